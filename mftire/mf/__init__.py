@@ -1,0 +1,25 @@
+"""Magic Formula 6.1/6.2 steady-state equations, split by channel.
+
+Module map (Pacejka 2012, 3rd ed., §4.3.2 and Appendix 3; Besselink, Schmeitz and
+Pacejka 2010, "An improved Magic Formula/Swift tyre model that can handle inflation
+pressure changes", Vehicle System Dynamics 48:S1):
+
+=================  ========================================================
+``modes``          the three-digit ``useMode`` of the reference evaluator
+``inputs``         limit checks, low-speed reduction factors, turn-slip spin
+``basic``          normalised load/pressure increments, star and prime quantities
+``longitudinal``   Fx0 (pure) and Fx (combined)
+``lateral``        Fy0 (pure) and Fy (combined)
+``aligning``       trail, residual torque, Mz0 and Mz
+``overturning``    Mx
+``rolling``        My
+``turnslip``       the zeta reduction factors
+``vertical``       effective rolling radius, loaded radius, deflection, contact patch
+``relaxation``     carcass stiffnesses and relaxation lengths
+``solver``         assembles the 30 output channels
+=================  ========================================================
+
+The reference for numerical agreement is MFeval 4.0 (M. Furlan Tassara).  Where it
+departs from the book to match TNO's solver we follow it; each place says so in a
+comment starting with ``MFeval departure:``.
+"""
