@@ -1,20 +1,204 @@
 """Command-line interface: ``mftire <command> ...``.
 
-Each sub-package registers its own sub-commands through an ``add_parser(subparsers)``
-function; this module only assembles them.  Input errors exit with code 2 and a
-one-line message (see :class:`mftire.errors.MftireInputError`).
+Sub-commands are registered here; larger features (``fe``, ``fit`` ...) register
+their own through an ``add_parser(subparsers)`` function.  Errors in the user's
+input print one line naming the file, column and row, and exit with code 2.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+from mftire.errors import MftireError, MftireInputError
+
+#: Columns of ``mftire evaluate``'s input CSV.
+EVALUATE_REQUIRED = ("Fz", "kappa", "alpha", "gamma")
+EVALUATE_OPTIONAL = ("phit", "Vx", "P", "omega")
+
+
+def read_numeric_csv(path: str, required: Sequence[str], optional: Sequence[str] = ()) -> pd.DataFrame:
+    """Read a CSV whose ``required`` and present ``optional`` columns must be finite numbers.
+
+    Raises :class:`MftireInputError` naming the file, column and (1-based) data row
+    of the first problem: a missing column, a non-numeric cell, a NaN or an infinity.
+    """
+    try:
+        df = pd.read_csv(path, sep=None if path == "-" else ",", engine="python" if path == "-" else "c")
+    except FileNotFoundError:
+        raise MftireInputError(f"{path}: file not found") from None
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+        raise MftireInputError(f"{path}: not a readable CSV file ({exc})") from None
+    df.columns = [str(c).strip() for c in df.columns]
+    missing = [c for c in required if c not in df.columns]
+    if missing:
+        raise MftireInputError(
+            f"{path}: missing column(s) {', '.join(missing)} (have: {', '.join(df.columns)})"
+        )
+    for col in [*required, *(c for c in optional if c in df.columns)]:
+        raw = df[col]
+        values = pd.to_numeric(raw, errors="coerce")
+        bad = values.isna() | ~np.isfinite(values.to_numpy(dtype=float, na_value=np.nan))
+        if bad.any():
+            i = int(np.flatnonzero(bad.to_numpy())[0])
+            cell = raw.iloc[i]
+            what = "empty or NaN" if pd.isna(cell) or str(cell).strip().lower() == "nan" else f"{cell!r}"
+            raise MftireInputError(
+                f"{path}: column '{col}', row {i + 1} (line {i + 2}): {what} is not a finite number"
+            )
+        df[col] = values.astype(float)
+    return df
+
+
+def _cmd_evaluate(args: argparse.Namespace) -> int:
+    from mftire.tyre import load
+
+    tyre = load(args.tir)
+    df = read_numeric_csv(args.input, EVALUATE_REQUIRED, EVALUATE_OPTIONAL)
+    kw = {c: df[c].to_numpy() for c in EVALUATE_OPTIONAL if c in df.columns}
+    out = tyre.evaluate(
+        df["Fz"].to_numpy(), df["kappa"].to_numpy(), df["alpha"].to_numpy(), df["gamma"].to_numpy(),
+        mode=args.mode, **kw,
+    )  # fmt: skip
+    result = pd.concat([df.reset_index(drop=True), out.to_frame()], axis=1)
+    if args.output == "-":
+        result.to_csv(sys.stdout, index=False, float_format="%.17g")
+    else:
+        from mftire.iotools.atomic import atomic_path
+
+        with atomic_path(args.output) as tmp:
+            result.to_csv(tmp, index=False, float_format="%.17g")
+    return 0
+
+
+def _cmd_convert(args: argparse.Namespace) -> int:
+    from mftire.iotools.tir import read_tir, write_tir
+
+    write_tir(read_tir(args.input), args.output)
+    return 0
+
+
+def _cmd_info(args: argparse.Namespace) -> int:
+    from mftire.tyre import load
+
+    print(tyre_info(load(args.tir)))
+    return 0
+
+
+def tyre_info(tyre) -> str:
+    """Human-readable summary used by ``mftire info``."""
+    from mftire.parameters import BY_KEY
+
+    params = tyre.parameters
+    f = tyre.flat
+    lines = [f"file:            {getattr(params, 'path', '') or tyre.name}"]
+    try:
+        model = params.model
+    except Exception:  # noqa: BLE001 - plain mappings have no model name
+        model = ""
+    lines.append(f"model:           FITTYP {tyre.fittyp} {model}".rstrip())
+    w, ar, rim = f["WIDTH"], f["ASPECT_RATIO"], f["RIM_RADIUS"]
+    lines.append(
+        f"size:            width {w * 1000:.0f} mm, aspect ratio {ar * 100:.0f} %, rim {2 * rim / 0.0254:.1f} in,"
+        f" unloaded radius {f['UNLOADED_RADIUS']:.4f} m"
+    )
+    lines.append(f"nominal load:    FNOMIN = {f['FNOMIN']:g} N")
+    lines.append(f"pressure:        NOMPRES = {f['NOMPRES'] / 1e5:g} bar, INFLPRES = {f['INFLPRES'] / 1e5:g} bar")
+    lines.append(f"nominal speed:   LONGVL = {f['LONGVL']:g} m/s, VXLOW = {f['VXLOW']:g} m/s")
+    lines.append("ranges:")
+    lines.append(f"  Fz    {f['FZMIN']:g} .. {f['FZMAX']:g} N")
+    lines.append(f"  kappa {f['KPUMIN']:g} .. {f['KPUMAX']:g}")
+    lines.append(f"  alpha {np.degrees(f['ALPMIN']):.2f} .. {np.degrees(f['ALPMAX']):.2f} deg")
+    lines.append(f"  gamma {np.degrees(f['CAMMIN']):.2f} .. {np.degrees(f['CAMMAX']):.2f} deg")
+    lines.append(f"  P     {f['PRESMIN'] / 1e5:g} .. {f['PRESMAX'] / 1e5:g} bar")
+    lines.append("parameters per section (in file / standard keys absent, taking defaults):")
+    sections = getattr(params, "sections", None) or {}
+    for name, content in sections.items():
+        n = len(content) if isinstance(content, dict) else 0
+        std = {p.key for p in BY_KEY.values() if p.section == name}
+        absent = len(std - set(content)) if isinstance(content, dict) else 0
+        lines.append(f"  [{name}] {n}" + (f" / {absent} defaulted" if absent else ""))
+    return "\n".join(lines)
+
+
+def _cmd_plot(args: argparse.Namespace) -> int:
+    from mftire.curves import standard_curves
+    from mftire.plotting import plot_standard_curves
+    from mftire.tyre import load
+
+    tyre = load(args.tir)
+    curves = standard_curves(tyre, mode=args.mode)
+    plot_standard_curves(curves, args.output, title=tyre.name)
+    if args.csv:
+        from mftire.iotools.atomic import atomic_path
+
+        with atomic_path(args.csv) as tmp:
+            curves.to_csv(tmp, index=False)
+    return 0
+
+
+def default_tir() -> str:
+    """Path of the shipped default ``.tir`` (MF 6.1, 255/55 R20, MFeval example; see data/NOTICE.md)."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    return os.path.join(here, "data", "default.tir")
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from mftire.curves import standard_curves
+    from mftire.plotting import plot_standard_curves
+    from mftire.tyre import load
+
+    os.makedirs(args.output, exist_ok=True)
+    tyre = load(args.tir or default_tir())
+    curves = standard_curves(tyre)
+    png = os.path.join(args.output, "curves.png")
+    csv = os.path.join(args.output, "curves.csv")
+    plot_standard_curves(curves, png, title=tyre.name)
+    from mftire.iotools.atomic import atomic_path
+
+    with atomic_path(csv) as tmp:
+        curves.to_csv(tmp, index=False)
+    print(f"mftire demo: {tyre!r}\n  wrote {png}\n  wrote {csv}")
+    return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="mftire", description=__doc__.splitlines()[0])
-    sub = parser.add_subparsers(dest="command", required=True)
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("evaluate", help="evaluate a .tir over the operating points of a CSV")
+    p.add_argument("tir", metavar="TIR")
+    p.add_argument("--input", required=True, help="CSV with Fz,kappa,alpha,gamma[,phit,Vx,P,omega] (SI, rad)")
+    p.add_argument("--output", required=True, help="output CSV, or - for standard output")
+    p.add_argument("--mode", type=int, default=111, help="MFeval useMode (default 111)")
+    p.set_defaults(func=_cmd_evaluate)
+
+    p = sub.add_parser("convert", help="read a .tir and write it back (SI units)")
+    p.add_argument("input", metavar="IN.tir")
+    p.add_argument("output", metavar="OUT.tir")
+    p.set_defaults(func=_cmd_convert)
+
+    p = sub.add_parser("info", help="summarise a .tir")
+    p.add_argument("tir", metavar="TIR")
+    p.set_defaults(func=_cmd_info)
+
+    p = sub.add_parser("plot", help="draw the standard curves at 0.5, 1 and 1.5 x FNOMIN")
+    p.add_argument("tir", metavar="TIR")
+    p.add_argument("--output", required=True, help="PNG file")
+    p.add_argument("--csv", help="also write the curve data to this CSV")
+    p.add_argument("--mode", type=int, default=111)
+    p.set_defaults(func=_cmd_plot)
+
+    p = sub.add_parser("demo", help="run the main job on the shipped default data")
+    p.add_argument("--output", default="demo_out", help="output directory (default demo_out)")
+    p.add_argument("--tir", help="use this .tir instead of the shipped default")
+    p.set_defaults(func=_cmd_demo)
+
     from mftire.fe import cli as fe_cli
 
     fe_cli.add_parser(sub)
@@ -26,13 +210,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
-    except Exception as exc:  # noqa: BLE001 - user-facing errors are printed on one line
-        from mftire.errors import MftireError
-
-        if isinstance(exc, MftireError):
-            print(f"mftire {args.command}: error: {exc}", file=sys.stderr)
-            return 2
-        raise
+    except MftireError as exc:
+        print(f"mftire {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"mftire {args.command}: error: {exc}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

@@ -106,8 +106,9 @@ def evaluate_arrays(
     """
     fittyp = p.get("FITTYP")
     if fittyp not in EVALUATED_FITTYP:
+        shown = int(fittyp) if isinstance(fittyp, float) and fittyp.is_integer() else fittyp
         raise UnsupportedModelError(
-            f"FITTYP {fittyp} is not evaluated: mftire evaluates MF 6.1 (61), MF 6.2 (62) and MF 5.2 (6) "
+            f"FITTYP {shown} is not evaluated: mftire evaluates MF 6.1 (61), MF 6.2 (62) and MF 5.2 (6) "
             "property files; MF 5.0/PAC2002 files can be read and written but not evaluated."
         )
     m = Mode.from_code(mode)

@@ -1,0 +1,934 @@
+r"""Read and write TYDEX-style ``.tir`` Magic Formula tyre property files.
+
+:func:`read_tir` parses a file into a :class:`TirParameters` (ordered sections of
+ordered ``KEY = value`` pairs, in SI units); :func:`write_tir` writes one back so
+that ``read_tir(write_tir(read_tir(f)))`` equals ``read_tir(f)`` exactly (floats
+are written with :func:`repr`, which round-trips every double bit for bit).
+
+Accepted syntax
+---------------
+* ``[SECTION]`` headers and ``KEY = value`` lines, in any letter case (both are
+  normalised to upper case), with any spacing or tabs, ``KEY=value`` too.
+* Comments: a line starting with ``$`` or ``!``; text after ``$`` or ``!`` on a
+  data line is kept as the key's description and written back.
+* Values: numbers in any usual format (``1``, ``+3``, ``-.5``, ``1.``, ``1E3``,
+  ``1.2e+03``, ``1.0D+03``, ``inf``, ``nan``), quoted strings (``'..'`` or
+  ``".."``) and bare words (read as strings).  Integers stay :class:`int`.
+* Blank lines, Windows/old-Mac line endings, a UTF-8 byte-order mark; non-UTF-8
+  files are read as Latin-1.
+* Sections and keys the reader does not know are kept and written back.  A section
+  whose lines are not ``KEY = value`` lines is a table (e.g. ``[SHAPE]`` with a
+  ``{radial width}`` header and rows of numbers) and is kept as a
+  :class:`TirTable`.  A key/value section that appears twice is merged; a table
+  section that appears twice is kept as a second table named ``NAME#2`` (written
+  back as ``[NAME]``).
+* Comment lines before the first section are kept (``header_comments``), except
+  ``$-----`` separator lines; other full-line comments are dropped.
+
+``FITTYP``
+----------
+``FITTYP`` in ``[MODEL]`` must be one of 5 (MF-Tyre 5.0), 6 and 21 (MF 5.2
+family), 61 (MF 6.1) or 62 (MF 6.2); anything else raises
+:class:`UnknownFittypError`.  A file without ``FITTYP`` raises
+:class:`MissingFittypError`, except a PAC2002 file
+(``PROPERTY_FILE_FORMAT = 'PAC2002'``), which reads with ``fittyp`` None and
+``model`` ``"PAC2002"``: no MF version number is invented for it, so an evaluator
+can refuse it clearly.  When a file has both (e.g. ``'PAC2002'`` and
+``FITTYP = 5``) the explicit ``FITTYP`` decides.
+
+Units
+-----
+The values are converted to SI on read, per parameter, using the ``[UNITS]``
+section and the unit column of :data:`mftire.parameters.PARAMETERS`.  After
+reading, ``[UNITS]`` reports SI (non-SI entries are replaced by ``'meter'``,
+``'newton'``, ``'radian'``, ``'kg'``, ``'second'``, ``'pascal'``; missing
+entries of the first five are added).  An absent ``PRESSURE`` means
+FORCE/LENGTH²; an absent ``[UNITS]`` means SI.
+
+=========  ==================================================================
+Quantity   Accepted unit names (case-insensitive) → SI factor
+=========  ==================================================================
+LENGTH     meter/metre/m 1; mm/millimeter 1e-3; cm/centimeter 1e-2;
+           km 1e3; inch/in 0.0254; foot/ft 0.3048
+FORCE      newton/N 1; kN/kilonewton 1e3; lbf/pound_force 4.4482216152605;
+           kgf 9.80665
+ANGLE      radian(s)/rad 1; deg/degree(s) π/180
+MASS       kg/kilogram 1; gram/g 1e-3; tonne 1e3; lbm/lb/pound 0.45359237
+TIME       second/s/sec 1; millisecond/ms 1e-3; minute/min 60; hour/h 3600
+PRESSURE   pascal/Pa 1; kPa 1e3; MPa 1e6; bar 1e5; psi 6894.757…
+=========  ==================================================================
+
+=====================================================  ==========  ===========
+Parameters (see the table for the full list)           SI unit     Converted
+=====================================================  ==========  ===========
+UNLOADED_RADIUS, WIDTH, RIM_RADIUS, RIM_WIDTH,         m           yes
+BOTTOM_OFFST, ELLIPS_MAX_STEP, ROAD_INCREMENT
+FNOMIN, FZMIN, FZMAX                                   N           yes
+VERTICAL_STIFFNESS, BOTTOM_STIFF, LONGITUDINAL_/       N/m         yes
+LATERAL_STIFFNESS
+VERTICAL_DAMPING                                       N·s/m       yes
+YAW_STIFFNESS                                          N·m/rad     yes
+NOMPRES, INFLPRES, PRESMIN, PRESMAX                    Pa          yes
+MASS, BELT_MASS, MBELT                                 kg          yes
+IXX, IYY, BELT_IXX, BELT_IYY                           kg·m²       yes
+LONGVL, VXLOW                                          m/s         yes
+GRAVITY                                                m/s²        yes
+ALPMIN, ALPMAX, CAMMIN, CAMMAX                         rad         yes
+HMAX_LOCAL, TIME_SWITCH_INTEG, DAMP_RESIDUAL,          s           yes
+DAMP_VLOW
+FREQ_LONG, FREQ_LAT, FREQ_YAW, FREQ_WINDUP             1/s (Hz)    yes
+KPUMIN/KPUMAX, ratios, scaling factors and all MF      -           no
+shape coefficients (Pxxx, Qxxx, Rxxx, Sxxx, Q_xxx,
+PCFx, ...)
+unknown keys                                           ?           no (warning)
+=====================================================  ==========  ===========
+
+MF shape coefficients are dimensionless or relate to angles in radians (e.g.
+``PKY3`` in 1/rad) and are never converted: the Magic Formula is defined on SI
+inputs, so a file that declares ``ANGLE = 'deg'`` still holds its coefficients
+for angles in radians.  Conversions by rational factors are correctly rounded
+(computed with :class:`fractions.Fraction`).
+
+Errors
+------
+Every problem raises :class:`TirError` (a :class:`mftire.errors.MftireError`)
+or one of its subclasses, with the file name, line number and offending text in
+the message: :class:`MalformedLineError`, :class:`NonNumericValueError`,
+:class:`UnknownUnitError`, :class:`UnknownFittypError`,
+:class:`MissingFittypError`, :class:`DuplicateKeyError` (a key twice in one
+section), :class:`EmptyFileError`.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import os
+import re
+import tempfile
+import warnings
+from dataclasses import dataclass, field
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+from mftire.errors import MftireError
+from mftire.parameters import BY_KEY, STANDARD_SECTIONS, UNIT_DIMENSIONS
+
+__all__ = [
+    "DuplicateKeyError",
+    "EmptyFileError",
+    "FITTYP_MODELS",
+    "FittypError",
+    "MalformedLineError",
+    "MissingFittypError",
+    "NonNumericValueError",
+    "TirError",
+    "TirParameters",
+    "TirTable",
+    "UnknownFittypError",
+    "UnknownUnitError",
+    "format_tir",
+    "parse_tir",
+    "read_tir",
+    "write_tir",
+]
+
+Value = float | int | str
+
+#: FITTYP values the reader accepts, with the model they denote.
+FITTYP_MODELS: dict[int, str] = {5: "MF-Tyre 5.0", 6: "MF 5.2", 21: "MF 5.2", 61: "MF 6.1", 62: "MF 6.2"}
+
+#: PROPERTY_FILE_FORMAT values for which a missing FITTYP is accepted.
+_FORMATS_WITHOUT_FITTYP = {"PAC2002": "PAC2002"}
+
+
+# --------------------------------------------------------------------------- errors
+class TirError(MftireError):
+    """A ``.tir`` file could not be read or written.
+
+    Attributes
+    ----------
+    path : str
+        The file (or ``"<string>"``).
+    line : int or None
+        1-based line number of the offending line.
+    text : str or None
+        The offending line (stripped).
+    reason : str
+        The problem, without location.
+    """
+
+    def __init__(self, reason: str, path: Any = None, line: int | None = None, text: str | None = None):
+        self.reason = reason
+        self.path = "<string>" if path is None else str(path)
+        self.line = line
+        self.text = text
+        where = self.path if line is None else f"{self.path}, line {line}"
+        message = f"{where}: {reason}"
+        if text is not None:
+            message += f": {text!r}"
+        super().__init__(message)
+
+
+class MalformedLineError(TirError):
+    """A line that is neither a comment, a section header, ``KEY = value`` nor a table row."""
+
+
+class NonNumericValueError(TirError):
+    """A standard numeric key has a value that is not a number."""
+
+
+class UnknownUnitError(TirError):
+    """A ``[UNITS]`` entry names a unit the reader cannot convert."""
+
+
+class FittypError(TirError):
+    """``FITTYP`` is missing or not a supported Magic Formula version."""
+
+
+class UnknownFittypError(FittypError):
+    """``FITTYP`` is not one of 5, 6, 21, 61, 62."""
+
+
+class MissingFittypError(FittypError):
+    """The file has no ``FITTYP`` and its ``PROPERTY_FILE_FORMAT`` does not imply a model."""
+
+
+class DuplicateKeyError(TirError):
+    """A key appears twice in the same section."""
+
+
+class EmptyFileError(TirError):
+    """The file holds no section and no parameter."""
+
+
+# ----------------------------------------------------------------------- values
+_INT_RE = re.compile(r"[+-]?\d+\Z")
+_FLOAT_RE = re.compile(r"[+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eEdD][+-]?\d+)?|inf(?:inity)?|nan)\Z", re.IGNORECASE)
+_KEY_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*\Z")
+_SECTION_RE = re.compile(r"\[\s*([A-Za-z0-9_][A-Za-z0-9_ .\-]*?)\s*\]\s*(?:[$!].*)?\Z")
+_SEPARATOR_RE = re.compile(r"\$-{3,}")
+_TABLE_HEADER_RE = re.compile(r"\{([^{}]*)\}\s*(?:[$!].*)?\Z")
+
+
+def _parse_number(token: str) -> int | float | None:
+    """Return the number ``token`` spells, or None."""
+    if _INT_RE.match(token):
+        number = int(token)
+        if number == 0 and token.startswith("-"):
+            return -0.0
+        return number
+    if _FLOAT_RE.match(token):
+        return float(token.replace("d", "e").replace("D", "e"))
+    return None
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _same_value(a: Any, b: Any) -> bool:
+    """Equality of two parameter values, exact to the bit for floats (-0.0 != 0.0, nan == nan)."""
+    if isinstance(a, str) or isinstance(b, str):
+        return isinstance(a, str) and isinstance(b, str) and a == b
+    if not (_is_number(a) and _is_number(b)):
+        return a == b
+    if isinstance(a, int) and isinstance(b, int):
+        return a == b
+    try:
+        fa, fb = float(a), float(b)
+    except OverflowError:
+        return False
+    if math.isnan(fa) or math.isnan(fb):
+        return math.isnan(fa) and math.isnan(fb)
+    return fa == fb and math.copysign(1.0, fa) == math.copysign(1.0, fb)
+
+
+# --------------------------------------------------------------------- data model
+@dataclass(eq=False)
+class TirTable:
+    """A table-like section, e.g. ``[SHAPE]`` with a ``{radial width}`` header.
+
+    Attributes
+    ----------
+    columns : list of str or None
+        Column names from the ``{...}`` header line, if any.
+    rows : list of list of int or float
+        The numbers of each row.
+    """
+
+    columns: list[str] | None = None
+    rows: list[list[int | float]] = field(default_factory=list)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, TirTable):
+            return NotImplemented
+        return (
+            self.columns == other.columns
+            and len(self.rows) == len(other.rows)
+            and all(
+                len(r1) == len(r2) and all(_same_value(a, b) for a, b in zip(r1, r2, strict=True))
+                for r1, r2 in zip(self.rows, other.rows, strict=True)
+            )
+        )
+
+
+Section = dict[str, Value] | TirTable
+
+
+def _base_name(section: str) -> str:
+    """``"SHAPE#2"`` -> ``"SHAPE"``."""
+    return section.split("#", 1)[0]
+
+
+class TirParameters:
+    """The parameters of one ``.tir`` file: ordered sections of ordered ``KEY: value``.
+
+    Values are :class:`float`, :class:`int` or :class:`str`, in SI units once read
+    by :func:`read_tir`.  Section and key names are upper case.
+
+    Parameters
+    ----------
+    sections : mapping, optional
+        ``{SECTION: {KEY: value}}`` (a :class:`TirTable` for a table section).
+    path : str or path-like, optional
+        The source file.
+
+    Attributes
+    ----------
+    sections : dict
+        ``{SECTION: {KEY: value} or TirTable}`` in file order.
+    comments : dict
+        ``{(SECTION, KEY): description}``, the inline ``$`` comments.
+    header_comments : list of str
+        Comment lines found before the first section.
+    path : str or None
+        The file the parameters were read from.
+    """
+
+    def __init__(self, sections: dict[str, Any] | None = None, path: Any = None) -> None:
+        self.sections: dict[str, Section] = {}
+        self.comments: dict[tuple[str, str], str] = {}
+        self.header_comments: list[str] = []
+        self.path: str | None = None if path is None else str(path)
+        for name, body in (sections or {}).items():
+            name = name.upper()
+            if isinstance(body, TirTable):
+                self.sections[name] = copy.deepcopy(body)
+            else:
+                self.sections[name] = {}
+                for key, value in body.items():
+                    self.set(key, value, section=name)
+
+    # ------------------------------------------------------------------ access
+    def flat(self) -> dict[str, Value]:
+        """Return ``{KEY: value}`` over all key/value sections.
+
+        ``[UNITS]`` and table sections are left out (``MASS`` is both the mass unit
+        and the tyre mass in ``[INERTIA]``).  A key found in several sections takes
+        the value of its standard section, else of the first section holding it.
+
+        Returns
+        -------
+        dict
+        """
+        out: dict[str, Value] = {}
+        owner: dict[str, str] = {}
+        for name, body in self.sections.items():
+            if name == "UNITS" or isinstance(body, TirTable):
+                continue
+            for key, value in body.items():
+                p = BY_KEY.get(key)
+                if key not in out or (p is not None and p.section == name and owner[key] != name):
+                    out[key] = value
+                    owner[key] = name
+        return out
+
+    def section(self, name: str) -> Section:
+        """Return the body of section ``name`` (KeyError if absent)."""
+        return self.sections[name.upper()]
+
+    def get(self, key: str, default: Any = None) -> Any:
+        """Return the value of ``key`` (see :meth:`flat`) or ``default``."""
+        return self.flat().get(key.upper(), default)
+
+    def __getitem__(self, key: str) -> Value:
+        flat = self.flat()
+        try:
+            return flat[key.upper()]
+        except KeyError:
+            raise KeyError(key) from None
+
+    def __contains__(self, key: object) -> bool:
+        return isinstance(key, str) and key.upper() in self.flat()
+
+    def keys(self) -> list[str]:
+        """Return the keys of :meth:`flat`."""
+        return list(self.flat())
+
+    @property
+    def fittyp(self) -> int | None:
+        """The ``FITTYP`` of the file as an int, or None if absent (e.g. PAC2002) or not supported."""
+        value = self.get("FITTYP")
+        if isinstance(value, float) and value.is_integer():
+            value = int(value)
+        if _is_number(value) and value in FITTYP_MODELS:
+            return int(value)
+        return None
+
+    @property
+    def model(self) -> str:
+        """Model family.
+
+        One of ``"MF 6.2"``, ``"MF 6.1"``, ``"MF 5.2"`` (FITTYP 6 or 21), ``"MF-Tyre 5.0"``,
+        ``"PAC2002"`` (no FITTYP) or ``"unknown"``.
+        """
+        fittyp = self.fittyp
+        if fittyp is not None:
+            return FITTYP_MODELS[fittyp]
+        fmt = self.get("PROPERTY_FILE_FORMAT")
+        if isinstance(fmt, str) and fmt.strip().upper() in _FORMATS_WITHOUT_FITTYP:
+            return _FORMATS_WITHOUT_FITTYP[fmt.strip().upper()]
+        return "unknown"
+
+    # ---------------------------------------------------------------- changing
+    def set(self, key: str, value: Value, section: str | None = None) -> None:
+        """Set ``key`` to ``value``.
+
+        Parameters
+        ----------
+        key : str
+            Parameter name (case-insensitive).
+        value : float, int or str
+            New value, in SI units.
+        section : str, optional
+            Section to put the key in (created if needed).  By default the key is
+            updated where it already is; a new standard key goes to its standard
+            section, and a new unknown key needs ``section``.
+        """
+        if not isinstance(key, str) or not _KEY_RE.match(key):
+            raise ValueError(f"invalid .tir key {key!r}")
+        if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+            raise TypeError(f"a .tir value must be a float, int or str, not {type(value).__name__}")
+        key = key.upper()
+        if section is None:
+            holders = [
+                n for n, b in self.sections.items() if isinstance(b, dict) and key in b and n != "UNITS"
+            ]
+            p = BY_KEY.get(key)
+            if p is not None and p.section in holders:
+                section = p.section
+            elif holders:
+                section = holders[0]
+            elif p is not None:
+                section = p.section
+            else:
+                raise ValueError(f"{key} is not a standard .tir key: give the section to put it in")
+        section = section.upper()
+        body = self.sections.get(section)
+        if body is None:
+            body = self._add_section(section)
+        if isinstance(body, TirTable):
+            raise ValueError(f"[{section}] is a table section")
+        body[key] = value
+
+    def _add_section(self, name: str) -> dict[str, Value]:
+        """Create an empty key/value section, placed in standard order if it is standard."""
+        body: dict[str, Value] = {}
+        if name in STANDARD_SECTIONS:
+            rank = STANDARD_SECTIONS.index(name)
+            names = list(self.sections)
+            at = len(names)
+            for i, other in enumerate(names):
+                if other in STANDARD_SECTIONS and STANDARD_SECTIONS.index(other) > rank:
+                    at = i
+                    break
+            items = list(self.sections.items())
+            items.insert(at, (name, body))
+            self.sections = dict(items)
+        else:
+            self.sections[name] = body
+        return body
+
+    def copy(self) -> TirParameters:
+        """Return a deep copy."""
+        return copy.deepcopy(self)
+
+    # ------------------------------------------------------------------ compare
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, TirParameters):
+            return NotImplemented
+        if set(self.sections) != set(other.sections):
+            return False
+        for name, body in self.sections.items():
+            theirs = other.sections[name]
+            if isinstance(body, TirTable) or isinstance(theirs, TirTable):
+                if not (isinstance(body, TirTable) and isinstance(theirs, TirTable) and body == theirs):
+                    return False
+                continue
+            if set(body) != set(theirs) or not all(_same_value(v, theirs[k]) for k, v in body.items()):
+                return False
+        return True
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        n = sum(len(b) for b in self.sections.values() if isinstance(b, dict))
+        return f"<TirParameters {self.model} {n} keys in {len(self.sections)} sections from {self.path!r}>"
+
+
+# --------------------------------------------------------------------- units
+_PI = Fraction(math.pi)
+_LBF = Fraction("4.4482216152605")
+_INCH = Fraction("0.0254")
+
+_UNIT_FACTORS: dict[str, dict[str, Fraction]] = {
+    "LENGTH": {
+        **dict.fromkeys(("meter", "metre", "meters", "metres", "m"), Fraction(1)),
+        **dict.fromkeys(("mm", "millimeter", "millimetre", "millimeters", "millimetres"), Fraction(1, 1000)),
+        **dict.fromkeys(("cm", "centimeter", "centimetre", "centimeters", "centimetres"), Fraction(1, 100)),
+        **dict.fromkeys(("km", "kilometer", "kilometre", "kilometers", "kilometres"), Fraction(1000)),
+        **dict.fromkeys(("inch", "inches", "in"), _INCH),
+        **dict.fromkeys(("foot", "feet", "ft"), Fraction("0.3048")),
+    },
+    "FORCE": {
+        **dict.fromkeys(("newton", "newtons", "n"), Fraction(1)),
+        **dict.fromkeys(("kn", "kilonewton", "kilonewtons"), Fraction(1000)),
+        **dict.fromkeys(("lbf", "pound_force", "poundforce", "pound-force"), _LBF),
+        **dict.fromkeys(("kgf", "kilogram_force", "kilogram-force"), Fraction("9.80665")),
+    },
+    "ANGLE": {
+        **dict.fromkeys(("radian", "radians", "rad"), Fraction(1)),
+        **dict.fromkeys(("degree", "degrees", "deg"), _PI / 180),
+    },
+    "MASS": {
+        **dict.fromkeys(("kg", "kilogram", "kilograms", "kilogramme"), Fraction(1)),
+        **dict.fromkeys(("gram", "grams", "g", "gramme"), Fraction(1, 1000)),
+        **dict.fromkeys(("tonne", "tonnes", "metric_ton"), Fraction(1000)),
+        **dict.fromkeys(("lbm", "lb", "pound", "pounds", "pound_mass"), Fraction("0.45359237")),
+    },
+    "TIME": {
+        **dict.fromkeys(("second", "seconds", "s", "sec"), Fraction(1)),
+        **dict.fromkeys(("millisecond", "milliseconds", "ms", "msec"), Fraction(1, 1000)),
+        **dict.fromkeys(("minute", "minutes", "min"), Fraction(60)),
+        **dict.fromkeys(("hour", "hours", "h", "hr"), Fraction(3600)),
+    },
+    "PRESSURE": {
+        **dict.fromkeys(("pascal", "pascals", "pa", "n/m^2", "n/m2"), Fraction(1)),
+        **dict.fromkeys(("kpa", "kilopascal", "kilopascals"), Fraction(1000)),
+        **dict.fromkeys(("mpa", "megapascal", "megapascals"), Fraction(10**6)),
+        "bar": Fraction(10**5),
+        "psi": _LBF / _INCH**2,
+    },
+}
+_UNIT_QUANTITIES = ("LENGTH", "FORCE", "ANGLE", "MASS", "TIME", "PRESSURE")
+_SI_NAMES = {
+    "LENGTH": "meter",
+    "FORCE": "newton",
+    "ANGLE": "radian",
+    "MASS": "kg",
+    "TIME": "second",
+    "PRESSURE": "pascal",
+}
+
+
+def _unit_factor(quantity: str, name: str) -> Fraction | None:
+    return _UNIT_FACTORS[quantity].get(name.strip().lower())
+
+
+def _scale(value: int | float, factor: Fraction) -> float:
+    """``value * factor``, correctly rounded for finite values; keeps the sign of zero."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return value * float(factor)
+    if value == 0:
+        return float(value)
+    try:
+        return float(Fraction(value) * factor)
+    except OverflowError:
+        return math.copysign(math.inf, value)
+
+
+# --------------------------------------------------------------------- reading
+class _LineProblem(Exception):
+    """Internal: a problem in one line, turned into a TirError with its location."""
+
+    def __init__(self, cls: type[TirError], reason: str) -> None:
+        super().__init__(reason)
+        self.cls = cls
+        self.reason = reason
+
+
+def _split_value(rest: str) -> tuple[Value, bool, str | None]:
+    """Parse the text after ``=``: return (value, was_quoted, comment)."""
+    rest = rest.strip()
+    if not rest or rest[0] in "$!":
+        raise _LineProblem(MalformedLineError, "missing value after '='")
+    if rest[0] in "'\"":
+        quote = rest[0]
+        end = rest.find(quote, 1)
+        if end == -1:
+            raise _LineProblem(MalformedLineError, "unterminated quoted string")
+        raw: str = rest[1:end]
+        tail = rest[end + 1 :].strip()
+        quoted = True
+    else:
+        m = re.search(r"[$!]", rest)
+        raw = (rest[: m.start()] if m else rest).strip()
+        tail = rest[m.start() :] if m else ""
+        quoted = False
+    comment = None
+    if tail:
+        if tail[0] not in "$!":
+            raise _LineProblem(MalformedLineError, "unexpected text after the value")
+        comment = tail[1:].strip()
+    if quoted:
+        return raw, True, comment
+    number = _parse_number(raw)
+    return (raw if number is None else number), False, comment
+
+
+def _decode(data: bytes) -> str:
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        text = data.decode("latin-1")
+    return text[1:] if text.startswith("\ufeff") else text
+
+
+def parse_tir(text: str, path: Any = None) -> TirParameters:
+    """Parse the text of a ``.tir`` file.
+
+    Parameters
+    ----------
+    text : str
+        File content.
+    path : str or path-like, optional
+        Name used in error messages and stored as ``path``.
+
+    Returns
+    -------
+    TirParameters
+        Values in SI units.
+
+    Raises
+    ------
+    TirError
+        On any problem (see the module docstring).
+    """
+    source = "<string>" if path is None else str(path)
+    if text.startswith("\ufeff"):
+        text = text[1:]
+    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    params = TirParameters(path=path)
+    where: dict[tuple[str, str], tuple[int, str]] = {}
+    section_line: dict[str, tuple[int, str]] = {}
+    current: str | None = None
+    found_data = False
+
+    def fail(cls: type[TirError], reason: str, lineno: int, line: str) -> TirError:
+        return cls(reason, source, lineno, line)
+
+    for lineno, raw in enumerate(lines, 1):
+        line = raw.strip()
+        if not line:
+            continue
+        if line[0] in "$!":
+            if current is None and not _SEPARATOR_RE.match(line):
+                params.header_comments.append(line)
+            continue
+        found_data = True
+        if line[0] == "[":
+            m = _SECTION_RE.match(line)
+            if not m:
+                raise fail(MalformedLineError, "malformed section header", lineno, line)
+            name = m.group(1).upper()
+            existing = params.sections.get(name)
+            if isinstance(existing, TirTable):
+                n = 2
+                while f"{name}#{n}" in params.sections:
+                    n += 1
+                name = f"{name}#{n}"
+                existing = None
+            if existing is None:
+                params.sections[name] = {}
+                section_line[name] = (lineno, line)
+            current = name
+            continue
+        if current is None:
+            raise fail(MalformedLineError, "data before the first [SECTION] header", lineno, line)
+        body = params.sections[current]
+        eq = line.find("=")
+        is_pair = eq > 0 and not any(c in line[:eq] for c in "$!'\"{")
+        if line[0] == "{":
+            m = _TABLE_HEADER_RE.match(line)
+            if not m:
+                raise fail(MalformedLineError, "malformed table header", lineno, line)
+            if isinstance(body, dict) and body:
+                raise fail(MalformedLineError, f"table header inside key = value section [{current}]",
+                           lineno, line)
+            if isinstance(body, TirTable) and (body.columns is not None or body.rows):
+                raise fail(MalformedLineError, f"second table header in section [{current}]", lineno, line)
+            params.sections[current] = TirTable(columns=m.group(1).split(), rows=[])
+            continue
+        if not is_pair:
+            if isinstance(body, dict) and body:
+                raise fail(MalformedLineError, "expected KEY = value", lineno, line)
+            cut = re.search(r"[$!]", line)
+            tokens = (line[: cut.start()] if cut else line).split()
+            numbers = [_parse_number(t) for t in tokens]
+            if not tokens or any(v is None for v in numbers):
+                reason = "expected KEY = value" if isinstance(body, dict) else "non-numeric table row"
+                raise fail(MalformedLineError, reason, lineno, line)
+            if isinstance(body, dict):
+                body = params.sections[current] = TirTable()
+            body.rows.append(numbers)  # type: ignore[arg-type]
+            continue
+        if isinstance(body, TirTable):
+            raise fail(MalformedLineError, f"KEY = value line inside table section [{current}]", lineno, line)
+        key = line[:eq].strip()
+        if not _KEY_RE.match(key):
+            raise fail(MalformedLineError, "invalid key name", lineno, line)
+        key = key.upper()
+        try:
+            value, quoted, comment = _split_value(line[eq + 1 :])
+        except _LineProblem as problem:
+            raise fail(problem.cls, problem.reason, lineno, line) from None
+        p = BY_KEY.get(key)
+        if current != "UNITS" and p is not None and p.unit != "str" and not _is_number(value):
+            number = _parse_number(value.strip()) if quoted and isinstance(value, str) else None
+            if number is None:
+                raise fail(NonNumericValueError, f"{key} needs a number", lineno, line)
+            value = number
+        if key in body:
+            first = where[(current, key)][0]
+            raise fail(DuplicateKeyError, f"duplicate key {key} in [{_base_name(current)}] "
+                       f"(first on line {first})", lineno, line)
+        body[key] = value
+        where[(current, key)] = (lineno, line)
+        if comment:
+            params.comments[(current, key)] = comment
+
+    if not found_data:
+        raise EmptyFileError("empty file: no section and no parameter", source, max(len(lines), 1), "")
+
+    _convert_units(params, where, section_line, source)
+    _check_fittyp(params, where, section_line, source, lines)
+    return params
+
+
+def _convert_units(params: TirParameters, where: dict, section_line: dict, source: str) -> None:
+    """Convert every known dimensional value to SI and make ``[UNITS]`` report SI."""
+    units = params.sections.get("UNITS")
+    if isinstance(units, TirTable):
+        lineno, line = section_line["UNITS"]
+        raise MalformedLineError("[UNITS] must hold KEY = value lines", source, lineno, line)
+    if units is None:
+        units = params._add_section("UNITS")
+    factors: dict[str, Fraction] = {}
+    for quantity in _UNIT_QUANTITIES:
+        name = units.get(quantity)
+        if name is None:
+            continue
+        factor = _unit_factor(quantity, name) if isinstance(name, str) else None
+        if factor is None:
+            lineno, line = where[("UNITS", quantity)]
+            raise UnknownUnitError(f"unknown {quantity.lower()} unit", source, lineno, line)
+        factors[quantity] = factor
+    for quantity in _UNIT_QUANTITIES[:5]:
+        factors.setdefault(quantity, Fraction(1))
+    factors.setdefault("PRESSURE", factors["FORCE"] / factors["LENGTH"] ** 2)
+
+    if any(f != 1 for f in factors.values()):
+        unconverted = []
+        for name, body in params.sections.items():
+            if name == "UNITS" or isinstance(body, TirTable):
+                continue
+            for key, value in body.items():
+                if not _is_number(value):
+                    continue
+                p = BY_KEY.get(key)
+                if p is None:
+                    unconverted.append(key)
+                    continue
+                factor = Fraction(1)
+                for quantity, power in UNIT_DIMENSIONS.get(p.unit, {}).items():
+                    factor *= factors[quantity] ** power
+                if factor != 1:
+                    body[key] = _scale(value, factor)
+        if unconverted:
+            warnings.warn(
+                f"{source}: non-SI [UNITS]; unknown keys left unconverted: {', '.join(unconverted)}",
+                stacklevel=3,
+            )
+    for quantity in _UNIT_QUANTITIES:
+        if quantity in units:
+            if factors[quantity] != 1:
+                units[quantity] = _SI_NAMES[quantity]
+        elif quantity != "PRESSURE":
+            units[quantity] = _SI_NAMES[quantity]
+
+
+def _check_fittyp(params: TirParameters, where: dict, section_line: dict, source: str, lines: list) -> None:
+    located = [(s, k) for (s, k) in where if k == "FITTYP"]
+    if located:
+        loc = ("MODEL", "FITTYP") if ("MODEL", "FITTYP") in where else located[0]
+        lineno, line = where[loc]
+        value = params.sections[loc[0]]["FITTYP"]  # type: ignore[index]
+        ok = (isinstance(value, int) and value in FITTYP_MODELS) or (
+            isinstance(value, float) and value.is_integer() and int(value) in FITTYP_MODELS
+        )
+        if not ok:
+            supported = ", ".join(str(k) for k in FITTYP_MODELS)
+            raise UnknownFittypError(f"unsupported FITTYP (supported: {supported})", source, lineno, line)
+        return
+    fmt = params.get("PROPERTY_FILE_FORMAT")
+    if isinstance(fmt, str) and fmt.strip().upper() in _FORMATS_WITHOUT_FITTYP:
+        return
+    if "MODEL" in section_line:
+        lineno, line = section_line["MODEL"]
+    else:
+        lineno = next((i for i, t in enumerate(lines, 1) if t.strip()), 1)
+        line = lines[lineno - 1].strip() if lines else ""
+    raise MissingFittypError("no FITTYP in [MODEL] (and no PROPERTY_FILE_FORMAT = 'PAC2002')",
+                             source, lineno, line)
+
+
+def read_tir(path: str | os.PathLike[str]) -> TirParameters:
+    """Read a ``.tir`` tyre property file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file.
+
+    Returns
+    -------
+    TirParameters
+        The parameters, converted to SI units (m, N, rad, kg, s, Pa).
+
+    Raises
+    ------
+    TirError
+        If the file is malformed (message with file name, line and text).
+    OSError
+        If the file cannot be read.
+    """
+    data = Path(path).read_bytes()
+    return parse_tir(_decode(data), path=os.fspath(path))
+
+
+# --------------------------------------------------------------------- writing
+def _format_value(value: Any, key: str, section: str) -> str:
+    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+        raise TirError(f"cannot write {type(value).__name__} value of {key} in [{section}]")
+    if isinstance(value, float):
+        return repr(value)
+    if isinstance(value, int):
+        return str(value)
+    if "\n" in value or "\r" in value:
+        raise TirError(f"cannot write a line break in the string value of {key} in [{section}]")
+    if "'" not in value:
+        return f"'{value}'"
+    if '"' not in value:
+        return f'"{value}"'
+    raise TirError(f"cannot write a string holding both quote characters ({key} in [{section}])")
+
+
+def format_tir(params: TirParameters) -> str:
+    """Return the text of a ``.tir`` file holding ``params`` (SI units, ``\\n`` line ends).
+
+    Parameters
+    ----------
+    params : TirParameters
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    TirError
+        If a value cannot be written so that it reads back identically (a string
+        for a numeric key, a non-SI ``[UNITS]`` entry, a bad key name, ...).
+    """
+    out: list[str] = [c if c[:1] in "$!" else "$" + c for c in params.header_comments]
+    sections = list(params.sections.items())
+    if "UNITS" not in params.sections:
+        units: dict[str, Value] = {q: _SI_NAMES[q] for q in _UNIT_QUANTITIES[:5]}
+        at = 1 if sections and sections[0][0] == "MDI_HEADER" else 0
+        sections.insert(at, ("UNITS", units))
+    for name, body in sections:
+        base = _base_name(name)
+        if not _SECTION_RE.match(f"[{base}]"):
+            raise TirError(f"cannot write section name {base!r}")
+        out.append("$" + "-" * max(3, 70 - len(base)) + base.lower())
+        out.append(f"[{base}]")
+        if isinstance(body, TirTable):
+            if body.columns is not None:
+                out.append("{" + " ".join(body.columns) + "}")
+            for row in body.rows:
+                out.append(" ".join(_format_value(v, "table row", base) for v in row))
+            continue
+        for key, value in body.items():
+            if not _KEY_RE.match(key) or key != key.upper():
+                raise TirError(f"cannot write key {key!r} in [{base}]")
+            p = BY_KEY.get(key)
+            if base == "UNITS":
+                if key in _UNIT_FACTORS and not (isinstance(value, str) and _unit_factor(key, value) == 1):
+                    raise TirError(f"[UNITS] {key} = {value!r} is not SI; convert the values, set SI units")
+            elif p is not None and p.unit != "str" and not _is_number(value):
+                raise TirError(f"{key} in [{base}] needs a number, not {value!r}")
+            text = f"{key:<25}= {_format_value(value, key, base)}"
+            comment = params.comments.get((name, key))
+            if comment is None and p is not None and p.section == base:
+                comment = p.description
+            if comment:
+                text = f"{text:<50} ${comment.strip()}"
+            out.append(text)
+    return "\n".join(out) + "\n"
+
+
+def write_tir(params: TirParameters, path: str | os.PathLike[str], line_ending: str = "\r\n") -> None:
+    """Write ``params`` to a ``.tir`` file, atomically.
+
+    The text goes to a temporary file in the same directory, which then replaces
+    ``path`` (:func:`os.replace`), so readers never see a half-written file.
+
+    Parameters
+    ----------
+    params : TirParameters
+        Parameters in SI units (as :func:`read_tir` returns them).
+    path : str or path-like
+        Destination file.
+    line_ending : str, default "\\r\\n"
+        Windows line endings by default, like the MFeval and ADAMS example
+        files: MFeval 4.0's reader drops the last character of every line,
+        assuming it is a carriage return.
+
+    Raises
+    ------
+    TirError
+        If ``params`` cannot be written faithfully (see :func:`format_tir`).
+    """
+    text = format_tir(params)
+    target = Path(path)
+    directory = target.parent
+    try:
+        mode = target.stat().st_mode & 0o777
+    except OSError:
+        mode = 0o644
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=directory)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline=line_ending) as handle:
+            handle.write(text)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.chmod(tmp, mode)
+        os.replace(tmp, target)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise

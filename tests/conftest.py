@@ -1,0 +1,41 @@
+"""Shared test fixtures: paths to the data shipped in tests/data."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+DATA = Path(__file__).parent / "data"
+TIR = DATA / "tir"
+MFEVAL = DATA / "mfeval"
+
+#: Reference tyre labels -> .tir file (see tests/data/mfeval/README.md)
+REFERENCE_TYRES = {
+    "MF52": TIR / "MagicFormula52_Parameters.tir",
+    "MF61": TIR / "mfeval" / "MagicFormula61_Paramerters.tir",
+    "MF62": TIR / "mfeval" / "MagicFormula62_Paramerters.tir",
+    "PacejkaBook": TIR / "mfeval" / "PacejkaBook_Defaults.tir",
+    "FSAE": TIR / "mfeval" / "FSAE_Defaults.tir",
+    "JuliaMF61": TIR / "MagicFormula61_Parameters.tir",
+    "JuliaMF62": TIR / "MagicFormula62_Parameters.tir",
+}
+
+
+@pytest.fixture(scope="session")
+def mf61_path() -> Path:
+    return REFERENCE_TYRES["MF61"]
+
+
+@pytest.fixture(scope="session")
+def mf62_path() -> Path:
+    return REFERENCE_TYRES["MF62"]
+
+
+@pytest.fixture()
+def in_tmp(tmp_path: Path):
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    yield tmp_path
+    os.chdir(cwd)
