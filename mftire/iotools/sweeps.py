@@ -1,0 +1,1030 @@
+"""The sweep table: one pandas DataFrame format for all slip-sweep data.
+
+Every loader in mftire (CSV, TYDEX, simulation output) ends in the same table:
+
+======== ====== ==================================================
+column   unit   meaning
+======== ====== ==================================================
+Fz       N      vertical load (positive in compression)
+kappa    -      longitudinal slip (fraction, not %)
+alpha    rad    slip angle
+gamma    rad    inclination (camber) angle
+Vx       m/s    forward speed of the wheel centre
+P        Pa     inflation pressure
+phit     1/m    turn slip (optional, 0 when absent)
+Fx, Fy   N      measured forces (any subset)
+Mx,My,Mz N*m    measured moments (any subset)
+======== ====== ==================================================
+
+Any other column (run id, time, temperature, file, ...) is carried through untouched.
+
+Functions here are small and pure: :func:`validate_sweeps` checks a table and returns a
+clean copy plus a :class:`SweepReport`; :func:`group_sweeps` labels rows with operating
+condition set points and sweep ids; :func:`sweep_kind` tells pure longitudinal, pure
+lateral and combined sweeps apart; :func:`convert_to_si` and :func:`to_schema` do the
+unit conversions shared with :mod:`mftire.iotools.tydex`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Hashable, Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from mftire.errors import MftireInputError
+
+__all__ = [
+    "REQUIRED_COLUMNS",
+    "OPTIONAL_INPUT_COLUMNS",
+    "MEASURED_COLUMNS",
+    "SI_UNITS",
+    "SweepReport",
+    "is_known_unit",
+    "unit_factor",
+    "convert_to_si",
+    "convert_from_si",
+    "to_schema",
+    "read_sweep_csv",
+    "validate_sweeps",
+    "cluster_1d",
+    "sweep_kind",
+    "group_sweeps",
+    "summarize_sweeps",
+]
+
+#: Operating-condition inputs every sweep table must have (SI).
+REQUIRED_COLUMNS: tuple[str, ...] = ("Fz", "kappa", "alpha", "gamma", "Vx", "P")
+#: Inputs that may be absent (filled with 0 where NaN).
+OPTIONAL_INPUT_COLUMNS: tuple[str, ...] = ("phit",)
+#: Measured channels; a table holds any subset.
+MEASURED_COLUMNS: tuple[str, ...] = ("Fx", "Fy", "Mz", "Mx", "My")
+#: The SI unit of each schema column (and of the extra channels the TYDEX reader names).
+SI_UNITS: dict[str, str] = {
+    "Fz": "N",
+    "kappa": "-",
+    "alpha": "rad",
+    "gamma": "rad",
+    "Vx": "m/s",
+    "P": "Pa",
+    "phit": "1/m",
+    "Fx": "N",
+    "Fy": "N",
+    "Mz": "Nm",
+    "Mx": "Nm",
+    "My": "Nm",
+    "meas_no": "-",
+    "time": "s",
+    "deflection": "m",
+    "Re": "m",
+    "Rl": "m",
+    "omega": "rad/s",
+}
+#: Physical dimension of each schema column, used to check a unit makes sense.
+DIMENSIONS: dict[str, str] = {
+    "Fz": "force",
+    "Fx": "force",
+    "Fy": "force",
+    "Mx": "moment",
+    "My": "moment",
+    "Mz": "moment",
+    "kappa": "ratio",
+    "alpha": "angle",
+    "gamma": "angle",
+    "Vx": "speed",
+    "P": "pressure",
+    "phit": "curvature",
+    "meas_no": "count",
+    "time": "time",
+    "deflection": "length",
+    "Re": "length",
+    "Rl": "length",
+    "omega": "angular_speed",
+}
+
+# ----------------------------------------------------------------------------------------
+# Units
+# ----------------------------------------------------------------------------------------
+
+_DEG = math.pi / 180.0
+# normalised unit string -> {dimension: factor to SI}.  Normalisation: see _normalise_unit.
+_UNITS: dict[str, dict[str, float]] = {}
+
+
+def _add_units(dimension: str, table: Mapping[str, float]) -> None:
+    for name, factor in table.items():
+        _UNITS.setdefault(name, {})[dimension] = float(factor)
+
+
+_add_units("angle", {"rad": 1.0, "radian": 1.0, "radians": 1.0, "mrad": 1e-3, "deg": _DEG,
+                     "degree": _DEG, "degrees": _DEG, "°": _DEG, "grd": _DEG})
+_add_units("ratio", {"": 1.0, "-": 1.0, "1": 1.0, "none": 1.0, "ratio": 1.0, "frac": 1.0,
+                     "%": 0.01, "percent": 0.01, "pct": 0.01})
+_add_units("speed", {"m/s": 1.0, "km/h": 1 / 3.6, "kmh": 1 / 3.6, "kph": 1 / 3.6,
+                     "km/hr": 1 / 3.6, "mph": 0.44704, "mm/s": 1e-3, "ft/s": 0.3048})
+_add_units("pressure", {"pa": 1.0, "n/m^2": 1.0, "n/m2": 1.0, "hpa": 100.0, "kpa": 1e3,
+                        "mpa": 1e6, "bar": 1e5, "mbar": 100.0, "psi": 6894.757293168,
+                        "n/mm^2": 1e6, "n/mm2": 1e6})
+_add_units("force", {"n": 1.0, "kn": 1e3, "dan": 10.0, "mn": 1e-3, "lbf": 4.4482216152605,
+                     "lb": 4.4482216152605, "kgf": 9.80665, "kp": 9.80665})
+_add_units("moment", {"nm": 1.0, "knm": 1e3, "danm": 10.0, "nmm": 1e-3, "lbfft": 1.3558179483314,
+                      "ftlbf": 1.3558179483314, "lbfin": 0.1129848290276, "inlbf": 0.1129848290276,
+                      "kgfm": 9.80665, "kpm": 9.80665})
+_add_units("length", {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "km": 1e3, "in": 0.0254, "inch": 0.0254,
+                      "ft": 0.3048})
+_add_units("time", {"s": 1.0, "sec": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0})
+_add_units("angular_speed", {"rad/s": 1.0, "1/s": 1.0, "deg/s": _DEG, "rpm": 2 * math.pi / 60,
+                             "1/min": 2 * math.pi / 60, "u/min": 2 * math.pi / 60,
+                             "rev/min": 2 * math.pi / 60, "rps": 2 * math.pi})
+_add_units("curvature", {"1/m": 1.0, "rad/m": 1.0, "1/mm": 1e3, "1/km": 1e-3})
+_add_units("count", {"": 1.0, "-": 1.0, "1": 1.0, "none": 1.0, "#": 1.0, "no": 1.0})
+# recognised (so that file parsers can tell a unit from a comment) but never converted
+_add_units("temperature", {"degc": 1.0, "°c": 1.0, "c": 1.0, "k": 1.0, "degf": 1.0, "°f": 1.0})
+
+
+def _normalise_unit(unit: str | None) -> str:
+    """Lower-case a unit string and drop brackets, blanks and multiplication signs."""
+    if unit is None:
+        return ""
+    u = str(unit).strip()
+    if len(u) >= 2 and u[0] in "[(" and u[-1] in "])":
+        u = u[1:-1].strip()
+    u = u.lower().replace("µ", "u").replace("²", "^2")
+    if u in ("-", "--"):
+        return "-"
+    for ch in (" ", "*", "·", ".", "-", "×"):
+        u = u.replace(ch, "")
+    return u
+
+
+def is_known_unit(unit: str | None) -> bool:
+    """True when ``unit`` (e.g. ``"km/h"``, ``"deg C"``, ``"N*m"``) is a unit mftire knows."""
+    key = _normalise_unit(unit)
+    return bool(key) and key in _UNITS
+
+
+def unit_factor(unit: str | None, dimension: str) -> float:
+    """Factor that turns values in ``unit`` into the SI unit of ``dimension``.
+
+    Parameters
+    ----------
+    unit : str
+        Unit as written in a file, e.g. ``"deg"``, ``"km/h"``, ``"kN"``, ``"%"``, ``"N*m"``.
+    dimension : str
+        One of ``angle, ratio, speed, pressure, force, moment, length, time,
+        angular_speed, curvature, count``.
+
+    Returns
+    -------
+    float
+        ``value_SI = value * factor``.
+
+    Raises
+    ------
+    MftireInputError
+        When the unit is unknown or belongs to another dimension.
+    """
+    key = _normalise_unit(unit)
+    if dimension in ("ratio", "count") and key == "":
+        return 1.0
+    hit = _UNITS.get(key, {})
+    if dimension not in hit:
+        known = sorted(k for k, dims in _UNITS.items() if dimension in dims and k)
+        what = "unknown unit" if not hit else f"unit of {'/'.join(hit)}, not {dimension},"
+        raise MftireInputError(
+            f"{what} {unit!r} for a {dimension} value; known {dimension} units: {', '.join(known)}"
+        )
+    return hit[dimension]
+
+
+def convert_to_si(values: Any, unit: str | None, column: str) -> Any:
+    """Convert ``values`` given in ``unit`` to the SI unit of schema ``column``.
+
+    ``values`` may be a scalar, numpy array or pandas Series; the same type comes back.
+    Example: ``convert_to_si(12.0, "deg", "alpha")`` gives 0.2094 rad.
+    """
+    dimension = DIMENSIONS.get(column)
+    if dimension is None:
+        raise MftireInputError(f"no SI unit is defined for column {column!r}")
+    return values * unit_factor(unit, dimension)
+
+
+def convert_from_si(values: Any, unit: str | None, column: str) -> Any:
+    """Inverse of :func:`convert_to_si`: SI values of ``column`` expressed in ``unit``."""
+    dimension = DIMENSIONS.get(column)
+    if dimension is None:
+        raise MftireInputError(f"no SI unit is defined for column {column!r}")
+    return values / unit_factor(unit, dimension)
+
+
+def to_schema(df: pd.DataFrame, mapping: Mapping[str, tuple[str, str]]) -> pd.DataFrame:
+    """Rename and convert columns into the sweep schema.
+
+    Parameters
+    ----------
+    df : DataFrame
+        Input table; not modified.
+    mapping : dict
+        ``{source_column: (schema_column, unit)}``, e.g.
+        ``{"SA": ("alpha", "deg"), "FZ": ("Fz", "N"), "P_kPa": ("P", "kPa")}``.
+        A negative sign convention can be handled afterwards (``out["Fz"] *= -1``).
+
+    Returns
+    -------
+    DataFrame
+        Copy with the schema columns added in SI; the source columns are dropped
+        unless they have the same name as their target.
+    """
+    out = df.copy()
+    for src, (dst, unit) in mapping.items():
+        if src not in out.columns:
+            raise MftireInputError(f"to_schema: column {src!r} not found")
+        values = pd.to_numeric(out[src], errors="raise").astype(float)
+        converted = convert_to_si(values, unit, dst)
+        if src != dst:
+            out = out.drop(columns=[src])
+        out[dst] = converted
+    return out
+
+
+# ----------------------------------------------------------------------------------------
+# Validation
+# ----------------------------------------------------------------------------------------
+
+# lower-case column names that usually mean a schema quantity, with the unit they usually
+# carry (None: the same as the schema, only the name differs).
+_ALIASES: dict[str, dict[str, str | None]] = {
+    "alpha": {"sa": "deg", "slipangle": "deg", "slip_angle": "deg", "slipangl": "deg",
+              "alpha_deg": "deg", "sa_deg": "deg", "alpha_rad": None, "alfa": None},
+    "kappa": {"sl": None, "sr": None, "slipratio": None, "slip_ratio": None, "longslip": None,
+              "kappa_pct": "%", "kappa_percent": "%", "sl_pct": "%", "slip_pct": "%",
+              "longslip_pct": "%"},
+    "gamma": {"ia": "deg", "inclination": "deg", "inclangl": "deg", "camber": "deg",
+              "gamma_deg": "deg", "ia_deg": "deg", "camber_deg": "deg", "gamma_rad": None},
+    "Fz": {"fz": None, "fzw": None, "fz_kn": "kN", "load": None, "normal_load": None,
+           "fz_n": None},
+    "Vx": {"v": "km/h", "vx": None, "vx_kmh": "km/h", "v_kmh": "km/h", "speed": None,
+           "runspeed": None, "velocity": None, "vx_kph": "km/h"},
+    "P": {"p": None, "pressure": None, "p_kpa": "kPa", "p_bar": "bar", "p_psi": "psi",
+          "inflpres": None, "ip": None},
+    "phit": {"turnslip": None, "phi_t": None},
+    "Fx": {"fx": None, "fxw": None, "fx_kn": "kN"},
+    "Fy": {"fy": None, "fyw": None, "fy_kn": "kN"},
+    "Mz": {"mz": None, "mzw": None},
+    "Mx": {"mx": None, "mxw": None},
+    "My": {"my": None, "myw": None},
+}
+
+
+def _alias_hint(df: pd.DataFrame, column: str) -> str:
+    """A sentence suggesting how an existing column could become schema ``column``."""
+    aliases = _ALIASES.get(column, {})
+    for c in df.columns:
+        name = str(c)
+        low = name.lower()
+        if low == column.lower() and name != column:
+            unit = None
+        elif low in aliases:
+            unit = aliases[low]
+        else:
+            continue
+        unit_txt = unit if unit is not None else SI_UNITS[column]
+        note = "" if unit is not None else " (check its unit and sign convention first)"
+        return (
+            f"; column {name!r} looks like {column}{note}: use "
+            f"mftire.iotools.sweeps.to_schema(df, {{{name!r}: ({column!r}, {unit_txt!r})}})"
+        )
+    return ""
+
+
+@dataclass
+class SweepReport:
+    """What :func:`validate_sweeps` did to a table.
+
+    Attributes
+    ----------
+    name : str
+        Name of the data set (file name) used in messages.
+    n_rows_in, n_rows_out : int
+        Rows before and after cleaning.
+    n_dropped_nan : int
+        Rows dropped because a required input was NaN/inf or because every measured
+        channel present was NaN.
+    nan_by_column : dict
+        NaN/inf count per required input column among the input rows.
+    n_dropped_all_measured_nan : int
+        Rows dropped because all measured channels were NaN.
+    nan_in_measured : dict
+        Rows kept that have NaN in *some* measured channels, per channel (the fit of that
+        channel must skip them).
+    n_dropped_nonpositive_fz : int
+        Rows dropped with Fz <= 0 (wheel lift-off).
+    measured_channels, missing_channels : list of str
+        Measured channels present / absent.
+    filled_defaults : dict
+        Columns that were missing and filled with a constant (see ``defaults``).
+    n_phit_filled : int
+        NaN turn-slip values set to 0.
+    messages : list of str
+        Human-readable notes.
+    """
+
+    name: str
+    n_rows_in: int = 0
+    n_rows_out: int = 0
+    n_dropped_nan: int = 0
+    nan_by_column: dict[str, int] = field(default_factory=dict)
+    n_dropped_all_measured_nan: int = 0
+    nan_in_measured: dict[str, int] = field(default_factory=dict)
+    n_dropped_nonpositive_fz: int = 0
+    measured_channels: list[str] = field(default_factory=list)
+    missing_channels: list[str] = field(default_factory=list)
+    filled_defaults: dict[str, float] = field(default_factory=dict)
+    n_phit_filled: int = 0
+    messages: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-dict copy (JSON serialisable)."""
+        return asdict(self)
+
+    def __str__(self) -> str:
+        lines = [f"{self.name}: {self.n_rows_out} of {self.n_rows_in} rows kept"]
+        if self.n_dropped_nan:
+            detail = ", ".join(f"{k}: {v}" for k, v in self.nan_by_column.items() if v)
+            lines.append(f"  {self.n_dropped_nan} rows dropped for NaN ({detail})")
+        if self.n_dropped_nonpositive_fz:
+            lines.append(f"  {self.n_dropped_nonpositive_fz} rows dropped with Fz <= 0")
+        lines.append(f"  measured channels: {', '.join(self.measured_channels) or 'none'}")
+        lines.extend(f"  {m}" for m in self.messages)
+        return "\n".join(lines)
+
+
+def _numeric_column(df: pd.DataFrame, column: str, name: str) -> pd.Series:
+    """``df[column]`` as float64; raise naming the column and a bad cell if not numeric."""
+    s = df[column]
+    if pd.api.types.is_bool_dtype(s):
+        raise MftireInputError(f"{name}: column {column!r} is boolean, expected numbers")
+    if pd.api.types.is_numeric_dtype(s):
+        return s.astype(float)
+    conv = pd.to_numeric(s, errors="coerce")
+    bad = conv.isna() & s.notna() & (s.astype(str).str.strip() != "")
+    if bad.any():
+        first = bad.idxmax()
+        raise MftireInputError(
+            f"{name}: column {column!r} is not numeric (row {first!r} holds {s[first]!r}); "
+            f"{int(bad.sum())} non-numeric cell(s)"
+        )
+    return conv.astype(float)
+
+
+def _check_si(df: pd.DataFrame, name: str, measured: Sequence[str]) -> None:
+    """Raise when a schema column's magnitudes suggest a non-SI unit."""
+
+    def robust_max(col: str) -> float:
+        v = np.abs(df[col].to_numpy(dtype=float))
+        v = v[np.isfinite(v)]
+        return float(np.quantile(v, 0.99)) if v.size else 0.0
+
+    def fail(col: str, why: str, fix: str) -> None:
+        raise MftireInputError(f"{name}: column {col!r} does not look SI ({why}); {fix}")
+
+    a = robust_max("alpha")
+    if a > 1.5 * math.pi / 2:
+        fail("alpha", f"|alpha| reaches {a:.3g}, more than 1.5*pi/2 rad",
+             "it looks like degrees: convert with np.deg2rad")
+    g = robust_max("gamma")
+    if g > math.pi / 6:
+        fail("gamma", f"|gamma| reaches {g:.3g}, more than 30 deg in rad",
+             "it looks like degrees: convert with np.deg2rad")
+    k = robust_max("kappa")
+    if k > 2.0:
+        fail("kappa", f"|kappa| reaches {k:.3g}", "it looks like percent: divide by 100")
+    fz = df["Fz"].to_numpy(dtype=float)
+    fz = fz[np.isfinite(fz)]
+    if fz.size:
+        if np.mean(fz < 0) > 0.5:
+            fail("Fz", "most values are negative",
+                 "mftire wants Fz > 0 in compression; flip the sign (SAE z-down data)")
+        fz_max = float(np.quantile(np.abs(fz), 0.99))
+        if 0 < fz_max < 50.0:
+            fail("Fz", f"|Fz| only reaches {fz_max:.3g}", "it looks like kN: multiply by 1000")
+    p = df["P"].to_numpy(dtype=float)
+    p = p[np.isfinite(p)]
+    if p.size:
+        p_med = float(np.median(p))
+        if p_med <= 0:
+            fail("P", f"median pressure {p_med:.3g} is not positive", "give the inflation pressure in Pa")
+        if p_med < 1000.0:
+            guess = "bar (multiply by 1e5)" if p_med < 20 else "kPa (multiply by 1e3) or psi (x 6894.76)"
+            fail("P", f"median {p_med:.3g} Pa is below 1000 Pa", f"it looks like {guess}")
+    v = robust_max("Vx")
+    if v > 100.0:
+        fail("Vx", f"|Vx| reaches {v:.3g} m/s", "it looks like km/h: divide by 3.6")
+    # forces in kN: peak lateral/longitudinal force far below what the slip implies
+    fz_med = float(np.median(np.abs(fz))) if fz.size else 0.0
+    for col, slip, span in (("Fy", "alpha", 0.05), ("Fx", "kappa", 0.05)):
+        if col in measured and fz_med > 0:
+            s = df[slip].to_numpy(dtype=float)
+            s = s[np.isfinite(s)]
+            if s.size and np.ptp(s) > span:
+                f_max = robust_max(col)
+                if 0 < f_max < 0.01 * fz_med:
+                    fail(col, f"peak |{col}| {f_max:.3g} is below 1 % of Fz {fz_med:.3g} N "
+                         f"over a {slip} sweep", "it looks like kN: multiply by 1000")
+
+
+def validate_sweeps(
+    df: pd.DataFrame,
+    name: str = "sweep data",
+    *,
+    source: str | None = None,
+    defaults: Mapping[str, float] | None = None,
+    check_units: bool = True,
+) -> tuple[pd.DataFrame, SweepReport]:
+    """Check a sweep table and return a clean copy with a report.
+
+    Parameters
+    ----------
+    df : DataFrame
+        Table in the sweep schema (see module docstring): SI columns ``Fz`` [N],
+        ``kappa`` [-], ``alpha`` [rad], ``gamma`` [rad], ``Vx`` [m/s], ``P`` [Pa],
+        optional ``phit`` [1/m], and any of ``Fx, Fy`` [N], ``Mz, Mx, My`` [N*m].
+    name : str
+        Name of the data set (e.g. the file), used in error messages and the report.
+    source : str, optional
+        When given, a ``source`` column with this value is added (overwriting any).
+    defaults : dict, optional
+        Constant values for missing input columns, e.g. ``{"kappa": 0.0, "P": 2.2e5}``
+        (SI). Recorded in the report.
+    check_units : bool
+        Check magnitudes for signs of non-SI units (degrees, percent, kN, bar, km/h).
+
+    Returns
+    -------
+    clean : DataFrame
+        Copy with float64 input/measured columns; rows with NaN/inf in a required
+        input, rows where every measured channel is NaN, and rows with Fz <= 0 are
+        dropped; NaN ``phit`` is set to 0. The index is kept. Other columns untouched.
+    report : SweepReport
+        Counts of what was dropped and why.
+
+    Raises
+    ------
+    MftireInputError
+        Missing required column (with a hint when a similarly named column exists), a
+        non-numeric column, a column that looks non-SI, or no rows left.
+    """
+    if not isinstance(df, pd.DataFrame):
+        raise MftireInputError(f"{name}: expected a pandas DataFrame, got {type(df).__name__}")
+    report = SweepReport(name=name, n_rows_in=len(df))
+    dup = df.columns[df.columns.duplicated()].tolist()
+    if dup:
+        raise MftireInputError(f"{name}: duplicate column(s) {dup}")
+    out = df.copy()
+    for col, value in (defaults or {}).items():
+        if col not in REQUIRED_COLUMNS + OPTIONAL_INPUT_COLUMNS:
+            raise MftireInputError(f"{name}: defaults given for {col!r}, which is not an input column")
+        if col not in out.columns:
+            out[col] = float(value)
+            report.filled_defaults[col] = float(value)
+
+    missing = [c for c in REQUIRED_COLUMNS if c not in out.columns]
+    if missing:
+        hints = "".join(_alias_hint(out, c) for c in missing)
+        raise MftireInputError(
+            f"{name}: missing required column(s) {', '.join(missing)} "
+            f"(SI units: {', '.join(f'{c} [{SI_UNITS[c]}]' for c in missing)}){hints}"
+            + ("" if hints else "; pass defaults={...} for inputs held constant")
+        )
+    for col in MEASURED_COLUMNS + OPTIONAL_INPUT_COLUMNS:
+        if col not in out.columns:
+            hint = _alias_hint(out, col)
+            if hint:
+                raise MftireInputError(f"{name}: no column {col!r} [{SI_UNITS[col]}]{hint}")
+
+    measured = [c for c in MEASURED_COLUMNS if c in out.columns]
+    report.measured_channels = measured
+    report.missing_channels = [c for c in MEASURED_COLUMNS if c not in out.columns]
+    inputs = list(REQUIRED_COLUMNS) + [c for c in OPTIONAL_INPUT_COLUMNS if c in out.columns]
+    for col in inputs + measured:
+        out[col] = _numeric_column(out, col, name).replace([np.inf, -np.inf], np.nan)
+
+    if check_units:
+        _check_si(out, name, measured)
+
+    if "phit" in out.columns:
+        n_fill = int(out["phit"].isna().sum())
+        if n_fill:
+            out["phit"] = out["phit"].fillna(0.0)
+            report.n_phit_filled = n_fill
+            report.messages.append(f"{n_fill} NaN phit values set to 0")
+
+    nan_inputs = out[list(REQUIRED_COLUMNS)].isna()
+    report.nan_by_column = {c: int(nan_inputs[c].sum()) for c in REQUIRED_COLUMNS}
+    bad = nan_inputs.any(axis=1)
+    if measured:
+        all_meas_nan = out[measured].isna().all(axis=1) & ~bad
+        report.n_dropped_all_measured_nan = int(all_meas_nan.sum())
+        bad |= all_meas_nan
+    else:
+        report.messages.append("no measured channel (Fx, Fy, Mz, Mx, My) in the data")
+    report.n_dropped_nan = int(bad.sum())
+    out = out.loc[~bad]
+
+    nonpos = out["Fz"] <= 0
+    report.n_dropped_nonpositive_fz = int(nonpos.sum())
+    out = out.loc[~nonpos]
+    if measured:
+        report.nan_in_measured = {c: int(out[c].isna().sum()) for c in measured}
+    if report.n_dropped_nan:
+        report.messages.append(f"{report.n_dropped_nan} rows with NaN dropped")
+    if report.n_dropped_nonpositive_fz:
+        report.messages.append(f"{report.n_dropped_nonpositive_fz} rows with Fz <= 0 dropped")
+    if len(out) == 0:
+        raise MftireInputError(f"{name}: no valid rows left after dropping NaN and Fz <= 0 rows")
+    if source is not None:
+        out["source"] = source
+    report.n_rows_out = len(out)
+    return out, report
+
+
+def read_sweep_csv(
+    path: str | os.PathLike[str],
+    source: str | None = None,
+    *,
+    validate: bool = True,
+    defaults: Mapping[str, float] | None = None,
+    check_units: bool = True,
+    **read_csv_kwargs: Any,
+) -> pd.DataFrame:
+    """Read a CSV file in the sweep schema.
+
+    Parameters
+    ----------
+    path : path-like
+        CSV file with a header row; lines starting with ``#`` are comments.
+    source : str, optional
+        Value of an added ``source`` column (e.g. ``"rig"``, ``"fe"``).
+    validate : bool
+        Run :func:`validate_sweeps` (default). Its report is stored as a dict in
+        ``df.attrs["report"]``.
+    defaults, check_units
+        Passed to :func:`validate_sweeps`.
+    **read_csv_kwargs
+        Extra keyword arguments for :func:`pandas.read_csv`.
+
+    Returns
+    -------
+    DataFrame
+        The sweep table (SI).
+    """
+    kwargs: dict[str, Any] = {"comment": "#", "skipinitialspace": True}
+    kwargs.update(read_csv_kwargs)
+    try:
+        df = pd.read_csv(path, **kwargs)
+    except (OSError, pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+        raise MftireInputError(f"cannot read sweep CSV {os.fspath(path)}: {exc}") from exc
+    df.columns = [str(c).strip() for c in df.columns]
+    if not validate:
+        if source is not None:
+            df["source"] = source
+        return df
+    clean, report = validate_sweeps(df, os.fspath(path), source=source, defaults=defaults,
+                                    check_units=check_units)
+    clean.attrs["report"] = report.to_dict()
+    return clean
+
+
+# ----------------------------------------------------------------------------------------
+# Grouping into sweeps
+# ----------------------------------------------------------------------------------------
+
+
+def cluster_1d(values: Any, rel_tol: float = 0.0, abs_tol: float = 0.0) -> np.ndarray:
+    """Single-linkage 1-D clustering by gaps.
+
+    Sorted values are split wherever the gap between neighbours exceeds
+    ``abs_tol + rel_tol * max(|left|, |right|)``. Dense noisy data around a set point
+    (e.g. Fz = 4 kN +- 5 %) forms one cluster; set points further apart than the
+    tolerance form separate ones.
+
+    Parameters
+    ----------
+    values : array-like of float
+    rel_tol : float
+        Relative gap tolerance [-].
+    abs_tol : float
+        Absolute gap tolerance, in the unit of ``values``.
+
+    Returns
+    -------
+    ndarray of int
+        Cluster label per value, numbered 0.. in increasing value order; -1 for NaN.
+    """
+    x = np.asarray(values, dtype=float)
+    labels = np.full(x.shape, -1, dtype=int)
+    ok = np.isfinite(x)
+    if not ok.any():
+        return labels
+    idx = np.flatnonzero(ok)
+    order = idx[np.argsort(x[idx], kind="stable")]
+    xs = x[order]
+    gaps = np.diff(xs)
+    thresh = abs_tol + rel_tol * np.maximum(np.abs(xs[:-1]), np.abs(xs[1:]))
+    labels[order] = np.concatenate([[0], np.cumsum(gaps > thresh)])
+    return labels
+
+
+def _set_point(values: np.ndarray, kind: str) -> float:
+    """Representative set point of one cluster.
+
+    Exact when all values are equal (simulation data). Otherwise the median, replaced by
+    the roundest number within its uncertainty (3 standard errors, at most 1 % or
+    0.05 deg), so that a load wandering around 4000 N is labelled 4000, not 4006.
+    """
+    v = values[np.isfinite(values)]
+    if v.size == 0:
+        return float("nan")
+    if np.ptp(v) == 0:
+        return float(v[0])
+    med = float(np.median(v))
+    sem = 3.0 * float(np.std(v)) / math.sqrt(v.size)
+    if kind == "angle":
+        med_deg = math.degrees(med)
+        tol = min(0.05, math.degrees(sem))
+        for decimals in range(0, 4):
+            r = round(med_deg, decimals)
+            if abs(r - med_deg) <= tol:
+                return math.radians(r) if r != 0 else 0.0
+        return med
+    if med == 0:
+        return 0.0
+    tol = min(0.01 * abs(med), sem)
+    magnitude = int(math.floor(math.log10(abs(med))))
+    for sig in range(1, 7):
+        r = round(med, sig - 1 - magnitude)
+        if abs(r - med) <= tol:
+            return float(r)
+    return med
+
+
+def _robust_range(x: np.ndarray) -> float:
+    x = x[np.isfinite(x)]
+    if x.size == 0:
+        return 0.0
+    if x.size < 20:
+        return float(np.ptp(x))
+    lo, hi = np.quantile(x, [0.02, 0.98])
+    return float(hi - lo)
+
+
+def sweep_kind(
+    kappa: Any,
+    alpha: Any,
+    *,
+    kappa_tol: float = 0.01,
+    alpha_tol: float = math.radians(0.5),
+) -> str:
+    """Kind of a sweep from which slips vary.
+
+    Parameters
+    ----------
+    kappa : array-like
+        Longitudinal slip [-] of the sweep's rows.
+    alpha : array-like
+        Slip angle [rad] of the sweep's rows.
+    kappa_tol, alpha_tol : float
+        A slip "varies" when its (2-98 %) range exceeds twice the tolerance, and is
+        "zero" when its median magnitude is within the tolerance.
+
+    Returns
+    -------
+    str
+        ``"pure_longitudinal"`` (kappa varies, alpha ~ 0), ``"pure_lateral"``
+        (alpha varies, kappa ~ 0), ``"combined"`` (both varying, or one varying at a
+        non-zero level of the other), or ``"free_rolling"`` (neither varies, both ~ 0).
+        A constant non-zero slip point counts as pure of that slip if the other is 0.
+    """
+    k = np.asarray(kappa, dtype=float)
+    a = np.asarray(alpha, dtype=float)
+    k_var = _robust_range(k) > 2 * kappa_tol
+    a_var = _robust_range(a) > 2 * alpha_tol
+    k_zero = abs(float(np.nanmedian(k))) <= kappa_tol if k.size else True
+    a_zero = abs(float(np.nanmedian(a))) <= alpha_tol if a.size else True
+    if k_var and a_var:
+        return "combined"
+    if k_var:
+        return "pure_longitudinal" if a_zero else "combined"
+    if a_var:
+        return "pure_lateral" if k_zero else "combined"
+    if k_zero and a_zero:
+        return "free_rolling"
+    if a_zero:
+        return "pure_longitudinal"
+    if k_zero:
+        return "pure_lateral"
+    return "combined"
+
+
+def _split_runs(
+    kappa: np.ndarray, alpha: np.ndarray, kappa_tol: float, alpha_tol: float, patience: int = 3
+) -> np.ndarray:
+    """Split an ordered segment into runs in which one slip is held at a level.
+
+    A run starts with both slips "held" at their level (the running mean of the run's
+    values); the first slip to leave its level by more than the tolerance becomes the
+    swept one, the other stays held; when the held slip leaves its level too, a new run
+    starts. A slip only counts as having left its level when ``patience`` consecutive
+    rows are out of it, so single noisy samples do not split a sweep.
+    """
+    n = kappa.size
+    run = np.zeros(n, dtype=int)
+    r = 0
+
+    def out_of_level(x: np.ndarray, i: int, ref: float, tol: float) -> bool:
+        window = x[i : i + patience]
+        return bool(np.all(np.abs(window - ref) > tol))
+
+    k_sum, a_sum, count = kappa[0], alpha[0], 1
+    held = "both"
+    for i in range(1, n):
+        k_ref, a_ref = k_sum / count, a_sum / count
+        k_out = out_of_level(kappa, i, k_ref, kappa_tol)
+        a_out = out_of_level(alpha, i, a_ref, alpha_tol)
+        if held == "both":
+            if k_out and a_out:
+                new_run = True
+            else:
+                new_run = False
+                if a_out:
+                    held = "kappa"
+                elif k_out:
+                    held = "alpha"
+        else:
+            new_run = (held == "alpha" and a_out) or (held == "kappa" and k_out)
+        if new_run:
+            r += 1
+            k_sum, a_sum, count, held = kappa[i], alpha[i], 1, "both"
+        else:
+            # running level of the held slip(s); noisy excursions are not averaged in
+            if abs(kappa[i] - k_ref) <= kappa_tol:
+                k_sum += kappa[i]
+            else:
+                k_sum += k_ref
+            if abs(alpha[i] - a_ref) <= alpha_tol:
+                a_sum += alpha[i]
+            else:
+                a_sum += a_ref
+            count += 1
+        run[i] = r
+    return run
+
+
+def _merge_short_runs(run: np.ndarray, min_points: int) -> np.ndarray:
+    """Merge runs shorter than ``min_points`` into the previous run (or the next one)."""
+    ids, counts = np.unique(run, return_counts=True)
+    if ids.size <= 1 or min_points <= 1:
+        return run
+    keep = {int(i) for i, c in zip(ids, counts, strict=True) if c >= min_points}
+    if not keep:
+        return np.zeros_like(run)
+    mapping: dict[int, int] = {}
+    last: int | None = None
+    for i in ids:
+        i = int(i)
+        if i in keep:
+            last = i
+        mapping[i] = last if last is not None else -1
+    first_kept = min(keep)
+    out = np.array([mapping[int(i)] for i in run])
+    out[out == -1] = first_kept
+    return out
+
+
+def _direction_labels(x: np.ndarray, tol: float) -> tuple[np.ndarray, str]:
+    """Per-row direction (+1, -1, 0) of an ordered sweep variable and a summary word."""
+    n = x.size
+    if n < 2:
+        return np.zeros(n, dtype=int), "none"
+    smooth = pd.Series(x).rolling(5, center=True, min_periods=1).median().to_numpy()
+    d = np.gradient(smooth)
+    step = np.sign(d) * (np.abs(d) > 1e-3 * tol)
+    dirs = step.astype(int)
+    nz = dirs[dirs != 0]
+    if nz.size == 0:
+        return dirs, "none"
+    frac_up = float(np.mean(nz > 0))
+    if frac_up >= 0.9:
+        return dirs, "increasing"
+    if frac_up <= 0.1:
+        return dirs, "decreasing"
+    # compress into runs of one sign, ignoring short flickers
+    runs: list[tuple[int, int]] = []
+    for s in nz:
+        if runs and runs[-1][0] == s:
+            runs[-1] = (s, runs[-1][1] + 1)
+        else:
+            runs.append((int(s), 1))
+    long_runs = [s for s, c in runs if c >= max(3, nz.size // 20)]
+    merged = [s for i, s in enumerate(long_runs) if i == 0 or s != long_runs[i - 1]]
+    names = {1: "increasing", -1: "decreasing"}
+    if len(merged) == 2:
+        return dirs, f"{names[merged[0]]}-{names[merged[1]]}"
+    return dirs, "mixed"
+
+
+_CONDITION_SPECS: tuple[tuple[str, str, str], ...] = (
+    ("Fz", "Fz_set", "rel"),
+    ("gamma", "gamma_set", "angle"),
+    ("P", "P_set", "rel"),
+    ("Vx", "Vx_set", "rel"),
+)
+
+
+def group_sweeps(
+    df: pd.DataFrame,
+    fz_tol: float = 0.1,
+    *,
+    gamma_tol: float = math.radians(0.5),
+    p_tol: float = 0.05,
+    vx_tol: float = 0.1,
+    vx_abs_tol: float = 0.5,
+    kappa_tol: float = 0.01,
+    alpha_tol: float = math.radians(0.5),
+    by: Sequence[Hashable] | None = None,
+    split: bool = True,
+    min_points: int = 3,
+) -> pd.DataFrame:
+    """Label rows with operating-condition set points and sweep ids.
+
+    Set points are found by 1-D gap clustering (:func:`cluster_1d`) of each condition
+    over the whole table, so the same nominal load in two files gets the same
+    ``Fz_set`` even when the measured Fz wanders around it.
+
+    Sweeps are then found in row order (the measurement sequence): rows are split
+    wherever the set points or the ``by`` columns change, and (``split=True``) wherever
+    the slip that is held constant leaves its level (see ``kappa_tol``/``alpha_tol``),
+    e.g. a kappa sweep at alpha = 0 followed by one at alpha = 4 deg. Runs shorter than
+    ``min_points`` rows are merged into the previous run.
+
+    Parameters
+    ----------
+    df : DataFrame
+        Validated sweep table (SI).
+    fz_tol : float
+        Relative gap tolerance for Fz clustering [-]. The default 0.1 separates set
+        points more than ~10 % apart, e.g. 2, 4, 6 kN with +-5 % noise.
+    gamma_tol : float
+        Absolute gap tolerance for camber [rad] (default 0.5 deg).
+    p_tol : float
+        Relative gap tolerance for pressure [-].
+    vx_tol, vx_abs_tol : float
+        Relative [-] and absolute [m/s] gap tolerance for speed.
+    kappa_tol : float
+        Level tolerance for kappa [-]: a held kappa may wander this much.
+    alpha_tol : float
+        Level tolerance for alpha [rad].
+    by : sequence of column names, optional
+        Columns that also delimit sweeps (e.g. a run id). Default: whichever of
+        ``source`` and ``file`` exist.
+    split : bool
+        Split (condition, ``by``) runs further by held-slip level. With ``False``
+        every contiguous run of constant set points and ``by`` values is one sweep.
+    min_points : int
+        Minimum rows per sweep before it is merged into its neighbour.
+
+    Returns
+    -------
+    DataFrame
+        Copy of ``df`` (same index and row order) with added columns:
+        ``Fz_set, gamma_set, P_set, Vx_set`` (SI set points), ``sweep_id`` (int, in
+        order of appearance), ``kind`` (see :func:`sweep_kind`), ``sweep_var``
+        (``"kappa"``, ``"alpha"`` or ``"none"``), ``kappa_set``/``alpha_set`` (level of
+        the held slip, NaN for the swept one), ``sweep_dir`` (per row +1/-1/0: is the
+        sweep variable increasing) and ``direction`` (per sweep: ``increasing``,
+        ``decreasing``, ``increasing-decreasing``, ``decreasing-increasing``,
+        ``mixed`` or ``none``).
+    """
+    missing = [c for c in REQUIRED_COLUMNS if c not in df.columns]
+    if missing:
+        raise MftireInputError(f"group_sweeps: missing column(s) {', '.join(missing)}")
+    if len(df) == 0:
+        raise MftireInputError("group_sweeps: empty table")
+    out = df.copy()
+    n = len(out)
+    keys = np.zeros((n, 0), dtype=int)
+    for col, set_col, kind in _CONDITION_SPECS:
+        x = out[col].to_numpy(dtype=float)
+        if col == "Fz":
+            labels = cluster_1d(x, rel_tol=fz_tol)
+        elif col == "gamma":
+            labels = cluster_1d(x, abs_tol=gamma_tol)
+        elif col == "P":
+            labels = cluster_1d(x, rel_tol=p_tol)
+        else:
+            labels = cluster_1d(x, rel_tol=vx_tol, abs_tol=vx_abs_tol)
+        centres = {lab: _set_point(x[labels == lab], kind) for lab in np.unique(labels)}
+        out[set_col] = np.array([centres[lab] for lab in labels], dtype=float)
+        keys = np.column_stack([keys, labels])
+
+    if by is None:
+        by = [c for c in ("source", "file") if c in out.columns]
+    for col in by:
+        if col not in out.columns:
+            raise MftireInputError(f"group_sweeps: 'by' column {col!r} not found")
+        codes = pd.factorize(out[col], use_na_sentinel=False)[0]
+        keys = np.column_stack([keys, codes])
+
+    # contiguous segments of identical keys
+    change = np.ones(n, dtype=bool)
+    if n > 1:
+        change[1:] = np.any(keys[1:] != keys[:-1], axis=1)
+    kappa = out["kappa"].to_numpy(dtype=float)
+    alpha = out["alpha"].to_numpy(dtype=float)
+    sweep = np.zeros(n, dtype=int)
+    next_id = 0
+    starts = np.flatnonzero(change)
+    ends = np.append(starts[1:], n)
+    for s, e in zip(starts, ends, strict=True):
+        if split and e - s > 1:
+            runs = _split_runs(kappa[s:e], alpha[s:e], kappa_tol, alpha_tol)
+            runs = _merge_short_runs(runs, min_points)
+            _, runs = np.unique(runs, return_inverse=True)
+        else:
+            runs = np.zeros(e - s, dtype=int)
+        sweep[s:e] = runs + next_id
+        next_id += int(runs.max()) + 1
+
+    out["sweep_id"] = sweep
+    kinds = np.empty(n, dtype=object)
+    svar = np.empty(n, dtype=object)
+    k_set = np.full(n, np.nan)
+    a_set = np.full(n, np.nan)
+    sdir = np.zeros(n, dtype=int)
+    direction = np.empty(n, dtype=object)
+    order = np.argsort(sweep, kind="stable")
+    bounds = np.flatnonzero(np.diff(sweep[order])) + 1
+    for rows in np.split(order, bounds):
+        k, a = kappa[rows], alpha[rows]
+        kind = sweep_kind(k, a, kappa_tol=kappa_tol, alpha_tol=alpha_tol)
+        if kind == "pure_longitudinal":
+            var = "kappa" if _robust_range(k) > 2 * kappa_tol else "none"
+        elif kind == "pure_lateral":
+            var = "alpha" if _robust_range(a) > 2 * alpha_tol else "none"
+        elif kind == "combined":
+            rk, ra = _robust_range(k) / kappa_tol, _robust_range(a) / alpha_tol
+            var = "kappa" if rk >= ra else "alpha"
+            if max(rk, ra) <= 2:
+                var = "none"
+        else:
+            var = "none"
+        kinds[rows] = kind
+        svar[rows] = var
+        if var != "alpha":
+            a_set[rows] = float(np.median(a))
+        if var != "kappa":
+            k_set[rows] = float(np.median(k))
+        if var == "none":
+            direction[rows] = "none"
+        else:
+            x = k if var == "kappa" else a
+            dirs, word = _direction_labels(x, kappa_tol if var == "kappa" else alpha_tol)
+            sdir[rows] = dirs
+            direction[rows] = word
+    out["kind"] = kinds
+    out["sweep_var"] = svar
+    out["kappa_set"] = k_set
+    out["alpha_set"] = a_set
+    out["sweep_dir"] = sdir
+    out["direction"] = direction
+    return out
+
+
+def summarize_sweeps(grouped: pd.DataFrame) -> pd.DataFrame:
+    """One row per sweep of a :func:`group_sweeps` result.
+
+    Returns
+    -------
+    DataFrame
+        Indexed by ``sweep_id`` with ``kind, sweep_var, direction, n, Fz_set, gamma_set,
+        P_set, Vx_set, kappa_set, alpha_set, kappa_min, kappa_max, alpha_min,
+        alpha_max`` and, when present, ``source``/``file`` of the first row.
+    """
+    need = ["sweep_id", "kind", "sweep_var", "direction", "Fz_set", "gamma_set", "P_set", "Vx_set"]
+    missing = [c for c in need if c not in grouped.columns]
+    if missing:
+        raise MftireInputError(f"summarize_sweeps: run group_sweeps first (missing {missing})")
+    g = grouped.groupby("sweep_id", sort=True)
+    first_cols = ["kind", "sweep_var", "direction", "Fz_set", "gamma_set", "P_set", "Vx_set",
+                  "kappa_set", "alpha_set"] + [c for c in ("source", "file") if c in grouped.columns]
+    summary = g[first_cols].first()
+    summary.insert(3, "n", g.size())
+    summary["kappa_min"] = g["kappa"].min()
+    summary["kappa_max"] = g["kappa"].max()
+    summary["alpha_min"] = g["alpha"].min()
+    summary["alpha_max"] = g["alpha"].max()
+    return summary
