@@ -16,14 +16,14 @@ follow from the reference's documented behaviour (tests/data/mfeval/README.md):
 
 from __future__ import annotations
 
-import hashlib
 import gzip
+import hashlib
 
 import numpy as np
 import pandas as pd
 import pytest
-
 from conftest import MFEVAL, REFERENCE_TYRES
+
 from mftire import OUTPUT_NAMES, load
 from mftire.mf import vertical
 

@@ -1,4 +1,9 @@
-"""Atomic file writes: write to a temporary file beside the target, then rename."""
+"""Atomic file writes: write to a temporary file beside the target, then rename.
+
+A failed write leaves the target untouched, and readers never see a half-written
+file.  The new file keeps the permissions of the file it replaces (0644 for a new
+file).
+"""
 
 from __future__ import annotations
 
@@ -16,10 +21,15 @@ def atomic_path(path: str | os.PathLike) -> Iterator[str]:
     """
     path = os.fspath(path)
     directory = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=os.path.splitext(path)[1], dir=directory)
+    try:
+        mode = os.stat(path).st_mode & 0o777
+    except OSError:
+        mode = 0o644
+    fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.", suffix=".tmp", dir=directory)
     os.close(fd)
     try:
         yield tmp
+        os.chmod(tmp, mode)
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
@@ -27,7 +37,12 @@ def atomic_path(path: str | os.PathLike) -> Iterator[str]:
         raise
 
 
-def write_text_atomic(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` (UTF-8) to ``path`` atomically."""
-    with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
+def write_text_atomic(path: str | os.PathLike, text: str, newline: str | None = "") -> None:
+    """Write ``text`` (UTF-8) to ``path`` atomically, flushed to disk before the rename.
+
+    ``newline`` is passed to :func:`open` (``""``: no translation).
+    """
+    with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8", newline=newline) as fh:
         fh.write(text)
+        fh.flush()
+        os.fsync(fh.fileno())

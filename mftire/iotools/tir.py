@@ -25,6 +25,14 @@ Accepted syntax
 * Comment lines before the first section are kept (``header_comments``), except
   ``$-----`` separator lines; other full-line comments are dropped.
 
+Writing
+-------
+Sections and keys are written in their order, one ``KEY = value $description``
+per line (the file's own description, else the table's), floats with
+:func:`repr`, strings quoted, ``[UNITS]`` in SI, with Windows (CRLF) line ends by
+default: MFeval 4.0's reader drops the last character of every line, assuming it
+is a carriage return, and the MFeval and ADAMS example files all use CRLF.
+
 ``FITTYP``
 ----------
 ``FITTYP`` in ``[MODEL]`` must be one of 5 (MF-Tyre 5.0), 6 and 21 (MF 5.2
@@ -105,14 +113,15 @@ import copy
 import math
 import os
 import re
-import tempfile
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
 from mftire.errors import MftireError
+from mftire.iotools.atomic import write_text_atomic
 from mftire.parameters import BY_KEY, STANDARD_SECTIONS, UNIT_DIMENSIONS
 
 __all__ = [
@@ -835,12 +844,28 @@ def _format_value(value: Any, key: str, section: str) -> str:
     raise TirError(f"cannot write a string holding both quote characters ({key} in [{section}])")
 
 
-def format_tir(params: TirParameters) -> str:
+def _as_parameters(params: Any) -> TirParameters:
+    """Accept a TirParameters, ``{SECTION: {KEY: value}}`` or a flat ``{KEY: value}`` of standard keys."""
+    if isinstance(params, TirParameters):
+        return params
+    if isinstance(params, Mapping):
+        if all(isinstance(v, (Mapping, TirTable)) for v in params.values()):
+            return TirParameters(dict(params))
+        out = TirParameters()
+        for key, value in params.items():
+            out.set(key, value)
+        return out
+    raise TypeError(f"cannot write {type(params).__name__} as a .tir file")
+
+
+def format_tir(params: TirParameters | Mapping[str, Any]) -> str:
     """Return the text of a ``.tir`` file holding ``params`` (SI units, ``\\n`` line ends).
 
     Parameters
     ----------
-    params : TirParameters
+    params : TirParameters or mapping
+        A :class:`TirParameters`, a ``{SECTION: {KEY: value}}`` mapping or a flat
+        ``{KEY: value}`` mapping of standard keys (each put in its standard section).
 
     Returns
     -------
@@ -852,6 +877,7 @@ def format_tir(params: TirParameters) -> str:
         If a value cannot be written so that it reads back identically (a string
         for a numeric key, a non-SI ``[UNITS]`` entry, a bad key name, ...).
     """
+    params = _as_parameters(params)
     out: list[str] = [c if c[:1] in "$!" else "$" + c for c in params.header_comments]
     sections = list(params.sections.items())
     if "UNITS" not in params.sections:
@@ -889,7 +915,11 @@ def format_tir(params: TirParameters) -> str:
     return "\n".join(out) + "\n"
 
 
-def write_tir(params: TirParameters, path: str | os.PathLike[str], line_ending: str = "\r\n") -> None:
+def write_tir(
+    params: TirParameters | Mapping[str, Any],
+    path: str | os.PathLike[str],
+    line_ending: str = "\r\n",
+) -> None:
     """Write ``params`` to a ``.tir`` file, atomically.
 
     The text goes to a temporary file in the same directory, which then replaces
@@ -897,8 +927,9 @@ def write_tir(params: TirParameters, path: str | os.PathLike[str], line_ending: 
 
     Parameters
     ----------
-    params : TirParameters
-        Parameters in SI units (as :func:`read_tir` returns them).
+    params : TirParameters or mapping
+        Parameters in SI units (as :func:`read_tir` returns them; see
+        :func:`format_tir` for the mappings accepted).
     path : str or path-like
         Destination file.
     line_ending : str, default "\\r\\n"
@@ -911,24 +942,4 @@ def write_tir(params: TirParameters, path: str | os.PathLike[str], line_ending: 
     TirError
         If ``params`` cannot be written faithfully (see :func:`format_tir`).
     """
-    text = format_tir(params)
-    target = Path(path)
-    directory = target.parent
-    try:
-        mode = target.stat().st_mode & 0o777
-    except OSError:
-        mode = 0o644
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=directory)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline=line_ending) as handle:
-            handle.write(text)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.chmod(tmp, mode)
-        os.replace(tmp, target)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    write_text_atomic(path, format_tir(params), newline=line_ending)

@@ -163,8 +163,12 @@ def mz_combined(
     Fx: np.ndarray,
     Fy: np.ndarray,
     Gyk: np.ndarray,
+    lat: PureLateral | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Combined-slip aligning moment (eqs 4.E71–4.E78; Besselink 2010 A54–A56).
+
+    ``lat``, the pure lateral force at the actual inclination, is reused for the
+    zero-camber force when every inclination is zero.
 
     Returns ``(Mz [N·m], t [m], Mzr [N·m])``.
     """
@@ -178,7 +182,10 @@ def mz_combined(
     Mzr = a.Dr * np.cos(a.Cr * np.arctan(a.Br * alphar_eq))  # eq 4.E75
 
     # Fy at zero camber (and zero spin weighting) for the trail term, eq 4.E74.
-    lat0 = fy0(p, mode, c, b, np.zeros_like(c.Fz), turn_slip=mode.turn_slip)
+    if lat is not None and not np.any(b.gamma_star):
+        lat0 = lat
+    else:
+        lat0 = fy0(p, mode, c, b, np.zeros_like(c.Fz), turn_slip=mode.turn_slip)
     Fy_prime = Gyk * lat0.Fy0  # eq 4.E74; Gyk does not depend on muy or zeta2
     # MFeval departure: t is multiplied by LFZO, as TNO's solver does.
     t = _trail_mf(a.Dt, a.Ct, a.Bt, a.Et, alphat_eq, b.alpha_prime) * p["LFZO"]  # eq 4.E73

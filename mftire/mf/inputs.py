@@ -90,7 +90,9 @@ def condition_inputs(
             ukappa_low = kappa * linear
             phit = phit * linear
             kappa = kappa * linear
-        phit = np.where(Vx < 0.0, -phit, phit)
+        backwards = Vx < 0.0
+        if backwards.any():
+            phit = np.where(backwards, -phit, phit)
         # Slip angle is also reduced when |Vx| + |Vsy| < VXLOW.
         speed_sum = np.abs(Vx) + np.abs(np.tan(alpha) * Vx)
         low_alpha = speed_sum < VXLOW
@@ -109,7 +111,8 @@ def condition_inputs(
                 _warn(f"{label} below the limit {lo_key}={lo}.")
             if (v > hi).any():
                 _warn(f"{label} above the limit {hi_key}={hi}.")
-            clipped[name] = np.where(v < lo, lo, np.where(v > hi, hi, v))
+            if (v < lo).any() or (v > hi).any():
+                clipped[name] = np.clip(v, lo, hi)
         alpha, gamma = clipped["alpha"], clipped["gamma"]
 
         if (Fz > p["FZMAX"]).any():
@@ -122,12 +125,12 @@ def condition_inputs(
             _warn(f"Pressure below the limit PRESMIN={p['PRESMIN']}.")
         if (P > p["PRESMAX"]).any():
             _warn(f"Pressure above the limit PRESMAX={p['PRESMAX']}.")
-        P = np.where(P < p["PRESMIN"], p["PRESMIN"], np.where(P > p["PRESMAX"], p["PRESMAX"], P))
+        P = np.clip(P, p["PRESMIN"], p["PRESMAX"])
         if (kappa < p["KPUMIN"]).any():
             _warn(f"Slip ratio below the limit KPUMIN={p['KPUMIN']}.")
         if (kappa > p["KPUMAX"]).any():
             _warn(f"Slip ratio above the limit KPUMAX={p['KPUMAX']}.")
-        kappa = np.where(kappa < p["KPUMIN"], p["KPUMIN"], np.where(kappa > p["KPUMAX"], p["KPUMAX"], kappa))
+        kappa = np.clip(kappa, p["KPUMIN"], p["KPUMAX"])
         if low_speed.any():
             warnings.warn(
                 f"Speed input Vx below the limit VXLOW={VXLOW}. Low speed mode activated.",
@@ -136,7 +139,9 @@ def condition_inputs(
             )
 
     # MFeval departure: the reported slip angle is zero at exactly zero speed.
-    ualpha = np.where(uVx == 0.0, 0.0, ualpha)
+    standstill = uVx == 0.0
+    if standstill.any():
+        ualpha = np.where(standstill, 0.0, ualpha)
     return Conditions(
         Fz=Fz,
         Fz_low=Fz_low,

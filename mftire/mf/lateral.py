@@ -35,7 +35,9 @@ def _kya(p: dict, Fz, Fz0p, dpi, gamma_star, zeta3) -> np.ndarray:
         * Fz0p
         * (1.0 + p["PPY1"] * dpi)
         * (1.0 - p["PKY3"] * np.abs(gamma_star))
-        * np.sin(p["PKY4"] * np.arctan((Fz / Fz0p) / ((p["PKY2"] + p["PKY5"] * gamma_star**2) * (1.0 + p["PPY2"] * dpi))))
+        * np.sin(
+            p["PKY4"] * np.arctan((Fz / Fz0p) / ((p["PKY2"] + p["PKY5"] * gamma_star**2) * (1.0 + p["PPY2"] * dpi)))
+        )
         * zeta3
         * p["LKY"]
     )
@@ -123,8 +125,12 @@ def fy0(
     Ba = By * alphay
     Fy0 = Dy * np.sin(Cy * np.arctan(Ba - Ey * (Ba - np.arctan(Ba)))) + SVy  # eq 4.E19
     if mode.alpha_star:
-        Fy0 = np.where(c.Vx < 0.0, -Fy0, Fy0)  # driving backwards
-    muy = np.where(Fz == 0.0, 0.0, muy)
+        backwards = c.Vx < 0.0
+        if backwards.any():
+            Fy0 = np.where(backwards, -Fy0, Fy0)  # driving backwards
+    no_load = Fz == 0.0
+    if no_load.any():
+        muy = np.where(no_load, 0.0, muy)
     return PureLateral(Fy0=Fy0, muy=muy, Kya=Kya, Kyg0=Kyg0, SHy=SHy, SVy=SVy, By=By, Cy=Cy, zeta2=zeta2)
 
 
@@ -153,7 +159,9 @@ def fy_combined(
     SHyk = p["RHY1"] + p["RHY2"] * dfz  # eq 4.E65
     Eyk = _clip_curvature(p["REY1"] + p["REY2"] * dfz, "Eyk", "4.E64", mode)  # eq 4.E64
     Cyk = p["RCY1"]  # eq 4.E63
-    Byk = (p["RBY1"] + p["RBY4"] * gamma_star**2) * np.cos(np.arctan(p["RBY2"] * (alpha_star - p["RBY3"]))) * p["LYKA"]  # 4.E62
+    Byk = (
+        (p["RBY1"] + p["RBY4"] * gamma_star**2) * np.cos(np.arctan(p["RBY2"] * (alpha_star - p["RBY3"]))) * p["LYKA"]
+    )  # eq 4.E62
     kappas = c.kappa + SHyk  # eq 4.E61
     Bs = Byk * SHyk
     Gyk0 = np.cos(Cyk * np.arctan(Bs - Eyk * (Bs - np.arctan(Bs))))  # eq 4.E60

@@ -39,7 +39,9 @@ def fx0(
         * (1.0 - p["PDX3"] * c.gamma**2)
         * b.LMUX_star
     )  # eq 4.E13
-    mux = np.where(Fz == 0.0, 0.0, mux)
+    no_load = Fz == 0.0
+    if no_load.any():
+        mux = np.where(no_load, 0.0, mux)
     Dx = mux * Fz * zeta1  # eq 4.E12
     Kxk = (
         Fz
@@ -56,7 +58,9 @@ def fx0(
     Ex = _clip_curvature(Ex, "Ex", "4.E14", mode)  # eq 4.E14
     Bk = Bx * kappax
     Fx0 = Dx * np.sin(Cx * np.arctan(Bk - Ex * (Bk - np.arctan(Bk)))) + SVx  # eq 4.E9
-    Fx0 = np.where(c.Vx < 0.0, -Fx0, Fx0)  # driving backwards
+    backwards = c.Vx < 0.0
+    if backwards.any():
+        Fx0 = np.where(backwards, -Fx0, Fx0)  # driving backwards
     return Fx0, mux, Kxk
 
 

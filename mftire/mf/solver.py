@@ -157,7 +157,7 @@ def _evaluate(p, m: Mode, Fz, kappa, alpha, gamma, phit, Vx, P, omega) -> dict[s
     if m.combined:
         Fx = fx_combined(p, m, c, b, Fx0)
         Fy = Fy_comb
-        Mz, t, Mzr = mz_combined(p, m, c, b, terms, Kxk, Fx, Fy, Gyk)
+        Mz, t, Mzr = mz_combined(p, m, c, b, terms, Kxk, Fx, Fy, Gyk, lat)
     else:
         Fx, Fy = Fx0, lat.Fy0
         Mz, t, Mzr = mz0(p, m, c, b, terms)
