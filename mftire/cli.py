@@ -59,8 +59,10 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     from mftire.tyre import load
 
     tyre = load(args.tir)
-    df = read_numeric_csv(args.input, EVALUATE_REQUIRED, EVALUATE_OPTIONAL)
+    # columns the model extensions of the file need (e.g. temperature) are required too
+    df = read_numeric_csv(args.input, (*EVALUATE_REQUIRED, *tyre.required_variables), EVALUATE_OPTIONAL)
     kw = {c: df[c].to_numpy() for c in EVALUATE_OPTIONAL if c in df.columns}
+    kw.update({c: df[c].to_numpy() for c in tyre.required_variables})
     out = tyre.evaluate(
         df["Fz"].to_numpy(), df["kappa"].to_numpy(), df["alpha"].to_numpy(), df["gamma"].to_numpy(),
         mode=args.mode, **kw,

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mftire.extensions import SECTION, required_variables
 from mftire.iotools.tir import TirParameters, read_tir
 from mftire.mf.solver import OUTPUT_NAMES, OUTPUT_UNITS, evaluate_arrays
 from mftire.parameters import with_defaults
@@ -49,6 +50,14 @@ class Tyre:
     def __init__(self, params: TirParameters | Mapping[str, Any], name: str | None = None) -> None:
         self.parameters = params
         self.flat: dict[str, float] = with_defaults(params)
+        if isinstance(params, TirParameters):
+            ext = params.sections.get(SECTION) if SECTION in params.sections else None
+        else:
+            ext = params.get(SECTION) if isinstance(params.get(SECTION), Mapping) else None
+        #: The ``[MFTIRE_EXTENSIONS]`` section (model extensions), or None.
+        self.extensions: dict[str, Any] | None = dict(ext) if ext else None
+        #: Extra input variables the extensions need (data columns such as ``temperature``).
+        self.required_variables: list[str] = required_variables(self.extensions)
         path = getattr(params, "path", None)
         self.name = name or (os.path.basename(str(path)) if path else "tyre")
 
@@ -79,6 +88,7 @@ class Tyre:
         P=None,
         omega=None,
         mode: int = 111,
+        **variables,
     ) -> MFResult:
         """Steady-state forces and moments.
 
@@ -102,13 +112,19 @@ class Tyre:
             Wheel spin [rad/s]; estimated when not given.
         mode : int, default 111
             MFeval ``useMode`` (see :mod:`mftire.mf.modes`).
+        **variables : array_like
+            Extra inputs for the model extensions of the file's ``[MFTIRE_EXTENSIONS]``
+            section (e.g. ``temperature=...``); a variable an extension needs but
+            that is not given raises :class:`~mftire.errors.MftireInputError`.
 
         Returns
         -------
         MFResult
             The 30 channels of :data:`mftire.mf.solver.OUTPUT_NAMES`.
         """
-        out = evaluate_arrays(self.flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode)
+        out = evaluate_arrays(
+            self.flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, self.extensions, variables or None
+        )
         return MFResult(out)
 
 

@@ -7,8 +7,8 @@ import io
 import numpy as np
 import pandas as pd
 import pytest
-
 from conftest import REFERENCE_TYRES, TIR
+
 from mftire import OUTPUT_NAMES, load
 from mftire.cli import main
 

@@ -11,6 +11,7 @@ import warnings
 import numpy as np
 
 from mftire.errors import MftireError, MftireInputError
+from mftire.extensions import extension_terms
 from mftire.mf import turnslip
 from mftire.mf.aligning import aligning_terms, mz0, mz_combined
 from mftire.mf.basic import basic
@@ -68,6 +69,8 @@ def evaluate_arrays(
     P=None,
     omega=None,
     mode: int = 111,
+    extensions: dict | None = None,
+    variables: dict | None = None,
 ) -> dict[str, np.ndarray]:
     """Steady-state Magic Formula outputs for broadcast inputs.
 
@@ -95,6 +98,10 @@ def evaluate_arrays(
         Wheel spin [rad/s]; estimated from kappa, Vx and Re when not given (or all zero).
     mode : int
         Three-digit ``useMode`` (see :mod:`mftire.mf.modes`).
+    extensions : dict, optional
+        The ``[MFTIRE_EXTENSIONS]`` section (see :mod:`mftire.extensions`).
+    variables : dict, optional
+        Extra input arrays the extensions need, by name (e.g. ``temperature``).
 
     NaN inputs are replaced by 0 (pressure: ``INFLPRES``) with an
     :class:`~mftire.mf.inputs.MFLimitWarning`.
@@ -114,13 +121,17 @@ def evaluate_arrays(
     m = Mode.from_code(mode)
     if Vx is None:
         Vx = p["LONGVL"]
+    names = list((variables or {}).keys())
     try:
         arrays = np.broadcast_arrays(
-            *(np.asarray(v, dtype=float) for v in (Fz, kappa, alpha, gamma, phit, Vx))
+            *(np.asarray(v, dtype=float) for v in (Fz, kappa, alpha, gamma, phit, Vx)),
+            *(np.asarray(variables[k], dtype=float) for k in names),
         )
-    except ValueError as exc:
-        raise MftireInputError(f"inputs cannot be broadcast together: {exc}") from None
+    except (ValueError, TypeError) as exc:
+        raise MftireInputError(f"inputs cannot be broadcast together or are not numeric: {exc}") from None
     shape = arrays[0].shape
+    variables = {k: _clean(k, np.array(a, dtype=float), 0.0) for k, a in zip(names, arrays[6:], strict=True)}
+    arrays = arrays[:6]
     Fz, kappa, alpha, gamma, phit, Vx = (np.array(a, dtype=float) for a in arrays)
     Fz = _clean("Fz", Fz, 0.0)
     kappa = _clean("kappa", kappa, 0.0)
@@ -138,16 +149,19 @@ def evaluate_arrays(
         omega = None if not np.any(omega) else _clean("omega", np.array(omega), 0.0)
 
     with np.errstate(all="ignore"):
-        return _evaluate(p, m, Fz, kappa, alpha, gamma, phit, Vx, P, omega)
+        return _evaluate(p, m, Fz, kappa, alpha, gamma, phit, Vx, P, omega, extensions, variables)
 
 
-def _evaluate(p, m: Mode, Fz, kappa, alpha, gamma, phit, Vx, P, omega) -> dict[str, np.ndarray]:
+def _evaluate(
+    p, m: Mode, Fz, kappa, alpha, gamma, phit, Vx, P, omega, extensions=None, variables=None
+) -> dict[str, np.ndarray]:
     c = condition_inputs(p, m, Fz, kappa, alpha, gamma, phit, Vx, P)
+    ext = extension_terms(extensions, p, c.Fz, c.kappa, c.alpha, c.Vx, variables) if extensions else None
     dpi = (c.P - p["NOMPRES"]) / p["NOMPRES"]  # eq 4.E2b
     Re, Romega, c.omega = effective_rolling_radius(p, c, dpi, omega)
     if m.turn_slip:
         c.phi, c.eps_gamma = turn_slip_spin(p, c)
-    b = basic(p, m, c)
+    b = basic(p, m, c, ext.mux, ext.muy) if ext else basic(p, m, c)
 
     z1 = turnslip.zeta1(p, b.dfz, c.kappa, c.phi) if m.turn_slip else 1.0
     Fx0, mux, Kxk = fx0(p, m, c, b, z1)
@@ -161,8 +175,16 @@ def _evaluate(p, m: Mode, Fz, kappa, alpha, gamma, phit, Vx, P, omega) -> dict[s
     else:
         Fx, Fy = Fx0, lat.Fy0
         Mz, t, Mzr = mz0(p, m, c, b, terms)
+    generic = ext.generic if ext is not None else None
+    if ext is not None:
+        Fx = Fx + ext.dFx
+        Fy = Fy + ext.dFy
+        if generic is not None and generic[0] in ("Fx", "Fy", "Mz"):
+            Fx, Fy, Mz = (v * generic[1] if n == generic[0] else v for n, v in (("Fx", Fx), ("Fy", Fy), ("Mz", Mz)))
     Mx = mx(p, c, dpi, Fy)
     My = my(p, c, Fx)
+    if generic is not None and generic[0] in ("Mx", "My"):
+        Mx, My = (v * generic[1] if n == generic[0] else v for n, v in (("Mx", Mx), ("My", My)))
     muy = np.abs(lat.muy) if m.limits else lat.muy
 
     if p["FITTYP"] == 61:
