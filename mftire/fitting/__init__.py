@@ -1,0 +1,21 @@
+"""Magic Formula 6.1/6.2 parameter fitting to slip sweeps.
+
+Small pure functions in the spirit of pvlib's ``ivtools``:
+
+=================  ================================================================
+``stages``         the seven stages: coefficients, bounds, identifiability needs
+``identify``       which coefficients the data can identify (loads, cambers, ...)
+``initial``        start values from the data (peak, slope at zero, shape, shifts)
+``model``          fast channel predictions (only the equations a stage needs)
+``data``           loading, column checks, per-source weights, noise estimate
+``core``           :func:`fit_tir`, :class:`FitResult`, :class:`StageResult`
+``report``         report.md, metrics.json and one PNG per sweep family
+``synthetic``      synthetic sweeps from a ``.tir`` (tests, benchmark)
+``cli``            ``mftire fit``
+=================  ================================================================
+"""
+
+from mftire.fitting.core import FitResult, StageResult, fit_tir
+from mftire.fitting.stages import STAGES, resolve_stages
+
+__all__ = ["FitResult", "StageResult", "fit_tir", "STAGES", "resolve_stages"]

@@ -1,0 +1,193 @@
+"""Identifiability: which coefficients the data of a stage can determine.
+
+A coefficient multiplies a function of the operating condition (a load increment
+dfz, dfz², an inclination γ, γ², |γ|, a pressure increment dpi, dpi², a speed ...).
+With one load every dfz term is a constant and cannot be told apart from the
+nominal coefficient; with two loads a linear term can, a quadratic term cannot; and
+so on.  :func:`data_levels` counts the distinct operating conditions of a table and
+:func:`split_identified` applies the :data:`RULES` named by each coefficient's
+``needs``.  Coefficients that fail a rule stay at their template value and are
+reported as "not identified" with the reason.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import pandas as pd
+
+from mftire.fitting.stages import Coefficient
+
+__all__ = ["DataLevels", "data_levels", "RULES", "split_identified"]
+
+
+@dataclass(frozen=True)
+class DataLevels:
+    """Counts of distinct operating conditions in a table (one stage's rows).
+
+    Attributes
+    ----------
+    n_points : int
+    loads, pressures, speeds : int
+        Distinct set points of Fz, P and Vx.
+    gammas : int
+        Distinct inclination set points.
+    abs_gammas : int
+        Distinct |γ| set points (0 counts).
+    nonzero_abs_gammas : int
+        Distinct non-zero |γ| set points.
+    gamma_negative, gamma_positive : bool
+        Some set point below / above zero.
+    kappa_negative, kappa_positive : bool
+        At least 3 points with κ < −0.02 / κ > 0.02.
+    alpha_negative, alpha_positive : bool
+        At least 3 points with α < −1° / α > 1°.
+    kappa_levels, alpha_levels : int
+        Distinct non-zero |κ| levels (0.01 bins) / |α| levels (0.5° bins).
+    kappa_range, alpha_range : float
+        Spread (2–98 %) of κ [-] and α [rad].
+    """
+
+    n_points: int
+    loads: int
+    gammas: int
+    abs_gammas: int
+    nonzero_abs_gammas: int
+    gamma_negative: bool
+    gamma_positive: bool
+    pressures: int
+    speeds: int
+    kappa_negative: bool
+    kappa_positive: bool
+    alpha_negative: bool
+    alpha_positive: bool
+    kappa_levels: int
+    alpha_levels: int
+    kappa_range: float
+    alpha_range: float
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def _distinct(values: np.ndarray, decimals: int) -> np.ndarray:
+    v = values[np.isfinite(values)]
+    return np.unique(np.round(v, decimals))
+
+
+def data_levels(df: pd.DataFrame) -> DataLevels:
+    """Count the operating conditions of ``df``.
+
+    ``df`` is a table from :func:`mftire.iotools.sweeps.group_sweeps` (it needs the
+    ``Fz_set, gamma_set, P_set, Vx_set`` columns and ``kappa``, ``alpha``).
+    """
+    if len(df) == 0:
+        return DataLevels(0, 0, 0, 0, 0, False, False, 0, 0, False, False, False, False, 0, 0, 0.0, 0.0)
+    gam = _distinct(np.degrees(df["gamma_set"].to_numpy(float)), 2)
+    kappa = df["kappa"].to_numpy(float)
+    alpha = df["alpha"].to_numpy(float)
+    a1 = math.radians(1.0)
+
+    def spread(x: np.ndarray) -> float:
+        return float(np.subtract(*np.quantile(x, [0.98, 0.02]))) if x.size else 0.0
+
+    k_lv = np.unique(np.round(np.abs(kappa[np.abs(kappa) > 0.01]) / 0.01))
+    a_lv = np.unique(np.round(np.abs(np.degrees(alpha[np.abs(alpha) > math.radians(0.5)])) / 0.5))
+    return DataLevels(
+        n_points=len(df),
+        loads=len(_distinct(df["Fz_set"].to_numpy(float), 0)),
+        gammas=len(gam),
+        abs_gammas=len(np.unique(np.abs(gam))),
+        nonzero_abs_gammas=len(np.unique(np.abs(gam[gam != 0]))),
+        gamma_negative=bool(np.any(gam < 0)),
+        gamma_positive=bool(np.any(gam > 0)),
+        pressures=len(_distinct(df["P_set"].to_numpy(float), -2)),
+        speeds=len(_distinct(df["Vx_set"].to_numpy(float), 2)),
+        kappa_negative=int(np.sum(kappa < -0.02)) >= 3,
+        kappa_positive=int(np.sum(kappa > 0.02)) >= 3,
+        alpha_negative=int(np.sum(alpha < -a1)) >= 3,
+        alpha_positive=int(np.sum(alpha > a1)) >= 3,
+        kappa_levels=len(k_lv),
+        alpha_levels=len(a_lv),
+        kappa_range=spread(kappa),
+        alpha_range=spread(alpha),
+    )
+
+
+Rule = Callable[[DataLevels, Mapping[str, float]], "str | None"]
+
+
+def _need(ok: bool, reason: str) -> str | None:
+    return None if ok else reason
+
+
+#: Identifiability rules: name -> function(levels, template) giving None when the rule
+#: holds, else the reason the coefficient cannot be identified.
+RULES: dict[str, Rule] = {
+    "loads2": lambda lv, p: _need(lv.loads >= 2, f"needs >= 2 loads for a dfz term (data: {lv.loads})"),
+    "loads3": lambda lv, p: _need(
+        lv.loads >= 3, f"needs >= 3 loads for a dfz^2 / nonlinear load term (data: {lv.loads})"
+    ),
+    "gamma": lambda lv, p: _need(lv.gammas >= 2, f"needs >= 2 cambers for a gamma term (data: {lv.gammas})"),
+    "gamma_even": lambda lv, p: _need(
+        lv.abs_gammas >= 2, f"needs a non-zero camber for a gamma^2 / |gamma| term (|gamma| levels: {lv.abs_gammas})"
+    ),
+    "gamma_square_vs_linear": lambda lv, p: _need(
+        lv.gammas >= 3, f"needs >= 3 cambers to separate gamma^2 from gamma (data: {lv.gammas})"
+    ),
+    "gamma_abs_vs_linear": lambda lv, p: _need(
+        lv.gamma_negative and lv.gamma_positive,
+        "needs cambers of both signs to separate |gamma| from gamma",
+    ),
+    "gamma_odd2_vs_linear": lambda lv, p: _need(
+        lv.nonzero_abs_gammas >= 2,
+        f"needs >= 2 distinct non-zero |gamma| to separate gamma*|gamma| from gamma (data: "
+        f"{lv.nonzero_abs_gammas})",
+    ),
+    "pressures2": lambda lv, p: _need(
+        lv.pressures >= 2, f"needs >= 2 pressures for a dpi term (data: {lv.pressures})"
+    ),
+    "pressures3": lambda lv, p: _need(
+        lv.pressures >= 3, f"needs >= 3 pressures for a dpi^2 term (data: {lv.pressures})"
+    ),
+    "speeds2": lambda lv, p: _need(lv.speeds >= 2, f"needs >= 2 speeds for a speed term (data: {lv.speeds})"),
+    "speeds3": lambda lv, p: _need(
+        lv.speeds >= 3, f"needs >= 3 speeds for a second speed term (data: {lv.speeds})"
+    ),
+    "kappa_both_signs": lambda lv, p: _need(
+        lv.kappa_negative and lv.kappa_positive, "needs braking and driving slip (kappa of both signs)"
+    ),
+    "alpha_both_signs": lambda lv, p: _need(
+        lv.alpha_negative and lv.alpha_positive, "needs slip angles of both signs"
+    ),
+    "kappa_levels2": lambda lv, p: _need(lv.kappa_levels >= 2, "needs combined data at >= 2 slip ratios"),
+    "alpha_levels2": lambda lv, p: _need(lv.alpha_levels >= 2, "needs combined data at >= 2 slip angles"),
+    "combined": lambda lv, p: _need(lv.n_points > 0, "needs combined-slip sweeps"),
+    "lateral_force": lambda lv, p: _need(
+        lv.alpha_range > math.radians(2.0), "needs rows with a lateral force (slip-angle sweeps)"
+    ),
+    "longitudinal_force": lambda lv, p: _need(
+        lv.kappa_range > 0.02, "needs rows with a longitudinal force (slip-ratio sweeps)"
+    ),
+    "mx_nonlinear": lambda lv, p: _need(
+        float(p.get("QSX4", 0.0)) != 0.0, "nonlinear Mx term switched off in the template (QSX4 = 0)"
+    ),
+}
+
+
+def split_identified(
+    coefficients: Sequence[Coefficient], levels: DataLevels, template: Mapping[str, float]
+) -> tuple[list[Coefficient], dict[str, str]]:
+    """Split ``coefficients`` into identified ones and ``{key: reason}`` for the rest."""
+    ok: list[Coefficient] = []
+    not_ok: dict[str, str] = {}
+    for c in coefficients:
+        reasons = [r for r in (RULES[n](levels, template) for n in c.needs) if r]
+        if reasons:
+            not_ok[c.key] = "; ".join(reasons)
+        else:
+            ok.append(c)
+    return ok, not_ok
