@@ -1,0 +1,558 @@
+/*
+ * fmi3_model.c -- FMI 3.0 Model Exchange and Co-Simulation wrapper of the mftire
+ * Magic Formula evaluator (mf_eval.c); the same model core as fmi2_model.c.
+ * The tyre is algebraic: no continuous states, no event indicators, no clocks.
+ *
+ * Uses the FMI 3.0 standard headers (fmi3Functions.h and friends).
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi3Functions.h"
+#include "mf_model.h"
+
+typedef enum { ST_INSTANTIATED, ST_INIT, ST_RUNNING, ST_TERMINATED, ST_ERROR } State;
+
+typedef struct {
+    MFModel model;
+    fmi3InstanceEnvironment env;
+    fmi3LogMessageCallback logger;
+    char *name;
+    int cosim;
+    State state;
+    int log_errors, log_warnings;
+} Instance;
+
+static void log_cb(MFModel *m, int status, const char *category, const char *message)
+{
+    Instance *ins = (Instance *)m->host;
+    if (!ins || !ins->logger) return;
+    if (status == MF_STATUS_WARNING && !ins->log_warnings) return;
+    if (status == MF_STATUS_ERROR && !ins->log_errors) return;
+    ins->logger(ins->env, (fmi3Status)status, category, message);
+}
+
+#define INS ((Instance *)instance)
+
+static fmi3Status fail(fmi3Instance instance, const char *what)
+{
+    if (instance) mf_model_logf(&INS->model, MF_STATUS_ERROR, "logStatusError", "%s", what);
+    return fmi3Error;
+}
+
+static Instance *create(fmi3String name, fmi3String token, fmi3Boolean loggingOn, fmi3InstanceEnvironment env,
+                        fmi3LogMessageCallback logger, int cosim)
+{
+    Instance *ins;
+    if (!token || strcmp(token, mf_model_guid()) != 0) {
+        if (logger) logger(env, fmi3Error, "logStatusError", "wrong instantiationToken for this binary");
+        return NULL;
+    }
+    ins = (Instance *)calloc(1, sizeof(Instance));
+    if (!ins) return NULL;
+    ins->name = (char *)malloc(strlen(name ? name : "") + 1);
+    if (!ins->name) {
+        free(ins);
+        return NULL;
+    }
+    strcpy(ins->name, name ? name : "");
+    ins->env = env;
+    ins->logger = logger;
+    ins->cosim = cosim;
+    ins->state = ST_INSTANTIATED;
+    ins->log_errors = ins->log_warnings = 1;
+    mf_model_init(&ins->model, log_cb, ins);
+    ins->model.debug_logging = loggingOn ? 1 : 0;
+    return ins;
+}
+
+/* ------------------------------------------------------------------ common functions */
+
+FMI3_Export const char *fmi3GetVersion(void) { return fmi3Version; }
+
+FMI3_Export fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, size_t nCategories,
+                                           const fmi3String categories[])
+{
+    size_t i;
+    if (!instance) return fmi3Error;
+    if (nCategories == 0) {
+        INS->model.debug_logging = loggingOn ? 1 : 0;
+        INS->log_errors = INS->log_warnings = 1;
+        return fmi3OK;
+    }
+    for (i = 0; i < nCategories; i++) {
+        const char *cat = categories[i];
+        if (!cat) continue;
+        if (strcmp(cat, "logAll") == 0) INS->model.debug_logging = loggingOn ? 1 : 0;
+        else if (strcmp(cat, "logStatusWarning") == 0) INS->log_warnings = loggingOn ? 1 : 0;
+        else if (strcmp(cat, "logStatusError") == 0) INS->log_errors = loggingOn ? 1 : 0;
+        else return fail(instance, "unknown log category");
+    }
+    return fmi3OK;
+}
+
+FMI3_Export fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String instantiationToken,
+                                                      fmi3String resourcePath, fmi3Boolean visible,
+                                                      fmi3Boolean loggingOn, fmi3InstanceEnvironment instanceEnvironment,
+                                                      fmi3LogMessageCallback logMessage)
+{
+    (void)resourcePath;
+    (void)visible;
+    return create(instanceName, instantiationToken, loggingOn, instanceEnvironment, logMessage, 0);
+}
+
+FMI3_Export fmi3Instance fmi3InstantiateCoSimulation(
+    fmi3String instanceName, fmi3String instantiationToken, fmi3String resourcePath, fmi3Boolean visible,
+    fmi3Boolean loggingOn, fmi3Boolean eventModeUsed, fmi3Boolean earlyReturnAllowed,
+    const fmi3ValueReference requiredIntermediateVariables[], size_t nRequiredIntermediateVariables,
+    fmi3InstanceEnvironment instanceEnvironment, fmi3LogMessageCallback logMessage,
+    fmi3IntermediateUpdateCallback intermediateUpdate)
+{
+    (void)resourcePath;
+    (void)visible;
+    (void)eventModeUsed;
+    (void)earlyReturnAllowed;
+    (void)requiredIntermediateVariables;
+    (void)nRequiredIntermediateVariables;
+    (void)intermediateUpdate;
+    return create(instanceName, instantiationToken, loggingOn, instanceEnvironment, logMessage, 1);
+}
+
+FMI3_Export fmi3Instance fmi3InstantiateScheduledExecution(
+    fmi3String instanceName, fmi3String instantiationToken, fmi3String resourcePath, fmi3Boolean visible,
+    fmi3Boolean loggingOn, fmi3InstanceEnvironment instanceEnvironment, fmi3LogMessageCallback logMessage,
+    fmi3ClockUpdateCallback clockUpdate, fmi3LockPreemptionCallback lockPreemption,
+    fmi3UnlockPreemptionCallback unlockPreemption)
+{
+    (void)instanceName;
+    (void)instantiationToken;
+    (void)resourcePath;
+    (void)visible;
+    (void)loggingOn;
+    (void)clockUpdate;
+    (void)lockPreemption;
+    (void)unlockPreemption;
+    if (logMessage)
+        logMessage(instanceEnvironment, fmi3Error, "logStatusError", "Scheduled Execution is not supported");
+    return NULL;
+}
+
+FMI3_Export void fmi3FreeInstance(fmi3Instance instance)
+{
+    if (!instance) return;
+    free(INS->name);
+    free(instance);
+}
+
+FMI3_Export fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined,
+                                                   fmi3Float64 tolerance, fmi3Float64 startTime,
+                                                   fmi3Boolean stopTimeDefined, fmi3Float64 stopTime)
+{
+    (void)toleranceDefined;
+    (void)tolerance;
+    (void)stopTimeDefined;
+    (void)stopTime;
+    if (!instance) return fmi3Error;
+    INS->model.time = startTime;
+    INS->state = ST_INIT;
+    return fmi3OK;
+}
+
+FMI3_Export fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
+{
+    if (!instance) return fmi3Error;
+    /* outputs are valid straight after initialisation */
+    if (mf_model_validate(&INS->model) != MF_STATUS_OK || mf_model_update(&INS->model) != MF_STATUS_OK) {
+        INS->state = ST_ERROR;
+        return fmi3Error;
+    }
+    INS->model.initialized = 1;
+    INS->state = ST_RUNNING;
+    return fmi3OK;
+}
+
+FMI3_Export fmi3Status fmi3EnterEventMode(fmi3Instance instance) { return instance ? fmi3OK : fmi3Error; }
+
+FMI3_Export fmi3Status fmi3Terminate(fmi3Instance instance)
+{
+    if (!instance) return fmi3Error;
+    INS->state = ST_TERMINATED;
+    return fmi3OK;
+}
+
+FMI3_Export fmi3Status fmi3Reset(fmi3Instance instance)
+{
+    if (!instance) return fmi3Error;
+    mf_model_reset(&INS->model);
+    INS->state = ST_INSTANTIATED;
+    return fmi3OK;
+}
+
+/* ------------------------------------------------------------------ variables */
+
+FMI3_Export fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                      fmi3Float64 values[], size_t nValues)
+{
+    size_t i;
+    if (!instance) return fmi3Error;
+    if (nValues != nvr) return fail(instance, "fmi3GetFloat64: only scalar variables (nValues == nValueReferences)");
+    for (i = 0; i < nvr; i++)
+        if (mf_model_get_real(&INS->model, vr[i], &values[i]) != MF_STATUS_OK) return fmi3Error;
+    return fmi3OK;
+}
+
+FMI3_Export fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                      const fmi3Float64 values[], size_t nValues)
+{
+    size_t i;
+    if (!instance) return fmi3Error;
+    if (nValues != nvr) return fail(instance, "fmi3SetFloat64: only scalar variables (nValues == nValueReferences)");
+    for (i = 0; i < nvr; i++)
+        if (mf_model_set_real(&INS->model, vr[i], values[i]) != MF_STATUS_OK) return fmi3Error;
+    return fmi3OK;
+}
+
+FMI3_Export fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                    fmi3Int32 values[], size_t nValues)
+{
+    size_t i;
+    if (!instance) return fmi3Error;
+    if (nValues != nvr) return fail(instance, "fmi3GetInt32: only scalar variables");
+    for (i = 0; i < nvr; i++) {
+        int v;
+        if (mf_model_get_int(&INS->model, vr[i], &v) != MF_STATUS_OK) return fmi3Error;
+        values[i] = v;
+    }
+    return fmi3OK;
+}
+
+FMI3_Export fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                    const fmi3Int32 values[], size_t nValues)
+{
+    size_t i;
+    if (!instance) return fmi3Error;
+    if (nValues != nvr) return fail(instance, "fmi3SetInt32: only scalar variables");
+    for (i = 0; i < nvr; i++)
+        if (mf_model_set_int(&INS->model, vr[i], values[i]) != MF_STATUS_OK) return fmi3Error;
+    return fmi3OK;
+}
+
+/* Types the model does not use: any non-empty access is an error. */
+#define NO_VARIABLES(NAME, TYPE, CONST)                                                                     \
+    FMI3_Export fmi3Status NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,           \
+                                CONST TYPE values[], size_t nValues)                                        \
+    {                                                                                                       \
+        (void)vr;                                                                                           \
+        (void)values;                                                                                       \
+        (void)nValues;                                                                                      \
+        if (!instance) return fmi3Error;                                                                    \
+        return nvr == 0 ? fmi3OK : fail(instance, #NAME ": the model has no variables of this type");     \
+    }
+
+NO_VARIABLES(fmi3GetFloat32, fmi3Float32, )
+NO_VARIABLES(fmi3GetInt8, fmi3Int8, )
+NO_VARIABLES(fmi3GetUInt8, fmi3UInt8, )
+NO_VARIABLES(fmi3GetInt16, fmi3Int16, )
+NO_VARIABLES(fmi3GetUInt16, fmi3UInt16, )
+NO_VARIABLES(fmi3GetUInt32, fmi3UInt32, )
+NO_VARIABLES(fmi3GetInt64, fmi3Int64, )
+NO_VARIABLES(fmi3GetUInt64, fmi3UInt64, )
+NO_VARIABLES(fmi3GetBoolean, fmi3Boolean, )
+NO_VARIABLES(fmi3GetString, fmi3String, )
+NO_VARIABLES(fmi3SetFloat32, fmi3Float32, const)
+NO_VARIABLES(fmi3SetInt8, fmi3Int8, const)
+NO_VARIABLES(fmi3SetUInt8, fmi3UInt8, const)
+NO_VARIABLES(fmi3SetInt16, fmi3Int16, const)
+NO_VARIABLES(fmi3SetUInt16, fmi3UInt16, const)
+NO_VARIABLES(fmi3SetUInt32, fmi3UInt32, const)
+NO_VARIABLES(fmi3SetInt64, fmi3Int64, const)
+NO_VARIABLES(fmi3SetUInt64, fmi3UInt64, const)
+NO_VARIABLES(fmi3SetBoolean, fmi3Boolean, const)
+NO_VARIABLES(fmi3SetString, fmi3String, const)
+
+FMI3_Export fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                     size_t valueSizes[], fmi3Binary values[], size_t nValues)
+{
+    (void)vr;
+    (void)valueSizes;
+    (void)values;
+    (void)nValues;
+    return nvr == 0 && instance ? fmi3OK : fail(instance, "the model has no Binary variables");
+}
+
+FMI3_Export fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                     const size_t valueSizes[], const fmi3Binary values[], size_t nValues)
+{
+    (void)vr;
+    (void)valueSizes;
+    (void)values;
+    (void)nValues;
+    return nvr == 0 && instance ? fmi3OK : fail(instance, "the model has no Binary variables");
+}
+
+FMI3_Export fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                    fmi3Clock values[])
+{
+    (void)vr;
+    (void)values;
+    return nvr == 0 && instance ? fmi3OK : fail(instance, "the model has no clocks");
+}
+
+FMI3_Export fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                    const fmi3Clock values[])
+{
+    (void)vr;
+    (void)values;
+    return nvr == 0 && instance ? fmi3OK : fail(instance, "the model has no clocks");
+}
+
+/* Every output depends on every input (both lists come from the variable table). */
+#define is_output(vr) mf_model_is_output(vr)
+
+FMI3_Export fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance, fmi3ValueReference vr,
+                                                           size_t *nDependencies)
+{
+    if (!instance || !nDependencies) return fmi3Error;
+    *nDependencies = is_output(vr) ? mf_model_input_vrs(NULL) : 0;
+    return fmi3OK;
+}
+
+FMI3_Export fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference dependent,
+                                                   size_t elementIndicesOfDependent[],
+                                                   fmi3ValueReference independents[],
+                                                   size_t elementIndicesOfIndependents[],
+                                                   fmi3DependencyKind dependencyKinds[], size_t nDependencies)
+{
+    unsigned inputs[64];
+    size_t i, n;
+    if (!instance) return fmi3Error;
+    n = mf_model_input_vrs(inputs);
+    if (!is_output(dependent) || nDependencies != n) return nDependencies == 0 ? fmi3OK : fmi3Error;
+    for (i = 0; i < n; i++) {
+        elementIndicesOfDependent[i] = 0;
+        independents[i] = (fmi3ValueReference)inputs[i];
+        elementIndicesOfIndependents[i] = 0;
+        dependencyKinds[i] = fmi3Dependent;
+    }
+    return fmi3OK;
+}
+
+/* ------------------------------------------------------------------ not supported */
+
+FMI3_Export fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *s)
+{
+    (void)s;
+    return fail(instance, "fmi3GetFMUState is not supported");
+}
+FMI3_Export fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState s)
+{
+    (void)s;
+    return fail(instance, "fmi3SetFMUState is not supported");
+}
+FMI3_Export fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *s)
+{
+    (void)s;
+    return fail(instance, "fmi3FreeFMUState is not supported");
+}
+FMI3_Export fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState s, size_t *size)
+{
+    (void)s;
+    (void)size;
+    return fail(instance, "fmi3SerializedFMUStateSize is not supported");
+}
+FMI3_Export fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState s, fmi3Byte b[], size_t size)
+{
+    (void)s;
+    (void)b;
+    (void)size;
+    return fail(instance, "fmi3SerializeFMUState is not supported");
+}
+FMI3_Export fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte b[], size_t size,
+                                               fmi3FMUState *s)
+{
+    (void)s;
+    (void)b;
+    (void)size;
+    return fail(instance, "fmi3DeserializeFMUState is not supported");
+}
+FMI3_Export fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference u[], size_t nu,
+                                                    const fmi3ValueReference k[], size_t nk, const fmi3Float64 seed[],
+                                                    size_t ns, fmi3Float64 sens[], size_t nsens)
+{
+    (void)u, (void)nu, (void)k, (void)nk, (void)seed, (void)ns, (void)sens, (void)nsens;
+    return fail(instance, "fmi3GetDirectionalDerivative is not supported");
+}
+FMI3_Export fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference u[], size_t nu,
+                                                const fmi3ValueReference k[], size_t nk, const fmi3Float64 seed[],
+                                                size_t ns, fmi3Float64 sens[], size_t nsens)
+{
+    (void)u, (void)nu, (void)k, (void)nk, (void)seed, (void)ns, (void)sens, (void)nsens;
+    return fail(instance, "fmi3GetAdjointDerivative is not supported");
+}
+FMI3_Export fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance)
+{
+    return fail(instance, "the model has no structural parameters");
+}
+FMI3_Export fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance)
+{
+    return fail(instance, "the model has no structural parameters");
+}
+FMI3_Export fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
+                                              fmi3Float64 intervals[], fmi3IntervalQualifier q[])
+{
+    (void)vr, (void)n, (void)intervals, (void)q;
+    return fail(instance, "the model has no clocks");
+}
+FMI3_Export fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
+                                               fmi3UInt64 c[], fmi3UInt64 r[], fmi3IntervalQualifier q[])
+{
+    (void)vr, (void)n, (void)c, (void)r, (void)q;
+    return fail(instance, "the model has no clocks");
+}
+FMI3_Export fmi3Status fmi3GetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
+                                           fmi3Float64 shifts[])
+{
+    (void)vr, (void)n, (void)shifts;
+    return fail(instance, "the model has no clocks");
+}
+FMI3_Export fmi3Status fmi3GetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
+                                            fmi3UInt64 c[], fmi3UInt64 r[])
+{
+    (void)vr, (void)n, (void)c, (void)r;
+    return fail(instance, "the model has no clocks");
+}
+FMI3_Export fmi3Status fmi3SetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
+                                              const fmi3Float64 intervals[])
+{
+    (void)vr, (void)n, (void)intervals;
+    return fail(instance, "the model has no clocks");
+}
+FMI3_Export fmi3Status fmi3SetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
+                                               const fmi3UInt64 c[], const fmi3UInt64 r[])
+{
+    (void)vr, (void)n, (void)c, (void)r;
+    return fail(instance, "the model has no clocks");
+}
+FMI3_Export fmi3Status fmi3SetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
+                                           const fmi3Float64 shifts[])
+{
+    (void)vr, (void)n, (void)shifts;
+    return fail(instance, "the model has no clocks");
+}
+FMI3_Export fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
+                                            const fmi3UInt64 c[], const fmi3UInt64 r[])
+{
+    (void)vr, (void)n, (void)c, (void)r;
+    return fail(instance, "the model has no clocks");
+}
+FMI3_Export fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference clockReference,
+                                                  fmi3Float64 activationTime)
+{
+    (void)clockReference, (void)activationTime;
+    return fail(instance, "Scheduled Execution is not supported");
+}
+
+/* ------------------------------------------------------------------ events and Model Exchange */
+
+FMI3_Export fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) { return instance ? fmi3OK : fmi3Error; }
+
+FMI3_Export fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discreteStatesNeedUpdate,
+                                                fmi3Boolean *terminateSimulation,
+                                                fmi3Boolean *nominalsOfContinuousStatesChanged,
+                                                fmi3Boolean *valuesOfContinuousStatesChanged,
+                                                fmi3Boolean *nextEventTimeDefined, fmi3Float64 *nextEventTime)
+{
+    if (!instance) return fmi3Error;
+    if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = fmi3False;
+    if (terminateSimulation) *terminateSimulation = fmi3False;
+    if (nominalsOfContinuousStatesChanged) *nominalsOfContinuousStatesChanged = fmi3False;
+    if (valuesOfContinuousStatesChanged) *valuesOfContinuousStatesChanged = fmi3False;
+    if (nextEventTimeDefined) *nextEventTimeDefined = fmi3False;
+    if (nextEventTime) *nextEventTime = 0.0;
+    return fmi3OK;
+}
+
+FMI3_Export fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) { return instance ? fmi3OK : fmi3Error; }
+
+FMI3_Export fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
+                                                   fmi3Boolean *enterEventMode, fmi3Boolean *terminateSimulation)
+{
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (!instance) return fmi3Error;
+    if (enterEventMode) *enterEventMode = fmi3False;
+    if (terminateSimulation) *terminateSimulation = fmi3False;
+    return fmi3OK;
+}
+
+FMI3_Export fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
+{
+    if (!instance) return fmi3Error;
+    INS->model.time = time;
+    return fmi3OK;
+}
+
+FMI3_Export fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 x[], size_t nx)
+{
+    (void)x;
+    return instance && nx == 0 ? fmi3OK : fmi3Error;
+}
+FMI3_Export fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 dx[], size_t nx)
+{
+    (void)dx;
+    return instance && nx == 0 ? fmi3OK : fmi3Error;
+}
+FMI3_Export fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 ei[], size_t ni)
+{
+    (void)ei;
+    return instance && ni == 0 ? fmi3OK : fmi3Error;
+}
+FMI3_Export fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 x[], size_t nx)
+{
+    (void)x;
+    return instance && nx == 0 ? fmi3OK : fmi3Error;
+}
+FMI3_Export fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 xn[], size_t nx)
+{
+    (void)xn;
+    return instance && nx == 0 ? fmi3OK : fmi3Error;
+}
+FMI3_Export fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n)
+{
+    if (!instance || !n) return fmi3Error;
+    *n = 0;
+    return fmi3OK;
+}
+FMI3_Export fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *n)
+{
+    if (!instance || !n) return fmi3Error;
+    *n = 0;
+    return fmi3OK;
+}
+
+/* ------------------------------------------------------------------ Co-Simulation */
+
+FMI3_Export fmi3Status fmi3EnterStepMode(fmi3Instance instance) { return instance ? fmi3OK : fmi3Error; }
+
+FMI3_Export fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                                                const fmi3Int32 orders[], fmi3Float64 values[], size_t nValues)
+{
+    (void)vr, (void)nvr, (void)orders, (void)values, (void)nValues;
+    return fail(instance, "fmi3GetOutputDerivatives is not supported");
+}
+
+FMI3_Export fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
+                                  fmi3Float64 communicationStepSize, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
+                                  fmi3Boolean *eventHandlingNeeded, fmi3Boolean *terminateSimulation,
+                                  fmi3Boolean *earlyReturn, fmi3Float64 *lastSuccessfulTime)
+{
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (!instance) return fmi3Error;
+    if (communicationStepSize < 0.0) return fail(instance, "fmi3DoStep: negative step size");
+    /* inputs are held over the step; the outputs at its end are those of the inputs */
+    INS->model.time = currentCommunicationPoint + communicationStepSize;
+    if (eventHandlingNeeded) *eventHandlingNeeded = fmi3False;
+    if (terminateSimulation) *terminateSimulation = fmi3False;
+    if (earlyReturn) *earlyReturn = fmi3False;
+    if (lastSuccessfulTime) *lastSuccessfulTime = INS->model.time;
+    return mf_model_update(&INS->model) == MF_STATUS_OK ? fmi3OK : fmi3Error;
+}

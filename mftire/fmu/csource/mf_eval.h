@@ -1,0 +1,77 @@
+/*
+ * mf_eval.h -- steady-state Magic Formula 6.1 / 6.2 (and MF 5.2, FITTYP 6) tyre
+ * evaluator in plain C99, for the mftire FMU.
+ *
+ * The equations mirror mftire's Python evaluator (the modules of mftire/mf) line by line;
+ * equation numbers refer to Pacejka (2012), "Tire and Vehicle Dynamics", 3rd ed.,
+ * and Besselink, Schmeitz and Pacejka (2010), Vehicle System Dynamics 48:S1.
+ * Axes are ISO-W (TYDEX W), units SI, angles in rad.
+ *
+ * MFParams (one double per .tir parameter) is generated from the FMU variable
+ * table into mf_params.h by mftire/fmu/variables.py.
+ */
+#ifndef MF_EVAL_H
+#define MF_EVAL_H
+
+#include "mf_params.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* One operating point as the importer gives it. */
+typedef struct {
+    double Fz;     /* vertical load [N]; negative = lift-off (set to 0) */
+    double kappa;  /* longitudinal slip [-] */
+    double alpha;  /* slip angle [rad] */
+    double gamma;  /* inclination angle [rad] */
+    double phit;   /* turn slip [1/m] */
+    double Vx;     /* forward speed [m/s] */
+    double P;      /* inflation pressure [Pa]; NaN or <= 0 means INFLPRES */
+    double omega;  /* wheel spin [rad/s]; 0 means "estimate from kappa, Vx, Re" */
+    double muRoad; /* road friction factor multiplying LMUX and LMUY [-] */
+} MFInputs;
+
+/* The outputs (the FMU publishes all but the last four). */
+typedef struct {
+    double Fx, Fy, Fz, Mx, My, Mz;
+    double Re, Rl, rho, a2, b2, t, Mzr, mux, muy, Kxk, Kya, sigmax, sigmay;
+    double omega, Cx, Cy, Cz;
+} MFOutputs;
+
+/* Warning kinds (bit numbers of the warning mask). */
+enum {
+    MF_W_NAN_FZ = 0, MF_W_NAN_KAPPA, MF_W_NAN_ALPHA, MF_W_NAN_GAMMA, MF_W_NAN_PHIT,
+    MF_W_NAN_VX, MF_W_NAN_OMEGA,
+    MF_W_ALPHA_LOW, MF_W_ALPHA_HIGH, MF_W_GAMMA_LOW, MF_W_GAMMA_HIGH,
+    MF_W_FZ_HIGH, MF_W_FZ_LOW, MF_W_P_LOW, MF_W_P_HIGH, MF_W_KAPPA_LOW, MF_W_KAPPA_HIGH,
+    MF_W_LOW_SPEED,
+    MF_W_EX, MF_W_EY, MF_W_EXA, MF_W_EYK, MF_W_ET,
+    MF_W_COUNT
+};
+
+/* Called once per distinct warning of an evaluation (kind, human-readable text). */
+typedef void (*mf_warning_fn)(void *ctx, int kind, const char *message);
+
+/* Return codes of mf_evaluate and the checks. */
+#define MF_OK 0
+#define MF_BAD_MODE 1
+#define MF_BAD_FITTYP 2
+
+/* Check a three-digit useMode; on failure write a message to msg (size n). */
+int mf_check_mode(int use_mode, char *msg, unsigned long n);
+
+/* Check that FITTYP is one the evaluator handles (6, 61, 62). */
+int mf_check_fittyp(const MFParams *p, char *msg, unsigned long n);
+
+/*
+ * Evaluate one operating point.  Returns MF_OK, or MF_BAD_MODE / MF_BAD_FITTYP
+ * (then *out is untouched).  warn may be NULL.
+ */
+int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *out,
+                mf_warning_fn warn, void *ctx);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* MF_EVAL_H */

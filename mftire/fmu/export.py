@@ -1,0 +1,245 @@
+"""Export a ``.tir`` tyre as a self-contained FMU (FMI 2.0 ME + CS, or FMI 3.0).
+
+The FMU carries the Magic Formula as C code (``mftire/fmu/csource``), compiled
+here with the system C compiler; no Python is needed to use it.  Layout::
+
+    modelDescription.xml
+    sources/            all C sources and headers (+ buildDescription.xml for FMI 3)
+    binaries/linux64/<id>.so          (FMI 2.0)
+    binaries/x86_64-linux/<id>.so     (FMI 3.0)
+
+The variable table (:mod:`mftire.fmu.variables`) generates the XML, the GUID and
+the C headers, so they cannot disagree.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+import tempfile
+import warnings
+import zipfile
+from pathlib import Path
+
+from mftire.errors import MftireError
+from mftire.fmu import variables as vt
+
+CSOURCE = Path(__file__).parent / "csource"
+
+#: Hand-written C sources shipped in every FMU (besides the wrapper and generated headers).
+CORE_SOURCES = ("mf_eval.c", "mf_eval.h", "mf_model.c", "mf_model.h")
+
+#: FMI headers taken from fmpy's ``c-code`` directory.
+FMI_HEADERS = {
+    2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
+    3: ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h"),
+}
+
+#: Flags of the shared library build (the maths library is linked explicitly).
+CFLAGS = ("-shared", "-fPIC", "-O2", "-std=c99", "-fvisibility=hidden", "-Wall")
+LIBS = ("-lm",)
+
+
+class FMUExportError(MftireError):
+    """The FMU could not be built (no C compiler, compile error, unusable .tir)."""
+
+
+def _fmpy_c_code() -> Path:
+    import fmpy
+
+    return Path(fmpy.__file__).parent / "c-code"
+
+
+def _platform(fmi_version: int) -> tuple[str, str]:
+    """(binaries/ sub-directory, shared-library suffix) for this machine."""
+    import fmpy
+
+    if sys.platform.startswith("win"):
+        raise FMUExportError("export-fmu builds with a POSIX C compiler; Windows binaries are not supported")
+    suffix = ".dylib" if sys.platform == "darwin" else ".so"
+    return (fmpy.platform if fmi_version == 2 else fmpy.platform_tuple), suffix
+
+
+def find_compiler(compiler: str | None = None) -> list[str]:
+    """The C compiler command: ``compiler``, else ``$CC``, else cc, gcc or clang on PATH.
+
+    Raises :class:`FMUExportError` when none is found.
+    """
+    candidates = [compiler] if compiler else ([os.environ["CC"]] if os.environ.get("CC") else ["cc", "gcc", "clang"])
+    for cand in candidates:
+        argv = shlex.split(cand)
+        if argv and shutil.which(argv[0]):
+            return argv
+    raise FMUExportError(
+        "no C compiler found (tried " + ", ".join(candidates) + "): the FMU's binary is compiled from its C "
+        "sources; install gcc or clang, or set CC"
+    )
+
+
+def model_identifier_for(name: str) -> str:
+    """A C identifier (and file name) from a tyre name."""
+    ident = re.sub(r"[^A-Za-z0-9_]", "_", name)
+    if not ident or not (ident[0].isalpha() or ident[0] == "_"):
+        ident = "tyre_" + ident
+    return ident
+
+
+def _load_flat(tir) -> tuple[dict[str, float], str]:
+    """Flat parameters and a name from a path, a Tyre or a mapping; checks the tyre evaluates."""
+    import numpy as np
+
+    from mftire.tyre import Tyre, load
+
+    if isinstance(tir, Tyre):
+        tyre = tir
+    elif isinstance(tir, (str, os.PathLike)):
+        if not Path(tir).is_file():
+            raise FMUExportError(f"{tir}: file not found")
+        tyre = load(tir)
+    else:
+        tyre = Tyre(tir)
+    name = Path(tyre.name).stem if tyre.name else "tyre"
+    active = _active_extensions(tyre)
+    if active:
+        raise FMUExportError(
+            f"{tyre.name}: the [MFTIRE_EXTENSIONS] terms ({', '.join(active)}) are not implemented in the FMU's "
+            "C code yet; remove the section to export the plain Magic Formula"
+        )
+    flat = dict(tyre.flat)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            out = tyre.evaluate(flat["FNOMIN"], 0.05, 0.05, 0.0, mode=111)
+    except MftireError as exc:
+        raise FMUExportError(f"{tyre.name}: cannot be evaluated, so it cannot be exported: {exc}") from None
+    bad = [k for k in ("Fx", "Fy", "Mz", "Re") if not np.isfinite(out[k]).all()]
+    if bad:
+        raise FMUExportError(
+            f"{tyre.name}: cannot be evaluated: {', '.join(bad)} not finite at Fz = FNOMIN, kappa = alpha = 0.05"
+        )
+    return flat, name
+
+
+def _active_extensions(tyre) -> list[str]:
+    ext = getattr(tyre, "extensions", None)
+    if not ext:
+        return []
+    try:
+        from mftire.extensions import active_extensions
+    except ImportError:  # pragma: no cover - older evaluator without extensions
+        return sorted(ext)
+    return list(active_extensions(ext))
+
+
+def generate_sources(
+    flat: dict[str, float], model_identifier: str, fmi_version: int, use_mode: int = vt.DEFAULT_USE_MODE
+) -> tuple[list[vt.Variable], dict[str, str]]:
+    """The variable table and every file of ``sources/`` (name -> text)."""
+    variables = vt.variable_table(flat, use_mode)
+    files: dict[str, str] = {}
+    for name in CORE_SOURCES:
+        files[name] = (CSOURCE / name).read_text(encoding="utf-8")
+    wrapper = f"fmi{fmi_version}_model.c"
+    files[wrapper] = (CSOURCE / wrapper).read_text(encoding="utf-8")
+    files["mf_params.h"] = vt.params_header(variables)
+    files["mf_model_gen.h"] = vt.model_header(variables, model_identifier, fmi_version)
+    c_code = _fmpy_c_code()
+    for h in FMI_HEADERS[fmi_version]:
+        files[h] = (c_code / h).read_text(encoding="utf-8")
+    if fmi_version == 3:
+        files["buildDescription.xml"] = vt.build_description_xml(model_identifier, sorted(files))
+    return variables, files
+
+
+def compile_sources(src_dir: Path, out_path: Path, compiler: str | None = None) -> None:
+    """Compile every ``.c`` in ``src_dir`` into the shared library ``out_path``."""
+    cc = find_compiler(compiler)
+    c_files = sorted(str(p) for p in src_dir.glob("*.c"))
+    cmd = [*cc, *CFLAGS, "-I", str(src_dir), *c_files, "-o", str(out_path), *LIBS]
+    try:
+        res = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    except OSError as exc:
+        raise FMUExportError(f"C compiler {cc[0]!r} could not be run: {exc}") from None
+    if res.returncode != 0:
+        tail = "\n".join((res.stderr or res.stdout).strip().splitlines()[-15:])
+        raise FMUExportError(f"compiling the FMU failed ({' '.join(cc)} exit {res.returncode}):\n{tail}")
+
+
+def export_fmu(
+    tir,
+    output: str | os.PathLike,
+    fmi_version: int = 2,
+    *,
+    model_identifier: str | None = None,
+    use_mode: int = vt.DEFAULT_USE_MODE,
+    compiler: str | None = None,
+) -> Path:
+    """Export a tyre as an FMU.
+
+    Parameters
+    ----------
+    tir : path, Tyre or mapping
+        The ``.tir`` file (or an already loaded :class:`~mftire.tyre.Tyre`).
+    output : path
+        The ``.fmu`` file to write (atomically).
+    fmi_version : 2 or 3
+        FMI 2.0 (Model Exchange and Co-Simulation in one FMU) or FMI 3.0 (both too).
+    model_identifier : str, optional
+        C identifier of the binary; default from the tyre's file name.
+    use_mode : int
+        Start value of the ``useMode`` parameter (default 111).
+    compiler : str, optional
+        C compiler command; default ``$CC``, then cc, gcc, clang.
+
+    Returns
+    -------
+    Path of the written FMU.
+
+    Raises
+    ------
+    FMUExportError
+        No C compiler, a compile error, or a ``.tir`` that cannot be evaluated.
+    """
+    from mftire.iotools.atomic import atomic_path
+    from mftire.mf.modes import Mode
+
+    if fmi_version not in (2, 3):
+        raise FMUExportError(f"fmi_version must be 2 or 3, not {fmi_version!r}")
+    Mode.from_code(use_mode)
+    cc = find_compiler(compiler)  # fail early, before any work
+    flat, name = _load_flat(tir)
+    ident = model_identifier or model_identifier_for(name)
+    if not re.match(r"^[A-Za-z_][A-Za-z0-9_]*$", ident):
+        raise FMUExportError(f"model identifier {ident!r} is not a C identifier")
+    variables, files = generate_sources(flat, ident, fmi_version, use_mode)
+    platform, suffix = _platform(fmi_version)
+    fittyp = int(flat["FITTYP"])
+    xml = vt.model_description_xml(
+        variables,
+        ident,
+        fmi_version,
+        model_name=name,
+        description=f"Magic Formula tyre {name} (FITTYP {fittyp}) exported by mftire; ISO-W axes, SI units",
+        sources=sorted(f for f in files if f.endswith(".c")),
+    )
+    output = Path(output)
+    with tempfile.TemporaryDirectory(prefix="mftire-fmu-") as tmp:
+        src = Path(tmp) / "sources"
+        src.mkdir()
+        for fname, text in files.items():
+            (src / fname).write_text(text, encoding="utf-8")
+        binary = Path(tmp) / (ident + suffix)
+        compile_sources(src, binary, " ".join(shlex.quote(a) for a in cc))
+        with atomic_path(output) as tmp_out, zipfile.ZipFile(tmp_out, "w", zipfile.ZIP_DEFLATED) as zf:
+            zf.writestr("modelDescription.xml", xml)
+            for fname in sorted(files):
+                zf.writestr(f"sources/{fname}", files[fname])
+            zf.write(binary, f"binaries/{platform}/{ident}{suffix}")
+    return output
+
+
+__all__ = ["FMUExportError", "export_fmu", "find_compiler", "generate_sources", "compile_sources"]
