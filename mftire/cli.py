@@ -204,6 +204,15 @@ def build_parser() -> argparse.ArgumentParser:
     from mftire.fe import cli as fe_cli
 
     fe_cli.add_parser(sub)
+    from mftire.fitting import cli as fit_cli
+
+    fit_cli.add_parser(sub)
+    from mftire.fmu import cli as fmu_cli
+
+    fmu_cli.add_parser(sub)
+    from mftire.diagnosis import cli as diagnose_cli
+
+    diagnose_cli.add_parser(sub)
     return parser
 
 

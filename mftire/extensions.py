@@ -93,6 +93,9 @@ NEUTRAL: dict[str, float] = {
     "GEN_REF": 0.0, "GEN_SCALE": 1.0, "GEN_C1": 0.0, "GEN_C2": 0.0, "GEN_C3": 0.0,
 }  # fmt: skip
 
+#: Variables an extension may use that the evaluator derives from its own inputs.
+BUILTIN_VARIABLES = ("Fz", "kappa", "alpha", "gamma", "Vx", "P", "Vs", "sign_alpha", "sign_kappa")
+
 #: Channels a generic correction may act on.
 GENERIC_CHANNELS = ("Fx", "Fy", "Mz", "Mx", "My")
 
@@ -119,8 +122,18 @@ def required_variables(section: Mapping[str, object] | None) -> list[str]:
             var = sec.get(ext.variable_key)
             if not isinstance(var, str) or not var:
                 raise MftireInputError(f"[{SECTION}] {name}: {ext.variable_key} must name the input variable")
-            out.append(var)
+            if var not in BUILTIN_VARIABLES and var not in out:
+                out.append(var)
     return out
+
+
+def builtin_variables(Fz, kappa, alpha, gamma, Vx, P) -> dict[str, np.ndarray]:
+    """The variables of :data:`BUILTIN_VARIABLES` from the (conditioned) MF inputs."""
+    return {
+        "Fz": Fz, "kappa": kappa, "alpha": alpha, "gamma": gamma, "Vx": Vx, "P": P,
+        "Vs": np.abs(Vx) * np.sqrt(kappa**2 + np.tan(alpha) ** 2),  # slip speed
+        "sign_alpha": np.sign(alpha), "sign_kappa": np.sign(kappa),
+    }  # fmt: skip
 
 
 @dataclass
@@ -158,7 +171,9 @@ def extension_terms(
     Fz: np.ndarray,
     kappa: np.ndarray,
     alpha: np.ndarray,
+    gamma: np.ndarray,
     Vx: np.ndarray,
+    P: np.ndarray,
     variables: Mapping[str, np.ndarray] | None = None,
 ) -> ExtensionTerms | None:
     """Evaluate the active extensions.
@@ -169,10 +184,12 @@ def extension_terms(
         The ``[MFTIRE_EXTENSIONS]`` section (upper-case keys).
     p : mapping
         Flat MF parameters (FNOMIN, LFZO, LONGVL are used).
-    Fz, kappa, alpha, Vx : ndarray
-        Conditioned load [N], slip [-], slip angle [rad] and forward speed [m/s].
+    Fz, kappa, alpha, gamma, Vx, P : ndarray
+        Conditioned load [N], slip [-], slip angle [rad], inclination [rad], forward
+        speed [m/s] and pressure [Pa].
     variables : mapping, optional
         Extra input arrays by name (e.g. ``{"temperature": ...}``), broadcast to Fz.
+        The names of :data:`BUILTIN_VARIABLES` always come from the MF inputs.
 
     Returns
     -------
@@ -183,7 +200,7 @@ def extension_terms(
     if not names:
         return None
     sec = {str(k).upper(): v for k, v in sec.items()}  # type: ignore[union-attr]
-    variables = variables or {}
+    variables = {**(variables or {}), **builtin_variables(Fz, kappa, alpha, gamma, Vx, P)}
     t = ExtensionTerms()
     V0 = p["LONGVL"]
     mu = np.ones(np.shape(Fz))

@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from mftire.extensions import SECTION, required_variables
-from mftire.iotools.tir import TirParameters, read_tir
+from mftire.iotools.tir import TirParameters, as_parameters, read_tir
 from mftire.mf.solver import OUTPUT_NAMES, OUTPUT_UNITS, evaluate_arrays
 from mftire.parameters import with_defaults
 
@@ -48,12 +48,11 @@ class Tyre:
     """
 
     def __init__(self, params: TirParameters | Mapping[str, Any], name: str | None = None) -> None:
-        self.parameters = params
+        #: The parameters as a :class:`TirParameters` (a mapping is converted; its
+        #: non-standard keys outside sections are kept in :attr:`flat` only).
+        self.parameters: TirParameters = as_parameters(params, unknown="drop")
         self.flat: dict[str, float] = with_defaults(params)
-        if isinstance(params, TirParameters):
-            ext = params.sections.get(SECTION) if SECTION in params.sections else None
-        else:
-            ext = params.get(SECTION) if isinstance(params.get(SECTION), Mapping) else None
+        ext = self.parameters.sections.get(SECTION)
         #: The ``[MFTIRE_EXTENSIONS]`` section (model extensions), or None.
         self.extensions: dict[str, Any] | None = dict(ext) if ext else None
         #: Extra input variables the extensions need (data columns such as ``temperature``).

@@ -844,16 +844,30 @@ def _format_value(value: Any, key: str, section: str) -> str:
     raise TirError(f"cannot write a string holding both quote characters ({key} in [{section}])")
 
 
-def _as_parameters(params: Any) -> TirParameters:
-    """Accept a TirParameters, ``{SECTION: {KEY: value}}`` or a flat ``{KEY: value}`` of standard keys."""
+def as_parameters(params: Any, unknown: str = "error") -> TirParameters:
+    """A :class:`TirParameters` from a TirParameters, ``{SECTION: {KEY: value}}`` or a flat mapping.
+
+    A flat mapping puts each standard key in its standard section; values that are
+    mappings (or tables) become sections of that name, so ``{"PCX1": 1.6,
+    "MFTIRE_EXTENSIONS": {"VS_DECAY": 0.1}}`` works.  A non-standard key outside a
+    section raises (``unknown="error"``) or is left out (``unknown="drop"``).
+    """
     if isinstance(params, TirParameters):
         return params
     if isinstance(params, Mapping):
         if all(isinstance(v, (Mapping, TirTable)) for v in params.values()):
-            return TirParameters(dict(params))
+            return TirParameters({k: (dict(v) if isinstance(v, Mapping) else v) for k, v in params.items()})
         out = TirParameters()
         for key, value in params.items():
-            out.set(key, value)
+            if isinstance(value, (Mapping, TirTable)):
+                for k, v in (value.items() if isinstance(value, Mapping) else ()):
+                    out.set(str(k).upper(), v, section=str(key).upper())
+                if isinstance(value, TirTable):
+                    out.sections[str(key).upper()] = value
+            elif unknown == "drop" and str(key).upper() not in BY_KEY:
+                continue
+            else:
+                out.set(str(key).upper(), value)
         return out
     raise TypeError(f"cannot write {type(params).__name__} as a .tir file")
 
@@ -877,7 +891,7 @@ def format_tir(params: TirParameters | Mapping[str, Any]) -> str:
         If a value cannot be written so that it reads back identically (a string
         for a numeric key, a non-SI ``[UNITS]`` entry, a bad key name, ...).
     """
-    params = _as_parameters(params)
+    params = as_parameters(params)
     out: list[str] = [c if c[:1] in "$!" else "$" + c for c in params.header_comments]
     sections = list(params.sections.items())
     if "UNITS" not in params.sections:

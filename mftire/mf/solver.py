@@ -156,7 +156,7 @@ def _evaluate(
     p, m: Mode, Fz, kappa, alpha, gamma, phit, Vx, P, omega, extensions=None, variables=None
 ) -> dict[str, np.ndarray]:
     c = condition_inputs(p, m, Fz, kappa, alpha, gamma, phit, Vx, P)
-    ext = extension_terms(extensions, p, c.Fz, c.kappa, c.alpha, c.Vx, variables) if extensions else None
+    ext = extension_terms(extensions, p, c.Fz, c.kappa, c.alpha, c.gamma, c.Vx, c.P, variables) if extensions else None
     dpi = (c.P - p["NOMPRES"]) / p["NOMPRES"]  # eq 4.E2b
     Re, Romega, c.omega = effective_rolling_radius(p, c, dpi, omega)
     if m.turn_slip:

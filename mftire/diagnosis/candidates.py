@@ -1,0 +1,151 @@
+"""Candidate explanatory variables for fit residuals.
+
+Candidates are every numeric data column that is neither a Magic Formula input or
+output nor a column mftire adds itself, plus derived quantities with fixed names:
+
+==========  =================================================================
+name        definition
+==========  =================================================================
+Vs          slip speed Vx·sqrt(kappa² + tan² alpha) [m/s]
+Vx          forward speed [m/s]
+P           inflation pressure [Pa]
+Fz_dev      deviation of Fz from its sweep set point [N]
+sign_alpha  sign of the slip angle (left/right asymmetry) [-]
+sign_kappa  sign of the slip (driving/braking asymmetry) [-]
+sweep_dir   +1 while the swept slip increases, −1 while it decreases [-]
+sequence    position in the test sequence (row order per source) [-]
+energy      cumulative friction energy along the sequence,
+            sum of (|Fx·Vsx| + |Fy·Vsy|)·dt, with dt from a ``time`` column when
+            there is one, else 1 s per point [J]
+==========  =================================================================
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from mftire.iotools.sweeps import MEASURED_COLUMNS, REQUIRED_COLUMNS, group_sweeps
+
+#: Derived candidates, in a fixed order.
+DERIVED = ("Vs", "Vx", "P", "Fz_dev", "sign_alpha", "sign_kappa", "sweep_dir", "sequence", "energy")
+
+#: Columns that are never candidates: MF inputs and outputs and mftire's own labels.
+EXCLUDED = {
+    *REQUIRED_COLUMNS, "phit", "omega", *MEASURED_COLUMNS,
+    "Fz_set", "gamma_set", "P_set", "Vx_set", "kappa_set", "alpha_set", "sweep_id", "sweep_dir",
+    "kind", "sweep_var", "direction", "source", "file", "load_fraction",
+}  # fmt: skip
+#: Names that look like time (used for the energy integral).
+TIME_NAMES = ("time", "t", "runtime", "time_s")
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One candidate variable."""
+
+    name: str
+    values: np.ndarray
+    derived: bool  #: one of :data:`DERIVED` (else a data column)
+    sweep_level: bool  #: constant within every sweep
+
+
+def _time_column(df: pd.DataFrame) -> str | None:
+    for c in df.columns:
+        if str(c).lower() in TIME_NAMES and pd.api.types.is_numeric_dtype(df[c]):
+            return str(c)
+    return None
+
+
+def with_sweeps(df: pd.DataFrame) -> pd.DataFrame:
+    """The data with sweep labels (``sweep_id``, set points, ``sweep_dir``), grouping if needed."""
+    if "sweep_id" in df.columns and "Fz_set" in df.columns and "sweep_dir" in df.columns:
+        return df
+    return group_sweeps(df)
+
+
+def derived_candidates(df: pd.DataFrame) -> dict[str, np.ndarray]:
+    """The derived candidates of :data:`DERIVED` for grouped sweep data."""
+    Vx = df["Vx"].to_numpy(float)
+    kappa = df["kappa"].to_numpy(float)
+    alpha = df["alpha"].to_numpy(float)
+    out: dict[str, np.ndarray] = {}
+    out["Vs"] = np.abs(Vx) * np.sqrt(kappa**2 + np.tan(alpha) ** 2)
+    out["Vx"] = Vx
+    out["P"] = df["P"].to_numpy(float)
+    out["Fz_dev"] = df["Fz"].to_numpy(float) - df["Fz_set"].to_numpy(float)
+    out["sign_alpha"] = np.sign(alpha)
+    out["sign_kappa"] = np.sign(kappa)
+    out["sweep_dir"] = df["sweep_dir"].to_numpy(float)
+    # position in the sequence, per source when several sources are combined
+    if "source" in df.columns:
+        seq = df.groupby("source", sort=False).cumcount().to_numpy(float)
+    else:
+        seq = np.arange(len(df), dtype=float)
+    out["sequence"] = seq
+    # cumulative friction energy along the sequence
+    Vsx = -kappa * np.abs(Vx)
+    Vsy = np.tan(alpha) * np.abs(Vx)
+    Fx = df["Fx"].to_numpy(float) if "Fx" in df.columns else np.zeros(len(df))
+    Fy = df["Fy"].to_numpy(float) if "Fy" in df.columns else np.zeros(len(df))
+    power = np.nan_to_num(np.abs(Fx * Vsx)) + np.nan_to_num(np.abs(Fy * Vsy))
+    tcol = _time_column(df)
+    if tcol is not None:
+        dt = np.diff(df[tcol].to_numpy(float), prepend=df[tcol].to_numpy(float)[0])
+        dt = np.where((dt > 0) & np.isfinite(dt), dt, 0.0)
+    else:
+        dt = np.ones(len(df))
+    if "source" in df.columns:
+        energy = pd.Series(power * dt).groupby(df["source"].to_numpy(), sort=False).cumsum().to_numpy()
+    else:
+        energy = np.cumsum(power * dt)
+    out["energy"] = energy
+    return out
+
+
+def _both_directions(df: pd.DataFrame) -> bool:
+    """True when some kind of sweep is run in both directions (so direction is not a proxy for the kind)."""
+    if "kind" not in df.columns:
+        return False
+    for _, g in df.groupby("kind"):
+        d = g["sweep_dir"].to_numpy(float)
+        if min(np.mean(d > 0), np.mean(d < 0)) >= 0.1:
+            return True
+    return False
+
+
+def candidates(df: pd.DataFrame) -> list[Candidate]:
+    """All candidates for grouped sweep data: derived ones, then numeric data columns.
+
+    Constant columns (one value) are left out: they cannot explain anything.
+    """
+    sweep = df["sweep_id"].to_numpy()
+    out = []
+
+    def level(v: np.ndarray) -> bool:
+        s = pd.Series(v).groupby(sweep).nunique(dropna=False)
+        return bool((s <= 1).all())
+
+    for name, v in derived_candidates(df).items():
+        if name in ("sign_alpha", "sign_kappa"):
+            # an asymmetry needs both signs, each in at least a tenth of the rows
+            if min(np.mean(v > 0), np.mean(v < 0)) < 0.1:
+                continue
+        if name == "sweep_dir" and not _both_directions(df):
+            continue
+        if np.nanstd(v) > 0:
+            out.append(Candidate(name, v, True, level(v)))
+    for col in df.columns:
+        name = str(col)
+        if name in EXCLUDED or name in DERIVED or not pd.api.types.is_numeric_dtype(df[col]):
+            continue
+        if pd.api.types.is_bool_dtype(df[col]):
+            v = df[col].to_numpy(float)
+        else:
+            v = df[col].to_numpy(float)
+        if np.all(np.isnan(v)) or np.nanstd(v) == 0:
+            continue
+        out.append(Candidate(name, v, False, level(v)))
+    return out

@@ -1,0 +1,86 @@
+"""Split sweep data by operating condition, never by random rows."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+from mftire.errors import MftireInputError
+
+#: Condition columns and the set-point column that identifies their levels.
+SET_COLUMNS = {"Fz": "Fz_set", "Vx": "Vx_set", "P": "P_set", "gamma": "gamma_set"}
+
+
+def parse_holdout(spec: str) -> tuple[str, list[float]]:
+    """Parse ``COLUMN=V1,V2,...`` (SI values)."""
+    if "=" not in spec:
+        raise MftireInputError(f"--holdout must look like COLUMN=VALUE[,VALUE...], got {spec!r}")
+    col, _, vals = spec.partition("=")
+    try:
+        values = [float(v) for v in vals.split(",") if v.strip()]
+    except ValueError:
+        raise MftireInputError(f"--holdout {spec!r}: values must be numbers (SI units)") from None
+    if not col.strip() or not values:
+        raise MftireInputError(f"--holdout must look like COLUMN=VALUE[,VALUE...], got {spec!r}")
+    return col.strip(), values
+
+
+def holdout_mask(df: pd.DataFrame, column: str, values: Sequence[float], rel_tol: float = 0.02) -> np.ndarray:
+    """Rows whose condition ``column`` is at one of ``values``.
+
+    Fz, Vx, P and gamma are matched on their sweep set points within ``rel_tol``
+    (absolute 1e-3 for gamma), other columns within ``rel_tol`` of the value.
+    """
+    col = SET_COLUMNS.get(column, column)
+    if col not in df.columns:
+        raise MftireInputError(f"--holdout: no column '{column}' in the data (have: {', '.join(map(str, df.columns))})")
+    x = df[col].to_numpy(float)
+    mask = np.zeros(len(df), dtype=bool)
+    for v in values:
+        tol = 1e-3 if column == "gamma" else rel_tol * max(abs(v), 1e-12)
+        mask |= np.abs(x - v) <= tol
+    if not mask.any():
+        levels = ", ".join(f"{u:g}" for u in np.unique(np.round(x, 6))[:12])
+        raise MftireInputError(f"--holdout {column}: no rows at {values} (levels present: {levels})")
+    if mask.all():
+        raise MftireInputError(f"--holdout {column}={values} holds out every row; nothing is left to fit")
+    return mask
+
+
+def levels(df: pd.DataFrame, column: str) -> np.ndarray:
+    """Sorted distinct levels of a condition (its set points for Fz, Vx, P, gamma)."""
+    col = SET_COLUMNS.get(column, column)
+    return np.unique(df[col].to_numpy(float))
+
+
+def _keeps_every_kind(df: pd.DataFrame, col: str, value: float) -> bool:
+    """True when holding out ``col == value`` leaves every kind of sweep in the training data."""
+    if "kind" not in df.columns:
+        return True
+    train = df[np.abs(df[col].to_numpy(float) - value) > 1e-9 * max(abs(value), 1.0)]
+    return set(train["kind"]) >= set(df["kind"])
+
+
+def default_holdout(df: pd.DataFrame, preferred: Sequence[str] = ()) -> tuple[str, list[float]]:
+    """Choose a condition to hold out: an interior level of the first column with at least
+    three levels, trying ``preferred`` (e.g. the top candidate) first, then load, speed,
+    pressure and camber.  A level whose removal would take every sweep of one kind
+    (e.g. all cornering sweeps) out of the training data is not chosen; among the
+    interior levels the one nearest the middle is taken."""
+    for column in [*preferred, "Fz", "Vx", "P", "gamma"]:
+        col = SET_COLUMNS.get(column, column)
+        if col not in df.columns or not pd.api.types.is_numeric_dtype(df[col]):
+            continue
+        lv = levels(df, column)
+        if len(lv) >= 3:
+            interior = sorted(lv[1:-1], key=lambda v: abs(v - lv[len(lv) // 2]))
+            for v in interior:
+                if _keeps_every_kind(df, col, v):
+                    return column, [float(v)]
+    for column in ("Fz", "Vx", "P"):
+        lv = levels(df, column)
+        if len(lv) == 2:
+            return column, [float(lv[-1])]
+    raise MftireInputError("cannot hold out an operating condition: the data have a single load, speed and pressure")

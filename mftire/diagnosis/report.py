@@ -1,0 +1,203 @@
+"""diagnosis.md, diagnosis.json and figures of a :class:`DiagnosisResult`."""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import asdict
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from mftire.diagnosis.diagnose import DiagnosisResult  # noqa: E402
+from mftire.iotools.atomic import atomic_path, write_text_atomic  # noqa: E402
+from mftire.iotools.tir import write_tir  # noqa: E402
+
+EXTENDED_TIR = "extended.tir"
+
+
+def to_json(result: DiagnosisResult, extended_tir: str | None) -> dict:
+    """The ``diagnosis.json`` document."""
+    e = result.effect
+    holdout = None
+    if result.holdout is not None:
+        holdout = dict(result.holdout)
+        holdout["channels"] = {
+            c.channel: {k: v for k, v in asdict(c).items() if k != "channel"} for c in result.errors
+        }
+    effect = None
+    if e is not None and result.significant:
+        effect = {
+            "name": e.name,
+            "variable": e.variable,
+            "parameters": e.parameters,
+            "physical": e.physical,
+            "label": "physical model extension" if e.physical else "generic smooth correction (not physics)",
+            "section": {k: v for k, v in e.section.items()},
+            "refitted_coefficients": e.standard,
+            "training_residual_removed": e.removed,
+            "messages": e.messages,
+        }
+    return {
+        "significant": bool(result.significant),
+        "summary": result.summary(),
+        "ranking": [
+            {
+                "variable": s.variable,
+                "score": s.score,
+                "p_value": s.p_value,
+                "significant": s.significant,
+                "channel": s.channel,
+                "effect_size": s.effect,
+                "derived": s.derived,
+            }
+            for s in result.ranking
+        ],
+        "effect": effect,
+        "holdout": holdout,
+        "extended_tir": extended_tir,
+        "tried": [
+            {"name": f.name, "variable": f.variable, "parameters": f.parameters, "bic": f.bic,
+             "training_residual_removed": f.removed}
+            for f in result.tried
+        ],  # fmt: skip
+        "messages": result.messages,
+    }
+
+
+def _markdown(doc: dict) -> str:
+    lines = ["# Diagnosis of the fit residual", "", f"**{doc['summary']}**", ""]
+    lines += ["## Candidate ranking", "",
+              "Share of the residual variance left by the MF inputs that each candidate explains "
+              "(cross-validated by sweep), permutation p-value, and the size of the explained part "
+              "(RMS, fraction of the channel's peak).", "",
+              "| rank | variable | channel | score | p-value | effect size | significant |",
+              "|---:|---|---|---:|---:|---:|---|"]  # fmt: skip
+    for i, r in enumerate(doc["ranking"], 1):
+        lines.append(
+            f"| {i} | {r['variable']} | {r['channel']} | {r['score']:.3f} | {r['p_value']:.3f} | "
+            f"{100 * r['effect_size']:.2f} % | {'yes' if r['significant'] else 'no'} |"
+        )
+    lines.append("")
+    e = doc["effect"]
+    if e is None:
+        lines += ["## Effect", "", "No model change: " + "; ".join(doc["messages"] or ["no significant effect"]), ""]
+    else:
+        lines += ["## Effect", "", f"- **{e['name']}** in `{e['variable']}` — {e['label']}"]
+        for k, v in e["parameters"].items():
+            lines.append(f"  - `{k}` = {v:.6g}")
+        if e["section"]:
+            lines.append(f"- stored in `[MFTIRE_EXTENSIONS]` of `{doc['extended_tir']}`")
+        lines.append(f"- refitted with it: {', '.join(sorted(e['refitted_coefficients'])) or 'none'}")
+        lines.append(f"- training residual removed: {100 * e['training_residual_removed']:.1f} %")
+        for m in e["messages"]:
+            lines.append(f"- note: {m}")
+        lines.append("")
+    h = doc["holdout"]
+    if h is not None and h.get("channels"):
+        vals = ", ".join(f"{v:g}" for v in h["values"])
+        lines += ["## Held-out condition", "", f"{h['column']} = {vals} ({h['n_rows']} rows, not used in any fit).", "",
+                  "| channel | RMS before | RMS after | RMS % of peak before | after | residual variance removed |",
+                  "|---|---:|---:|---:|---:|---:|"]  # fmt: skip
+        for ch, c in h["channels"].items():
+            lines.append(
+                f"| {ch} | {c['rms_before']:.4g} | {c['rms_after']:.4g} | {c['rms_pct_before']:.2f} | "
+                f"{c['rms_pct_after']:.2f} | {100 * c['variance_removed']:.1f} % |"
+            )
+        lines.append("")
+    lines += ["## Figures", "", "- `ranking.png`: candidate scores",
+              "- `residual_vs_<variable>.png`: residual against the top candidates (cause: before and after)",
+              "- `curves_before_after.png`: held-out sweeps, data against the model before and after", ""]  # fmt: skip
+    return "\n".join(lines)
+
+
+def _binned(x: np.ndarray, y: np.ndarray, n: int = 15):
+    ok = np.isfinite(x) & np.isfinite(y)
+    x, y = x[ok], y[ok]
+    if len(np.unique(x)) <= n:
+        xs = np.unique(x)
+        return xs, np.array([y[x == v].mean() for v in xs])
+    edges = np.quantile(x, np.linspace(0, 1, n + 1))
+    idx = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, n - 1)
+    xs = np.array([x[idx == i].mean() if np.any(idx == i) else np.nan for i in range(n)])
+    ys = np.array([y[idx == i].mean() if np.any(idx == i) else np.nan for i in range(n)])
+    return xs, ys
+
+
+def _figures(result: DiagnosisResult, outdir: str) -> None:
+    df = result.data
+    ranking = result.ranking
+    fig, ax = plt.subplots(figsize=(8, 0.35 * max(len(ranking), 4) + 1.2), constrained_layout=True)
+    names = [f"{r.variable} ({r.channel})" for r in ranking][::-1]
+    scores = [r.score for r in ranking][::-1]
+    colors = ["tab:red" if r.significant else "tab:gray" for r in ranking][::-1]
+    ax.barh(names, scores, color=colors)
+    ax.set_xlabel("share of residual variance explained beyond the MF inputs (CV)")
+    ax.set_title("candidates (red: significant)")
+    with atomic_path(os.path.join(outdir, "ranking.png")) as tmp:
+        fig.savefig(tmp, format="png", dpi=100)
+    plt.close(fig)
+
+    for r in ranking[:3]:
+        if r.variable not in df.columns or f"residual_{r.channel}" not in df.columns:
+            continue
+        x = df[r.variable].to_numpy(float)
+        fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
+        y = df[f"residual_{r.channel}"].to_numpy(float)
+        ax.plot(x, y, ".", ms=2, alpha=0.3, color="tab:blue")
+        ax.plot(*_binned(x, y), "o-", color="tab:blue", label="before (binned mean)")
+        after = f"residual_after_{r.channel}"
+        if after in df.columns and result.effect is not None and r is ranking[0]:
+            ya = df[after].to_numpy(float)
+            ax.plot(x, ya, ".", ms=2, alpha=0.3, color="tab:orange")
+            ax.plot(*_binned(x, ya), "s-", color="tab:orange", label="after (binned mean)")
+        ax.axhline(0, color="k", lw=0.8)
+        ax.set_xlabel(r.variable)
+        ax.set_ylabel(f"{r.channel} data − model")
+        ax.set_title(f"residual of {r.channel} against {r.variable} (score {r.score:.2f})")
+        ax.legend()
+        with atomic_path(os.path.join(outdir, f"residual_vs_{r.variable}.png")) as tmp:
+            fig.savefig(tmp, format="png", dpi=100)
+        plt.close(fig)
+
+    if result.effect is None or result.train is None:
+        return
+    test = df[~result.train]
+    chans = [c.channel for c in result.errors]
+    if not chans:
+        return
+    sweeps = list(dict.fromkeys(test["sweep_id"]))[:6]
+    fig, axes = plt.subplots(len(chans), 1, figsize=(9, 3.2 * len(chans)), constrained_layout=True, squeeze=False)
+    for ax, ch in zip(axes[:, 0], chans, strict=True):
+        for i, sid in enumerate(sweeps):
+            g = test[test["sweep_id"] == sid]
+            xcol = "kappa" if g["kappa"].std() > g["alpha"].std() else "alpha"
+            x = g[xcol].to_numpy(float) * (np.degrees(1) if xcol == "alpha" else 1)
+            color = f"C{i}"
+            ax.plot(x, g[ch], ".", color=color, ms=4)
+            ax.plot(x, g[ch] - g[f"residual_{ch}"], "--", color=color, lw=1)
+            ax.plot(x, g[ch] - g[f"residual_after_{ch}"], "-", color=color, lw=1.2)
+        ax.set_ylabel(ch)
+        ax.set_title(f"held-out sweeps: points data, dashed before, solid after ({ch})")
+    with atomic_path(os.path.join(outdir, "curves_before_after.png")) as tmp:
+        fig.savefig(tmp, format="png", dpi=100)
+    plt.close(fig)
+
+
+def write_report(result: DiagnosisResult, outdir: str | os.PathLike) -> dict:
+    """Write diagnosis.md, diagnosis.json, the figures and (when there is an effect) the
+    extended ``.tir`` into ``outdir``; return the JSON document."""
+    outdir = os.fspath(outdir)
+    os.makedirs(outdir, exist_ok=True)
+    extended_name = None
+    if result.significant and result.extended is not None:
+        extended_name = EXTENDED_TIR
+        write_tir(result.extended.parameters, os.path.join(outdir, EXTENDED_TIR))
+    doc = to_json(result, extended_name)
+    write_text_atomic(os.path.join(outdir, "diagnosis.json"), json.dumps(doc, indent=2, default=float) + "\n")
+    write_text_atomic(os.path.join(outdir, "diagnosis.md"), _markdown(doc))
+    _figures(result, outdir)
+    return doc
