@@ -96,6 +96,9 @@ NEUTRAL: dict[str, float] = {
 #: Variables an extension may use that the evaluator derives from its own inputs.
 BUILTIN_VARIABLES = ("Fz", "kappa", "alpha", "gamma", "Vx", "P", "Vs", "sign_alpha", "sign_kappa")
 
+#: Input names of the evaluator that a data variable may not take.
+RESERVED_VARIABLES = ("phit", "omega", "mode")
+
 #: Channels a generic correction may act on.
 GENERIC_CHANNELS = ("Fx", "Fy", "Mz", "Mx", "My")
 
@@ -122,6 +125,11 @@ def required_variables(section: Mapping[str, object] | None) -> list[str]:
             var = sec.get(ext.variable_key)
             if not isinstance(var, str) or not var:
                 raise MftireInputError(f"[{SECTION}] {name}: {ext.variable_key} must name the input variable")
+            if var in RESERVED_VARIABLES:
+                raise MftireInputError(
+                    f"[{SECTION}] {ext.variable_key} = {var!r}: that name is an input of the evaluator; "
+                    "name the data variable differently"
+                )
             if var not in BUILTIN_VARIABLES and var not in out:
                 out.append(var)
     return out
@@ -149,7 +157,9 @@ class ExtensionTerms:
 
 def _value(sec: Mapping[str, object], key: str) -> float:
     v = sec.get(key, NEUTRAL[key])
-    return float(v)  # type: ignore[arg-type]
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise MftireInputError(f"[{SECTION}] {key} = {v!r} must be a number")
+    return float(v)
 
 
 def _variable(name: str, variables: Mapping[str, np.ndarray], where: str) -> np.ndarray:

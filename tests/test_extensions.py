@@ -132,3 +132,13 @@ def test_mapping_input_with_extension_section():
     sym = Tyre({k: v for k, v in flat.items() if k != SECTION}).evaluate(5000.0, 0.0, [0.2, -0.2])
     assert abs(out["Fy"][0]) > abs(sym["Fy"][0])
     assert abs(out["Fy"][1]) < abs(sym["Fy"][1])
+
+
+def test_bad_extension_values_raise_input_errors():
+    flat = dict(load(REFERENCE_TYRES["MF61"]).flat)
+    flat[SECTION] = {"VS_DECAY": "fast"}
+    with pytest.raises(MftireInputError, match="VS_DECAY"):
+        Tyre(flat).evaluate(5000.0, -0.1, 0.0)
+    flat[SECTION] = {"FVAR_VARIABLE": "phit", "FVAR_C1": 0.1}
+    with pytest.raises(MftireInputError, match="phit"):
+        Tyre(flat)

@@ -88,64 +88,71 @@ def model_identifier_for(name: str) -> str:
     return ident
 
 
-def _load_flat(tir) -> tuple[dict[str, float], str]:
-    """Flat parameters and a name from a path, a Tyre or a mapping; checks the tyre evaluates."""
+def _load(tir):
+    """Flat parameters, a name and the extension configuration from a path, a Tyre or a mapping.
+
+    Checks that the tyre evaluates (with its model extensions, data variables at 0).
+    """
     import numpy as np
 
     from mftire.tyre import Tyre, load
 
-    if isinstance(tir, Tyre):
-        tyre = tir
-    elif isinstance(tir, (str, os.PathLike)):
-        if not Path(tir).is_file():
-            raise FMUExportError(f"{tir}: file not found")
-        tyre = load(tir)
-    else:
-        tyre = Tyre(tir)
+    try:
+        if isinstance(tir, Tyre):
+            tyre = tir
+        elif isinstance(tir, (str, os.PathLike)):
+            if not Path(tir).is_file():
+                raise FMUExportError(f"{tir}: file not found")
+            tyre = load(tir)
+        else:
+            tyre = Tyre(tir)
+    except FMUExportError:
+        raise
+    except MftireError as exc:
+        raise FMUExportError(f"{tir}: cannot be exported: {exc}") from None
     name = Path(tyre.name).stem if tyre.name else "tyre"
-    active = _active_extensions(tyre)
-    if active:
-        raise FMUExportError(
-            f"{tyre.name}: the [MFTIRE_EXTENSIONS] terms ({', '.join(active)}) are not implemented in the FMU's "
-            "C code yet; remove the section to export the plain Magic Formula"
-        )
     flat = dict(tyre.flat)
+    try:
+        spec = vt.extension_spec(tyre.extensions) if tyre.extensions else None
+        vt.variable_table(flat, vt.DEFAULT_USE_MODE, spec)  # data-variable names must not collide
+    except MftireError as exc:
+        raise FMUExportError(f"{tyre.name}: the model extensions cannot be exported: {exc}") from None
+    data = {v: 0.0 for v in tyre.required_variables}
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            out = tyre.evaluate(flat["FNOMIN"], 0.05, 0.05, 0.0, mode=111)
-    except MftireError as exc:
+            out = tyre.evaluate(flat["FNOMIN"], 0.05, 0.05, 0.0, mode=111, **data)
+    except (MftireError, ValueError, TypeError) as exc:
         raise FMUExportError(f"{tyre.name}: cannot be evaluated, so it cannot be exported: {exc}") from None
     bad = [k for k in ("Fx", "Fy", "Mz", "Re") if not np.isfinite(out[k]).all()]
     if bad:
         raise FMUExportError(
             f"{tyre.name}: cannot be evaluated: {', '.join(bad)} not finite at Fz = FNOMIN, kappa = alpha = 0.05"
         )
-    return flat, name
-
-
-def _active_extensions(tyre) -> list[str]:
-    ext = getattr(tyre, "extensions", None)
-    if not ext:
-        return []
-    try:
-        from mftire.extensions import active_extensions
-    except ImportError:  # pragma: no cover - older evaluator without extensions
-        return sorted(ext)
-    return list(active_extensions(ext))
+    return flat, name, spec
 
 
 def generate_sources(
-    flat: dict[str, float], model_identifier: str, fmi_version: int, use_mode: int = vt.DEFAULT_USE_MODE
+    flat: dict[str, float],
+    model_identifier: str,
+    fmi_version: int,
+    use_mode: int = vt.DEFAULT_USE_MODE,
+    extensions: vt.ExtensionSpec | None = None,
 ) -> tuple[list[vt.Variable], dict[str, str]]:
-    """The variable table and every file of ``sources/`` (name -> text)."""
-    variables = vt.variable_table(flat, use_mode)
+    """The variable table and every file of ``sources/`` (name -> text).
+
+    ``extensions`` is the model-extension configuration (:func:`mftire.fmu.variables.extension_spec`).
+    """
+    try:
+        variables = vt.variable_table(flat, use_mode, extensions)
+    except MftireError as exc:
+        raise FMUExportError(f"the model extensions cannot be exported: {exc}") from None
     files: dict[str, str] = {}
     for name in CORE_SOURCES:
         files[name] = (CSOURCE / name).read_text(encoding="utf-8")
     wrapper = f"fmi{fmi_version}_model.c"
     files[wrapper] = (CSOURCE / wrapper).read_text(encoding="utf-8")
-    files["mf_params.h"] = vt.params_header(variables)
+    files["mf_params.h"] = vt.params_header(variables, extensions)
     files["mf_model_gen.h"] = vt.model_header(variables, model_identifier, fmi_version)
     c_code = _fmpy_c_code()
     for h in FMI_HEADERS[fmi_version]:
@@ -202,7 +209,12 @@ def export_fmu(
     Raises
     ------
     FMUExportError
-        No C compiler, a compile error, or a ``.tir`` that cannot be evaluated.
+        No C compiler, a compile error, or a ``.tir`` that cannot be evaluated
+        (including a ``[MFTIRE_EXTENSIONS]`` section the evaluator rejects).
+
+    A ``[MFTIRE_EXTENSIONS]`` section is compiled in: its numeric keys become tunable
+    parameters, the data variables its extensions read become extra inputs, and its
+    string keys (variables, generic channel) are fixed (see ``docs/fmu.md``).
     """
     from mftire.iotools.atomic import atomic_path
     from mftire.mf.modes import Mode
@@ -211,19 +223,22 @@ def export_fmu(
         raise FMUExportError(f"fmi_version must be 2 or 3, not {fmi_version!r}")
     Mode.from_code(use_mode)
     cc = find_compiler(compiler)  # fail early, before any work
-    flat, name = _load_flat(tir)
+    flat, name, spec = _load(tir)
     ident = model_identifier or model_identifier_for(name)
     if not re.match(r"^[A-Za-z_][A-Za-z0-9_]*$", ident):
         raise FMUExportError(f"model identifier {ident!r} is not a C identifier")
-    variables, files = generate_sources(flat, ident, fmi_version, use_mode)
+    variables, files = generate_sources(flat, ident, fmi_version, use_mode, spec)
     platform, suffix = _platform(fmi_version)
     fittyp = int(flat["FITTYP"])
+    description = f"Magic Formula tyre {name} (FITTYP {fittyp}) exported by mftire; ISO-W axes, SI units"
+    if spec:
+        description += f"; model extensions: {', '.join(spec.active)}"
     xml = vt.model_description_xml(
         variables,
         ident,
         fmi_version,
         model_name=name,
-        description=f"Magic Formula tyre {name} (FITTYP {fittyp}) exported by mftire; ISO-W axes, SI units",
+        description=description,
         sources=sorted(f for f in files if f.endswith(".c")),
     )
     output = Path(output)

@@ -140,9 +140,16 @@ class FMUTyre:
         vrs = [self.vr[n] for n in names]
         return list((self.fmu.getReal if self.fmi_version == 2 else self.fmu.getFloat64)(vrs))
 
-    def evaluate(self, Fz, kappa, alpha, gamma=0.0, phit=0.0, Vx=None, P=None, omega=0.0, muRoad=1.0) -> dict:
-        """Set the inputs, advance (CS: one ``doStep``) and return every output by name."""
+    def evaluate(
+        self, Fz, kappa, alpha, gamma=0.0, phit=0.0, Vx=None, P=None, omega=0.0, muRoad=1.0, **variables
+    ) -> dict:
+        """Set the inputs, advance (CS: one ``doStep``) and return every output by name.
+
+        ``variables`` are the data-variable inputs of the model extensions, by name
+        (e.g. ``temperature=60.0``; ``**{"brake temp": 60.0}`` for other names).
+        """
         values = dict(Fz=Fz, kappa=kappa, alpha=alpha, gamma=gamma, phit=phit, omega=omega, muRoad=muRoad)
+        values.update(variables)
         if Vx is not None:
             values["Vx"] = Vx
         if P is not None:

@@ -9,11 +9,18 @@ module generates:
 * the GUID / instantiation token (:func:`guid`, a hash of the table),
 * ``modelDescription.xml`` for FMI 2.0 and FMI 3.0 (:func:`model_description_xml`),
 * the C header ``mf_params.h`` with the ``MFParams`` struct, one ``double`` per
-  parameter (:func:`params_header`),
+  parameter, and the export-time configuration of the model extensions
+  (:func:`params_header`),
 * the C header ``mf_model_gen.h`` with the GUID, the value-reference table, the
   start values and the variable names (:func:`model_header`),
 
 so the C code, the XML and the GUID cannot disagree.
+
+Model extensions (``[MFTIRE_EXTENSIONS]``, :mod:`mftire.extensions`): which
+extensions are active, the variable each one reads and the channel of the generic
+correction are fixed at export time (:func:`extension_spec`, compiled in as
+``MF_EXT_*`` macros); their numeric keys are tunable parameters; every data
+variable they read (e.g. ``temperature``) is an extra continuous input.
 """
 
 from __future__ import annotations
@@ -24,6 +31,8 @@ import uuid
 from dataclasses import dataclass
 from xml.sax.saxutils import quoteattr
 
+from mftire.errors import MftireInputError
+from mftire.extensions import BUILTIN_VARIABLES, GENERIC_CHANNELS, LIBRARY, NEUTRAL, SECTION, active_extensions
 from mftire.parameters import PARAMETERS
 
 #: ``useMode`` of a new FMU: limit checks, no alpha-star, combined slip (MFeval's default).
@@ -99,6 +108,84 @@ OUTPUTS: tuple[tuple[str, str, str | None, str], ...] = (
 )
 
 
+#: Data-variable inputs the C code has room for (``MF_MAX_DATA`` in mf_eval.h): at most one
+#: per extension that reads a named variable (fade, friction_variable, generic).
+MAX_DATA_INPUTS = 3
+
+#: Units of the extension keys that have one (the others are factors or in the unit of their variable).
+_EXT_UNITS = {"VS_PEAK_SPEED": "m/s"}
+
+
+@dataclass(frozen=True)
+class ExtensionSpec:
+    """The export-time configuration of the ``[MFTIRE_EXTENSIONS]`` section."""
+
+    active: tuple[str, ...]  #: active extensions, in :data:`mftire.extensions.LIBRARY` order
+    values: dict[str, float]  #: every numeric key of the active extensions -> start value
+    variables: dict[str, str]  #: extension name -> the variable it reads (fade, friction_variable, generic)
+    channel: str | None  #: channel of the generic correction
+    data: tuple[str, ...]  #: data variables (FMU inputs), in the order of ``Tyre.required_variables``
+
+    def describe(self, name: str) -> str:
+        """Description of the parameters of extension ``name`` (with its fixed choices)."""
+        ext = LIBRARY[name]
+        text = f"[{SECTION}] {name}: {ext.description}"
+        fixed = []
+        if name in self.variables:
+            fixed.append(f"variable {self.variables[name]}")
+        if name == "generic":
+            fixed.append(f"channel {self.channel}")
+        return text + (f" ({', '.join(fixed)}; fixed at export)" if fixed else "")
+
+
+def _valid_fmi_name(name: str) -> bool:
+    return bool(name) and not any(ord(ch) < 0x20 or 0x7F <= ord(ch) < 0xA0 for ch in name) and name == name.strip()
+
+
+def extension_spec(section) -> ExtensionSpec | None:
+    """The export-time configuration of a ``[MFTIRE_EXTENSIONS]`` section (None: no extension).
+
+    Raises :class:`~mftire.errors.MftireInputError` for a section the FMU cannot
+    evaluate (the same conditions under which the Python evaluator raises, plus
+    data-variable names that are not usable as FMI variable names).
+    """
+    active = active_extensions(section)
+    if not active:
+        return None
+    sec = {str(k).upper(): v for k, v in section.items()}
+    values: dict[str, float] = {}
+    variables: dict[str, str] = {}
+    data: list[str] = []
+    channel = None
+    for name in active:
+        ext = LIBRARY[name]
+        for key in ext.keys:
+            value = sec.get(key, NEUTRAL[key])
+            if not _number(value):
+                raise MftireInputError(f"[{SECTION}] {name}: {key} must be a number, not {value!r}")
+            values[key] = float(value)
+        if ext.variable_key:
+            var = sec.get(ext.variable_key)
+            if not isinstance(var, str) or not var:
+                raise MftireInputError(f"[{SECTION}] {name}: {ext.variable_key} must name the input variable")
+            if not _valid_fmi_name(var):
+                raise MftireInputError(
+                    f"[{SECTION}] {name}: {ext.variable_key} = {var!r} cannot be an FMI variable name "
+                    "(control characters or surrounding blanks)"
+                )
+            variables[name] = var
+            if var not in BUILTIN_VARIABLES and var not in data:
+                data.append(var)
+        if name == "generic":
+            channel = str(sec.get("GEN_CHANNEL", "Fx"))
+            if channel not in GENERIC_CHANNELS:
+                raise MftireInputError(
+                    f"[{SECTION}] generic: GEN_CHANNEL must be one of {', '.join(GENERIC_CHANNELS)}, not {channel!r}"
+                )
+    assert len(data) <= MAX_DATA_INPUTS
+    return ExtensionSpec(tuple(active), values, variables, channel, tuple(data))
+
+
 @dataclass(frozen=True)
 class Variable:
     """One FMU variable."""
@@ -127,12 +214,16 @@ def _number(value: object) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
-def variable_table(flat: dict[str, float], use_mode: int = DEFAULT_USE_MODE) -> list[Variable]:
+def variable_table(
+    flat: dict[str, float], use_mode: int = DEFAULT_USE_MODE, extensions: ExtensionSpec | None = None
+) -> list[Variable]:
     """The FMU's variables for the flat parameter dict ``flat`` (see ``with_defaults``).
 
-    Value references: 0 ``time``, 1.. inputs, then outputs, ``useMode``, then the
-    parameters in the order of :data:`mftire.parameters.PARAMETERS`, followed by
-    the file's non-standard numeric keys (in file order).
+    Value references: 0 ``time``, 1.. inputs (the data variables of the model
+    extensions last), then outputs, ``useMode``, then the parameters in the order of
+    :data:`mftire.parameters.PARAMETERS`, followed by the file's non-standard
+    numeric keys (in file order) and the keys of the active model extensions
+    (``extensions``, see :func:`extension_spec`; in library order).
     """
     out: list[Variable] = [
         Variable("time", 0, "time", "Real", "independent", "continuous", None, "s", "Simulation time", "")
@@ -140,6 +231,11 @@ def variable_table(flat: dict[str, float], use_mode: int = DEFAULT_USE_MODE) -> 
     for name, field, unit, desc, start in INPUTS:
         value = float(flat[start]) if isinstance(start, str) else float(start)
         out.append(Variable(name, len(out), "input", "Real", "input", "continuous", value, unit, desc, field))
+    ext_keys = dict(extensions.values) if extensions else {}
+    for i, name in enumerate(extensions.data if extensions else ()):
+        users = ", ".join(e for e, v in extensions.variables.items() if v == name)
+        desc = f"Data variable of the model extension(s) {users} (unit as in the fitted data)"
+        out.append(Variable(name, len(out), "input", "Real", "input", "continuous", 0.0, None, desc, f"data[{i}]"))
     for name, field, unit, desc in OUTPUTS:
         out.append(Variable(name, len(out), "output", "Real", "output", "continuous", None, unit, desc, field))
     out.append(
@@ -151,7 +247,9 @@ def variable_table(flat: dict[str, float], use_mode: int = DEFAULT_USE_MODE) -> 
         )
     )  # fmt: skip
     standard = {p.key: p for p in PARAMETERS if p.unit != "str"}
-    keys = list(standard) + [k for k in flat if k not in standard and _IDENT.match(k) and _number(flat[k])]
+    keys = list(standard) + [
+        k for k in flat if k not in standard and k not in ext_keys and _IDENT.match(k) and _number(flat[k])
+    ]
     for key in keys:
         row = standard.get(key)
         unit = _PARAM_UNIT[row.unit] if row else None
@@ -160,8 +258,20 @@ def variable_table(flat: dict[str, float], use_mode: int = DEFAULT_USE_MODE) -> 
         out.append(
             Variable(key, len(out), "param", "Real", "parameter", variability, float(flat[key]), unit, desc, key)
         )
+    for name in extensions.active if extensions else ():
+        for key in LIBRARY[name].keys:
+            desc = extensions.describe(name)
+            out.append(
+                Variable(key, len(out), "param", "Real", "parameter", "tunable", ext_keys[key], _EXT_UNITS.get(key),
+                         desc, key)
+            )  # fmt: skip
     names = [v.name for v in out]
-    assert len(set(names)) == len(names), "duplicate variable name"
+    if len(set(names)) != len(names):
+        dup = sorted({n for n in names if names.count(n) > 1})
+        raise MftireInputError(
+            f"FMU variable name(s) {', '.join(map(repr, dup))} used twice: a data variable of [{SECTION}] must not "
+            "be named like an FMU input, output or parameter"
+        )
     return out
 
 
@@ -176,19 +286,73 @@ def _fmt(value: float | int) -> str:
 
 
 def guid(variables: list[Variable], fmi_version: int) -> str:
-    """GUID (FMI 2) / instantiation token (FMI 3): a hash of the variable table."""
+    """GUID (FMI 2) / instantiation token (FMI 3): a hash of the variable table.
+
+    The descriptions of the model-extension parameters are hashed too: they carry
+    the export-time choices (variable read, generic channel) compiled into the binary.
+    """
     h = hashlib.sha256(f"mftire-fmu fmi{fmi_version}\n".encode())
     for v in variables:
         start = "" if v.start is None else _fmt(v.start)
-        h.update(f"{v.vr}|{v.name}|{v.type}|{v.causality}|{v.variability}|{start}|{v.unit}\n".encode())
+        line = f"{v.vr}|{v.name}|{v.type}|{v.causality}|{v.variability}|{start}|{v.unit}"
+        if v.description.startswith(f"[{SECTION}]") or v.field.startswith("data["):
+            line += "|" + v.description
+        h.update((line + "\n").encode())
     return "{" + str(uuid.UUID(bytes=h.digest()[:16])) + "}"
 
 
 # --------------------------------------------------------------------------- C headers
 
 
-def params_header(variables: list[Variable]) -> str:
-    """``mf_params.h``: the ``MFParams`` struct, one double per parameter variable."""
+def _c_comment(text: str) -> str:
+    """``text`` made safe inside a C comment: printable ASCII, no ``*/``, no trigraphs."""
+    out = "".join(ch if 0x20 <= ord(ch) < 0x7F else "_" for ch in text)
+    return out.replace("*/", "* /").replace("??", "?_")
+
+
+def c_string(text: str) -> str:
+    """``text`` as a C string literal (UTF-8; quotes, backslashes, ``?`` and non-ASCII escaped)."""
+    body = []
+    for byte in text.encode("utf-8"):
+        ch = chr(byte)
+        if ch in '"\\?':
+            body.append("\\" + ch)
+        elif 0x20 <= byte < 0x7F:
+            body.append(ch)
+        else:
+            body.append(f"\\{byte:03o}")  # octal: at most 3 digits, never swallows what follows
+    return '"' + "".join(body) + '"'
+
+
+#: C macro of each builtin extension variable (MF_XV_* in mf_eval.h).
+_XV = {name: "MF_XV_" + name.upper() for name in BUILTIN_VARIABLES}
+
+
+def _extension_macros(spec: ExtensionSpec | None) -> list[str]:
+    lines = [
+        f"/* Model extensions ([{SECTION}]), fixed at export time (see mftire/extensions.py). */",
+        f"#define MF_EXT_ACTIVE {1 if spec else 0}",
+    ]
+    for name in LIBRARY:
+        lines.append(f"#define MF_EXT_{name.upper()} {1 if spec and name in spec.active else 0}")
+    data = spec.data if spec else ()
+    lines.append(f"#define MF_N_DATA {len(data)}")
+    if data:
+        lines.append(f"#define MF_DATA_NAMES {{{', '.join(c_string(d) for d in data)}}}")
+    for name, macro in (("fade", "MF_EXT_FADE_VAR"), ("friction_variable", "MF_EXT_FVAR_VAR"),
+                        ("generic", "MF_EXT_GEN_VAR")):  # fmt: skip
+        if spec and name in spec.variables:
+            var = spec.variables[name]
+            src = _XV[var] if var in _XV else f"(MF_XV_DATA0 + {data.index(var)})"
+            lines.append(f"#define {macro} {src} /* {_c_comment(var)} */")
+    if spec and spec.channel:
+        lines.append(f"#define MF_EXT_GEN_CHANNEL MF_CH_{spec.channel.upper()}")
+    return lines
+
+
+def params_header(variables: list[Variable], extensions: ExtensionSpec | None = None) -> str:
+    """``mf_params.h``: the ``MFParams`` struct, one double per parameter variable, and
+    the ``MF_EXT_*`` configuration of the model extensions ``extensions``."""
     lines = [
         "/* mf_params.h -- GENERATED by mftire/fmu/variables.py from the FMU variable table. Do not edit. */",
         "#ifndef MF_PARAMS_H",
@@ -198,9 +362,16 @@ def params_header(variables: list[Variable]) -> str:
     ]
     for v in variables:
         if v.kind == "param":
-            lines.append(f"    double {v.field}; /* vr {v.vr}: {v.description[:80].replace('*/', '* /')} */")
-    lines += ["} MFParams;", "", "#endif /* MF_PARAMS_H */", ""]
+            lines.append(f"    double {v.field}; /* vr {v.vr}: {_c_comment(v.description[:80])} */")
+    lines += ["} MFParams;", "", *_extension_macros(extensions), "", "#endif /* MF_PARAMS_H */", ""]
     return "\n".join(lines)
+
+
+def _offset(struct: str, field: str) -> str:
+    if "[" in field:  # data[i]: avoid offsetof with a subscript (an extension in C99)
+        base, index = field.rstrip("]").split("[")
+        return f"(offsetof({struct}, {base}) + {int(index)} * sizeof(double))"
+    return f"offsetof({struct}, {field})"
 
 
 def _c_double(x: float) -> str:
@@ -239,10 +410,10 @@ def model_header(variables: list[Variable], model_identifier: str, fmi_version: 
     ]
     for v in by_vr:
         fixed = 1 if v.variability == "fixed" else 0
-        off = f"offsetof({structs[v.kind]}, {v.field})" if v.kind in structs else "0"
-        lines.append(f"    {{{kinds[v.kind]}, {fixed}, {off}}}, /* {v.vr} {v.name} */")
+        off = _offset(structs[v.kind], v.field) if v.kind in structs else "0"
+        lines.append(f"    {{{kinds[v.kind]}, {fixed}, {off}}}, /* {v.vr} {_c_comment(v.name)} */")
     lines += ["};", "", "static const char *const MF_VAR_NAMES[MF_N_VARS] = {"]
-    lines += [f'    "{v.name}",' for v in by_vr]
+    lines += [f"    {c_string(v.name)}," for v in by_vr]
     lines += ["};", "", "static const MFInputs MF_INPUT_START = {"]
     lines += [f"    .{v.field} = {_c_double(v.start)}," for v in by_vr if v.kind == "input"]
     lines += ["};", "", "static const MFParams MF_PARAM_START = {"]
@@ -390,10 +561,14 @@ def build_description_xml(model_identifier: str, sources: list[str]) -> str:
 
 __all__ = [
     "DEFAULT_USE_MODE",
+    "ExtensionSpec",
     "INPUTS",
+    "MAX_DATA_INPUTS",
     "OUTPUTS",
     "Variable",
     "build_description_xml",
+    "c_string",
+    "extension_spec",
     "guid",
     "model_description_xml",
     "model_header",

@@ -230,7 +230,8 @@ typedef struct {
     double LMUX_star, LMUY_star, LMUX_prime, LMUY_prime; /* eqs 4.E7, 4.E8 */
 } Basic;
 
-static void basic(const MFParams *p, const Ctx *m, const Cond *c, double muRoad, Basic *b)
+static void basic(const MFParams *p, const Ctx *m, const Cond *c, double muRoad, double mu_x, double mu_y,
+                  Basic *b)
 {
     double absVx, Vsy, Vc, Vc_prime, s, LMUV, Amu;
     b->Fz0p = p->LFZO * p->FNOMIN;                 /* eq 4.E1 */
@@ -253,11 +254,14 @@ static void basic(const MFParams *p, const Ctx *m, const Cond *c, double muRoad,
     b->alpha_prime = acos(c->Vx / Vc_prime);      /* eq 4.E6 */
     /* Friction decaying with slip speed: LMUV is not part of MF 6.1/6.2 .tir files,
      * so it is 0 as in the reference evaluator; Amu = 1 (MFeval departure: the book
-     * suggests Amu = 10, Amu = 1 matches TNO).  muRoad scales LMUX and LMUY. */
+     * suggests Amu = 10, Amu = 1 matches TNO).  muRoad scales LMUX and LMUY; mu_x and
+     * mu_y (1 without extensions) carry the friction-type model extensions. */
     LMUV = 0.0;
     (void)LMUV;
     b->LMUX_star = p->LMUX * muRoad;              /* eq 4.E7 with LMUV = 0 */
     b->LMUY_star = p->LMUY * muRoad;              /* eq 4.E7 with LMUV = 0 */
+    b->LMUX_star = b->LMUX_star * mu_x;
+    b->LMUY_star = b->LMUY_star * mu_y;
     Amu = 1.0;
     b->LMUX_prime = Amu * b->LMUX_star / (1.0 + (Amu - 1.0) * b->LMUX_star); /* eq 4.E8 */
     b->LMUY_prime = Amu * b->LMUY_star / (1.0 + (Amu - 1.0) * b->LMUY_star); /* eq 4.E8 */
@@ -853,6 +857,129 @@ static void relaxation(const MFParams *p, const Cond *c, double Kxk, double Kya,
     *Cy_out = Cy;
 }
 
+/* ------------------------------------------------------------------ extensions.py */
+
+/*
+ * Model extensions of the [MFTIRE_EXTENSIONS] section (mftire/extensions.py): which
+ * ones are active, the variable each reads and the generic channel are compile-time
+ * constants of mf_params.h; their numeric keys are ordinary (tunable) parameters.
+ * Friction-type extensions multiply lambda_mu* (Pacejka 2012 eqs 4.E7, 4.E8), offsets
+ * add to Fx, Fy.  The order of the terms is that of mftire.extensions.LIBRARY.
+ */
+typedef struct {
+    double mux, muy; /* factors on lambda_mux*, lambda_muy* [-] */
+    double dFx, dFy; /* added longitudinal and lateral force [N] */
+    double generic;  /* factor of the generic correction on MF_EXT_GEN_CHANNEL [-] */
+} ExtTerms;
+
+#if MF_EXT_ACTIVE
+
+#if MF_EXT_FADE || MF_EXT_FRICTION_VARIABLE || MF_EXT_GENERIC
+/* One of mftire.extensions.BUILTIN_VARIABLES (from the conditioned inputs), or a data input. */
+static double ext_variable(int which, const Cond *c, const double *data)
+{
+    switch (which) {
+    case MF_XV_FZ: return c->Fz;
+    case MF_XV_KAPPA: return c->kappa;
+    case MF_XV_ALPHA: return c->alpha;
+    case MF_XV_GAMMA: return c->gamma;
+    case MF_XV_VX: return c->Vx;
+    case MF_XV_P: return c->P;
+    case MF_XV_VS: return fabs(c->Vx) * sqrt(sq(c->kappa) + sq(tan(c->alpha))); /* slip speed */
+    case MF_XV_SIGN_ALPHA: return sgn(c->alpha);
+    case MF_XV_SIGN_KAPPA: return sgn(c->kappa);
+    default: return data[which - MF_XV_DATA0];
+    }
+}
+#endif
+
+#if MF_EXT_FADE || MF_EXT_SLIP_SPEED_PEAK
+/* numpy.maximum: NaN if either argument is NaN */
+static double np_maximum(double a, double b)
+{
+    if (isnan(a) || isnan(b)) return a + b;
+    return a >= b ? a : b;
+}
+
+/* Python's max(a, b) of two floats: a unless b > a (so NaN in a passes). */
+static double py_max(double a, double b) { return b > a ? b : a; }
+#endif
+
+#if MF_EXT_SLIP_SPEED_PEAK
+/* Savkoor bell exp(-h^2*ln^2(v/v_peak)), 0..1 (van der Steen 2010 eq 2.2 shape). */
+static double savkoor(double v, double v_peak, double h)
+{
+    return exp(-sq(h) * sq(log(np_maximum(v, 1e-9) / v_peak)));
+}
+#endif
+
+static void extension_terms(const MFParams *p, const Cond *c, const double *data, ExtTerms *t)
+{
+    double V0 = p->LONGVL, mu = 1.0;
+    (void)data;
+    (void)V0;
+#if MF_EXT_SLIP_SPEED_FRICTION
+    {
+        double Vs = fabs(c->Vx) * sqrt(sq(c->kappa) + sq(tan(c->alpha)));
+        mu = mu / (1.0 + p->VS_DECAY * Vs / V0); /* Pacejka 2012 eq 4.E7 */
+    }
+#endif
+#if MF_EXT_SLIP_SPEED_PEAK
+    {
+        double Vs = fabs(c->Vx) * sqrt(sq(c->kappa) + sq(tan(c->alpha)));
+        double A = p->VS_PEAK_GAIN, Vpk = py_max(fabs(p->VS_PEAK_SPEED), 1e-6), h = p->VS_PEAK_WIDTH;
+        /* Savkoor-type peak, normalised at Vs = 0.1*LONGVL (van der Steen 2010 eq 2.2) */
+        mu = mu * (1.0 + A * savkoor(Vs, Vpk, h)) / (1.0 + A * savkoor(0.1 * V0, Vpk, h));
+    }
+#endif
+#if MF_EXT_SPEED_FRICTION
+    {
+        double u = fabs(c->Vx) / V0 - 1.0;
+        mu = mu * (1.0 + p->VX_FRIC1 * u + p->VX_FRIC2 * sq(u));
+    }
+#endif
+#if MF_EXT_FADE
+    {
+        double v = ext_variable(MF_EXT_FADE_VAR, c, data);
+        double tau = py_max(fabs(p->FADE_SCALE), 1e-12);
+        mu = mu * (1.0 - p->FADE_DEPTH * (1.0 - exp(-np_maximum(v, 0.0) / tau)));
+    }
+#endif
+#if MF_EXT_FRICTION_VARIABLE
+    {
+        double v = ext_variable(MF_EXT_FVAR_VAR, c, data);
+        double z = (v - p->FVAR_REF) / p->FVAR_SCALE;
+        mu = mu * (1.0 + p->FVAR_C1 * z + p->FVAR_C2 * sq(z));
+    }
+#endif
+#if MF_EXT_LOAD_FRICTION
+    {
+        double Fz0p = p->LFZO * p->FNOMIN;
+        double dfz = (c->Fz - Fz0p) / Fz0p; /* eq 4.E2a */
+        mu = mu * (1.0 + p->LOAD_MU2 * sq(dfz));
+    }
+#endif
+#if MF_EXT_ROLLING_RESISTANCE
+    t->dFx = t->dFx - p->RR_FX * c->Fz * sgn(c->Vx);
+#endif
+#if MF_EXT_ASYMMETRY
+    t->muy = t->muy * (1.0 + p->ASYM_MUY * sgn(c->alpha));
+    t->dFy = t->dFy + p->ASYM_FY * c->Fz;
+#endif
+#if MF_EXT_GENERIC
+    {
+        double v = ext_variable(MF_EXT_GEN_VAR, c, data);
+        double z = (v - p->GEN_REF) / p->GEN_SCALE;
+        /* NOT PHYSICS: a labelled smooth correction */
+        t->generic = 1.0 + p->GEN_C1 * z + p->GEN_C2 * sq(z) + p->GEN_C3 * pow(z, 3.0);
+    }
+#endif
+    t->mux = t->mux * mu;
+    t->muy = t->muy * mu;
+}
+
+#endif /* MF_EXT_ACTIVE */
+
 /* ------------------------------------------------------------------ solver.py */
 
 static double clean(Ctx *m, int kind, const char *name, double x, double fill)
@@ -876,7 +1003,14 @@ int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *
     AlignTerms at;
     double Fz, kappa, alpha, gamma, phit, Vx, P, omega_in, dpi, Re, Romega, omega, z1, Fx0, mux, Kxk, Fy_comb, Gyk;
     double Fx, Fy, Mz, t, Mzr, Mx, My, muy, rho, Rl, Cz, a, bw, Cx, Cy, sigmax, sigmay;
+    ExtTerms et = {1.0, 1.0, 0.0, 0.0, 1.0}; /* no extension: neutral */
     int omega_given, k;
+#if MF_EXT_ACTIVE
+    double data[MF_MAX_DATA] = {0.0, 0.0, 0.0};
+#endif
+#if MF_N_DATA > 0
+    static const char *const data_names[MF_N_DATA] = MF_DATA_NAMES;
+#endif
 
     if (mf_check_mode(use_mode, msg, sizeof msg) != MF_OK) return MF_BAD_MODE;
     if (mf_check_fittyp(p, msg, sizeof msg) != MF_OK) return MF_BAD_FITTYP;
@@ -898,13 +1032,19 @@ int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *
     /* omega = 0 means "not given" (estimated); NaN is cleaned to a given 0 as in Python */
     omega_given = in->omega != 0.0;
     omega_in = omega_given ? clean(&m, MF_W_NAN_OMEGA, "omega", in->omega, 0.0) : 0.0;
+#if MF_N_DATA > 0
+    for (k = 0; k < MF_N_DATA; k++) data[k] = clean(&m, MF_W_NAN_DATA0 + k, data_names[k], in->data[k], 0.0);
+#endif
 
     condition_inputs(p, &m, Fz, kappa, alpha, gamma, phit, Vx, P, &c);
+#if MF_EXT_ACTIVE
+    extension_terms(p, &c, data, &et);
+#endif
     dpi = (c.P - p->NOMPRES) / p->NOMPRES; /* eq 4.E2b */
     effective_rolling_radius(p, &c, dpi, omega_given, omega_in, &Re, &Romega, &omega);
     c.omega = omega;
     if (m.turn_slip) turn_slip_spin(p, &c);
-    basic(p, &m, &c, in->muRoad, &b);
+    basic(p, &m, &c, in->muRoad, et.mux, et.muy, &b);
 
     z1 = m.turn_slip ? zeta1(p, b.dfz, c.kappa, c.phi) : 1.0;
     fx0(p, &m, &c, &b, z1, &Fx0, &mux, &Kxk);
@@ -920,8 +1060,25 @@ int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *
         Fy = lat.Fy0;
         mz0(p, &m, &c, &b, &at, &Mz, &t, &Mzr);
     }
+#if MF_EXT_ACTIVE
+    /* extension offsets, then the generic correction of Fx, Fy or Mz (after Mz, before Mx, My) */
+    Fx = Fx + et.dFx;
+    Fy = Fy + et.dFy;
+#if MF_EXT_GENERIC && MF_EXT_GEN_CHANNEL == MF_CH_FX
+    Fx = Fx * et.generic;
+#elif MF_EXT_GENERIC && MF_EXT_GEN_CHANNEL == MF_CH_FY
+    Fy = Fy * et.generic;
+#elif MF_EXT_GENERIC && MF_EXT_GEN_CHANNEL == MF_CH_MZ
+    Mz = Mz * et.generic;
+#endif
+#endif
     Mx = mx(p, &c, dpi, Fy);
     My = my(p, &c, Fx);
+#if MF_EXT_GENERIC && MF_EXT_GEN_CHANNEL == MF_CH_MX
+    Mx = Mx * et.generic;
+#elif MF_EXT_GENERIC && MF_EXT_GEN_CHANNEL == MF_CH_MY
+    My = My * et.generic;
+#endif
     muy = m.limits ? fabs(lat.muy) : lat.muy;
 
     if (p->FITTYP == 61.0)

@@ -8,7 +8,13 @@
  * Axes are ISO-W (TYDEX W), units SI, angles in rad.
  *
  * MFParams (one double per .tir parameter) is generated from the FMU variable
- * table into mf_params.h by mftire/fmu/variables.py.
+ * table into mf_params.h by mftire/fmu/variables.py, together with the export-time
+ * configuration of the model extensions ([MFTIRE_EXTENSIONS], mftire/extensions.py):
+ *   MF_EXT_ACTIVE, MF_EXT_<NAME>   1 when the extension is active in the .tir;
+ *   MF_N_DATA, MF_DATA_NAMES       the data variables (extra inputs, MFInputs.data);
+ *   MF_EXT_FADE_VAR, MF_EXT_FVAR_VAR, MF_EXT_GEN_VAR
+ *                                  the variable each extension reads (MF_XV_*);
+ *   MF_EXT_GEN_CHANNEL             the channel of the generic correction (MF_CH_*).
  */
 #ifndef MF_EVAL_H
 #define MF_EVAL_H
@@ -18,6 +24,29 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* Room for the data variables of the model extensions (one per extension that reads one). */
+#define MF_MAX_DATA 3
+
+/* Variables an extension may read: mftire.extensions.BUILTIN_VARIABLES (from the
+ * conditioned inputs), then the data inputs MFInputs.data[0..MF_N_DATA-1]. */
+#define MF_XV_FZ 0
+#define MF_XV_KAPPA 1
+#define MF_XV_ALPHA 2
+#define MF_XV_GAMMA 3
+#define MF_XV_VX 4
+#define MF_XV_P 5
+#define MF_XV_VS 6
+#define MF_XV_SIGN_ALPHA 7
+#define MF_XV_SIGN_KAPPA 8
+#define MF_XV_DATA0 9
+
+/* Channels of the generic correction (mftire.extensions.GENERIC_CHANNELS). */
+#define MF_CH_FX 0
+#define MF_CH_FY 1
+#define MF_CH_MZ 2
+#define MF_CH_MX 3
+#define MF_CH_MY 4
 
 /* One operating point as the importer gives it. */
 typedef struct {
@@ -30,6 +59,7 @@ typedef struct {
     double P;      /* inflation pressure [Pa]; NaN or <= 0 means INFLPRES */
     double omega;  /* wheel spin [rad/s]; 0 means "estimate from kappa, Vx, Re" */
     double muRoad; /* road friction factor multiplying LMUX and LMUY [-] */
+    double data[MF_MAX_DATA]; /* data variables of the model extensions (MF_DATA_NAMES); NaN means 0 */
 } MFInputs;
 
 /* The outputs (the FMU publishes all but the last four). */
@@ -47,6 +77,7 @@ enum {
     MF_W_FZ_HIGH, MF_W_FZ_LOW, MF_W_P_LOW, MF_W_P_HIGH, MF_W_KAPPA_LOW, MF_W_KAPPA_HIGH,
     MF_W_LOW_SPEED,
     MF_W_EX, MF_W_EY, MF_W_EXA, MF_W_EYK, MF_W_ET,
+    MF_W_NAN_DATA0, MF_W_NAN_DATA1, MF_W_NAN_DATA2, /* NaN in MFInputs.data[0..2] */
     MF_W_COUNT
 };
 

@@ -1,0 +1,352 @@
+"""FMU export of the model extensions ([MFTIRE_EXTENSIONS], mftire/extensions.py).
+
+One small FMU per case (each extension on its own, the generic correction on
+every channel, and all extensions together), compiled once per module.  The FMU
+must agree with the Python evaluator point by point to 1e-9 relative, with the
+absolute floors of tests/test_fmu_export.py, in Model Exchange and Co-Simulation,
+with random values of the data-variable inputs.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import warnings
+
+import numpy as np
+import pytest
+from conftest import REFERENCE_TYRES
+from test_fmu_export import CHANNEL, OUTPUTS, _have_compiler, _random_points, _rel_errors, _scale
+
+from mftire import read_tir
+from mftire.extensions import LIBRARY, NEUTRAL, SECTION
+from mftire.fmu import variables as vt
+from mftire.fmu.export import FMUExportError, export_fmu, find_compiler, generate_sources
+from mftire.mf.solver import evaluate_arrays
+from mftire.tyre import Tyre
+
+pytestmark = pytest.mark.skipif(
+    not _have_compiler(), reason="no C compiler (cc, gcc or clang) on PATH: FMU binaries cannot be built"
+)
+
+BASE_INPUTS = ["Fz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "omega", "muRoad"]
+ODD_NAME = "brake temp [°C]"  # not a C identifier: kept as the FMI name, escaped in the C sources
+
+#: case -> (base .tir, [MFTIRE_EXTENSIONS] entries)
+CASES: dict[str, tuple[str, dict]] = {
+    "slip_speed_friction": ("JuliaMF62", {"VS_DECAY": 0.6}),
+    "slip_speed_peak": ("JuliaMF61", {"VS_PEAK_GAIN": 0.4, "VS_PEAK_SPEED": 2.5, "VS_PEAK_WIDTH": 0.7}),
+    "speed_friction": ("JuliaMF62", {"VX_FRIC1": -0.08, "VX_FRIC2": 0.03}),
+    "fade": ("JuliaMF62", {"FADE_VARIABLE": "energy", "FADE_DEPTH": 0.25, "FADE_SCALE": 4e5}),
+    "friction_variable": ("JuliaMF61", {"FVAR_VARIABLE": ODD_NAME, "FVAR_REF": 60.0, "FVAR_SCALE": 30.0,
+                                        "FVAR_C1": -0.05, "FVAR_C2": -0.02}),
+    "load_friction": ("MF52", {"LOAD_MU2": -0.06}),
+    "rolling_resistance": ("JuliaMF61", {"RR_FX": 0.012}),
+    "asymmetry": ("JuliaMF62", {"ASYM_MUY": 0.06, "ASYM_FY": 0.015}),
+    "generic_Fy": ("JuliaMF62", {"GEN_VARIABLE": "temperature", "GEN_CHANNEL": "Fy", "GEN_REF": 40.0,
+                                 "GEN_SCALE": 50.0, "GEN_C1": 0.05, "GEN_C2": -0.03, "GEN_C3": 0.01}),
+    "generic_Mx": ("JuliaMF61", {"GEN_VARIABLE": "Vs", "GEN_CHANNEL": "Mx", "GEN_SCALE": 10.0, "GEN_C1": 0.04,
+                                 "GEN_C3": -0.002}),
+    "generic_My": ("JuliaMF62", {"GEN_VARIABLE": "kappa", "GEN_CHANNEL": "My", "GEN_C1": 0.3, "GEN_C2": 0.2}),
+    "fade_Vs_generic_Fx": ("JuliaMF61", {"FADE_VARIABLE": "Vs", "FADE_DEPTH": 0.2, "FADE_SCALE": 5.0,
+                                         "GEN_VARIABLE": "sign_kappa", "GEN_CHANNEL": "Fx", "GEN_C1": 0.05}),
+    "all": ("JuliaMF62", {
+        "VS_DECAY": 0.3, "VS_PEAK_GAIN": 0.2, "VS_PEAK_SPEED": 3.0, "VX_FRIC1": -0.05, "VX_FRIC2": 0.02,
+        "FADE_VARIABLE": "energy", "FADE_DEPTH": 0.15, "FADE_SCALE": 1e6,
+        "FVAR_VARIABLE": "temperature", "FVAR_REF": 50.0, "FVAR_SCALE": 40.0, "FVAR_C1": -0.04, "FVAR_C2": -0.01,
+        "LOAD_MU2": -0.04, "RR_FX": 0.01, "ASYM_MUY": 0.04, "ASYM_FY": 0.01,
+        "GEN_VARIABLE": "temperature", "GEN_CHANNEL": "Mz", "GEN_REF": 50.0, "GEN_SCALE": 40.0, "GEN_C1": 0.03,
+    }),
+}  # fmt: skip
+
+#: data variable -> (low, high) of its random values (energy includes negatives: clipped at 0 by fade)
+DATA_RANGES = {"energy": (-2e5, 3e6), "temperature": (-20.0, 140.0), ODD_NAME: (0.0, 200.0)}
+MODES = (111, 121, 211, 112, 110, 222)
+N_POINTS = 300  # per case and interface
+
+
+def _tyre(case: str) -> Tyre:
+    base, entries = CASES[case]
+    params = read_tir(REFERENCE_TYRES[base])
+    for key, value in entries.items():
+        params.set(key, value, section=SECTION)
+    return Tyre(params, name=f"{case}.tir")
+
+
+@pytest.fixture(scope="module")
+def build(tmp_path_factory):
+    """build(case, version) -> (fmu path, extracted directory), compiled once per module."""
+    from fmpy import extract
+
+    d = tmp_path_factory.mktemp("fmu_ext")
+    cache: dict = {}
+
+    def get(case: str, version: int = 2):
+        if (case, version) not in cache:
+            path = export_fmu(_tyre(case), d / f"{case}_fmi{version}.fmu", fmi_version=version)
+            cache[case, version] = (path, extract(str(path), unzipdir=str(d / f"{case}_x{version}")))
+        return cache[case, version]
+
+    return get
+
+
+def _python(tyre: Tyre, pt: dict, data: dict, mode: int, flat: dict | None = None, record=None) -> dict:
+    """Tyre.evaluate's evaluator (evaluate_arrays with the tyre's extensions) on one point, muRoad folded
+    into LMUX/LMUY as the FMU does."""
+    q = dict(flat or tyre.flat)
+    q["LMUX"] = q["LMUX"] * pt["muRoad"]
+    q["LMUY"] = q["LMUY"] * pt["muRoad"]
+    omega = None if pt["omega"] == 0 else pt["omega"]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        out = evaluate_arrays(q, pt["Fz"], pt["kappa"], pt["alpha"], pt["gamma"], pt["phit"], pt["Vx"], pt["P"],
+                              omega, mode, tyre.extensions, data or None)  # fmt: skip
+    if record is not None:
+        record.extend(str(w.message) for w in caught)
+    return {k: float(out[CHANNEL.get(k, k)]) for k in OUTPUTS}
+
+
+def _data_points(rng, names, n) -> list[dict]:
+    cols = {v: rng.uniform(*DATA_RANGES[v], n) for v in names}
+    return [{v: float(cols[v][i]) for v in names} for i in range(n)]
+
+
+def _agreement(unzipdir: str, tyre: Tyre, seed: int, n: int) -> dict[str, float]:
+    from mftire.fmu.host import FMUTyre
+
+    rng = np.random.default_rng(seed)
+    p = tyre.flat
+    pts = _random_points(rng, p, n)
+    data = _data_points(rng, tyre.required_variables, n)
+    modes = [MODES[i % len(MODES)] for i in range(n)]
+    refs = [_python(tyre, pt, dv, mode) for pt, dv, mode in zip(pts, data, modes, strict=True)]
+    worst = {}
+    for iface in ("ME", "CS"):
+        worst[iface] = 0.0
+        for mode in MODES:
+            with FMUTyre(unzipdir, iface, start_values={"useMode": mode}) as fmu:
+                for pt, dv, m, ref in zip(pts, data, modes, refs, strict=True):
+                    if m != mode:
+                        continue
+                    got = fmu.evaluate(**pt, **dv)
+                    errs = _rel_errors(p, got, ref)
+                    assert max(errs.values()) <= 1e-9, (iface, mode, pt, dv, {k: (got[k], ref[k]) for k in errs
+                                                                              if errs[k] > 1e-9})  # fmt: skip
+                    worst[iface] = max(worst[iface], max(errs.values()))
+    return worst
+
+
+# --------------------------------------------------------------------------- agreement
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_extension_fmu_agrees_with_python_me_and_cs(build, case):
+    """300 random points per interface (6 modes, random muRoad and data inputs), 1e-9 relative."""
+    from fmpy.validation import validate_fmu
+
+    path, unzipdir = build(case)
+    assert validate_fmu(str(path)) == []
+    tyre = _tyre(case)
+    worst = _agreement(unzipdir, tyre, seed=1000 + list(CASES).index(case), n=N_POINTS)
+    print(f"{case}: max relative error vs Python over {N_POINTS} points: ME {worst['ME']:.1e}, CS {worst['CS']:.1e}")
+
+
+def test_every_extension_is_covered():
+    from mftire.extensions import active_extensions
+
+    covered = {n for case in CASES for n in active_extensions(CASES[case][1])}
+    assert covered == set(LIBRARY)
+    assert {CASES[c][1].get("GEN_CHANNEL") for c in CASES} >= {"Fx", "Fy", "Mz", "Mx", "My"}
+
+
+def test_extension_fmu_fmi3(build):
+    from fmpy.validation import validate_fmu
+
+    path, unzipdir = build("all", 3)
+    assert validate_fmu(str(path)) == []
+    worst = _agreement(unzipdir, _tyre("all"), seed=3, n=120)
+    print(f"FMI 3 all extensions: ME {worst['ME']:.1e}, CS {worst['CS']:.1e}")
+
+
+def test_extensions_change_the_outputs(build):
+    """The extended FMU is not the plain tyre (guards against a silently neutral C path)."""
+    from mftire.fmu.host import FMUTyre
+
+    _, unzipdir = build("all")
+    base = _tyre("all")
+    plain = Tyre(read_tir(REFERENCE_TYRES["JuliaMF62"]))
+    pt = dict(Fz=5000.0, kappa=-0.15, alpha=0.08, gamma=0.02, phit=0.0, Vx=25.0, P=2.3e5, omega=0.0, muRoad=1.0)
+    data = {"energy": 5e5, "temperature": 90.0}
+    with FMUTyre(unzipdir, "ME") as fmu:
+        got = fmu.evaluate(**pt, **data)
+    ref_plain = _python(plain, pt, {}, 111)
+    ref = base.evaluate(pt["Fz"], pt["kappa"], pt["alpha"], pt["gamma"], pt["phit"], pt["Vx"], pt["P"], **data)
+    for k in ("Fx", "Fy", "Mz", "Mx", "mux", "muy"):  # (My: QSY2 = 0 in this file, Fx does not reach it)
+        assert abs(got[k] - ref_plain[k]) > 1e-3 * abs(ref_plain[k]), k
+        assert got[k] == pytest.approx(float(ref[k]), rel=1e-12, abs=1e-12), k
+
+
+# --------------------------------------------------------------------------- variables
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_data_variables_are_inputs_and_keys_are_parameters(build, version):
+    from fmpy import read_model_description
+
+    path, unzipdir = build("all", version)
+    md = read_model_description(str(path))
+    by_name = {v.name: v for v in md.modelVariables}
+    inputs = [v for v in md.modelVariables if v.causality == "input"]
+    # one input per data variable (temperature is read by two extensions: one input), builtins are not inputs
+    assert [v.name for v in inputs] == [*BASE_INPUTS, "energy", "temperature"]
+    for name in ("energy", "temperature"):
+        v = by_name[name]
+        assert v.variability == "continuous" and float(v.start) == 0.0 and v.unit is None
+    for unknowns in (md.outputs, md.initialUnknowns):
+        assert {u.variable.name for u in unknowns} == set(OUTPUTS)
+        for u in unknowns:
+            assert {d.name for d in u.dependencies} == {v.name for v in inputs}
+    # every numeric key of an active extension is a tunable parameter: the file's value, else neutral
+    entries = CASES["all"][1]
+    for name in LIBRARY:
+        for key in LIBRARY[name].keys:
+            v = by_name[key]
+            assert (v.causality, v.variability) == ("parameter", "tunable"), key
+            assert float(v.start) == float(entries.get(key, NEUTRAL[key])), key
+            assert v.description.startswith(f"[{SECTION}] {name}")
+    assert "variable temperature, channel Mz; fixed at export" in by_name["GEN_C1"].description
+    assert "FADE_VARIABLE" not in by_name and "GEN_CHANNEL" not in by_name  # string keys are compiled in
+    header = open(os.path.join(unzipdir, "sources", "mf_params.h")).read()
+    assert "#define MF_EXT_GEN_CHANNEL MF_CH_MZ" in header
+    assert re.search(r"#define MF_EXT_FADE_VAR \(MF_XV_DATA0 \+ 0\)", header)
+
+
+def test_odd_data_variable_name_is_kept_for_fmi_and_escaped_for_c(build):
+    from fmpy import read_model_description
+
+    path, unzipdir = build("friction_variable")
+    md = read_model_description(str(path))
+    assert [v.name for v in md.modelVariables if v.causality == "input"] == [*BASE_INPUTS, ODD_NAME]
+    gen = open(os.path.join(unzipdir, "sources", "mf_model_gen.h"), encoding="ascii").read()  # pure ASCII
+    assert vt.c_string(ODD_NAME) in gen and r"\302\260" in vt.c_string(ODD_NAME)
+
+
+def test_builtin_variable_is_not_an_input(build):
+    from fmpy import read_model_description
+
+    for case in ("generic_Mx", "fade_Vs_generic_Fx", "slip_speed_friction"):
+        path, _ = build(case)
+        md = read_model_description(str(path))
+        assert [v.name for v in md.modelVariables if v.causality == "input"] == BASE_INPUTS, case
+
+
+def test_guid_covers_the_compiled_choices():
+    """Two files that differ only in a string key (compiled in) get different GUIDs."""
+    flat = Tyre(read_tir(REFERENCE_TYRES["JuliaMF62"])).flat
+    sec = {"GEN_VARIABLE": "Vs", "GEN_C1": 0.1}
+    guids = set()
+    for extra in ({"GEN_CHANNEL": "Fx"}, {"GEN_CHANNEL": "Mz"}, {"GEN_CHANNEL": "Mz", "GEN_VARIABLE": "Fz"}):
+        spec = vt.extension_spec({**sec, **extra})
+        guids.add(vt.guid(vt.variable_table(flat, extensions=spec), 2))
+    assert len(guids) == 3
+    # a plain tyre's table and GUID are unchanged by the extension machinery
+    assert vt.variable_table(flat) == vt.variable_table(flat, extensions=None)
+
+
+# --------------------------------------------------------------------------- parameters
+
+
+@pytest.mark.parametrize("iface", ["ME", "CS"])
+def test_extension_parameter_start_values_change_outputs_as_python(build, iface):
+    from mftire.fmu.host import FMUTyre
+
+    _, unzipdir = build("all")
+    tyre = _tyre("all")
+    changed = {"VS_DECAY": 0.9, "FADE_DEPTH": 0.3, "FVAR_C1": -0.1, "RR_FX": 0.02, "ASYM_FY": -0.02,
+               "GEN_C1": 0.08, "LOAD_MU2": 0.05}  # fmt: skip
+    params = read_tir(REFERENCE_TYRES["JuliaMF62"])
+    for key, value in {**CASES["all"][1], **changed}.items():
+        params.set(key, value, section=SECTION)
+    tuned_py = Tyre(params)
+    pt = dict(Fz=5000.0, kappa=-0.12, alpha=0.06, gamma=0.02, phit=0.0, Vx=20.0, P=2.3e5, omega=0.0, muRoad=1.0)
+    data = {"energy": 4e5, "temperature": 85.0}
+    args = [pt[k] for k in ("Fz", "kappa", "alpha", "gamma", "phit", "Vx", "P")]
+    with FMUTyre(unzipdir, iface) as base, FMUTyre(unzipdir, iface, start_values=changed) as tuned:
+        g0, g1 = base.evaluate(**pt, **data), tuned.evaluate(**pt, **data)
+    r0 = {k: float(v) for k, v in tyre.evaluate(*args, **data).items()}
+    r1 = {k: float(v) for k, v in tuned_py.evaluate(*args, **data).items()}
+    p = tyre.flat
+    assert abs(g1["Fx"] - g0["Fx"]) > 0.02 * abs(g0["Fx"])  # the change matters
+    for k in OUTPUTS:
+        c = CHANNEL.get(k, k)
+        assert g0[k] == pytest.approx(r0[c], rel=1e-12, abs=1e-12), k
+        assert g1[k] == pytest.approx(r1[c], rel=1e-12, abs=1e-12), k
+        assert g1[k] - g0[k] == pytest.approx(r1[c] - r0[c], rel=1e-9, abs=1e-9 * _scale(p, k)), k
+
+
+def test_nan_data_input_is_zeroed_with_a_warning(build):
+    from mftire.fmu.host import FMUTyre
+
+    _, unzipdir = build("all")
+    tyre = _tyre("all")
+    pt = dict(Fz=4000.0, kappa=0.05, alpha=0.03, gamma=0.01, phit=0.0, Vx=15.0, P=2.4e5, omega=0.0, muRoad=1.0)
+    data = {"energy": float("nan"), "temperature": float("nan")}
+    with FMUTyre(unzipdir, "ME") as fmu:
+        got = fmu.evaluate(**pt, **data)
+        logged = " | ".join(m for s, c, m in fmu.messages if s == 1)
+    py_warnings: list[str] = []
+    ref = _python(tyre, pt, data, 111, record=py_warnings)
+    assert max(_rel_errors(tyre.flat, got, ref).values()) <= 1e-9
+    assert ref == _python(tyre, pt, {"energy": 0.0, "temperature": 0.0}, 111)
+    assert len(py_warnings) == 2
+    for w in py_warnings:
+        assert w in logged, (w, logged)
+
+
+# --------------------------------------------------------------------------- sources and errors
+
+
+def test_extended_sources_rebuild_warning_free(build, tmp_path):
+    _, unzipdir = build("all")
+    src = os.path.join(unzipdir, "sources")
+    files = [os.path.join(src, f) for f in sorted(os.listdir(src)) if f.endswith(".c")]
+    res = subprocess.run([*find_compiler(), "-shared", "-fPIC", "-std=c99", "-Wall", "-Wextra", "-I", src, *files,
+                          "-o", str(tmp_path / "rebuilt.so"), "-lm"], capture_output=True, text=True)  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    assert res.stderr.strip() == ""
+
+
+def _with(entries: dict) -> Tyre:
+    params = read_tir(REFERENCE_TYRES["JuliaMF62"])
+    for key, value in entries.items():
+        params.set(key, value, section=SECTION)
+    return Tyre(params, name="bad.tir")
+
+
+@pytest.mark.parametrize(
+    ("entries", "match"),
+    [
+        ({"GEN_VARIABLE": "Vs", "GEN_CHANNEL": "Fz", "GEN_C1": 0.1}, "GEN_CHANNEL must be one of"),
+        ({"FVAR_VARIABLE": "phit", "FVAR_C1": 0.1}, "'phit' used twice"),
+        ({"FADE_VARIABLE": "LMUX", "FADE_DEPTH": 0.1}, "'LMUX' used twice"),
+        ({"FADE_VARIABLE": "a\tb", "FADE_DEPTH": 0.1}, "cannot be an FMI variable name"),
+        ({"VS_DECAY": "fast"}, "VS_DECAY must be a number"),
+    ],
+)
+def test_export_refuses_extensions_it_cannot_evaluate(tmp_path, entries, match):
+    with pytest.raises(FMUExportError, match=re.escape(match)):
+        export_fmu(_with(entries), tmp_path / "bad.fmu")
+    assert not list(tmp_path.iterdir())
+
+
+def test_generate_sources_without_compiler_for_every_case():
+    """The generated headers define every macro the C code reads (checked without compiling)."""
+    for case in CASES:
+        tyre = _tyre(case)
+        spec = vt.extension_spec(tyre.extensions)
+        _, files = generate_sources(tyre.flat, "x", 2, 111, spec)
+        header = files["mf_params.h"]
+        for name in LIBRARY:
+            assert f"#define MF_EXT_{name.upper()} {int(name in spec.active)}" in header
+        assert f"#define MF_N_DATA {len(tyre.required_variables)}" in header
