@@ -213,6 +213,9 @@ def build_parser() -> argparse.ArgumentParser:
     from mftire.diagnosis import cli as diagnose_cli
 
     diagnose_cli.add_parser(sub)
+    from mftire.compare import cli as compare_cli
+
+    compare_cli.add_parser(sub)
     return parser
 
 

@@ -25,8 +25,33 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
         paths = write_report(result, args.report)
         lines.append(f"  report: {paths['report']}, {paths['metrics']}, {len(paths['plots'])} plot(s)")
+    if args.bands:
+        lines.extend(_bands(args, result))
     print("\n".join(lines), file=sys.stdout)
     return 0
+
+
+def _bands(args: argparse.Namespace, result) -> list[str]:
+    """``--bands N``: bootstrap bands written next to the report (or the fitted .tir)."""
+    import os
+
+    from mftire.fitting.bands import bootstrap_bands, coverage_table, write_bands
+
+    bands = bootstrap_bands(None, args.template, n=args.bands, level=args.band_level, fit=result,
+                            weights=args.weights, alpha_star=args.alpha_star, seed=args.seed, n_jobs=args.jobs,
+                            progress=None if not sys.stderr.isatty() else
+                            (lambda m: print(f"\rmftire fit: bands: {m}\x1b[K", end="", file=sys.stderr, flush=True)))
+    cov = coverage_table(bands, args.heldout) if args.heldout else None
+    directory = args.report or os.path.dirname(os.path.abspath(args.output))
+    paths = write_bands(bands, directory, cov)
+    out = [f"  bands: {len(bands.replicates)} bootstrap replicates over sweeps ({bands.n_failed} failed), "
+           f"level {bands.level:g}, {bands.time:.1f} s: {paths['csv']}, {paths['json']}"]
+    if cov is not None:
+        a = cov.iloc[-1]
+        out.append(f"  held-out coverage: {100 * a['inside_prediction']:.1f} % of {int(a['n'])} points inside the "
+                   f"prediction band (nominal {100 * bands.level:g} %), {100 * a['inside_confidence']:.1f} % inside "
+                   "the confidence band of the mean curve")
+    return out
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -48,5 +73,14 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="per-source weights, e.g. fe=1,measured=5 (source column or file name)")
     p.add_argument("--alpha-star", action="store_true",
                    help="fit for evaluation with alpha* = tan(alpha) (mode 121) instead of 111")
+    p.add_argument("--bands", type=int, default=0, metavar="N",
+                   help="bootstrap over sweeps with N replicates (warm-started refits): confidence and prediction "
+                   "bands of the fitted curves, written to bands.csv/bands.json in the report directory "
+                   "(or beside the output)")
+    p.add_argument("--band-level", type=float, default=0.95, metavar="LEVEL", help="band coverage (default 0.95)")
+    p.add_argument("--heldout", nargs="+", metavar="DATA",
+                   help="held-out measured sweeps: report the fraction of their points inside the bands")
+    p.add_argument("--seed", type=int, default=0, help="random seed of the bootstrap (default 0)")
+    p.add_argument("--jobs", type=int, default=1, help="worker processes for the bootstrap refits (default 1)")
     p.set_defaults(func=_cmd_fit)
     return p
