@@ -21,14 +21,16 @@ name                       variable  term                                       
 ``fade``                   any       mu × (1 − a·(1 − exp(−max(v, 0)/tau)))            FADE_VARIABLE, FADE_DEPTH,
                                      (thermal or wear fade with time, energy, ...)     FADE_SCALE
 ``friction_variable``      any       mu × (1 + c1·z + c2·z²), z = (v − ref)/scale      FVAR_VARIABLE, FVAR_REF,
-                                     (e.g. temperature sensitivity of rubber)          FVAR_SCALE, FVAR_C1, FVAR_C2
+                                     (e.g. temperature sensitivity of rubber); v        FVAR_SCALE, FVAR_C1, FVAR_C2,
+                                     clipped to [FVAR_MIN, FVAR_MAX], the fitted range   FVAR_MIN, FVAR_MAX
 ``load_friction``          Fz        mu × (1 + c·dfz²)  (load sensitivity beyond PDX2, LOAD_MU2
                                      PDY2)
 ``rolling_resistance``     —         Fx − c·Fz·sign(Vx)  (free-rolling offset)         RR_FX
 ``asymmetry``              sign α    muy × (1 + a·sign(alpha)); Fy + b·Fz              ASYM_MUY, ASYM_FY
                                      (tread asymmetry; ply-steer)
-``generic``                any       channel × (1 + c1·z + c2·z² + c3·z³)              GEN_CHANNEL, GEN_VARIABLE,
-                                     NOT PHYSICS: a labelled smooth correction          GEN_REF, GEN_SCALE, GEN_C1..3
+``generic``                any       channel × (1 + c1·z + c2·z² + c3·z³), v clipped   GEN_CHANNEL, GEN_VARIABLE,
+                                     to [GEN_MIN, GEN_MAX]; NOT PHYSICS: a labelled     GEN_REF, GEN_SCALE, GEN_C1..3,
+                                     smooth correction                                  GEN_MIN, GEN_MAX
 =========================  ========  ==============================================  ============================
 
 The inflation-pressure effect needs no section of its own: it is the standard
@@ -73,13 +75,15 @@ LIBRARY: dict[str, Extension] = {
         Extension("fade", "thermal or wear fade of friction with a cumulative variable",
                   ("FADE_DEPTH", "FADE_SCALE"), variable_key="FADE_VARIABLE"),
         Extension("friction_variable", "friction depending on a measured variable (e.g. temperature)",
-                  ("FVAR_REF", "FVAR_SCALE", "FVAR_C1", "FVAR_C2"), variable_key="FVAR_VARIABLE"),
+                  ("FVAR_REF", "FVAR_SCALE", "FVAR_C1", "FVAR_C2", "FVAR_MIN", "FVAR_MAX"),
+                  variable_key="FVAR_VARIABLE"),
         Extension("load_friction", "quadratic load sensitivity of friction", ("LOAD_MU2",), fixed_variable="Fz"),
         Extension("rolling_resistance", "free-rolling longitudinal force offset (rolling resistance)", ("RR_FX",)),
         Extension("asymmetry", "left/right asymmetry: tread asymmetry of lateral friction and ply-steer offset",
                   ("ASYM_MUY", "ASYM_FY"), fixed_variable="sign_alpha"),
         Extension("generic", "generic smooth correction (not a physical model)",
-                  ("GEN_REF", "GEN_SCALE", "GEN_C1", "GEN_C2", "GEN_C3"), variable_key="GEN_VARIABLE",
+                  ("GEN_REF", "GEN_SCALE", "GEN_C1", "GEN_C2", "GEN_C3", "GEN_MIN", "GEN_MAX"),
+                  variable_key="GEN_VARIABLE",
                   physical=False),
     )
 }  # fmt: skip
@@ -88,9 +92,10 @@ LIBRARY: dict[str, Extension] = {
 NEUTRAL: dict[str, float] = {
     "VS_DECAY": 0.0, "VS_PEAK_GAIN": 0.0, "VS_PEAK_SPEED": 1.0, "VS_PEAK_WIDTH": 0.5,
     "VX_FRIC1": 0.0, "VX_FRIC2": 0.0, "FADE_DEPTH": 0.0, "FADE_SCALE": 1.0,
-    "FVAR_REF": 0.0, "FVAR_SCALE": 1.0, "FVAR_C1": 0.0, "FVAR_C2": 0.0, "LOAD_MU2": 0.0,
+    "FVAR_REF": 0.0, "FVAR_SCALE": 1.0, "FVAR_C1": 0.0, "FVAR_C2": 0.0, "FVAR_MIN": -1e300, "FVAR_MAX": 1e300,
+    "LOAD_MU2": 0.0,
     "RR_FX": 0.0, "ASYM_MUY": 0.0, "ASYM_FY": 0.0,
-    "GEN_REF": 0.0, "GEN_SCALE": 1.0, "GEN_C1": 0.0, "GEN_C2": 0.0, "GEN_C3": 0.0,
+    "GEN_REF": 0.0, "GEN_SCALE": 1.0, "GEN_C1": 0.0, "GEN_C2": 0.0, "GEN_C3": 0.0, "GEN_MIN": -1e300, "GEN_MAX": 1e300,
 }  # fmt: skip
 
 #: Variables an extension may use that the evaluator derives from its own inputs.
@@ -233,6 +238,7 @@ def extension_terms(
             mu = mu * (1.0 - _value(sec, "FADE_DEPTH") * (1.0 - np.exp(-np.maximum(v, 0.0) / tau)))
         elif name == "friction_variable":
             v = _variable(str(sec["FVAR_VARIABLE"]), variables, where)
+            v = np.minimum(np.maximum(v, _value(sec, "FVAR_MIN")), _value(sec, "FVAR_MAX"))  # fitted range
             z = (v - _value(sec, "FVAR_REF")) / _value(sec, "FVAR_SCALE")
             mu = mu * (1.0 + _value(sec, "FVAR_C1") * z + _value(sec, "FVAR_C2") * z**2)
         elif name == "load_friction":
@@ -249,6 +255,7 @@ def extension_terms(
             if channel not in GENERIC_CHANNELS:
                 raise MftireInputError(f"{where}: GEN_CHANNEL must be one of {', '.join(GENERIC_CHANNELS)}")
             v = _variable(str(sec.get("GEN_VARIABLE", "")), variables, where)
+            v = np.minimum(np.maximum(v, _value(sec, "GEN_MIN")), _value(sec, "GEN_MAX"))  # fitted range
             z = (v - _value(sec, "GEN_REF")) / _value(sec, "GEN_SCALE")
             t.generic = (channel, 1.0 + _value(sec, "GEN_C1") * z + _value(sec, "GEN_C2") * z**2
                          + _value(sec, "GEN_C3") * z**3)  # fmt: skip

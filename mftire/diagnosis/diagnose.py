@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from mftire.diagnosis.candidates import Candidate, candidates, with_sweeps
-from mftire.diagnosis.effects import EffectFit, choose_effect, make_problem
+from mftire.diagnosis.effects import EffectFit, choose_effect, drop_outliers, make_problem, primary_rows
 from mftire.diagnosis.holdout import default_holdout, holdout_mask, levels
 from mftire.diagnosis.ranking import (
     CandidateScore,
@@ -108,12 +108,13 @@ def _variables_for(tyre: Tyre, df: pd.DataFrame, cand: Mapping[str, Candidate]) 
 def channel_errors(
     df: pd.DataFrame, before: Mapping[str, np.ndarray], after: Mapping[str, np.ndarray], channels: Sequence[str]
 ) -> list[ChannelError]:
-    """Per-channel RMS, RMS % of peak and share of residual variance removed."""
+    """Per-channel RMS, RMS % of peak and share of residual variance removed, on the
+    rows where the channel is a primary response (:func:`~mftire.diagnosis.effects.primary_rows`)."""
     out = []
     for ch in channels:
         y = df[ch].to_numpy(float)
-        ok = np.isfinite(y)
-        if not ok.any():
+        ok = np.isfinite(y) & primary_rows(df, ch)
+        if ok.sum() < 5:
             continue
         rb = (y - before[ch])[ok]
         ra = (y - after[ch])[ok]
@@ -190,7 +191,8 @@ def diagnose(
     top = significant[0]
     if holdout is None:
         pref = [top.variable] if by_name[top.variable].sweep_level and top.variable in df.columns else []
-        holdout = default_holdout(df, pref)
+        misfit = np.where(primary_rows(df, top.channel), residuals[top.channel] ** 2, np.nan)
+        holdout = default_holdout(df, pref, misfit)
     column, values = holdout[0], list(holdout[1])
     test = holdout_mask(df, column, values)
     train = ~test
@@ -200,16 +202,23 @@ def diagnose(
     n_pressures = len(levels(df[train], "P"))
     best: tuple[EffectFit, CandidateScore] | None = None
     tried: list[EffectFit] = []
+    control: EffectFit | None = None  # the refit without any effect, shared by the candidates
     dtrain = df[train].reset_index(drop=True)
     for e in group:
         c = by_name[e.variable]
         v = c.values[train]
         monotone = bool(np.all(np.diff(v) >= 0))
-        prob = make_problem(tyre, dtrain, chans)
+        dtr = dtrain.assign(_cand=v)
+        prob = make_problem(tyre, dtr, chans)
         prob.variables = {k: np.asarray(val)[train] for k, val in variables.items()}
+        prob = drop_outliers(prob)
+        v = prob.df["_cand"].to_numpy(float)
         _progress(f"fitting effects for {e.variable}", progress)
-        chosen, fits = choose_effect(prob, e.variable, v, c.derived, monotone, n_pressures, e.channel)
-        tried += fits
+        eff_ch = [ch for ch, sc in e.channel_scores.items() if sc >= max(0.05, 0.25 * e.score)] or [e.channel]
+        chosen, fits = choose_effect(prob, e.variable, v, c.derived, monotone, n_pressures, e.channel, control,
+                                     eff_ch)  # fmt: skip
+        control = fits[0]
+        tried += fits[1:] if len(tried) else fits
         if chosen is None or chosen.removed <= 0:
             continue
         key = (not chosen.physical, chosen.bic)

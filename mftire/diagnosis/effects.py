@@ -1,11 +1,11 @@
 """Map a candidate variable to model extensions, fit them, and choose one.
 
-Each extension of :mod:`mftire.extensions` is fitted by bounded robust least
-squares on the training data, together with the main pure-slip coefficients of the
-measured channels (:data:`REFIT_KEYS`: shape, peak, curvature and stiffness of Fx
-and Fy, trail and residual torque of Mz), because a base fit made on data
-containing the effect has absorbed part of it into them.  The other Magic Formula
-coefficients stay as fitted.  The inflation-pressure effect refits the
+Each extension of :mod:`mftire.extensions` is fitted by bounded least squares on the
+training data (gross outliers removed; each channel on the rows where it is a primary
+response), together with the peak and curvature coefficients of the measured
+channels (:data:`REFIT_KEYS`), because a base fit made on data containing the effect
+has absorbed part of it into them.  The other Magic Formula coefficients stay as
+fitted.  The inflation-pressure effect refits the
 standard MF 6.1 pressure coefficients instead of an extension section.
 
 Extensions are compared by the Bayesian information criterion of the weighted
@@ -24,6 +24,7 @@ import pandas as pd
 from scipy.optimize import least_squares
 
 from mftire.extensions import BUILTIN_VARIABLES, LIBRARY, SECTION
+from mftire.mf.solver import evaluate_arrays
 from mftire.tyre import Tyre
 
 #: Extensions tried for each derived candidate (data columns: see :func:`effects_for`).
@@ -48,13 +49,21 @@ PRESSURE_KEYS = {
     "Mz": (("PPZ1", "PPZ2"), ()),
 }
 
-#: Main pure-slip coefficients refitted with an effect, by channel (Pacejka 2012
-#: eqs 4.E11–4.E15, 4.E21–4.E25, 4.E40–4.E47): a base fit made on data containing
-#: the effect has absorbed part of it into these.
+#: Iteration cap of one effect fit (warm start from the fitted model).
+MAX_ITER = 40
+#: Training rows used for effect fits at most (an even subsample of the sequence).
+MAX_ROWS = 1500
+
+#: Coefficients refitted with an effect, by channel: the pure-slip shape, peak,
+#: curvature and stiffness factors of Fx and Fy and the trail's peak and curvature
+#: (Pacejka 2012 eqs 4.E11–4.E15, 4.E21–4.E25, 4.E42, 4.E44), into which a base fit
+#: made on data containing the effect has absorbed part of it (a friction law in slip
+#: speed also reshapes the curves).  The other aligning coefficients stay: refitting
+#: them overfits when the training data hold few loads.
 REFIT_KEYS = {
     "Fx": ("PCX1", "PDX1", "PDX2", "PEX1", "PEX2", "PKX1", "PKX2"),
     "Fy": ("PCY1", "PDY1", "PDY2", "PEY1", "PEY2", "PKY1", "PKY2"),
-    "Mz": ("QBZ1", "QBZ2", "QCZ1", "QDZ1", "QDZ2", "QEZ1", "QDZ6"),
+    "Mz": ("QDZ1", "QDZ2", "QEZ1"),
 }
 
 
@@ -104,6 +113,23 @@ def effects_for(variable: str, derived: bool, monotone: bool) -> tuple[str, ...]
     return ("fade", "friction_variable") if monotone else ("friction_variable",)
 
 
+#: Channels effects are fitted on (Mx and My follow the forces through models of their
+#: own; including their residuals swamps the comparison of effects).
+FIT_CHANNELS = ("Fx", "Fy", "Mz")
+
+
+def primary_rows(df: pd.DataFrame, channel: str) -> np.ndarray:
+    """Rows where ``channel`` is a primary response of the sweep: Fx where the tyre
+    slips longitudinally (|kappa| > 0.005), Fy, Mz and Mx where it has a slip angle
+    (|alpha| > 0.5 deg), My everywhere.  Fy or Mz of a pure braking sweep are left
+    out: a fit does not target them, and their size is not what a test measures."""
+    if channel == "Fx":
+        return np.abs(df["kappa"].to_numpy(float)) > 0.005
+    if channel in ("Fy", "Mz", "Mx"):
+        return np.abs(df["alpha"].to_numpy(float)) > np.radians(0.5)
+    return np.ones(len(df), dtype=bool)
+
+
 @dataclass
 class _Problem:
     """The training data of an effect fit."""
@@ -115,13 +141,54 @@ class _Problem:
     variables: dict[str, np.ndarray]
     weights: np.ndarray
 
+    @property
+    def masks(self) -> dict[str, np.ndarray]:
+        """Rows where each channel is used (:func:`primary_rows`)."""
+        return {c: primary_rows(self.df, c) for c in self.channels}
+
 
 def make_problem(tyre: Tyre, df: pd.DataFrame, channels: Sequence[str], weights: np.ndarray | None = None) -> _Problem:
     """Prepare the training data: channels present, residual scales (peak |y|)."""
-    chans = tuple(c for c in channels if c in df.columns and df[c].notna().any())
+    chans = tuple(c for c in channels if c in FIT_CHANNELS and c in df.columns and df[c].notna().any())
     scale = {c: float(np.nanmax(np.abs(df[c].to_numpy(float)))) or 1.0 for c in chans}
     w = np.ones(len(df)) if weights is None else np.asarray(weights, float)
     return _Problem(tyre, df, chans, scale, {}, w)
+
+
+def drop_outliers(prob: _Problem, limit: float = 10.0) -> _Problem:
+    """Drop rows whose residual in any channel exceeds ``limit`` robust standard deviations
+    (1.4826·MAD) of that channel's residual *along its sweep neighbours*: gross outliers,
+    not the smooth systematic residual an effect leaves."""
+    d = prob.df
+    out = evaluate_arrays(prob.tyre.flat, d["Fz"].to_numpy(float), d["kappa"].to_numpy(float),
+                          d["alpha"].to_numpy(float), d["gamma"].to_numpy(float), 0.0, d["Vx"].to_numpy(float),
+                          d["P"].to_numpy(float), extensions=prob.tyre.extensions,
+                          variables={k: v for k, v in prob.variables.items()} or None)  # fmt: skip
+    bad = np.zeros(len(d), dtype=bool)
+    for c in prob.channels:
+        r = np.where(primary_rows(d, c), d[c].to_numpy(float) - out[c], 0.0)
+        # deviation from a running median removes the smooth part of the residual
+        smooth = pd.Series(r).rolling(5, center=True, min_periods=1).median().to_numpy()
+        dev = r - smooth
+        mad = 1.4826 * np.nanmedian(np.abs(dev - np.nanmedian(dev)))
+        if mad > 0:
+            bad |= np.abs(dev) > limit * mad
+    if not bad.any():
+        return prob
+    keep = ~bad
+    return _Problem(prob.tyre, d[keep].reset_index(drop=True), prob.channels, prob.scale,
+                    {k: np.asarray(v)[keep] for k, v in prob.variables.items()}, prob.weights[keep])  # fmt: skip
+
+
+def subsample(prob: _Problem, max_rows: int = MAX_ROWS) -> tuple[_Problem, np.ndarray]:
+    """An evenly spaced subsample of the training rows (keeps the sequence and every sweep)."""
+    n = len(prob.df)
+    if n <= max_rows:
+        return prob, np.arange(n)
+    idx = np.unique(np.linspace(0, n - 1, max_rows).round().astype(int))
+    sub = _Problem(prob.tyre, prob.df.iloc[idx].reset_index(drop=True), prob.channels, prob.scale,
+                   {k: np.asarray(v)[idx] for k, v in prob.variables.items()}, prob.weights[idx])  # fmt: skip
+    return sub, idx
 
 
 def covered_channels(prob: _Problem) -> list[str]:
@@ -141,56 +208,77 @@ def covered_channels(prob: _Problem) -> list[str]:
     return out
 
 
-def _residuals(prob: _Problem, tyre: Tyre, variables: Mapping[str, np.ndarray]) -> np.ndarray:
+def _residuals(
+    prob: _Problem, flat: Mapping[str, float], section: Mapping[str, object] | None,
+    variables: Mapping[str, np.ndarray],
+) -> np.ndarray:
+    """Weighted, peak-scaled residuals of the measured channels for flat parameters."""
     d = prob.df
-    out = tyre.evaluate(
-        d["Fz"].to_numpy(float), d["kappa"].to_numpy(float), d["alpha"].to_numpy(float),
-        d["gamma"].to_numpy(float), Vx=d["Vx"].to_numpy(float), P=d["P"].to_numpy(float), **variables,
+    out = evaluate_arrays(
+        flat, d["Fz"].to_numpy(float), d["kappa"].to_numpy(float), d["alpha"].to_numpy(float),
+        d["gamma"].to_numpy(float), 0.0, d["Vx"].to_numpy(float), d["P"].to_numpy(float),
+        extensions=dict(section) if section else None, variables=dict(variables) or None,
     )  # fmt: skip
     parts = []
     sw = np.sqrt(prob.weights)
     for c in prob.channels:
         r = (d[c].to_numpy(float) - out[c]) / prob.scale[c]
-        parts.append(np.where(np.isfinite(r), r, 0.0) * sw)
+        use = prob.masks[c] & np.isfinite(r)
+        parts.append(np.where(use, r, 0.0) * sw)
     return np.concatenate(parts)
 
 
-def _spec(name: str, variable: str, v: np.ndarray | None, tyre: Tyre, n_pressures: int, channels):
+def _degree(v: np.ndarray, most: int) -> int:
+    """Polynomial degree a variable with few distinct levels supports: levels − 2, at least 1.
+
+    A polynomial of degree levels − 1 (with the friction level) would interpolate the
+    levels exactly and say nothing between them.
+    """
+    levels = len(np.unique(np.round(np.asarray(v, float)[np.isfinite(v)], 9)))
+    return int(max(1, min(most, levels - 2)))
+
+
+def _spec(name: str, variable: str, v: np.ndarray | None, tyre: Tyre, n_pressures: int, channels,
+          pressure_channels: Sequence[str] | None = None):
     """Keys, initial values, bounds and fixed entries of an effect's fit."""
     fixed: dict[str, object] = {}
     V0 = tyre["LONGVL"]
     if name == "slip_speed_friction":
-        return ["VS_DECAY"], [0.05], [(-0.5, 5.0)], fixed
+        return ["VS_DECAY"], [0.0], [(-0.5, 5.0)], fixed
     if name == "slip_speed_peak":
-        return (["VS_PEAK_GAIN", "VS_PEAK_SPEED", "VS_PEAK_WIDTH"], [0.2, 0.1 * V0, 0.5],
+        return (["VS_PEAK_GAIN", "VS_PEAK_SPEED", "VS_PEAK_WIDTH"], [0.05, 0.1 * V0, 0.5],
                 [(-0.9, 5.0), (1e-3, 5.0 * V0), (0.05, 3.0)], fixed)  # fmt: skip
     if name == "speed_friction":
         return ["VX_FRIC1", "VX_FRIC2"], [0.0, 0.0], [(-1.0, 1.0), (-1.0, 1.0)], fixed
     if name == "load_friction":
         return ["LOAD_MU2"], [0.0], [(-1.0, 1.0)], fixed
     if name == "rolling_resistance":
-        return ["RR_FX"], [0.01], [(-0.1, 0.1)], fixed
+        return ["RR_FX"], [0.0], [(-0.1, 0.1)], fixed
     if name == "asymmetry":
         return ["ASYM_MUY", "ASYM_FY"], [0.0, 0.0], [(-0.5, 0.5), (-0.2, 0.2)], fixed
     if name == "fade":
         span = float(np.nanmax(v)) if v is not None and np.nanmax(v) > 0 else 1.0
         fixed["FADE_VARIABLE"] = variable
-        return ["FADE_DEPTH", "FADE_SCALE"], [0.05, 0.5 * span], [(-0.5, 0.9), (1e-3 * span, 100.0 * span)], fixed
+        return ["FADE_DEPTH", "FADE_SCALE"], [0.02, 0.5 * span], [(-0.5, 0.9), (1e-3 * span, 100.0 * span)], fixed
     if name == "friction_variable":
         ref = float(np.nanmedian(v))
         sc = float(np.nanstd(v)) or 1.0
-        fixed.update({"FVAR_VARIABLE": variable, "FVAR_REF": ref, "FVAR_SCALE": sc})
-        return ["FVAR_C1", "FVAR_C2"], [0.0, 0.0], [(-1.0, 1.0), (-1.0, 1.0)], fixed
+        fixed.update({"FVAR_VARIABLE": variable, "FVAR_REF": ref, "FVAR_SCALE": sc,
+                      "FVAR_MIN": float(np.nanmin(v)), "FVAR_MAX": float(np.nanmax(v))})  # fmt: skip
+        degree = _degree(v, 2)
+        return ["FVAR_C1", "FVAR_C2"][:degree], [0.0] * degree, [(-1.0, 1.0)] * degree, fixed
     if name == "generic":
         ref = float(np.nanmedian(v))
         sc = float(np.nanstd(v)) or 1.0
-        fixed.update({"GEN_VARIABLE": variable, "GEN_REF": ref, "GEN_SCALE": sc, "GEN_CHANNEL": channels[0]})
-        return ["GEN_C1", "GEN_C2", "GEN_C3"], [0.0, 0.0, 0.0], [(-2.0, 2.0)] * 3, fixed
+        fixed.update({"GEN_VARIABLE": variable, "GEN_REF": ref, "GEN_SCALE": sc, "GEN_CHANNEL": channels[0],
+                      "GEN_MIN": float(np.nanmin(v)), "GEN_MAX": float(np.nanmax(v))})  # fmt: skip
+        degree = _degree(v, 3)
+        return ["GEN_C1", "GEN_C2", "GEN_C3"][:degree], [0.0] * degree, [(-2.0, 2.0)] * degree, fixed
     if name == "none":
         return [], [], [], fixed
     if name == "pressure":
         keys: list[str] = []
-        for ch in channels:
+        for ch in (pressure_channels if pressure_channels is not None else channels):
             lin, quad = PRESSURE_KEYS.get(ch, ((), ()))
             keys += list(lin) if n_pressures >= 2 else []
             keys += list(quad) if n_pressures >= 3 else []
@@ -206,28 +294,34 @@ def fit_effect(
     n_pressures: int = 1,
     generic_channel: str | None = None,
     refit_base: bool = True,
+    warm: Mapping[str, float] | None = None,
+    pressure_channels: Sequence[str] | None = None,
 ) -> EffectFit:
     """Fit one effect on the training problem, with the main pure-slip coefficients
     of the measured channels (:data:`REFIT_KEYS`) refitted alongside when
-    ``refit_base``; ``refit_base=False`` with ``name="none"`` is the control refit."""
+    ``refit_base``; ``name="none"`` is the control refit.  ``warm`` gives start values of
+    refitted coefficients (the control refit's), so that an effect starts from the
+    control's optimum with its own terms neutral."""
     tyre = prob.tyre
     channels = (generic_channel,) if name == "generic" and generic_channel else prob.channels
-    keys, x0, bounds, fixed = _spec(name, variable, values, tyre, n_pressures, channels)
+    keys, x0, bounds, fixed = _spec(name, variable, values, tyre, n_pressures, channels, pressure_channels)
     uses_data = name in ("fade", "friction_variable", "generic") and values is not None
     variables = {variable: values} if uses_data and variable not in BUILTIN_VARIABLES else {}
     variables.update(prob.variables)
     needed = set(tyre.required_variables)
-    base_r = _residuals(prob, tyre, {k: v for k, v in variables.items() if k in needed})
+    base_section = tyre.extensions or {}
+    base_r = _residuals(prob, tyre.flat, base_section, {k: v for k, v in variables.items() if k in needed})
     ss0 = float(base_r @ base_r)
     refit = [k for ch in covered_channels(prob) for k in REFIT_KEYS.get(ch, ()) if k not in keys]
     refit = list(dict.fromkeys(refit)) if refit_base else []
     lo = [b[0] for b in bounds] + [tyre[k] - 0.5 * abs(tyre[k]) - 1e-3 for k in refit]
     hi = [b[1] for b in bounds] + [tyre[k] + 0.5 * abs(tyre[k]) + 1e-3 for k in refit]
-    start = np.clip(np.array(list(x0) + [tyre[k] for k in refit], float), lo, hi)
+    warm = warm or {}
+    start = np.clip(np.array(list(x0) + [warm.get(k, tyre[k]) for k in refit], float), lo, hi)
 
     def build(x):
         standard: dict[str, float] = {k: float(v) for k, v in zip(refit, x[len(keys):], strict=True)}
-        section: dict[str, object] = dict(fixed)
+        section: dict[str, object] = {**base_section, **fixed}
         for k, val in zip(keys, x[: len(keys)], strict=True):
             if name == "pressure":
                 standard[k] = float(val)
@@ -237,7 +331,7 @@ def fit_effect(
 
     def fun(x):
         standard, section = build(x)
-        return _residuals(prob, _tyre_with(tyre, standard, section), variables)
+        return _residuals(prob, {**tyre.flat, **standard}, section, variables)
 
     messages = []
     if not len(start):
@@ -245,15 +339,18 @@ def fit_effect(
     if name == "pressure" and not keys:
         messages.append("one inflation pressure in the training data: pressure terms not identifiable")
         return EffectFit(name, variable, True, {}, {}, {}, ss0, ss0, np.inf, 0, messages)
-    f_scale = max(float(np.sqrt(np.median(base_r**2))), 1e-6)
-    res = least_squares(fun, start, bounds=(lo, hi), loss="soft_l1", f_scale=2.0 * f_scale, x_scale="jac",
-                        max_nfev=60 * (len(start) + 1))  # fmt: skip
+    # Plain least squares: the effect *is* the large systematic residual, which a robust
+    # loss would discount as outliers; gross outliers were dropped in make_problem.  TRF
+    # counts only function evaluations, not the finite-difference ones: MAX_ITER
+    # iterations are plenty for a warm start.
+    res = least_squares(fun, start, bounds=(lo, hi), x_scale="jac", max_nfev=MAX_ITER)
     r = fun(res.x)
     ss1 = float(r @ r)
     n = max(len(r), 1)
     k = len(start)
     bic = n * np.log(max(ss1, 1e-300) / n) + k * np.log(n)
     standard, section = build(res.x)
+    section = {k: v for k, v in section.items() if k not in base_section or base_section[k] != v or k in fixed}
     params = {kk: float(vv) for kk, vv in zip(keys, res.x[: len(keys)], strict=True)}
     physical = name in ("pressure", "none") or LIBRARY[name].physical
     return EffectFit(name, variable, physical, params, section, standard, ss0, ss1, float(bic), k, messages)
@@ -279,8 +376,13 @@ def choose_effect(
     monotone: bool,
     n_pressures: int,
     top_channel: str,
+    control: EffectFit | None = None,
+    effect_channels: Sequence[str] | None = None,
 ) -> tuple[EffectFit | None, list[EffectFit]]:
     """Fit the extensions mapped to ``variable`` and a generic correction; choose one.
+
+    ``effect_channels`` are the channels where the candidate is significant; the
+    pressure effect fits only their pressure terms.
 
     Every fit is compared with a *control*: the same coefficients refitted without
     any extension.  An effect is only chosen if it beats the control (see
@@ -288,15 +390,21 @@ def choose_effect(
 
     Returns ``(chosen, all_fits)``; chosen is None when no effect beats the control.
     """
-    control = fit_effect(prob, "none", variable, values, n_pressures)
+    prob, idx = subsample(prob)
+    values = None if values is None else np.asarray(values)[idx]
+    if control is None:
+        control = fit_effect(prob, "none", variable, values, n_pressures)
     fits: list[EffectFit] = []
     for name in effects_for(variable, derived, monotone):
-        fits.append(fit_effect(prob, name, variable, values, n_pressures))
+        fits.append(fit_effect(prob, name, variable, values, n_pressures, warm=control.standard,
+                               pressure_channels=effect_channels))  # fmt: skip
     physical = [f for f in fits if f.n_params > 0 and _beats(f, control)]
     generic = None
     if values is not None and variable not in ("P",):
-        generic = fit_effect(prob, "generic", variable, values, n_pressures, generic_channel=top_channel)
+        generic = fit_effect(prob, "generic", variable, values, n_pressures, generic_channel=top_channel,
+                             warm=control.standard)  # fmt: skip
         fits.append(generic)
+    fits.insert(0, control)
     best_phys = min(physical, key=lambda f: f.bic) if physical else None
     if best_phys is not None and (generic is None or best_phys.removed >= 0.5 * generic.removed):
         return best_phys, fits

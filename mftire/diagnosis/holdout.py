@@ -63,22 +63,43 @@ def _keeps_every_kind(df: pd.DataFrame, col: str, value: float) -> bool:
     return set(train["kind"]) >= set(df["kind"])
 
 
-def default_holdout(df: pd.DataFrame, preferred: Sequence[str] = ()) -> tuple[str, list[float]]:
+def default_holdout(
+    df: pd.DataFrame, preferred: Sequence[str] = (), misfit: np.ndarray | None = None
+) -> tuple[str, list[float]]:
     """Choose a condition to hold out: an interior level of the first column with at least
     three levels, trying ``preferred`` (e.g. the top candidate) first, then load, speed,
     pressure and camber.  A level whose removal would take every sweep of one kind
-    (e.g. all cornering sweeps) out of the training data is not chosen; among the
-    interior levels the one nearest the middle is taken."""
+    (e.g. all cornering sweeps) out of the training data is not chosen.
+
+    The held-out condition should not be one the model fits by construction.  With
+    ``misfit`` (a per-row misfit of the given model, e.g. its squared normalised
+    residual) the level where the model fits worst is taken: an interior level (the
+    refitted model then interpolates) when the worst interior level fits no better
+    than the median level, else the worst level of all (an extrapolation, e.g. a
+    pressure beyond the one the model was fitted at).  Without ``misfit``, the interior
+    level nearest the middle."""
     for column in [*preferred, "Fz", "Vx", "P", "gamma"]:
         col = SET_COLUMNS.get(column, column)
         if col not in df.columns or not pd.api.types.is_numeric_dtype(df[col]):
             continue
         lv = levels(df, column)
-        if len(lv) >= 3:
-            interior = sorted(lv[1:-1], key=lambda v: abs(v - lv[len(lv) // 2]))
-            for v in interior:
-                if _keeps_every_kind(df, col, v):
-                    return column, [float(v)]
+        if len(lv) < 3:
+            continue
+        ok = [v for v in lv if _keeps_every_kind(df, col, v)]
+        interior = [v for v in ok if lv[0] < v < lv[-1]]
+        if not ok:
+            continue
+        if misfit is None:
+            if interior:
+                return column, [float(min(interior, key=lambda v: abs(v - lv[len(lv) // 2])))]
+            continue
+        x = df[col].to_numpy(float)
+        m = np.asarray(misfit, float)
+        level_misfit = {v: float(np.nanmean(m[np.isclose(x, v)])) for v in lv}
+        median = float(np.median(list(level_misfit.values())))
+        if interior and max(level_misfit[v] for v in interior) >= median:
+            return column, [float(max(interior, key=level_misfit.get))]
+        return column, [float(max(ok, key=level_misfit.get))]
     for column in ("Fz", "Vx", "P"):
         lv = levels(df, column)
         if len(lv) == 2:

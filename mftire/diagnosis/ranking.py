@@ -34,7 +34,7 @@ reported.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -56,6 +56,7 @@ class CandidateScore:
     effect: float  #: RMS of the explained part / channel peak [-]
     sweep_level: bool
     derived: bool
+    channel_scores: dict[str, float] = field(default_factory=dict)  #: score on every channel [-]
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -187,12 +188,14 @@ def rank_candidates(
 
     for c in cands:
         best: CandidateScore | None = None
+        channel_scores: dict[str, float] = {}
         for ch, (ok, Xb, folds, pred0, mse0, denom, r, g) in per_channel.items():
             v = c.values[keep][ok]
             if not np.all(np.isfinite(v)) or np.std(v) == 0:
                 continue
             cs = (v - v.mean()) / v.std()
             s, pred = _score(Xb, cs, r, folds, mse0, denom)
+            channel_scores[ch] = s
             effect = float(np.sqrt(np.mean((pred - pred0) ** 2))) / max(peaks.get(ch, 1.0), 1e-9)
             entry = CandidateScore(c.name, ch, s, 1.0, False, effect, c.sweep_level, c.derived)
             if best is None or entry.score > best.score:
@@ -200,6 +203,7 @@ def rank_candidates(
                 best_ctx = (Xb, folds, mse0, denom, r, g, v)
         if best is None:
             continue
+        best.channel_scores = channel_scores
         if best.score >= min_score and best.effect >= min_effect:
             Xb, folds, mse0, denom, r, g, v = best_ctx
             exceed = 0

@@ -123,6 +123,11 @@ class FrictionParams:
     h: float | None = None  #: fixed width parameter h [-]; or give mu_lock instead
     mu_lock: float | None = 0.72  #: common locked-wheel mu_v; h then follows from eq 5.8 at every speed
     kappa_max: float = 0.05  #: Vmax = kappa_max * Vx (eq 5.6/5.13)
+    #: fixed sliding speed of peak friction [m/s] (Savkoor's law with a constant Vmax, thesis
+    #: eq 2.2) instead of kappa_max * Vx; needs a fixed ``h``.  Friction then depends on the
+    #: local sliding speed itself, not on the slip ratio.
+    v_max: float | None = None
+    scale: float = 1.0  #: overall friction level (road surface, fade) multiplying mu_s and mu_m [-]
     gamma_crit_fraction: float = 0.01  #: regularisation gamma_crit = this * Vx (thesis 3.5.2)
     max_speed: float = 70.0  #: speeds up to which the law is checked/used [m/s]
 
@@ -346,6 +351,11 @@ def validate(tyre: TyreConfig) -> None:
     _in_range("friction.k", f.k, 0.0, 0.95)
     _positive("friction.plimit", f.plimit)
     _in_range("friction.kappa_max", f.kappa_max, 1e-4, 0.5)
+    _positive("friction.scale", f.scale)
+    if f.v_max is not None:
+        _positive("friction.v_max", f.v_max)
+        if f.h is None:
+            raise MftireInputError("tyre parameter 'friction.v_max' needs a fixed 'friction.h' (not mu_lock)")
     _in_range("friction.gamma_crit_fraction", f.gamma_crit_fraction, 1e-5, 0.2)
     _positive("friction.max_speed", f.max_speed)
     if (f.h is None) == (f.mu_lock is None):

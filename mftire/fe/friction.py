@@ -95,9 +95,13 @@ def velocity_law(params: FrictionParams, Vx: ArrayLike) -> VelocityLaw:
         h = h_from_mu_lock(mu_s, mu_m, params.mu_lock, params.kappa_max)
     else:
         h = np.full_like(Vx, float(params.h))
-    v_max = params.kappa_max * Vx  # eq 5.13
+    if params.v_max is None:
+        v_max = params.kappa_max * Vx  # eq 5.13
+    else:
+        v_max = np.full_like(Vx, float(params.v_max))  # constant Vmax, eq 2.2
     gamma_crit = params.gamma_crit_fraction * Vx  # thesis 3.5.2: 1 % of the forward speed
-    return VelocityLaw(mu_s=mu_s, mu_m=mu_m, h=h, v_max=v_max, gamma_crit=gamma_crit)
+    scale = params.scale  # overall friction level
+    return VelocityLaw(mu_s=scale * mu_s, mu_m=scale * mu_m, h=h, v_max=v_max, gamma_crit=gamma_crit)
 
 
 def friction_coefficient(p: ArrayLike, v: ArrayLike, Vx: ArrayLike, params: FrictionParams) -> np.ndarray:

@@ -10,8 +10,9 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     from mftire.fitting.core import fit_tir
     from mftire.iotools.tir import write_tir
 
+    fixed = [k.strip() for k in (args.fix or "").split(",") if k.strip()]
     result = fit_tir(args.data, args.template, stages=args.stages, weights=args.weights,
-                     alpha_star=args.alpha_star)
+                     alpha_star=args.alpha_star, fixed=fixed)
     write_tir(result.parameters, args.output)
     lines = [f"mftire fit: wrote {args.output} ({len(dict.fromkeys(result.identified))} coefficients fitted, "
              f"{len(result.not_identified)} not identified, {result.time:.1f} s)"]
@@ -82,5 +83,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="held-out measured sweeps: report the fraction of their points inside the bands")
     p.add_argument("--seed", type=int, default=0, help="random seed of the bootstrap (default 0)")
     p.add_argument("--jobs", type=int, default=1, help="worker processes for the bootstrap refits (default 1)")
+    p.add_argument("--fix", metavar="KEYS", help="coefficients held at their template values, "
+                   "comma-separated (e.g. PPX1,PPX2,PPX3,PPX4 to fit without pressure terms)")
     p.set_defaults(func=_cmd_fit)
     return p

@@ -41,7 +41,7 @@ from mftire.fitting import initial
 from mftire.fitting.data import load_sweep_files, noise_std, parse_weights, prepare_table, row_weights
 from mftire.fitting.identify import DataLevels, data_levels, split_identified
 from mftire.fitting.model import Inputs, fitting_mode, predict_fx, predict_fy
-from mftire.fitting.stages import STAGES, Coefficient, Stage, resolve_stages
+from mftire.fitting.stages import FITTED_KEYS, STAGES, Coefficient, Stage, resolve_stages
 from mftire.iotools.sweeps import group_sweeps
 from mftire.iotools.tir import TirParameters, read_tir
 from mftire.mf.aligning import aligning_terms, mz_combined
@@ -573,6 +573,7 @@ def fit_tir(
     weights: str | Mapping[str, float] | None = None,
     alpha_star: bool = False,
     progress: bool | Callable[[str], None] | None = None,
+    fixed: Sequence[str] = (),
 ) -> FitResult:
     """Fit Magic Formula 6.1/6.2 coefficients to slip sweeps, stage by stage.
 
@@ -595,6 +596,9 @@ def fit_tir(
     progress : bool or callable, optional
         Print per-stage progress to stderr (default: only when stderr is a terminal),
         or call this function with each message.
+    fixed : sequence of str, optional
+        Coefficients held at their template values (e.g. the pressure terms, to fit a
+        model without them); reported as not identified, "fixed by the user".
 
     Returns
     -------
@@ -628,9 +632,16 @@ def fit_tir(
 
     results: list[StageResult] = []
     free_rolling: list[pd.DataFrame] = []
+    fixed_keys = {str(k).upper() for k in fixed}
+    unknown = sorted(fixed_keys - FITTED_KEYS)
+    if unknown:
+        raise MftireInputError(f"cannot fix {', '.join(unknown)}: not a fitted coefficient")
     for stage in chosen:
         for channel, coeffs in zip(_stage_channels(stage), stage.groups, strict=True):
+            held = [c.key for c in coeffs if c.key in fixed_keys]
+            coeffs = tuple(c for c in coeffs if c.key not in fixed_keys)
             p, r = _run_group(stage, channel, coeffs, p, table, sqrt_w, mode, free_rolling, say)
+            r.not_identified.update({k: "fixed by the user" for k in held})
             results.append(r)
             if stage.number == 5 and r.status == "fitted":
                 # Mz at kappa = 0 holds s·Fx (eq 4.E71) with the SSZ and combined Fx just fitted:

@@ -948,6 +948,7 @@ static void extension_terms(const MFParams *p, const Cond *c, const double *data
 #if MF_EXT_FRICTION_VARIABLE
     {
         double v = ext_variable(MF_EXT_FVAR_VAR, c, data);
+        v = fmin(fmax(v, p->FVAR_MIN), p->FVAR_MAX); /* fitted range */
         double z = (v - p->FVAR_REF) / p->FVAR_SCALE;
         mu = mu * (1.0 + p->FVAR_C1 * z + p->FVAR_C2 * sq(z));
     }
@@ -969,6 +970,7 @@ static void extension_terms(const MFParams *p, const Cond *c, const double *data
 #if MF_EXT_GENERIC
     {
         double v = ext_variable(MF_EXT_GEN_VAR, c, data);
+        v = fmin(fmax(v, p->GEN_MIN), p->GEN_MAX); /* fitted range */
         double z = (v - p->GEN_REF) / p->GEN_SCALE;
         /* NOT PHYSICS: a labelled smooth correction */
         t->generic = 1.0 + p->GEN_C1 * z + p->GEN_C2 * sq(z) + p->GEN_C3 * pow(z, 3.0);
