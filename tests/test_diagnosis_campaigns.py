@@ -1,0 +1,85 @@
+"""Issue 6 'done when': the shipped simulated campaigns (validation/data/).
+
+For each campaign with an effect, ``mftire diagnose`` must name the right cause first
+and the added effect must cut the held-out RMS error of the channel the effect
+dominates (Fx in these campaigns) by at least 50 %; the null campaign must produce no
+finding.  The extended model must round-trip through .tir and a plain MF reader must
+still read it.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mftire import load, read_tir
+from mftire.cli import main
+from mftire.extensions import SECTION
+
+DATA = Path(__file__).resolve().parents[1] / "validation" / "data"
+CASES = {
+    "slip_speed": ({"Vs"}, {"slip_speed_friction", "slip_speed_peak"}),
+    "fade": ({"energy", "time", "sequence", "run"}, {"fade", "friction_variable"}),
+    "pressure": ({"P"}, {"pressure"}),
+}
+
+
+def _diagnose(name: str, out: Path) -> dict:
+    folder = DATA / name
+    assert main(["diagnose", str(folder / "sweeps.csv"), "--tir", str(folder / "fitted.tir"),
+                 "--output", str(out)]) == 0  # fmt: skip
+    return json.loads((out / "diagnosis.json").read_text())
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_campaign_cause_and_heldout_improvement(name, tmp_path):
+    causes, effects = CASES[name]
+    doc = _diagnose(name, tmp_path)
+    assert doc["significant"] is True
+    assert doc["ranking"][0]["variable"] in causes, doc["ranking"][:3]
+    assert doc["effect"]["name"] in effects
+    assert doc["effect"]["physical"] is True
+    fx = doc["holdout"]["channels"]["Fx"]
+    assert fx["rms_after"] <= 0.5 * fx["rms_before"], fx
+    # no force channel gets materially worse on the held-out condition
+    for ch in ("Fx", "Fy"):
+        if ch in doc["holdout"]["channels"]:
+            c = doc["holdout"]["channels"][ch]
+            assert c["rms_after"] <= 1.05 * c["rms_before"], (ch, c)
+    assert doc["holdout"]["n_rows"] > 0
+
+
+def test_null_campaign_has_no_finding(tmp_path):
+    doc = _diagnose("null", tmp_path)
+    assert doc["significant"] is False
+    assert doc["effect"] is None and doc["extended_tir"] is None
+    assert not (tmp_path / "extended.tir").exists()
+
+
+def test_extended_model_round_trips_and_reads_plainly(tmp_path):
+    doc = _diagnose("fade", tmp_path)
+    path = tmp_path / doc["extended_tir"]
+    params = read_tir(path)
+    again = tmp_path / "again.tir"
+    from mftire import write_tir
+
+    write_tir(params, again)
+    assert read_tir(again) == params
+    assert SECTION in params.sections
+    # a plain reader: key = value lines, '$' comments; every MF key of the fitted file is there unchanged
+    plain = {}
+    for line in path.read_text().splitlines():
+        line = line.split("$")[0].strip()
+        if "=" in line and not line.startswith("["):
+            k, v = (s.strip() for s in line.split("=", 1))
+            plain[k] = v
+    fitted = load(DATA / "fade" / "fitted.tir")
+    for k in ("PCX1", "PKY1", "QSX3", "FNOMIN", "UNLOADED_RADIUS"):
+        assert float(plain[k]) == pytest.approx(fitted[k], rel=0, abs=0) or k in doc["effect"]["refitted_coefficients"]
+    tyre = load(path)
+    variable = doc["effect"]["variable"]
+    out = tyre.evaluate(4000.0, -0.2, 0.0, **({variable: 1e5} if variable in tyre.required_variables else {}))
+    assert np.isfinite(out["Fx"])
