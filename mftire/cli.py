@@ -151,21 +151,9 @@ def default_tir() -> str:
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
-    from mftire.curves import standard_curves
-    from mftire.plotting import plot_standard_curves
-    from mftire.tyre import load
+    from mftire.demo import run_demo
 
-    os.makedirs(args.output, exist_ok=True)
-    tyre = load(args.tir or default_tir())
-    curves = standard_curves(tyre)
-    png = os.path.join(args.output, "curves.png")
-    csv = os.path.join(args.output, "curves.csv")
-    plot_standard_curves(curves, png, title=tyre.name)
-    from mftire.iotools.atomic import atomic_path
-
-    with atomic_path(csv) as tmp:
-        curves.to_csv(tmp, index=False)
-    print(f"mftire demo: {tyre!r}\n  wrote {png}\n  wrote {csv}")
+    run_demo(args.output, quick=args.quick, progress=True)
     return 0
 
 
@@ -196,9 +184,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--mode", type=int, default=111)
     p.set_defaults(func=_cmd_plot)
 
-    p = sub.add_parser("demo", help="run the main job on the shipped default data")
+    p = sub.add_parser(
+        "demo", help="the whole loop on the shipped default data: FE and measured-like campaigns, fit, "
+        "diagnosis, extended .tir, FMU, comparison with bands, HTML report",
+    )
     p.add_argument("--output", default="demo_out", help="output directory (default demo_out)")
-    p.add_argument("--tir", help="use this .tir instead of the shipped default")
+    p.add_argument("--quick", action="store_true", help="reduced grids (a test run)")
     p.set_defaults(func=_cmd_demo)
 
     from mftire.fe import cli as fe_cli

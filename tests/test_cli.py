@@ -87,13 +87,10 @@ def test_info_reports_the_essentials(capsys):
     assert "alpha -55.00 .. 55.00 deg" in out
 
 
-def test_plot_and_demo_write_files(tmp_path, capsys):
+def test_plot_writes_png_and_csv(tmp_path, capsys):
     png, csv = tmp_path / "c.png", tmp_path / "c.csv"
     assert main(["plot", MF61, "--output", str(png), "--csv", str(csv)]) == 0
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     curves = pd.read_csv(csv)
     assert set(curves.curve) == {"pure_long", "pure_lat", "combined"}
     assert set(curves.load_factor) == {0.5, 1.0, 1.5}
-    out = tmp_path / "demo"
-    assert main(["demo", "--output", str(out)]) == 0
-    assert (out / "curves.png").exists() and (out / "curves.csv").exists()

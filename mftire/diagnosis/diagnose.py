@@ -234,6 +234,8 @@ def diagnose(
     named = [e for e in ranking if e.variable == fixed_var and e.significant]
     if named:  # e.g. a slip-speed extension chosen for the Vx candidate: the cause is Vs
         cause = named[0]
+    if fixed_var is not None:
+        effect.variable = fixed_var
     ranking.remove(cause)
     ranking.insert(0, cause)
 
