@@ -29,6 +29,7 @@ import numpy as np
 import pandas as pd
 
 from mftire.iotools.atomic import write_text_atomic
+from mftire.iotools.jsonutil import jsonable
 
 __all__ = ["HtmlReport"]
 
@@ -47,26 +48,6 @@ figure{margin:1em 0}figure img{max-width:100%;border:1px solid #eee}figcaption{f
 def _slug(text: str) -> str:
     s = re.sub(r"[^A-Za-z0-9]+", "_", text).strip("_").lower()
     return s or "item"
-
-
-def _jsonable(x: Any) -> Any:
-    if isinstance(x, Mapping):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _jsonable(x.tolist())
-    if isinstance(x, (float, np.floating)):
-        return float(x) if np.isfinite(x) else None
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, (np.bool_,)):
-        return bool(x)
-    if isinstance(x, (pd.Timestamp, _dt.datetime, _dt.date)):
-        return x.isoformat()
-    if x is pd.NA or x is None:
-        return None
-    return x
 
 
 class HtmlReport:
@@ -205,7 +186,7 @@ class HtmlReport:
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON sidecar: title, headings, figure captions, named numbers and every table in full."""
-        return _jsonable({"title": self.title, "subtitle": self.subtitle, "headings": self.headings,
+        return jsonable({"title": self.title, "subtitle": self.subtitle, "headings": self.headings,
                           "figures": self.figures, "numbers": self.numbers, "tables": self.tables})
 
     def write(self, path: str | os.PathLike, json_path: str | os.PathLike | None = None) -> tuple[str, str]:

@@ -24,6 +24,7 @@ from mftire.compare.tables import (
     trail_summary,
 )
 from mftire.iotools.atomic import atomic_path, write_text_atomic
+from mftire.iotools.jsonutil import jsonable
 from mftire.tyre import Tyre
 
 __all__ = ["Comparison", "compare", "write_comparison", "bands_frame"]
@@ -173,20 +174,6 @@ def compare(
 # ------------------------------------------------------------------------------------
 
 
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, (float, np.floating)):
-        return float(x) if np.isfinite(x) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
-
-
 def _md_table(df: pd.DataFrame, floatfmt: str = "{:.4g}", max_rows: int = 60) -> str:
     if df is None or df.empty:
         return "_(none)_\n"
@@ -271,7 +258,7 @@ def write_comparison(comp: Comparison, directory: str | os.PathLike, plots: bool
                   "Vx_set": "m/s", "t": "m", "C_Fa": "N/rad", "C_Ma": "N·m/rad", "Kya": "N/rad"},
     }
     js = os.path.join(directory, "compare.json")
-    write_text_atomic(js, json.dumps(_jsonable(payload), indent=1, allow_nan=False) + "\n")
+    write_text_atomic(js, json.dumps(jsonable(payload), indent=1, allow_nan=False) + "\n")
     if comp.bands is not None:
         with atomic_path(os.path.join(directory, "bands_drawn.csv")) as tmp:
             comp.bands.to_csv(tmp, index=False, float_format="%.10g")

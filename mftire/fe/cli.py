@@ -86,7 +86,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     res = identify_velocity_law(data, tyre, Fz=Fz, P=args.P, kappa_max=args.kappa_max, mu_p=args.mu_p)
     text = res.to_json() if (args.output and args.output.endswith(".json")) else res.to_toml()
     if args.output:
-        from mftire.fe.sweeps import write_text_atomic
+        from mftire.iotools.atomic import write_text_atomic
 
         write_text_atomic(Path(args.output), text)
     print(text, end="")

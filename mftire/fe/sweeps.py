@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import os
 import sys
-import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -30,6 +29,7 @@ from mftire.errors import MftireInputError
 from mftire.fe import carcass as cc
 from mftire.fe.config import TyreConfig, check_operating_range
 from mftire.fe.solver import solve
+from mftire.iotools.atomic import write_text_atomic
 
 SWEEP_COLUMNS = ["Fz", "kappa", "alpha", "gamma", "Vx", "P", "Fx", "Fy", "Mz", "Mx", "My"]
 FREE_ROLLING_COLUMNS = ["Vx", "Fz", "load_fraction", "P", "omega", "re"]
@@ -224,23 +224,7 @@ def campaign(
     return run_sweeps(tyre, campaign_jobs(tyre, False), n_kappa=50, n_alpha=49, progress=progress)
 
 
-def write_text_atomic(path: str | os.PathLike[str], text: str) -> Path:
-    """Write text atomically: temp file in the same directory, then os.replace."""
-    path = Path(path)
-    directory = path.parent if str(path.parent) else Path(".")
-    directory.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
-    try:
-        with os.fdopen(fd, "w", newline="") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
-
-
 def write_csv_atomic(df: pd.DataFrame, path: str | os.PathLike[str]) -> Path:
-    """Write a DataFrame as CSV atomically (temp file in the same directory, then os.replace)."""
-    return write_text_atomic(path, df.to_csv(index=False))
+    """Write a table as CSV atomically (see :mod:`mftire.iotools.atomic`)."""
+    write_text_atomic(path, df.to_csv(index=False))
+    return Path(path)

@@ -56,6 +56,7 @@ from scipy import stats
 
 from mftire.errors import MftireInputError
 from mftire.fitting.core import FitResult, fit_tir
+from mftire.iotools.jsonutil import jsonable
 from mftire.iotools.tir import TirParameters
 from mftire.tyre import Tyre
 
@@ -436,20 +437,6 @@ def band_coverage(bands: Bands, heldout_data, channels: Sequence[str] = BAND_CHA
     return float(t.iloc[-1][f"inside_{kind}"])
 
 
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, (float, np.floating)):
-        return float(x) if np.isfinite(x) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
-
-
 def write_bands(bands: Bands, directory: str | os.PathLike, coverage: pd.DataFrame | None = None) -> dict[str, str]:
     """Write ``bands.csv`` (grid points and bands) and ``bands.json`` (settings, σ, coefficients, coverage)."""
     from mftire.iotools.atomic import atomic_path, write_text_atomic
@@ -463,5 +450,5 @@ def write_bands(bands: Bands, directory: str | os.PathLike, coverage: pd.DataFra
     if coverage is not None:
         payload["coverage"] = coverage.to_dict(orient="records")
     js = os.path.join(directory, "bands.json")
-    write_text_atomic(js, json.dumps(_jsonable(payload), indent=1, allow_nan=False) + "\n")
+    write_text_atomic(js, json.dumps(jsonable(payload), indent=1, allow_nan=False) + "\n")
     return {"csv": csv, "json": js}

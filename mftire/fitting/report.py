@@ -21,6 +21,7 @@ import pandas as pd
 from mftire.fitting.core import CONDITION_KEYS, FitResult
 from mftire.fitting.model import CHANNELS, Inputs, predict
 from mftire.iotools.atomic import atomic_path, write_text_atomic
+from mftire.iotools.jsonutil import jsonable
 from mftire.mf.modes import Mode
 
 __all__ = ["compute_metrics", "channel_summary", "write_report", "plot_families"]
@@ -209,20 +210,6 @@ def plot_families(result: FitResult, directory: str, max_panels: int = 12) -> li
     return out
 
 
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, (np.floating, float)):
-        return None if not np.isfinite(x) else float(x)
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, np.bool_):
-        return bool(x)
-    return x
-
-
 def write_report(result: FitResult, directory: str | os.PathLike, plots: bool = True) -> dict[str, str]:
     """Write ``report.md``, ``metrics.json`` and the PNGs into ``directory``.
 
@@ -254,5 +241,5 @@ def write_report(result: FitResult, directory: str | os.PathLike, plots: bool = 
         "messages": result.messages,
     }
     js = os.path.join(directory, "metrics.json")
-    write_text_atomic(js, json.dumps(_jsonable(payload), indent=1, allow_nan=False) + "\n")
+    write_text_atomic(js, json.dumps(jsonable(payload), indent=1, allow_nan=False) + "\n")
     return {"report": md, "metrics": js, "plots": pngs}
