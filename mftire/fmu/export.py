@@ -40,7 +40,7 @@ FMI_HEADERS = {
 }
 
 #: Flags of the shared library build (the maths library is linked explicitly).
-CFLAGS = ("-shared", "-fPIC", "-O2", "-std=c99", "-fvisibility=hidden", "-Wall")
+CFLAGS = ("-shared", "-fPIC", "-O3", "-std=c99", "-fvisibility=hidden", "-Wall")
 LIBS = ("-lm",)
 
 

@@ -620,7 +620,8 @@ static void mz0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, const 
 
 /* Combined-slip aligning moment (eqs 4.E71-4.E78; Besselink 2010 A54-A56). */
 static void mz_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, const AlignTerms *a, double Kxk,
-                        double Fx, double Fy, double Gyk, double *Mz_out, double *t_out, double *Mzr_out)
+                        double Fx, double Fy, double Gyk, const PureLat *lat, double *Mz_out, double *t_out,
+                        double *Mzr_out)
 {
     double R0 = p->UNLOADED_RADIUS, ratio2, alphar_eq, alphat_eq, s, Mzr, Fy_prime, t, Mz;
     PureLat lat0;
@@ -632,8 +633,13 @@ static void mz_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b
     s = R0 * (p->SSZ1 + p->SSZ2 * (Fy / p->FNOMIN) + (p->SSZ3 + p->SSZ4 * b->dfz) * c->gamma) * p->LS; /* A56 */
     Mzr = residual(a->Dr, a->Cr, atan(a->Br * alphar_eq), 1.0); /* eq 4.E75 */
 
-    /* Fy at zero camber (and zero spin weighting) for the trail term, eq 4.E74. */
-    fy0(p, m, c, b, 0.0, m->turn_slip, &lat0);
+    /* Fy at zero camber (and zero spin weighting) for the trail term, eq 4.E74; the pure
+       lateral force at the actual inclination is that force when the inclination is zero. */
+    if (lat != NULL && b->gamma_star == 0.0) {
+        lat0 = *lat;
+    } else {
+        fy0(p, m, c, b, 0.0, m->turn_slip, &lat0);
+    }
     Fy_prime = Gyk * lat0.Fy0; /* eq 4.E74; Gyk does not depend on muy or zeta2 */
     /* MFeval departure: t is multiplied by LFZO, as TNO's solver does. */
     t = trail_mf(a->Dt, a->Ct, a->Bt, a->Et, alphat_eq, b->alpha_prime) * p->LFZO; /* eq 4.E73 */
@@ -1056,7 +1062,7 @@ int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *
     if (m.combined) {
         Fx = fx_combined(p, &m, &c, &b, Fx0);
         Fy = Fy_comb;
-        mz_combined(p, &m, &c, &b, &at, Kxk, Fx, Fy, Gyk, &Mz, &t, &Mzr);
+        mz_combined(p, &m, &c, &b, &at, Kxk, Fx, Fy, Gyk, &lat, &Mz, &t, &Mzr);
     } else {
         Fx = Fx0;
         Fy = lat.Fy0;
