@@ -225,6 +225,7 @@ def campaign(
 
 
 def write_csv_atomic(df: pd.DataFrame, path: str | os.PathLike[str]) -> Path:
-    """Write a table as CSV atomically (see :mod:`mftire.iotools.atomic`)."""
+    """Write a table as CSV atomically (see :mod:`mftire.iotools.atomic`), creating the folder."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
     write_text_atomic(path, df.to_csv(index=False))
     return Path(path)
