@@ -7,6 +7,8 @@ from pathlib import Path
 
 import pytest
 
+from mftire.fmu.export import FMUExportError, find_compiler
+
 DATA = Path(__file__).parent / "data"
 TIR = DATA / "tir"
 MFEVAL = DATA / "mfeval"
@@ -39,3 +41,18 @@ def in_tmp(tmp_path: Path):
     os.chdir(tmp_path)
     yield tmp_path
     os.chdir(cwd)
+
+
+def have_c_compiler() -> bool:
+    """True when a C compiler for FMU binaries is on PATH."""
+    try:
+        find_compiler()
+    except FMUExportError:
+        return False
+    return True
+
+
+#: Skip marker for tests that build FMU binaries.
+needs_c_compiler = pytest.mark.skipif(
+    not have_c_compiler(), reason="no C compiler (cc, gcc or clang) on PATH: FMU binaries cannot be built"
+)

@@ -24,25 +24,14 @@ import zipfile
 import numpy as np
 import pandas as pd
 import pytest
-from conftest import MFEVAL, REFERENCE_TYRES, TIR
+from conftest import MFEVAL, REFERENCE_TYRES, TIR, needs_c_compiler
 
 from mftire.fmu.export import FMUExportError, export_fmu, find_compiler
 from mftire.mf import vertical
 from mftire.mf.solver import evaluate_arrays
 from mftire.tyre import load
 
-
-def _have_compiler() -> bool:
-    try:
-        find_compiler()
-    except FMUExportError:
-        return False
-    return True
-
-
-pytestmark = pytest.mark.skipif(
-    not _have_compiler(), reason="no C compiler (cc, gcc or clang) on PATH: FMU binaries cannot be built"
-)
+pytestmark = needs_c_compiler
 
 #: FMU output name -> Python evaluator channel
 CHANNEL = {"Fz_out": "Fz", "a2": "2a", "b2": "2b"}

@@ -16,8 +16,8 @@ import warnings
 
 import numpy as np
 import pytest
-from conftest import REFERENCE_TYRES
-from test_fmu_export import CHANNEL, OUTPUTS, _have_compiler, _random_points, _rel_errors, _scale
+from conftest import REFERENCE_TYRES, needs_c_compiler
+from test_fmu_export import CHANNEL, OUTPUTS, _random_points, _rel_errors, _scale
 
 from mftire import read_tir
 from mftire.errors import MftireError
@@ -27,9 +27,7 @@ from mftire.fmu.export import export_fmu, find_compiler, generate_sources
 from mftire.mf.solver import evaluate_arrays
 from mftire.tyre import Tyre
 
-pytestmark = pytest.mark.skipif(
-    not _have_compiler(), reason="no C compiler (cc, gcc or clang) on PATH: FMU binaries cannot be built"
-)
+pytestmark = needs_c_compiler
 
 BASE_INPUTS = ["Fz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "omega", "muRoad"]
 ODD_NAME = "brake temp [°C]"  # not a C identifier: kept as the FMI name, escaped in the C sources

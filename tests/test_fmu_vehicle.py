@@ -8,24 +8,14 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pytest
-
-from mftire.fmu.export import FMUExportError, find_compiler
+from conftest import needs_c_compiler
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _have_compiler() -> bool:
-    try:
-        find_compiler()
-    except FMUExportError:
-        return False
-    return True
 
 
-@pytest.mark.skipif(
-    not _have_compiler(), reason="no C compiler (cc, gcc or clang) on PATH: FMU binaries cannot be built"
-)
+@needs_c_compiler
 def test_vehicle_example_short(tmp_path):
     spec = importlib.util.spec_from_file_location("vehicle_example", ROOT / "validation" / "vehicle_example.py")
     mod = importlib.util.module_from_spec(spec)

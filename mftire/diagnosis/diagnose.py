@@ -20,7 +20,7 @@ Procedure (:func:`diagnose`)
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -254,5 +254,3 @@ def diagnose(
     return DiagnosisResult(True, ranking, effect, {"column": column, "values": values, "n_rows": int(test.sum())},
                            errors, extended, tried, data=df, train=train)  # fmt: skip
 
-
-ProgressFn = Callable[[str], None]
