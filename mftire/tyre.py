@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from mftire.extensions import SECTION, required_variables
+from mftire.extensions import SECTION, ExtensionSet, parse_section
 from mftire.iotools.tir import TirParameters, as_parameters, read_tir
 from mftire.mf.solver import OUTPUT_NAMES, OUTPUT_UNITS, evaluate_arrays
 from mftire.parameters import with_defaults
@@ -55,8 +55,10 @@ class Tyre:
         ext = self.parameters.sections.get(SECTION)
         #: The ``[MFTIRE_EXTENSIONS]`` section (model extensions), or None.
         self.extensions: dict[str, Any] | None = dict(ext) if ext else None
-        #: Extra input variables the extensions need (data columns such as ``temperature``).
-        self.required_variables: list[str] = required_variables(self.extensions)
+        #: The validated extension terms (empty without a section).
+        self.extension_set: ExtensionSet = parse_section(self.extensions)
+        #: External input variables the extensions need (data columns such as ``temperature``).
+        self.required_variables: list[str] = self.extension_set.external_variables
         path = getattr(params, "path", None)
         self.name = name or (os.path.basename(str(path)) if path else "tyre")
 
@@ -122,7 +124,7 @@ class Tyre:
             The 30 channels of :data:`mftire.mf.solver.OUTPUT_NAMES`.
         """
         out = evaluate_arrays(
-            self.flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, self.extensions, variables or None
+            self.flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, self.extension_set, variables or None
         )
         return MFResult(out)
 

@@ -21,8 +21,9 @@ from mftire.extensions import SECTION
 
 DATA = Path(__file__).resolve().parents[1] / "validation" / "data"
 CASES = {
-    "slip_speed": ({"Vs"}, {"slip_speed_friction", "slip_speed_peak"}),
-    "fade": ({"energy", "time", "sequence", "run"}, {"fade", "friction_variable"}),
+    "slip_speed": ({"Vs"}, {"slip_speed_friction", "slip_speed_quadratic"}),
+    "fade": ({"energy", "time", "sequence", "run"}, {"friction_fade", "friction_variable",
+                                                     "friction_variable_quadratic"}),
     "pressure": ({"P"}, {"pressure"}),
 }
 

@@ -39,7 +39,7 @@ EXCLUDED = {
     "kind", "sweep_var", "direction", "source", "file", "load_fraction",
 }  # fmt: skip
 #: Names that look like time (used for the energy integral).
-TIME_NAMES = ("time", "t", "runtime", "time_s")
+TIME_NAMES = ("time", "t", "runtime", "time_s", "et", "elapsed_time")
 
 
 @dataclass(frozen=True)
@@ -52,7 +52,8 @@ class Candidate:
     sweep_level: bool  #: constant within every sweep
 
 
-def _time_column(df: pd.DataFrame) -> str | None:
+def time_column(df: pd.DataFrame) -> str | None:
+    """The data's elapsed-time column (one of :data:`TIME_NAMES`), or None."""
     for c in df.columns:
         if str(c).lower() in TIME_NAMES and pd.api.types.is_numeric_dtype(df[c]):
             return str(c)
@@ -91,7 +92,7 @@ def derived_candidates(df: pd.DataFrame) -> dict[str, np.ndarray]:
     Fx = df["Fx"].to_numpy(float) if "Fx" in df.columns else np.zeros(len(df))
     Fy = df["Fy"].to_numpy(float) if "Fy" in df.columns else np.zeros(len(df))
     power = np.nan_to_num(np.abs(Fx * Vsx)) + np.nan_to_num(np.abs(Fy * Vsy))
-    tcol = _time_column(df)
+    tcol = time_column(df)
     if tcol is not None:
         dt = np.diff(df[tcol].to_numpy(float), prepend=df[tcol].to_numpy(float)[0])
         dt = np.where((dt > 0) & np.isfinite(dt), dt, 0.0)

@@ -26,8 +26,15 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from mftire.diagnosis.candidates import Candidate, candidates, with_sweeps
-from mftire.diagnosis.effects import EffectFit, choose_effect, drop_outliers, make_problem, primary_rows
+from mftire.diagnosis.candidates import Candidate, candidates, time_column, with_sweeps
+from mftire.diagnosis.effects import (
+    HISTORY_CANDIDATES,
+    EffectFit,
+    choose_effect,
+    drop_outliers,
+    make_problem,
+    primary_rows,
+)
 from mftire.diagnosis.holdout import default_holdout, holdout_mask, levels
 from mftire.diagnosis.ranking import (
     CandidateScore,
@@ -36,7 +43,6 @@ from mftire.diagnosis.ranking import (
     rank_candidates,
 )
 from mftire.errors import MftireInputError
-from mftire.extensions import LIBRARY
 from mftire.iotools.sweeps import MEASURED_COLUMNS
 from mftire.tyre import Tyre
 
@@ -206,6 +212,15 @@ def diagnose(
     dtrain = df[train].reset_index(drop=True)
     for e in group:
         c = by_name[e.variable]
+        variable, derived, note = e.variable, c.derived, None
+        if e.variable in HISTORY_CANDIDATES:
+            # not a closed variable: use the nearest raw column, the elapsed time
+            variable, derived = time_column(df), False
+            if variable is None:
+                continue
+            note = (f"the candidate '{e.variable}' needs the measured history; the effect is expressed in the raw "
+                    f"column '{variable}' instead")
+            c = by_name.get(variable) or Candidate(variable, df[variable].to_numpy(float), False, False)
         v = c.values[train]
         monotone = bool(np.all(np.diff(v) >= 0))
         dtr = dtrain.assign(_cand=v)
@@ -215,12 +230,13 @@ def diagnose(
         v = prob.df["_cand"].to_numpy(float)
         _progress(f"fitting effects for {e.variable}", progress)
         eff_ch = [ch for ch, sc in e.channel_scores.items() if sc >= max(0.05, 0.25 * e.score)] or [e.channel]
-        chosen, fits = choose_effect(prob, e.variable, v, c.derived, monotone, n_pressures, e.channel, control,
-                                     eff_ch)  # fmt: skip
+        chosen, fits = choose_effect(prob, variable, v, derived, monotone, n_pressures, control, eff_ch)
         control = fits[0]
         tried += fits[1:] if len(tried) else fits
         if chosen is None or chosen.removed <= 0:
             continue
+        if note:
+            chosen.messages.insert(0, note)
         key = (not chosen.physical, chosen.bic)
         if best is None or key < (not best[0].physical, best[0].bic):
             best = (chosen, e)
@@ -230,12 +246,9 @@ def diagnose(
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                tried=tried, messages=[msg], data=df, train=train)
     effect, cause = best
-    fixed_var = LIBRARY[effect.name].fixed_variable if effect.name in LIBRARY else None
-    named = [e for e in ranking if e.variable == fixed_var and e.significant]
-    if named:  # e.g. a slip-speed extension chosen for the Vx candidate: the cause is Vs
+    named = [e for e in ranking if e.variable == effect.variable and e.significant]
+    if named and effect.variable != cause.variable:  # e.g. a slip-speed law chosen for Vx: the cause is Vs
         cause = named[0]
-    if fixed_var is not None:
-        effect.variable = fixed_var
     ranking.remove(cause)
     ranking.insert(0, cause)
 

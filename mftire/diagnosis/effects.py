@@ -1,6 +1,8 @@
 """Map a candidate variable to model extensions, fit them, and choose one.
 
-Each extension of :mod:`mftire.extensions` is fitted by bounded least squares on the
+An effect is a law of :data:`LAWS`: MF scaling factors times a form of
+:mod:`mftire.extensions` in the candidate's variable (or the standard pressure terms).
+Each is fitted by bounded least squares on the
 training data (gross outliers removed; each channel on the rows where it is a primary
 response), together with the peak and curvature coefficients of the measured
 channels (:data:`REFIT_KEYS`), because a base fit made on data containing the effect
@@ -9,9 +11,11 @@ fitted.  The inflation-pressure effect refits the
 standard MF 6.1 pressure coefficients instead of an extension section.
 
 Extensions are compared by the Bayesian information criterion of the weighted
-residual, n·ln(SS/n) + k·ln(n), so a term with more parameters must earn them.  If
-no physical extension removes at least half of what a generic smooth correction in
-the same variable removes, the generic correction is offered, labelled as such.
+residual, n·ln(SS/n) + k·ln(n), so a term with more parameters must earn them.
+
+Variables are closed (:mod:`mftire.extensions`): a candidate that needs measured
+history (``energy``) or the row order (``sequence``) is expressed in the nearest raw
+column, a time column when the data have one, and the effect says so.
 """
 
 from __future__ import annotations
@@ -23,22 +27,38 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
-from mftire.extensions import BUILTIN_VARIABLES, LIBRARY, SECTION
+from mftire.extensions import BUILTIN_VARIABLES, MAX_LEVELS, SECTION, Extension, make_extension
 from mftire.mf.solver import evaluate_arrays
 from mftire.tyre import Tyre
 
-#: Extensions tried for each derived candidate (data columns: see :func:`effects_for`).
-EFFECTS_FOR: dict[str, tuple[str, ...]] = {
-    "Vs": ("slip_speed_friction", "slip_speed_peak", "speed_friction"),
-    "Vx": ("speed_friction", "slip_speed_friction", "slip_speed_peak"),
-    "P": ("pressure",),
-    "Fz_dev": ("load_friction",),
-    "sign_alpha": ("asymmetry",),
-    "sign_kappa": ("rolling_resistance",),
+
+@dataclass(frozen=True)
+class Law:
+    """A candidate law: ``targets`` (MF scaling factors) times ``form`` of the variable."""
+
+    name: str
+    targets: tuple[str, ...]
+    form: str
+
+
+_FRICTION = ("LMUX", "LMUY")
+
+#: Laws tried for each derived candidate (data columns: see :func:`effects_for`);
+#: ``(variable the law reads, law)``: Fz_dev is read as the builtin dfz.
+EFFECTS_FOR: dict[str, tuple[tuple[str, Law], ...]] = {
+    "Vs": (("Vs", Law("slip_speed_friction", _FRICTION, "decay")),
+           ("Vs", Law("slip_speed_quadratic", _FRICTION, "quadratic"))),
+    "Vx": (("Vx", Law("speed_friction", _FRICTION, "quadratic")),
+           ("Vs", Law("slip_speed_friction", _FRICTION, "decay"))),
+    "P": (("P", Law("pressure", (), "")),),
+    "Fz_dev": (("dfz", Law("load_friction", _FRICTION, "quadratic")),),
+    "sign_alpha": (("sign_alpha", Law("asymmetry", ("LMUY",), "linear")),),
+    "sign_kappa": (("sign_kappa", Law("drive_brake_asymmetry", ("LMUX",), "linear")),),
     "sweep_dir": (),
-    "sequence": ("fade", "friction_variable"),
-    "energy": ("fade", "friction_variable"),
-}
+}  # fmt: skip
+
+#: Candidates that are not closed variables, expressed in the nearest raw column.
+HISTORY_CANDIDATES = ("sequence", "energy")
 
 #: Standard pressure coefficients refitted by the ``pressure`` effect, by channel,
 #: split into terms linear and quadratic in dpi (Pacejka 2012 eqs 4.E13, 4.E15,
@@ -102,15 +122,22 @@ def _tyre_with(tyre: Tyre, standard: Mapping[str, float], section: Mapping[str, 
     return Tyre(params, name=tyre.name)
 
 
-def effects_for(variable: str, derived: bool, monotone: bool) -> tuple[str, ...]:
-    """Extensions to try for a candidate.
+def effects_for(variable: str, derived: bool, monotone: bool, n_levels: int = 99) -> tuple[tuple[str, Law], ...]:
+    """Laws to try for a candidate, as ``(variable read, law)``.
 
-    Data columns: ``fade`` when the variable never decreases along the sequence
-    (time, energy, distance ...), and ``friction_variable`` (e.g. temperature, road).
+    Data columns: a saturating friction fade when the variable never decreases along the
+    sequence (time, distance ...), friction linear and quadratic in it, and a per-level
+    table when it has at most :data:`mftire.extensions.MAX_LEVELS` levels.
     """
     if derived:
         return EFFECTS_FOR.get(variable, ())
-    return ("fade", "friction_variable") if monotone else ("friction_variable",)
+    laws = [(variable, Law("friction_fade", _FRICTION, "saturating"))] if monotone else []
+    laws += [(variable, Law("friction_variable", _FRICTION, "linear"))]
+    if n_levels >= 4:
+        laws += [(variable, Law("friction_variable_quadratic", _FRICTION, "quadratic"))]
+    if 2 <= n_levels <= MAX_LEVELS:
+        laws += [(variable, Law("friction_levels", _FRICTION, "table"))]
+    return tuple(laws)
 
 
 #: Channels effects are fitted on (Mx and My follow the forces through models of their
@@ -238,79 +265,77 @@ def _degree(v: np.ndarray, most: int) -> int:
     return int(max(1, min(most, levels - 2)))
 
 
-def _spec(name: str, variable: str, v: np.ndarray | None, tyre: Tyre, n_pressures: int, channels,
-          pressure_channels: Sequence[str] | None = None):
-    """Keys, initial values, bounds and fixed entries of an effect's fit."""
-    fixed: dict[str, object] = {}
-    V0 = tyre["LONGVL"]
-    if name == "slip_speed_friction":
-        return ["VS_DECAY"], [0.0], [(-0.5, 5.0)], fixed
-    if name == "slip_speed_peak":
-        return (["VS_PEAK_GAIN", "VS_PEAK_SPEED", "VS_PEAK_WIDTH"], [0.05, 0.1 * V0, 0.5],
-                [(-0.9, 5.0), (1e-3, 5.0 * V0), (0.05, 3.0)], fixed)  # fmt: skip
-    if name == "speed_friction":
-        return ["VX_FRIC1", "VX_FRIC2"], [0.0, 0.0], [(-1.0, 1.0), (-1.0, 1.0)], fixed
-    if name == "load_friction":
-        return ["LOAD_MU2"], [0.0], [(-1.0, 1.0)], fixed
-    if name == "rolling_resistance":
-        return ["RR_FX"], [0.0], [(-0.1, 0.1)], fixed
-    if name == "asymmetry":
-        return ["ASYM_MUY", "ASYM_FY"], [0.0, 0.0], [(-0.5, 0.5), (-0.2, 0.2)], fixed
-    if name == "fade":
-        span = float(np.nanmax(v)) if v is not None and np.nanmax(v) > 0 else 1.0
-        fixed["FADE_VARIABLE"] = variable
-        return ["FADE_DEPTH", "FADE_SCALE"], [0.02, 0.5 * span], [(-0.5, 0.9), (1e-3 * span, 100.0 * span)], fixed
-    if name == "friction_variable":
-        ref = float(np.nanmedian(v))
-        sc = float(np.nanstd(v)) or 1.0
-        fixed.update({"FVAR_VARIABLE": variable, "FVAR_REF": ref, "FVAR_SCALE": sc,
-                      "FVAR_MIN": float(np.nanmin(v)), "FVAR_MAX": float(np.nanmax(v))})  # fmt: skip
-        degree = _degree(v, 2)
-        return ["FVAR_C1", "FVAR_C2"][:degree], [0.0] * degree, [(-1.0, 1.0)] * degree, fixed
-    if name == "generic":
-        ref = float(np.nanmedian(v))
-        sc = float(np.nanstd(v)) or 1.0
-        fixed.update({"GEN_VARIABLE": variable, "GEN_REF": ref, "GEN_SCALE": sc, "GEN_CHANNEL": channels[0],
-                      "GEN_MIN": float(np.nanmin(v)), "GEN_MAX": float(np.nanmax(v))})  # fmt: skip
-        degree = _degree(v, 3)
-        return ["GEN_C1", "GEN_C2", "GEN_C3"][:degree], [0.0] * degree, [(-2.0, 2.0)] * degree, fixed
-    if name == "none":
-        return [], [], [], fixed
-    if name == "pressure":
-        keys: list[str] = []
-        for ch in (pressure_channels if pressure_channels is not None else channels):
-            lin, quad = PRESSURE_KEYS.get(ch, ((), ()))
-            keys += list(lin) if n_pressures >= 2 else []
-            keys += list(quad) if n_pressures >= 3 else []
-        return keys, [float(tyre[k]) for k in keys], [(-3.0, 3.0)] * len(keys), fixed
-    raise ValueError(f"unknown effect {name!r}")
+def law_term(law: Law, variable: str, v: np.ndarray | None, tyre: Tyre, index: int) -> Extension:
+    """The extension term of ``law`` in ``variable`` (values ``v`` for data columns), numbered ``index``.
+
+    Data variables are normalised by their median and standard deviation and clipped to
+    the fitted range; the slip-speed decay is eq 4.E7 with z = Vs/LONGVL.
+    """
+    numbers: dict[str, float] = {}
+    if law.form == "decay":
+        numbers.update(REF=0.0, SCALE=float(tyre["LONGVL"]))
+    elif variable in BUILTIN_VARIABLES and variable in ("sign_alpha", "sign_kappa"):
+        numbers.update(REF=0.0, SCALE=1.0)
+    elif v is not None and np.isfinite(v).any():
+        vv = np.asarray(v, float)[np.isfinite(v)]
+        sc = float(np.std(vv)) or 1.0
+        numbers.update(REF=float(np.median(vv)), SCALE=sc, MIN=float(vv.min()), MAX=float(vv.max()))
+        if law.form == "saturating":
+            numbers.update(REF=float(vv.min()))
+        if law.form == "table":
+            for i, lev in enumerate(np.unique(np.round(vv, 9))[:MAX_LEVELS], start=1):
+                numbers[f"L{i}"] = float(lev)
+    return make_extension(index, law.targets, law.form, variable, **numbers)
+
+
+def _pressure_keys(n_pressures: int, channels: Sequence[str]) -> list[str]:
+    keys: list[str] = []
+    for ch in channels:
+        lin, quad = PRESSURE_KEYS.get(ch, ((), ()))
+        keys += list(lin) if n_pressures >= 2 else []
+        keys += list(quad) if n_pressures >= 3 else []
+    return keys
+
+
+#: The control refit: the same coefficients refitted without any effect.
+CONTROL = Law("none", (), "")
 
 
 def fit_effect(
     prob: _Problem,
-    name: str,
+    law: Law,
     variable: str,
     values: np.ndarray | None,
     n_pressures: int = 1,
-    generic_channel: str | None = None,
     refit_base: bool = True,
     warm: Mapping[str, float] | None = None,
     pressure_channels: Sequence[str] | None = None,
 ) -> EffectFit:
-    """Fit one effect on the training problem, with the main pure-slip coefficients
+    """Fit one law on the training problem, with the main pure-slip coefficients
     of the measured channels (:data:`REFIT_KEYS`) refitted alongside when
-    ``refit_base``; ``name="none"`` is the control refit.  ``warm`` gives start values of
+    ``refit_base``; :data:`CONTROL` is the control refit.  ``warm`` gives start values of
     refitted coefficients (the control refit's), so that an effect starts from the
     control's optimum with its own terms neutral."""
     tyre = prob.tyre
-    channels = (generic_channel,) if name == "generic" and generic_channel else prob.channels
-    keys, x0, bounds, fixed = _spec(name, variable, values, tyre, n_pressures, channels, pressure_channels)
-    uses_data = name in ("fade", "friction_variable", "generic") and values is not None
-    variables = {variable: values} if uses_data and variable not in BUILTIN_VARIABLES else {}
-    variables.update(prob.variables)
-    needed = set(tyre.required_variables)
-    base_section = tyre.extensions or {}
-    base_r = _residuals(prob, tyre.flat, base_section, {k: v for k, v in variables.items() if k in needed})
+    base = tyre.extension_set
+    base_section = dict(tyre.extensions or {})
+    term = None
+    if law.name == "pressure":
+        keys = _pressure_keys(n_pressures, pressure_channels if pressure_channels is not None else prob.channels)
+        x0, bounds = [float(tyre[k]) for k in keys], [(-3.0, 3.0)] * len(keys)
+    elif law is CONTROL or law.name == "none":
+        keys, x0, bounds = [], [], []
+    else:
+        index = max((t.index for t in base.terms), default=0) + 1
+        term = law_term(law, variable, values, tyre, index)
+        keys = list(term.coefficient_keys)
+        x0 = [term.start(k) for k in keys]
+        bounds = [term.bounds(k) for k in keys]
+    variables = dict(prob.variables)
+    if term is not None and variable not in BUILTIN_VARIABLES and values is not None:
+        variables[variable] = values
+    base_r = _residuals(prob, tyre.flat, base_section, {k: v for k, v in variables.items() if k in
+                                                         set(tyre.required_variables)})  # fmt: skip
     ss0 = float(base_r @ base_r)
     refit = [k for ch in covered_channels(prob) for k in REFIT_KEYS.get(ch, ()) if k not in keys]
     refit = list(dict.fromkeys(refit)) if refit_base else []
@@ -321,9 +346,11 @@ def fit_effect(
 
     def build(x):
         standard: dict[str, float] = {k: float(v) for k, v in zip(refit, x[len(keys):], strict=True)}
-        section: dict[str, object] = {**base_section, **fixed}
+        section: dict[str, object] = dict(base_section)
+        if term is not None:
+            section.update(term.section())
         for k, val in zip(keys, x[: len(keys)], strict=True):
-            if name == "pressure":
+            if term is None:
                 standard[k] = float(val)
             else:
                 section[k] = float(val)
@@ -335,10 +362,10 @@ def fit_effect(
 
     messages = []
     if not len(start):
-        return EffectFit(name, variable, True, {}, {}, {}, ss0, ss0, np.inf, 0, messages)
-    if name == "pressure" and not keys:
+        return EffectFit(law.name, variable, True, {}, {}, {}, ss0, ss0, np.inf, 0, messages)
+    if law.name == "pressure" and not keys:
         messages.append("one inflation pressure in the training data: pressure terms not identifiable")
-        return EffectFit(name, variable, True, {}, {}, {}, ss0, ss0, np.inf, 0, messages)
+        return EffectFit(law.name, variable, True, {}, {}, {}, ss0, ss0, np.inf, 0, messages)
     # Plain least squares: the effect *is* the large systematic residual, which a robust
     # loss would discount as outliers; gross outliers were dropped in make_problem.  TRF
     # counts only function evaluations, not the finite-difference ones: MAX_ITER
@@ -350,10 +377,12 @@ def fit_effect(
     k = len(start)
     bic = n * np.log(max(ss1, 1e-300) / n) + k * np.log(n)
     standard, section = build(res.x)
-    section = {k: v for k, v in section.items() if k not in base_section or base_section[k] != v or k in fixed}
+    section = {k: v for k, v in section.items() if k not in base_section}
     params = {kk: float(vv) for kk, vv in zip(keys, res.x[: len(keys)], strict=True)}
-    physical = name in ("pressure", "none") or LIBRARY[name].physical
-    return EffectFit(name, variable, physical, params, section, standard, ss0, ss1, float(bic), k, messages)
+    fit = EffectFit(law.name, variable, True, params, section, standard, ss0, ss1, float(bic), k, messages)
+    if term is not None:
+        fit.messages.append(f"term: {term.describe()}")
+    return fit
 
 
 #: An effect must leave at most this share of the control refit's residual ...
@@ -375,42 +404,31 @@ def choose_effect(
     derived: bool,
     monotone: bool,
     n_pressures: int,
-    top_channel: str,
     control: EffectFit | None = None,
     effect_channels: Sequence[str] | None = None,
 ) -> tuple[EffectFit | None, list[EffectFit]]:
-    """Fit the extensions mapped to ``variable`` and a generic correction; choose one.
+    """Fit the laws mapped to ``variable`` (:func:`effects_for`); choose one.
 
     ``effect_channels`` are the channels where the candidate is significant; the
     pressure effect fits only their pressure terms.
 
     Every fit is compared with a *control*: the same coefficients refitted without
     any extension.  An effect is only chosen if it beats the control (see
-    :func:`_beats`), so refitting alone cannot pass for a missing effect.
+    :func:`_beats`), so refitting alone cannot pass for a missing effect; among those
+    that do, the lowest BIC wins.
 
     Returns ``(chosen, all_fits)``; chosen is None when no effect beats the control.
     """
     prob, idx = subsample(prob)
     values = None if values is None else np.asarray(values)[idx]
     if control is None:
-        control = fit_effect(prob, "none", variable, values, n_pressures)
+        control = fit_effect(prob, CONTROL, variable, values, n_pressures)
+    n_levels = 0 if values is None else int(np.unique(np.round(values[np.isfinite(values)], 9)).size)
     fits: list[EffectFit] = []
-    for name in effects_for(variable, derived, monotone):
-        fits.append(fit_effect(prob, name, variable, values, n_pressures, warm=control.standard,
+    for var, law in effects_for(variable, derived, monotone, n_levels):
+        v = values if var == variable else None
+        fits.append(fit_effect(prob, law, var, v, n_pressures, warm=control.standard,
                                pressure_channels=effect_channels))  # fmt: skip
-    physical = [f for f in fits if f.n_params > 0 and _beats(f, control)]
-    generic = None
-    if values is not None and variable not in ("P",):
-        generic = fit_effect(prob, "generic", variable, values, n_pressures, generic_channel=top_channel,
-                             warm=control.standard)  # fmt: skip
-        fits.append(generic)
+    good = [f for f in fits if f.n_params > 0 and _beats(f, control)]
     fits.insert(0, control)
-    best_phys = min(physical, key=lambda f: f.bic) if physical else None
-    if best_phys is not None and (generic is None or best_phys.removed >= 0.5 * generic.removed):
-        return best_phys, fits
-    if generic is not None and _beats(generic, control):
-        generic.messages.append(
-            "no physical extension explains this residual; this is a generic smooth correction, not a physical model"
-        )
-        return generic, fits
-    return best_phys, fits
+    return (min(good, key=lambda f: f.bic) if good else None), fits

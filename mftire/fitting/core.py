@@ -37,21 +37,15 @@ import pandas as pd
 from scipy.optimize import least_squares
 
 from mftire.errors import MftireInputError
+from mftire.extensions import SECTION, ExtensionSet, parse_section
 from mftire.fitting import initial
 from mftire.fitting.data import load_sweep_files, noise_std, parse_weights, prepare_table, row_weights
 from mftire.fitting.identify import DataLevels, data_levels, split_identified
-from mftire.fitting.model import Inputs, fitting_mode, predict_fx, predict_fy
+from mftire.fitting.model import Inputs, Model, fitting_mode, predict
 from mftire.fitting.stages import FITTED_KEYS, STAGES, Coefficient, Stage, resolve_stages
 from mftire.iotools.sweeps import group_sweeps
 from mftire.iotools.tir import TirParameters, read_tir
-from mftire.mf.aligning import aligning_terms, mz_combined
-from mftire.mf.basic import basic
-from mftire.mf.inputs import condition_inputs
-from mftire.mf.lateral import fy0, fy_combined
-from mftire.mf.longitudinal import fx0, fx_combined
 from mftire.mf.modes import Mode
-from mftire.mf.overturning import mx
-from mftire.mf.rolling import my
 from mftire.parameters import with_defaults
 
 __all__ = ["StageResult", "FitResult", "fit_tir", "LOSS", "F_SCALE", "CONDITION_KEYS"]
@@ -63,6 +57,7 @@ F_SCALE = 3.0
 #: Columns that identify an operating condition (set points from group_sweeps).
 CONDITION_KEYS = ("Fz_set", "gamma_set", "P_set", "Vx_set")
 _NOISE_FLOOR = 1e-3  # sigma >= this fraction of the channel peak
+_NO_EXTENSIONS = ExtensionSet(())
 
 
 @dataclass
@@ -203,47 +198,27 @@ def _progress_printer(progress: bool | Callable[[str], None] | None) -> Callable
 # ------------------------------------------------------------------------------------
 
 
-def _make_evaluator(channel: str, stage: int, p: dict, x: Inputs, mode: Mode) -> Callable[[dict], np.ndarray]:
-    """A function q -> channel at ``x`` that recomputes only what the stage changes.
+def _make_evaluator(
+    channel: str, p: dict, x: Inputs, mode: Mode, ext: ExtensionSet, fitted: Sequence[str] = ()
+) -> Callable[[dict], np.ndarray]:
+    """A function q -> channel at ``x`` through the model pipeline (:class:`Model`).
 
-    The conditioned inputs and basic increments (eqs 4.E1–4.E8) depend only on
-    never-fitted constants; for moments the forces of the earlier stages are cached.
+    Piece 1 (conditioning, eqs 4.E1–4.E8 inputs) runs once.  For the moments, the forces
+    are computed once when no coefficient of ``fitted`` changes them (aligning, overturning
+    and rolling coefficients only).
     """
-    z = np.zeros_like(x.Fz)
-    with np.errstate(all="ignore"):
-        c = condition_inputs(p, mode, x.Fz, x.kappa, x.alpha, x.gamma, z, x.Vx, x.P)
-        b = basic(p, mode, c)
-    if channel == "Fx":
+    model = Model(p, x, mode, ext)
+    if channel in ("Fx", "Fy"):
+        return lambda q: model.predict(q, channel)  # eqs 4.E9/4.E50, 4.E19/4.E58
+    force_free = all(k.startswith(("Q", "SSZ", "PPZ", "PPMX")) for k in fitted)
+    if not force_free:
+        return lambda q: model.predict(q, channel)
+    given = model.channels(p, ("Fx", "Fy"))
 
-        def f(q):
-            Fx0, _, _ = fx0(q, mode, c, b)  # eq 4.E9
-            return fx_combined(q, mode, c, b, Fx0)  # eq 4.E50
+    def f(q):
+        return np.real(getattr(model.channels(q, (channel,), given), channel))  # eqs 4.E71, 49, A48
 
-        return f
-    if channel == "Fy":
-
-        def f(q):
-            lat = fy0(q, mode, c, b, b.gamma_star, turn_slip=False)  # eq 4.E19
-            return fy_combined(q, mode, c, b, lat.Fy0, lat.muy, lat.zeta2)[0]  # eq 4.E58
-
-        return f
-    with np.errstate(all="ignore"):
-        Fx0, _, Kxk = fx0(p, mode, c, b)
-        Fx = fx_combined(p, mode, c, b, Fx0)
-        lat = fy0(p, mode, c, b, b.gamma_star, turn_slip=False)
-        Fy, Gyk, _ = fy_combined(p, mode, c, b, lat.Fy0, lat.muy, lat.zeta2)
-    if channel == "Mz":
-
-        def f(q):
-            terms = aligning_terms(q, mode, c, b, lat, Gyk)  # eqs 4.E33–4.E47
-            return np.real(mz_combined(q, mode, c, b, terms, Kxk, Fx, Fy, Gyk)[0])  # eq 4.E71
-
-        return f
-    if channel == "Mx":
-        return lambda q: mx(q, c, b.dpi, Fy)
-    if channel == "My":
-        return lambda q: my(q, c, Fx)
-    raise ValueError(f"unknown channel {channel!r}")
+    return f
 
 
 # ------------------------------------------------------------------------------------
@@ -323,7 +298,7 @@ def _channel_sigma(y: np.ndarray, table: pd.DataFrame, xcol: str | None) -> floa
     return max(sigma, floor) if np.isfinite(sigma) else floor
 
 
-def _free_rolling_targets(table: pd.DataFrame) -> pd.DataFrame:
+def _free_rolling_targets(table: pd.DataFrame, variables: Sequence[str] = ()) -> pd.DataFrame:
     """Measured Fx at κ = 0 per condition of pure longitudinal sweeps (Theil–Sen intercept)."""
     rows = []
     for key, g in table.groupby(list(CONDITION_KEYS), sort=True):
@@ -332,14 +307,17 @@ def _free_rolling_targets(table: pd.DataFrame) -> pd.DataFrame:
         if s is None and len(near) == 0:
             continue
         measured = s.y0 if s is not None else float(near["Fx"].median())
-        rows.append(dict(zip(CONDITION_KEYS, key, strict=True), measured=measured, n=len(g)))
-    return pd.DataFrame(rows, columns=[*CONDITION_KEYS, "measured", "n"])
+        extra = {v: float(g[v].mean()) for v in variables}
+        rows.append(dict(zip(CONDITION_KEYS, key, strict=True), measured=measured, n=len(g), **extra))
+    return pd.DataFrame(rows, columns=[*CONDITION_KEYS, "measured", "n", *variables])
 
 
-def _condition_inputs(df: pd.DataFrame) -> Inputs:
+def _condition_inputs(df: pd.DataFrame, ext: ExtensionSet) -> Inputs:
+    """Free rolling (kappa = alpha = 0) at each condition's set points (and mean external variables)."""
     n = len(df)
     return Inputs(df["Fz_set"].to_numpy(float), np.zeros(n), np.zeros(n), df["gamma_set"].to_numpy(float),
-                  df["Vx_set"].to_numpy(float), df["P_set"].to_numpy(float))
+                  df["Vx_set"].to_numpy(float), df["P_set"].to_numpy(float),
+                  {v: df[v].to_numpy(float) for v in ext.external_variables})  # fmt: skip
 
 
 def _template_slope_fn(p: dict, rows: pd.DataFrame, mode: Mode) -> Callable[[float], float]:
@@ -350,7 +328,7 @@ def _template_slope_fn(p: dict, rows: pd.DataFrame, mode: Mode) -> Callable[[flo
 
     def slope(Fz: float) -> float:
         x = Inputs(np.full(2, Fz), np.zeros(2), np.array([-h, h]), np.full(2, g), np.full(2, vx), np.full(2, Pn))
-        fy = predict_fy(p, x, mode)
+        fy = predict(p, x, "Fy", mode)
         return float((fy[1] - fy[0]) / (2 * h))
 
     return slope
@@ -394,7 +372,9 @@ def _run_group(
     free_rolling: list,
     say: Callable[[str], None],
     refine: bool = False,
+    ext: ExtensionSet | None = None,
 ) -> tuple[dict, StageResult]:
+    ext = ext or _NO_EXTENSIONS
     res = StageResult(stage.number, stage.name, stage.title, channel)
     t0 = time.perf_counter()
     if channel not in table.columns or table[channel].isna().all():
@@ -419,6 +399,8 @@ def _run_group(
     levels: DataLevels = data_levels(rows)
     res.levels = levels.to_dict()
     ident, not_ident = split_identified(coeffs, levels, p)
+    ident, not_ext = _extension_identified(ext, ident, rows)
+    not_ident.update(not_ext)
     res.not_identified = not_ident
     need = max(stage.min_points, 2 * len(ident) + 1)
     if len(rows) < need:
@@ -430,25 +412,25 @@ def _run_group(
         res.message = "no identifiable coefficient"
         return p, res
 
-    x = Inputs.from_frame(rows)
+    x = Inputs.from_frame(rows, ext.external_variables)
     y = rows[channel].to_numpy(float)
     xcol = {"Fx": "kappa", "Fy": "alpha", "Mz": "alpha"}.get(channel) if stage.number <= 3 else None
     sigma = _channel_sigma(y, rows, xcol)
     res.noise = sigma
-    evaluate = _make_evaluator(channel, stage.number, p, x, mode)
+    evaluate = _make_evaluator(channel, p, x, mode, ext, [c.key for c in ident])
     prob = _Problem(evaluate, y, sqrt_w[sel] / sigma)
 
     if stage.number == 1:
-        targets = _free_rolling_targets(rows)
+        targets = _free_rolling_targets(rows, ext.external_variables)
         neg = targets[targets["measured"] < 0]
         if len(neg):
-            xin = _condition_inputs(neg)
+            free_model = Model(p, _condition_inputs(neg, ext), mode, ext)
             wfr = 10.0 * np.sqrt(neg["n"].to_numpy(float)) / sigma
             # keep a small margin below zero so that the constraint holds strictly
             margin = np.minimum(0.05 * sigma, 0.5 * np.abs(neg["measured"].to_numpy(float)))
 
             def penalty(q):
-                fx = predict_fx(q, xin, mode)
+                fx = free_model.predict(q, "Fx")
                 return wfr * np.maximum(fx + margin, 0.0)  # one-sided: model Fx(kappa=0) must not be > 0
 
             prob.penalty = penalty
@@ -620,7 +602,16 @@ def fit_tir(
     table = _classify_rows(group_sweeps(table))
     table["weight"] = w
     sqrt_w = np.sqrt(w)
+    ext = parse_section(tmpl.sections.get(SECTION))
+    missing = [v for v in ext.external_variables if v not in table.columns]
+    if missing:
+        raise MftireInputError(
+            f"the template's [{SECTION}] reads {', '.join(missing)}: no such column in the data"
+        )
     p0 = with_defaults(tmpl)
+    for t in ext.terms:  # coefficients absent from the section start at the form's start values
+        for k in t.coefficient_keys:
+            p0.setdefault(k, t.start(k))
     p = dict(p0)
     mode = fitting_mode(alpha_star)
     say(f"{len(table)} points, {table['sweep_id'].nunique()} sweeps, stages "
@@ -633,20 +624,21 @@ def fit_tir(
     results: list[StageResult] = []
     free_rolling: list[pd.DataFrame] = []
     fixed_keys = {str(k).upper() for k in fixed}
-    unknown = sorted(fixed_keys - FITTED_KEYS)
+    unknown = sorted(fixed_keys - FITTED_KEYS - set(ext.coefficient_keys))
     if unknown:
         raise MftireInputError(f"cannot fix {', '.join(unknown)}: not a fitted coefficient")
     for stage in chosen:
         for channel, coeffs in zip(_stage_channels(stage), stage.groups, strict=True):
+            coeffs = tuple(coeffs) + _extension_coefficients(ext, stage.number, channel)
             held = [c.key for c in coeffs if c.key in fixed_keys]
             coeffs = tuple(c for c in coeffs if c.key not in fixed_keys)
-            p, r = _run_group(stage, channel, coeffs, p, table, sqrt_w, mode, free_rolling, say)
+            p, r = _run_group(stage, channel, coeffs, p, table, sqrt_w, mode, free_rolling, say, ext=ext)
             r.not_identified.update({k: "fixed by the user" for k in held})
             results.append(r)
             if stage.number == 5 and r.status == "fitted":
                 # Mz at kappa = 0 holds s·Fx (eq 4.E71) with the SSZ and combined Fx just fitted:
                 # polish the aligning coefficients together with SSZ on all Mz rows.
-                p, r2 = _refine_mz(p, results, table, sqrt_w, mode, say)
+                p, r2 = _refine_mz(p, results, table, sqrt_w, mode, say, ext)
                 if r2 is not None:
                     results.append(r2)
             if r.status != "fitted":
@@ -662,14 +654,14 @@ def fit_tir(
         identified.extend(r.identified)
         not_identified.update(r.not_identified)
         for k in r.identified:
-            fitted.set(k, float(p[k]))
+            fitted.set(k, float(p[k]), section=SECTION if k in ext.coefficient_keys else None)
 
-    fr = _free_rolling_report(p, free_rolling, mode)
+    fr = _free_rolling_report(p, free_rolling, mode, ext)
     if len(fr) and not fr["sign_ok"].all():
         bad = fr[~fr["sign_ok"]]
         messages.append(f"free rolling: the model gives Fx > 0 at kappa = 0 in {len(bad)} condition(s) "
                         "where the data show Fx < 0")
-    table = _add_fit_columns(table, p, mode)
+    table = _add_fit_columns(table, p, mode, ext)
     ran = [r for r in results if r.status == "fitted"]
     return FitResult(
         parameters=fitted,
@@ -688,15 +680,16 @@ def fit_tir(
     )
 
 
-def _refine_mz(p, results, table, sqrt_w, mode, say):
+def _refine_mz(p, results, table, sqrt_w, mode, say, ext):
     keys = [k for r in results if r.number in (3, 5) and r.status == "fitted" for k in r.identified]
     if not any(r.number == 3 and r.status == "fitted" for r in results):
         return p, None
     by_key = {c.key: c for s in STAGES for c in s.coefficients}
+    by_key.update({c.key: c for n in (3, 5) for c in _extension_coefficients(ext, n, "Mz")})
     coeffs = tuple(by_key[k] for k in dict.fromkeys(keys))
     stage = Stage(5, "combined_mz", ("Mz",), ("pure_lateral", "free_rolling", "combined"), (coeffs,),
                   "aligning moment refinement on pure and combined sweeps")
-    p, r = _run_group(stage, "Mz", coeffs, p, table, sqrt_w, mode, [], say, refine=True)
+    p, r = _run_group(stage, "Mz", coeffs, p, table, sqrt_w, mode, [], say, refine=True, ext=ext)
     r.name = "combined_mz_refine"
     r.not_identified = {}
     return p, (r if r.status == "fitted" else None)
@@ -726,28 +719,64 @@ def _stage_channels(stage: Stage) -> tuple[str, ...]:
     return stage.channels if len(stage.channels) == len(stage.groups) else stage.channels * len(stage.groups)
 
 
-def _free_rolling_report(p: dict, targets: list[pd.DataFrame], mode: Mode) -> pd.DataFrame:
+def _free_rolling_report(p: dict, targets: list[pd.DataFrame], mode: Mode, ext: ExtensionSet) -> pd.DataFrame:
     cols = [*CONDITION_KEYS, "measured", "fitted", "error", "sign_ok"]
     if not targets or all(len(t) == 0 for t in targets):
         return pd.DataFrame(columns=cols)
     t = pd.concat(targets, ignore_index=True)
-    fitted = predict_fx(p, _condition_inputs(t), mode)
+    fitted = predict(p, _condition_inputs(t, ext), "Fx", mode, ext)
     t["fitted"] = fitted
     t["error"] = fitted - t["measured"]
     t["sign_ok"] = ~((t["measured"] < 0) & (fitted > 0))
     return t[cols]
 
 
-def _add_fit_columns(table: pd.DataFrame, p: dict, mode: Mode) -> pd.DataFrame:
+def _add_fit_columns(table: pd.DataFrame, p: dict, mode: Mode, ext: ExtensionSet) -> pd.DataFrame:
     """Add ``fit_<channel>`` model columns for every measured channel present."""
-    from mftire.fitting.model import predict
-
-    x = Inputs.from_frame(table)
+    model = Model(p, Inputs.from_frame(table, ext.external_variables), mode, ext)
     out = table.copy()
-    for ch in ("Fx", "Fy", "Mz", "Mx", "My"):
-        if ch in out.columns:
-            out[f"fit_{ch}"] = predict(p, x, ch, mode)
+    present = tuple(ch for ch in ("Fx", "Fy", "Mz", "Mx", "My") if ch in out.columns)
+    if present:
+        ch = model.channels(p, present)
+        for name in present:
+            out[f"fit_{name}"] = np.real(getattr(ch, name))
     return out
+
+
+#: The stage that fits an extension term, by the first channel it acts on.
+_EXTENSION_STAGE = {"Fx": 1, "Fy": 2, "Mz": 3, "Mx": 6, "My": 7}
+
+
+def _extension_coefficients(ext: ExtensionSet, stage: int, channel: str) -> tuple[Coefficient, ...]:
+    """The coefficients of the extension terms fitted in ``stage`` (bounds from their form)."""
+    out = []
+    for t in ext.terms:
+        if _EXTENSION_STAGE.get(t.channels[0]) == stage and t.channels[0] == channel:
+            for k in t.coefficient_keys:
+                lo, hi = t.bounds(k)
+                out.append(Coefficient(k, lo, hi, scale=0.1))
+    return tuple(out)
+
+
+def _extension_identified(
+    ext: ExtensionSet, coeffs: Sequence[Coefficient], rows: pd.DataFrame
+) -> tuple[list[Coefficient], dict[str, str]]:
+    """Drop extension coefficients whose variable does not vary over ``rows``."""
+    if not ext:
+        return list(coeffs), {}
+    owner = {k: t for t in ext.terms for k in t.coefficient_keys}
+    ok, not_ok = [], {}
+    for c in coeffs:
+        t = owner.get(c.key)
+        if t is None:
+            ok.append(c)
+            continue
+        cols = [v for v in t.variables() if v in rows.columns]  # builtin variables vary with the slips
+        if all(np.unique(np.round(rows[v].to_numpy(float), 9)).size >= 2 for v in cols):
+            ok.append(c)
+        else:
+            not_ok[c.key] = f"{', '.join(cols)} does not vary in the stage's data"
+    return ok, not_ok
 
 
 #: Re-exported for convenience.

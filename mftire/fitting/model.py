@@ -1,39 +1,35 @@
-"""Fast channel predictions for fitting: only the equations a stage needs.
+"""Channel predictions for fitting, through the one model pipeline of :mod:`mftire.mf.solver`.
 
-Each function takes the flat parameter dictionary ``p`` (see
-:func:`mftire.parameters.with_defaults`) and an :class:`Inputs` bundle of SI arrays and
-returns the channel in SI units.  The full combined-slip model (mode ``2x1``: no
-input limits, combined slip, no turn slip) is used for every channel, so the fitted
-``.tir`` reproduces the data when evaluated the standard way; at pure slip it reduces to
-the pure-slip equations (Gxa = Gyk = 1, SVyk = 0, eqs 4.E51, 4.E59, 4.E66).
+:class:`Model` binds the pipeline to fixed operating points: piece 1
+(:func:`~mftire.mf.solver.prepare`: conditioning, extension variables) runs once, and
+each evaluation for a parameter set ``q`` runs pieces 2 and 3 (scaling factors with
+the model extensions, then only the channels asked for).  So the fitter's prediction
+is :meth:`mftire.tyre.Tyre.evaluate` exactly, extensions included.
 
-Limit checks are off while fitting: the template's ranges (FZMAX, ALPMAX ...) would
-otherwise clip measured operating points.
+Limit checks are off while fitting (mode ``2x1``): the template's ranges (FZMAX,
+ALPMAX ...) would otherwise clip measured operating points.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from mftire.mf.aligning import aligning_terms, mz_combined
-from mftire.mf.basic import basic
-from mftire.mf.inputs import condition_inputs
-from mftire.mf.lateral import fy0, fy_combined
-from mftire.mf.longitudinal import fx0, fx_combined
+from mftire.extensions import ExtensionSet
 from mftire.mf.modes import Mode
-from mftire.mf.overturning import mx
-from mftire.mf.rolling import my
+from mftire.mf.solver import Channels, channels, prepare, scaled
 
-__all__ = ["Inputs", "fitting_mode", "predict", "predict_fx", "predict_fy", "predict_mz", "CHANNELS"]
+__all__ = ["Inputs", "Model", "fitting_mode", "predict", "predict_fx", "predict_fy", "predict_mz", "CHANNELS"]
 
 CHANNELS = ("Fx", "Fy", "Mz", "Mx", "My")
+_INPUTS = ("Fz", "kappa", "alpha", "gamma", "Vx", "P")
 
 
 @dataclass
 class Inputs:
-    """Operating points (SI, 1-D arrays of equal length)."""
+    """Operating points (SI, 1-D arrays of equal length) and the extensions' external variables."""
 
     Fz: np.ndarray  #: vertical load [N]
     kappa: np.ndarray  #: longitudinal slip [-]
@@ -41,11 +37,13 @@ class Inputs:
     gamma: np.ndarray  #: inclination [rad]
     Vx: np.ndarray  #: forward speed [m/s]
     P: np.ndarray  #: inflation pressure [Pa]
+    variables: dict[str, np.ndarray] = field(default_factory=dict)  #: external extension variables
 
     @classmethod
-    def from_frame(cls, df) -> Inputs:
-        """Take the schema columns of a sweep table."""
-        return cls(*(df[c].to_numpy(dtype=float) for c in ("Fz", "kappa", "alpha", "gamma", "Vx", "P")))
+    def from_frame(cls, df, variables: Sequence[str] = ()) -> Inputs:
+        """Take the schema columns of a sweep table, and the columns ``variables``."""
+        return cls(*(df[c].to_numpy(dtype=float) for c in _INPUTS),
+                   {v: df[v].to_numpy(dtype=float) for v in variables})  # fmt: skip
 
     def __len__(self) -> int:
         return int(self.Fz.size)
@@ -56,68 +54,42 @@ def fitting_mode(alpha_star: bool = False) -> Mode:
     return Mode.from_code(221 if alpha_star else 211)
 
 
-def _prepare(p: dict, x: Inputs, mode: Mode):
-    z = np.zeros_like(x.Fz)
-    c = condition_inputs(p, mode, x.Fz, x.kappa, x.alpha, x.gamma, z, x.Vx, x.P)
-    return c, basic(p, mode, c)
+class Model:
+    """The model pipeline at fixed operating points ``x``.
+
+    ``p`` supplies the never-fitted constants of piece 1; ``extensions`` are the terms of
+    the tyre's ``[MFTIRE_EXTENSIONS]`` (their coefficients are read from each ``q``).
+    """
+
+    def __init__(self, p: Mapping[str, float], x: Inputs, mode: Mode, extensions: ExtensionSet | None = None):
+        self.pre = prepare(p, x.Fz, x.kappa, x.alpha, x.gamma, 0.0, x.Vx, x.P, None, mode, x.variables or None)
+        self.extensions = extensions
+
+    def channels(self, q: Mapping[str, float], want: tuple[str, ...], given: Channels | None = None) -> Channels:
+        """Pieces 2 and 3 for parameters ``q``: the channels ``want`` (see :func:`mftire.mf.solver.channels`)."""
+        qq, offsets = scaled(q, self.extensions, self.pre)
+        return channels(qq, self.pre, offsets, want, given)
+
+    def predict(self, q: Mapping[str, float], channel: str) -> np.ndarray:
+        """Model value of ``channel`` (one of :data:`CHANNELS`) [N or N·m]."""
+        return np.real(getattr(self.channels(q, (channel,)), channel))
 
 
-def predict_fx(p: dict, x: Inputs, mode: Mode) -> np.ndarray:
-    """Fx [N]: Fx0 (eq 4.E9) weighted by Gxa (eq 4.E50)."""
-    with np.errstate(all="ignore"):
-        c, b = _prepare(p, x, mode)
-        Fx0, _, _ = fx0(p, mode, c, b)
-        return fx_combined(p, mode, c, b, Fx0)
-
-
-def predict_fy(p: dict, x: Inputs, mode: Mode) -> np.ndarray:
-    """Fy [N]: Fy0 (eq 4.E19) weighted by Gyk plus SVyk (eq 4.E58)."""
-    with np.errstate(all="ignore"):
-        c, b = _prepare(p, x, mode)
-        lat = fy0(p, mode, c, b, b.gamma_star, turn_slip=False)
-        Fy, _, _ = fy_combined(p, mode, c, b, lat.Fy0, lat.muy, lat.zeta2)
-        return Fy
-
-
-def _forces(p: dict, x: Inputs, mode: Mode):
-    c, b = _prepare(p, x, mode)
-    Fx0, _, Kxk = fx0(p, mode, c, b)
-    Fx = fx_combined(p, mode, c, b, Fx0)
-    lat = fy0(p, mode, c, b, b.gamma_star, turn_slip=False)
-    Fy, Gyk, _ = fy_combined(p, mode, c, b, lat.Fy0, lat.muy, lat.zeta2)
-    return c, b, Fx, Kxk, lat, Fy, Gyk
-
-
-def predict_mz(p: dict, x: Inputs, mode: Mode) -> np.ndarray:
-    """Mz [N·m]: −t·Fy′ + Mzr + s·Fx (eqs 4.E71, 4.E72)."""
-    with np.errstate(all="ignore"):
-        c, b, Fx, Kxk, lat, Fy, Gyk = _forces(p, x, mode)
-        terms = aligning_terms(p, mode, c, b, lat, Gyk)
-        Mz, _, _ = mz_combined(p, mode, c, b, terms, Kxk, Fx, Fy, Gyk)
-        return np.real(Mz)
-
-
-def predict_mx(p: dict, x: Inputs, mode: Mode, Fy: np.ndarray | None = None) -> np.ndarray:
-    """Mx [N·m] (draft eq 49); ``Fy`` from the model unless given."""
-    with np.errstate(all="ignore"):
-        c, b = _prepare(p, x, mode)
-        if Fy is None:
-            Fy = predict_fy(p, x, mode)
-        return mx(p, c, b.dpi, Fy)
-
-
-def predict_my(p: dict, x: Inputs, mode: Mode, Fx: np.ndarray | None = None) -> np.ndarray:
-    """My [N·m] (Besselink 2010 eq A48); ``Fx`` from the model unless given."""
-    with np.errstate(all="ignore"):
-        c, _ = _prepare(p, x, mode)
-        if Fx is None:
-            Fx = predict_fx(p, x, mode)
-        return my(p, c, Fx)
-
-
-_PREDICT = {"Fx": predict_fx, "Fy": predict_fy, "Mz": predict_mz, "Mx": predict_mx, "My": predict_my}
-
-
-def predict(p: dict, x: Inputs, channel: str, mode: Mode) -> np.ndarray:
+def predict(p: Mapping[str, float], x: Inputs, channel: str, mode: Mode, extensions: ExtensionSet | None = None):
     """Model value of ``channel`` (one of :data:`CHANNELS`) at ``x``."""
-    return _PREDICT[channel](p, x, mode)
+    return Model(p, x, mode, extensions).predict(p, channel)
+
+
+def predict_fx(p: Mapping[str, float], x: Inputs, mode: Mode, extensions: ExtensionSet | None = None):
+    """Fx [N]: Fx0 (eq 4.E9) weighted by Gxa (eq 4.E50)."""
+    return predict(p, x, "Fx", mode, extensions)
+
+
+def predict_fy(p: Mapping[str, float], x: Inputs, mode: Mode, extensions: ExtensionSet | None = None):
+    """Fy [N]: Fy0 (eq 4.E19) weighted by Gyk plus SVyk (eq 4.E58)."""
+    return predict(p, x, "Fy", mode, extensions)
+
+
+def predict_mz(p: Mapping[str, float], x: Inputs, mode: Mode, extensions: ExtensionSet | None = None):
+    """Mz [N·m]: −t·Fy′ + Mzr + s·Fx (eqs 4.E71, 4.E72)."""
+    return predict(p, x, "Mz", mode, extensions)

@@ -26,6 +26,7 @@ import zipfile
 from pathlib import Path
 
 from mftire.errors import MftireError
+from mftire.extensions import ExtensionSet
 from mftire.fmu import variables as vt
 
 CSOURCE = Path(__file__).parent / "csource"
@@ -137,7 +138,7 @@ def generate_sources(
     model_identifier: str,
     fmi_version: int,
     use_mode: int = vt.DEFAULT_USE_MODE,
-    extensions: vt.ExtensionSpec | None = None,
+    extensions: ExtensionSet | None = None,
 ) -> tuple[list[vt.Variable], dict[str, str]]:
     """The variable table and every file of ``sources/`` (name -> text).
 
@@ -153,6 +154,7 @@ def generate_sources(
     wrapper = f"fmi{fmi_version}_model.c"
     files[wrapper] = (CSOURCE / wrapper).read_text(encoding="utf-8")
     files["mf_params.h"] = vt.params_header(variables, extensions)
+    files["mf_ext_gen.h"] = vt.extension_header(variables, extensions)
     files["mf_model_gen.h"] = vt.model_header(variables, model_identifier, fmi_version)
     c_code = _fmpy_c_code()
     for h in FMI_HEADERS[fmi_version]:
@@ -232,7 +234,7 @@ def export_fmu(
     fittyp = int(flat["FITTYP"])
     description = f"Magic Formula tyre {name} (FITTYP {fittyp}) exported by mftire; ISO-W axes, SI units"
     if spec:
-        description += f"; model extensions: {', '.join(spec.active)}"
+        description += f"; model extensions: {'; '.join(t.describe() for t in spec.terms)}"
     xml = vt.model_description_xml(
         variables,
         ident,

@@ -16,11 +16,14 @@ module generates:
 
 so the C code, the XML and the GUID cannot disagree.
 
-Model extensions (``[MFTIRE_EXTENSIONS]``, :mod:`mftire.extensions`): which
-extensions are active, the variable each one reads and the channel of the generic
-correction are fixed at export time (:func:`extension_spec`, compiled in as
-``MF_EXT_*`` macros); their numeric keys are tunable parameters; every data
-variable they read (e.g. ``temperature``) is an extra continuous input.
+* the C header ``mf_ext_gen.h`` with the model-extension terms (:func:`extension_header`):
+  the term table, and the C of every variable and form, generated from the one
+  definition of each in :mod:`mftire.extensions`.
+
+Model extensions (``[MFTIRE_EXTENSIONS]``, :mod:`mftire.extensions`): the terms'
+targets, forms and variables are fixed at export time (:func:`extension_spec`); their
+numeric keys (REF, SCALE, MIN, MAX, levels, coefficients) are tunable parameters; every
+external variable they read (e.g. ``temperature``) is an extra continuous input.
 """
 
 from __future__ import annotations
@@ -32,7 +35,16 @@ from dataclasses import dataclass
 from xml.sax.saxutils import quoteattr
 
 from mftire.errors import MftireInputError
-from mftire.extensions import BUILTIN_VARIABLES, GENERIC_CHANNELS, LIBRARY, NEUTRAL, SECTION, active_extensions
+from mftire.extensions import (
+    BUILTIN_VARIABLES,
+    FORMS,
+    MAX_EXTERNAL,
+    OFFSET_TARGETS,
+    SECTION,
+    Extension,
+    ExtensionSet,
+    parse_section,
+)
 from mftire.parameters import PARAMETERS
 
 #: ``useMode`` of a new FMU: limit checks, no alpha-star, combined slip (MFeval's default).
@@ -108,82 +120,45 @@ OUTPUTS: tuple[tuple[str, str, str | None, str], ...] = (
 )
 
 
-#: Data-variable inputs the C code has room for (``MF_MAX_DATA`` in mf_eval.h): at most one
-#: per extension that reads a named variable (fade, friction_variable, generic).
-MAX_DATA_INPUTS = 3
+#: External-variable inputs the C code has room for (``MF_MAX_DATA`` in mf_eval.h).
+MAX_DATA_INPUTS = MAX_EXTERNAL
 
-#: Units of the extension keys that have one (the others are factors or in the unit of their variable).
-_EXT_UNITS = {"VS_PEAK_SPEED": "m/s"}
-
-
-@dataclass(frozen=True)
-class ExtensionSpec:
-    """The export-time configuration of the ``[MFTIRE_EXTENSIONS]`` section."""
-
-    active: tuple[str, ...]  #: active extensions, in :data:`mftire.extensions.LIBRARY` order
-    values: dict[str, float]  #: every numeric key of the active extensions -> start value
-    variables: dict[str, str]  #: extension name -> the variable it reads (fade, friction_variable, generic)
-    channel: str | None  #: channel of the generic correction
-    data: tuple[str, ...]  #: data variables (FMU inputs), in the order of ``Tyre.required_variables``
-
-    def describe(self, name: str) -> str:
-        """Description of the parameters of extension ``name`` (with its fixed choices)."""
-        ext = LIBRARY[name]
-        text = f"[{SECTION}] {name}: {ext.description}"
-        fixed = []
-        if name in self.variables:
-            fixed.append(f"variable {self.variables[name]}")
-        if name == "generic":
-            fixed.append(f"channel {self.channel}")
-        return text + (f" ({', '.join(fixed)}; fixed at export)" if fixed else "")
+#: Largest double: an absent MIN/MAX of a term (no clipping) as a finite FMU start value.
+_BIG = 1.7976931348623157e308
 
 
 def _valid_fmi_name(name: str) -> bool:
     return bool(name) and not any(ord(ch) < 0x20 or 0x7F <= ord(ch) < 0xA0 for ch in name) and name == name.strip()
 
 
-def extension_spec(section) -> ExtensionSpec | None:
-    """The export-time configuration of a ``[MFTIRE_EXTENSIONS]`` section (None: no extension).
+def extension_spec(section) -> ExtensionSet | None:
+    """The validated ``[MFTIRE_EXTENSIONS]`` terms to compile in (None: no extension).
 
-    Raises :class:`~mftire.errors.MftireInputError` for a section the FMU cannot
-    evaluate (the same conditions under which the Python evaluator raises, plus
-    data-variable names that are not usable as FMI variable names).
+    Raises :class:`~mftire.errors.MftireInputError` for a section the Python evaluator
+    rejects, and for external-variable names that cannot be FMI variable names.
     """
-    active = active_extensions(section)
-    if not active:
+    ext = parse_section(section)
+    if not ext:
         return None
-    sec = {str(k).upper(): v for k, v in section.items()}
-    values: dict[str, float] = {}
-    variables: dict[str, str] = {}
-    data: list[str] = []
-    channel = None
-    for name in active:
-        ext = LIBRARY[name]
-        for key in ext.keys:
-            value = sec.get(key, NEUTRAL[key])
-            if not _number(value):
-                raise MftireInputError(f"[{SECTION}] {name}: {key} must be a number, not {value!r}")
-            values[key] = float(value)
-        if ext.variable_key:
-            var = sec.get(ext.variable_key)
-            if not isinstance(var, str) or not var:
-                raise MftireInputError(f"[{SECTION}] {name}: {ext.variable_key} must name the input variable")
-            if not _valid_fmi_name(var):
-                raise MftireInputError(
-                    f"[{SECTION}] {name}: {ext.variable_key} = {var!r} cannot be an FMI variable name "
-                    "(control characters or surrounding blanks)"
-                )
-            variables[name] = var
-            if var not in BUILTIN_VARIABLES and var not in data:
-                data.append(var)
-        if name == "generic":
-            channel = str(sec.get("GEN_CHANNEL", "Fx"))
-            if channel not in GENERIC_CHANNELS:
-                raise MftireInputError(
-                    f"[{SECTION}] generic: GEN_CHANNEL must be one of {', '.join(GENERIC_CHANNELS)}, not {channel!r}"
-                )
-    assert len(data) <= MAX_DATA_INPUTS
-    return ExtensionSpec(tuple(active), values, variables, channel, tuple(data))
+    for var in ext.external_variables:
+        if not _valid_fmi_name(var):
+            raise MftireInputError(
+                f"[{SECTION}] variable {var!r} cannot be an FMI variable name (control characters or surrounding "
+                "blanks)"
+            )
+    return ext
+
+
+def term_fields(t: Extension) -> list[tuple[str, float]]:
+    """The numeric fields of term ``t`` as FMU parameters, in struct order
+    (levels directly before the coefficients, as the C form reads them)."""
+    names = ["REF", "SCALE", "MIN", "MAX"]
+    if t.variable2 is not None:
+        names += ["REF2", "SCALE2", "MIN2", "MAX2"]
+    out = [(t.key(n), min(max(t.value(n), -_BIG), _BIG)) for n in names]
+    out += [(k, t.numbers[k]) for k in t.level_keys]
+    out += [(k, t.numbers.get(k, 0.0)) for k in t.coefficient_keys]
+    return out
 
 
 @dataclass(frozen=True)
@@ -215,7 +190,7 @@ def _number(value: object) -> bool:
 
 
 def variable_table(
-    flat: dict[str, float], use_mode: int = DEFAULT_USE_MODE, extensions: ExtensionSpec | None = None
+    flat: dict[str, float], use_mode: int = DEFAULT_USE_MODE, extensions: ExtensionSet | None = None
 ) -> list[Variable]:
     """The FMU's variables for the flat parameter dict ``flat`` (see ``with_defaults``).
 
@@ -231,10 +206,11 @@ def variable_table(
     for name, field, unit, desc, start in INPUTS:
         value = float(flat[start]) if isinstance(start, str) else float(start)
         out.append(Variable(name, len(out), "input", "Real", "input", "continuous", value, unit, desc, field))
-    ext_keys = dict(extensions.values) if extensions else {}
-    for i, name in enumerate(extensions.data if extensions else ()):
-        users = ", ".join(e for e, v in extensions.variables.items() if v == name)
-        desc = f"Data variable of the model extension(s) {users} (unit as in the fitted data)"
+    terms = extensions.terms if extensions else ()
+    ext_keys = {k: v for t in terms for k, v in term_fields(t)}
+    for i, name in enumerate(extensions.external_variables if extensions else ()):
+        users = ", ".join(f"EXT{t.index}" for t in terms if name in t.variables())
+        desc = f"External variable of the model extension(s) {users} (unit as in the fitted data)"
         out.append(Variable(name, len(out), "input", "Real", "input", "continuous", 0.0, None, desc, f"data[{i}]"))
     for name, field, unit, desc in OUTPUTS:
         out.append(Variable(name, len(out), "output", "Real", "output", "continuous", None, unit, desc, field))
@@ -258,18 +234,15 @@ def variable_table(
         out.append(
             Variable(key, len(out), "param", "Real", "parameter", variability, float(flat[key]), unit, desc, key)
         )
-    for name in extensions.active if extensions else ():
-        for key in LIBRARY[name].keys:
-            desc = extensions.describe(name)
-            out.append(
-                Variable(key, len(out), "param", "Real", "parameter", "tunable", ext_keys[key], _EXT_UNITS.get(key),
-                         desc, key)
-            )  # fmt: skip
+    for t in terms:
+        desc = f"[{SECTION}] EXT{t.index}: {t.describe()} (targets, form, variables fixed at export)"
+        for key, value in term_fields(t):
+            out.append(Variable(key, len(out), "param", "Real", "parameter", "tunable", value, None, desc, key))
     names = [v.name for v in out]
     if len(set(names)) != len(names):
         dup = sorted({n for n in names if names.count(n) > 1})
         raise MftireInputError(
-            f"FMU variable name(s) {', '.join(map(repr, dup))} used twice: a data variable of [{SECTION}] must not "
+            f"FMU variable name(s) {', '.join(map(repr, dup))} used twice: a variable of [{SECTION}] must not "
             "be named like an FMU input, output or parameter"
         )
     return out
@@ -289,7 +262,7 @@ def guid(variables: list[Variable], fmi_version: int) -> str:
     """GUID (FMI 2) / instantiation token (FMI 3): a hash of the variable table.
 
     The descriptions of the model-extension parameters are hashed too: they carry
-    the export-time choices (variable read, generic channel) compiled into the binary.
+    the export-time choices (targets, form, variables) compiled into the binary.
     """
     h = hashlib.sha256(f"mftire-fmu fmi{fmi_version}\n".encode())
     for v in variables:
@@ -324,35 +297,93 @@ def c_string(text: str) -> str:
     return '"' + "".join(body) + '"'
 
 
-#: C macro of each builtin extension variable (MF_XV_* in mf_eval.h).
-_XV = {name: "MF_XV_" + name.upper() for name in BUILTIN_VARIABLES}
+def extension_header(variables: list[Variable], extensions: ExtensionSet | None = None) -> str:
+    """``mf_ext_gen.h``: the model-extension terms for ``mf_eval.c``.
 
-
-def _extension_macros(spec: ExtensionSpec | None) -> list[str]:
+    Generated from :mod:`mftire.extensions`: the term table (targets as indices of the
+    scaling factors in ``MFParams``, form, variables, the indices of the term's numeric
+    fields), ``mf_ext_var`` (the C expression of each builtin variable, then the external
+    inputs) and ``mf_ext_form`` (the C expression of each form).
+    """
+    terms = extensions.terms if extensions else ()
     lines = [
-        f"/* Model extensions ([{SECTION}]), fixed at export time (see mftire/extensions.py). */",
-        f"#define MF_EXT_ACTIVE {1 if spec else 0}",
+        "/* mf_ext_gen.h -- GENERATED by mftire/fmu/variables.py from mftire.extensions. Do not edit. */",
+        "#ifndef MF_EXT_GEN_H",
+        "#define MF_EXT_GEN_H",
+        "",
+        f"#define MF_N_TERMS {len(terms)}",
     ]
-    for name in LIBRARY:
-        lines.append(f"#define MF_EXT_{name.upper()} {1 if spec and name in spec.active else 0}")
-    data = spec.data if spec else ()
-    lines.append(f"#define MF_N_DATA {len(data)}")
-    if data:
-        lines.append(f"#define MF_DATA_NAMES {{{', '.join(c_string(d) for d in data)}}}")
-    for name, macro in (("fade", "MF_EXT_FADE_VAR"), ("friction_variable", "MF_EXT_FVAR_VAR"),
-                        ("generic", "MF_EXT_GEN_VAR")):  # fmt: skip
-        if spec and name in spec.variables:
-            var = spec.variables[name]
-            src = _XV[var] if var in _XV else f"(MF_XV_DATA0 + {data.index(var)})"
-            lines.append(f"#define {macro} {src} /* {_c_comment(var)} */")
-    if spec and spec.channel:
-        lines.append(f"#define MF_EXT_GEN_CHANNEL MF_CH_{spec.channel.upper()}")
-    return lines
+    if not terms:
+        return "\n".join([*lines, "", "#endif /* MF_EXT_GEN_H */", ""])
+    builtin = list(BUILTIN_VARIABLES)
+    external = extensions.external_variables
+    forms = list(FORMS)
+    n_targets = max(len(t.targets) for t in terms)
+
+    def var_index(name: str) -> int:
+        return builtin.index(name) if name in builtin else len(builtin) + external.index(name)
+
+    def idx(field: str) -> str:
+        return f"MF_PI({field})"
+
+    lines += [
+        "#define MF_TARGET_FX_OFFSET (-1)",
+        "#define MF_TARGET_FY_OFFSET (-2)",
+        "#define MF_PI(f) ((int)(offsetof(MFParams, f) / sizeof(double)))",
+        "",
+        "typedef struct {",
+        "    int form;      /* index in mftire.extensions.FORMS */",
+        f"    int n_targets; int targets[{n_targets}]; /* MFParams indices, or MF_TARGET_* */",
+        "    int var, var2; /* mf_ext_var indices; var2 < 0: one variable */",
+        "    int ref, scale, min, max, ref2, scale2, min2, max2; /* MFParams indices */",
+        "    int c0, n;     /* first level (table) or coefficient, and the number of levels (table) */",
+        "} MFTerm;",
+        "",
+        "static const MFTerm MF_TERMS[MF_N_TERMS] = {",
+    ]
+    for t in terms:
+        tg = ", ".join("MF_TARGET_" + x if x in OFFSET_TARGETS else idx(x) for x in t.targets)
+        two = t.variable2 is not None
+        f2 = [idx(t.key(n)) for n in ("REF2", "SCALE2", "MIN2", "MAX2")] if two else [idx(t.key("REF"))] * 4
+        first = (t.level_keys or t.coefficient_keys)[0]
+        lines.append(
+            f"    {{{forms.index(t.form.name)}, {len(t.targets)}, {{{tg}}}, {var_index(t.variable)}, "
+            f"{var_index(t.variable2) if two else -1}, "
+            f"{', '.join(idx(t.key(n)) for n in ('REF', 'SCALE', 'MIN', 'MAX'))}, {', '.join(f2)}, "
+            f"{idx(first)}, {t.n_levels}}}, /* EXT{t.index}: {_c_comment(t.describe())} */"
+        )
+    lines += [
+        "};",
+        "",
+        "/* The variables a term reads: mftire.extensions.BUILTIN_VARIABLES, then the external inputs. */",
+        "static double mf_ext_var(int k, const MFParams *p, const Cond *c, const double *data)",
+        "{",
+        "    switch (k) {",
+    ]
+    for i, (name, (_, expr)) in enumerate(BUILTIN_VARIABLES.items()):
+        lines.append(f"    case {i}: return {expr}; /* {name} */")
+    lines += [
+        f"    default: return data[k - {len(builtin)}];",
+        "    }",
+        "}",
+        "",
+        "static double mf_ext_table(double u, const double *c, int n);",
+        "",
+        "/* f of each form of mftire.extensions.FORMS (neutral coefficients give 1). */",
+        "static double mf_ext_form(int form, double u, double z, double z2, double ref, const double *c, int n)",
+        "{",
+        "    (void)u; (void)z; (void)z2; (void)ref; (void)n;",
+        "    switch (form) {",
+    ]
+    for i, f in enumerate(FORMS.values()):
+        lines.append(f"    case {i}: return {f.c_expr}; /* {f.name}: {_c_comment(f.formula)} */")
+    lines += ["    }", "    return 1.0;", "}", "", "#endif /* MF_EXT_GEN_H */", ""]
+    return "\n".join(lines)
 
 
-def params_header(variables: list[Variable], extensions: ExtensionSpec | None = None) -> str:
+def params_header(variables: list[Variable], extensions: ExtensionSet | None = None) -> str:
     """``mf_params.h``: the ``MFParams`` struct, one double per parameter variable, and
-    the ``MF_EXT_*`` configuration of the model extensions ``extensions``."""
+    the external variables of the model extensions ``extensions``."""
     lines = [
         "/* mf_params.h -- GENERATED by mftire/fmu/variables.py from the FMU variable table. Do not edit. */",
         "#ifndef MF_PARAMS_H",
@@ -363,7 +394,11 @@ def params_header(variables: list[Variable], extensions: ExtensionSpec | None = 
     for v in variables:
         if v.kind == "param":
             lines.append(f"    double {v.field}; /* vr {v.vr}: {_c_comment(v.description[:80])} */")
-    lines += ["} MFParams;", "", *_extension_macros(extensions), "", "#endif /* MF_PARAMS_H */", ""]
+    data = extensions.external_variables if extensions else []
+    lines += ["} MFParams;", "", f"#define MF_N_DATA {len(data)}"]
+    if data:
+        lines.append(f"#define MF_DATA_NAMES {{{', '.join(c_string(d) for d in data)}}}")
+    lines += ["", "#endif /* MF_PARAMS_H */", ""]
     return "\n".join(lines)
 
 
@@ -561,13 +596,13 @@ def build_description_xml(model_identifier: str, sources: list[str]) -> str:
 
 __all__ = [
     "DEFAULT_USE_MODE",
-    "ExtensionSpec",
     "INPUTS",
     "MAX_DATA_INPUTS",
     "OUTPUTS",
     "Variable",
     "build_description_xml",
     "c_string",
+    "extension_header",
     "extension_spec",
     "guid",
     "model_description_xml",

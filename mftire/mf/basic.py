@@ -34,13 +34,11 @@ def increments(p: dict, Fz: np.ndarray, P: np.ndarray) -> tuple[float, np.ndarra
     return Fz0p, dfz, dpi
 
 
-def basic(
-    p: dict, mode: Mode, c: Conditions, mu_x: np.ndarray | float = 1.0, mu_y: np.ndarray | float = 1.0
-) -> Basic:
+def basic(p: dict, mode: Mode, c: Conditions) -> Basic:
     """Compute :class:`Basic` for the conditioned operating point ``c``.
 
-    ``mu_x`` and ``mu_y`` multiply the friction scaling factors lambda_mu* (eq 4.E7);
-    they carry the friction-type model extensions of :mod:`mftire.extensions`.
+    The scaling factors of ``p`` may be arrays: the model extensions of
+    :mod:`mftire.extensions` act through them (e.g. LMUX, LMUY in eq 4.E7).
     """
     Fz0p, dfz, dpi = increments(p, c.Fz, c.P)
     absVx = np.abs(c.Vx)
@@ -63,8 +61,6 @@ def basic(
     LMUV = 0.0
     LMUX_star = p["LMUX"] / (1.0 + LMUV * Vs / p["LONGVL"]) if LMUV else p["LMUX"]  # eq 4.E7
     LMUY_star = p["LMUY"] / (1.0 + LMUV * Vs / p["LONGVL"]) if LMUV else p["LMUY"]  # eq 4.E7
-    LMUX_star = LMUX_star * mu_x
-    LMUY_star = LMUY_star * mu_y
     Amu = 1.0
     LMUX_prime = Amu * LMUX_star / (1.0 + (Amu - 1.0) * LMUX_star)  # eq 4.E8
     LMUY_prime = Amu * LMUY_star / (1.0 + (Amu - 1.0) * LMUY_star)  # eq 4.E8

@@ -1,21 +1,34 @@
-"""Assemble the 30 output channels of the reference evaluator MFeval.
+"""The one model pipeline, and the 30 output channels of the reference evaluator MFeval.
 
-:func:`evaluate_arrays` is the pure, vectorised core: a flat parameter dictionary
-in, a dictionary of arrays out.  :class:`mftire.tyre.Tyre` is the object layer.
+The evaluation runs in three cacheable pieces, which the evaluator, the fitter, the
+bands, the diagnosis and the comparison all call (none rebuilds the equations):
+
+1. :func:`prepare` -- input checks, conditioning (limits, low speed), wheel spin and
+   effective rolling radius, and the variables the model extensions read.  Depends
+   on the inputs and on never-fitted constants only (FNOMIN, LONGVL, ranges, Q_RE0 ...).
+2. :func:`scaled` -- the effective parameters: the file's scaling factors times the
+   extension terms of ``[MFTIRE_EXTENSIONS]`` (:mod:`mftire.extensions`).
+3. :func:`channels` -- the Magic Formula equations by channel, computing only what
+   is asked for; :func:`outputs` assembles MFeval's 30 channels.
+
+:func:`evaluate_arrays` chains them.  :class:`mftire.tyre.Tyre` is the object layer.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass
 
 import numpy as np
 
 from mftire.errors import MftireError, MftireInputError
-from mftire.extensions import extension_terms
+from mftire.extensions import ExtensionSet, builtin_variables, parse_section
 from mftire.mf import turnslip
 from mftire.mf.aligning import aligning_terms, mz0, mz_combined
 from mftire.mf.basic import basic
-from mftire.mf.inputs import MFLimitWarning, condition_inputs, turn_slip_spin
+from mftire.mf.inputs import Conditions, MFLimitWarning, condition_inputs, turn_slip_spin
 from mftire.mf.lateral import fy0, fy_combined
 from mftire.mf.longitudinal import fx0, fx_combined
 from mftire.mf.modes import Mode
@@ -58,8 +71,205 @@ def _clean(name: str, x: np.ndarray, fill: float) -> np.ndarray:
     return x
 
 
+def check_fittyp(p: Mapping[str, float]) -> None:
+    """Raise :class:`UnsupportedModelError` unless the evaluator handles ``p['FITTYP']``."""
+    fittyp = p.get("FITTYP")
+    if fittyp not in EVALUATED_FITTYP:
+        shown = int(fittyp) if isinstance(fittyp, float) and fittyp.is_integer() else fittyp
+        raise UnsupportedModelError(
+            f"FITTYP {shown} is not evaluated: mftire evaluates MF 6.1 (61), MF 6.2 (62) and MF 5.2 (6) "
+            "property files; MF 5.0/PAC2002 files can be read and written but not evaluated."
+        )
+
+
+@dataclass
+class Prepared:
+    """Piece 1 of the pipeline: the conditioned operating points (see :func:`prepare`)."""
+
+    mode: Mode
+    c: Conditions  #: conditioned inputs; ``omega`` filled
+    dpi: np.ndarray  #: normalised pressure increment [-] (eq 4.E2b)
+    Re: np.ndarray  #: effective rolling radius [m]
+    Romega: np.ndarray  #: free radius at the wheel spin [m]
+    variables: dict[str, np.ndarray]  #: builtin and external extension variables
+    shape: tuple[int, ...]
+
+
+def prepare(
+    p: Mapping[str, float],
+    Fz,
+    kappa,
+    alpha,
+    gamma=0.0,
+    phit=0.0,
+    Vx=None,
+    P=None,
+    omega=None,
+    mode: int | Mode = 111,
+    variables: Mapping[str, object] | None = None,
+) -> Prepared:
+    """Piece 1: validate, broadcast and condition the inputs (arguments as :func:`evaluate_arrays`).
+
+    NaN inputs are replaced by 0 (pressure: ``INFLPRES``) with an
+    :class:`~mftire.mf.inputs.MFLimitWarning`; out-of-range values are clipped in modes 1xx.
+    """
+    check_fittyp(p)
+    m = mode if isinstance(mode, Mode) else Mode.from_code(mode)
+    if Vx is None:
+        Vx = p["LONGVL"]
+    names = list((variables or {}).keys())
+    try:
+        arrays = np.broadcast_arrays(
+            *(np.asarray(v, dtype=float) for v in (Fz, kappa, alpha, gamma, phit, Vx)),
+            *(np.asarray(variables[k], dtype=float) for k in names),
+        )
+    except (ValueError, TypeError) as exc:
+        raise MftireInputError(f"inputs cannot be broadcast together or are not numeric: {exc}") from None
+    shape = arrays[0].shape
+    external = {k: _clean(k, np.array(a, dtype=float), 0.0) for k, a in zip(names, arrays[6:], strict=True)}
+    Fz, kappa, alpha, gamma, phit, Vx = (
+        _clean(n, np.array(a, dtype=float), 0.0)
+        for n, a in zip(("Fz", "kappa", "alpha", "gamma", "phit", "Vx"), arrays[:6], strict=True)
+    )
+    if P is None:
+        P = np.full(shape, float(p["INFLPRES"]))
+    else:
+        P = np.broadcast_to(np.asarray(P, dtype=float), shape)
+        P = np.where(np.isnan(P) | (P <= 0.0), float(p["INFLPRES"]), P)
+    if omega is not None:
+        omega = np.broadcast_to(np.asarray(omega, dtype=float), shape)
+        omega = None if not np.any(omega) else _clean("omega", np.array(omega), 0.0)
+    with np.errstate(all="ignore"):
+        c = condition_inputs(p, m, Fz, kappa, alpha, gamma, phit, Vx, P)
+        dpi = (c.P - p["NOMPRES"]) / p["NOMPRES"]  # eq 4.E2b
+        Re, Romega, c.omega = effective_rolling_radius(p, c, dpi, omega)
+        builtin = builtin_variables(p, c)
+    return Prepared(m, c, dpi, Re, Romega, {**external, **builtin}, shape)
+
+
+def scaled(
+    p: Mapping[str, float], extensions: ExtensionSet | None, pre: Prepared
+) -> tuple[dict, dict[str, np.ndarray]]:
+    """Piece 2: effective parameters ``(q, offsets)`` (see :meth:`ExtensionSet.scale`).
+
+    Without extensions ``q`` is ``p`` itself and ``offsets`` is empty.  Extension
+    coefficients (``EXTn_C1`` ...) are taken from ``p`` when it holds them, so a fitter
+    can vary them like any coefficient.
+    """
+    if not extensions:
+        return p, {}
+    with np.errstate(all="ignore"):
+        return extensions.scale(p, pre.variables)
+
+
+@dataclass
+class Channels:
+    """Piece 3: the Magic Formula channels and their intermediate terms (None: not computed)."""
+
+    b: object = None  #: :class:`mftire.mf.basic.Basic`
+    c: Conditions | None = None  #: conditions with the turn-slip spin of this parameter set
+    Fx0: np.ndarray | None = None
+    mux: np.ndarray | None = None
+    Kxk: np.ndarray | None = None
+    Fx: np.ndarray | None = None
+    lat: object = None  #: :class:`mftire.mf.lateral.PureLateral`
+    Fy: np.ndarray | None = None
+    Gyk: np.ndarray | None = None
+    Mz: np.ndarray | None = None
+    t: np.ndarray | None = None
+    Mzr: np.ndarray | None = None
+    Mx: np.ndarray | None = None
+    My: np.ndarray | None = None
+
+
+#: What each channel needs computed first.
+_NEEDS = {"Fx": ("Fx",), "Fy": ("Fy",), "Mz": ("Fx", "Fy", "Mz"), "Mx": ("Fy", "Mx"), "My": ("Fx", "My")}
+
+
+def channels(
+    q: Mapping[str, float],
+    pre: Prepared,
+    offsets: Mapping[str, np.ndarray] | None = None,
+    want: tuple[str, ...] = ("Fx", "Fy", "Mz", "Mx", "My"),
+    given: Channels | None = None,
+) -> Channels:
+    """Piece 3: the channels ``want`` (and what they need) for effective parameters ``q``.
+
+    ``given`` holds terms computed before with the same ``q`` for the force equations
+    (a fitter that varies only aligning coefficients passes the forces once computed).
+    """
+    todo: set[str] = set()
+    for w in want:
+        todo.update(_NEEDS[w])
+    m = pre.mode
+    out = dataclasses.replace(given) if given is not None else Channels()
+    offsets = offsets or {}
+    with np.errstate(all="ignore"):
+        if out.b is None:
+            c = pre.c
+            if m.turn_slip:
+                phi, eps_gamma = turn_slip_spin(q, c)
+                c = dataclasses.replace(c, phi=phi, eps_gamma=eps_gamma)
+            out.c = c
+            out.b = basic(q, m, c)
+        c, b = out.c, out.b
+        if "Fx" in todo and out.Fx is None:
+            z1 = turnslip.zeta1(q, b.dfz, c.kappa, c.phi) if m.turn_slip else 1.0
+            out.Fx0, out.mux, out.Kxk = fx0(q, m, c, b, z1)  # eq 4.E9
+            Fx = fx_combined(q, m, c, b, out.Fx0) if m.combined else out.Fx0  # eq 4.E50
+            if "FX_OFFSET" in offsets:
+                Fx = Fx + c.Fz * offsets["FX_OFFSET"]
+            out.Fx = Fx
+        if "Fy" in todo and out.Fy is None:
+            out.lat = fy0(q, m, c, b, b.gamma_star, turn_slip=m.turn_slip)  # eq 4.E19
+            Fy, out.Gyk, _ = fy_combined(q, m, c, b, out.lat.Fy0, out.lat.muy, out.lat.zeta2)  # eq 4.E58
+            Fy = Fy if m.combined else out.lat.Fy0
+            if "FY_OFFSET" in offsets:
+                Fy = Fy + c.Fz * offsets["FY_OFFSET"]
+            out.Fy = Fy
+        if "Mz" in todo:
+            terms = aligning_terms(q, m, c, b, out.lat, out.Gyk)  # eqs 4.E33-4.E47
+            if m.combined:
+                out.Mz, out.t, out.Mzr = mz_combined(q, m, c, b, terms, out.Kxk, out.Fx, out.Fy, out.Gyk, out.lat)
+            else:
+                out.Mz, out.t, out.Mzr = mz0(q, m, c, b, terms)
+        if "Mx" in todo:
+            out.Mx = mx(q, c, pre.dpi, out.Fy)
+        if "My" in todo:
+            out.My = my(q, c, out.Fx)
+    return out
+
+
+def outputs(q: Mapping[str, float], pre: Prepared, ch: Channels) -> dict[str, np.ndarray]:
+    """MFeval's 30 channels (:data:`OUTPUT_NAMES`) from a full :class:`Channels`."""
+    c, m, dpi = ch.c, pre.mode, pre.dpi
+    with np.errstate(all="ignore"):
+        muy = np.abs(ch.lat.muy) if m.limits else ch.lat.muy
+        if q["FITTYP"] == 61:
+            rho, Rl, Cz = loaded_radius_61(q, c, dpi, c.omega, pre.Romega, ch.Fx, ch.Fy)
+        else:
+            rho, Rl, Cz = loaded_radius_62(q, c, dpi, c.omega, pre.Romega, ch.Fx, ch.Fy)
+        a, bw = contact_patch(q, c, dpi)
+        Cx, Cy, sigmax, sigmay = relaxation(q, c, ch.Kxk, ch.lat.Kya)
+        shape = pre.shape
+        fy_flat, al_flat = ch.Fy.ravel(), c.alpha.ravel()
+        if fy_flat.size > 1:
+            d = np.diff(fy_flat) / np.diff(al_flat)
+            instKya = np.append(d, d[-1]).reshape(shape)
+        else:
+            instKya = np.zeros(shape)
+    out = {
+        "Fx": ch.Fx, "Fy": ch.Fy, "Fz": c.uFz, "Mx": ch.Mx, "My": ch.My, "Mz": ch.Mz, "kappa": c.ukappa_low,
+        "alpha": c.ualpha, "gamma": c.ugamma, "phit": c.phit, "Vx": c.Vx, "P": c.P, "Re": pre.Re, "rho": rho,
+        "2a": 2.0 * a, "t": ch.t, "mux": ch.mux, "muy": muy, "omega": c.omega, "Rl": Rl, "2b": 2.0 * bw,
+        "Mzr": ch.Mzr, "Cx": Cx, "Cy": Cy, "Cz": Cz, "Kya": ch.lat.Kya, "sigmax": sigmax, "sigmay": sigmay,
+        "instKya": instKya, "Kxk": ch.Kxk,
+    }  # fmt: skip
+    return {k: np.broadcast_to(np.real(out[k]), shape).astype(float, copy=False) for k in OUTPUT_NAMES}
+
+
 def evaluate_arrays(
-    p: dict,
+    p: Mapping[str, float],
     Fz,
     kappa,
     alpha,
@@ -69,10 +279,10 @@ def evaluate_arrays(
     P=None,
     omega=None,
     mode: int = 111,
-    extensions: dict | None = None,
-    variables: dict | None = None,
+    extensions: Mapping[str, object] | ExtensionSet | None = None,
+    variables: Mapping[str, object] | None = None,
 ) -> dict[str, np.ndarray]:
-    """Steady-state Magic Formula outputs for broadcast inputs.
+    """Steady-state Magic Formula outputs for broadcast inputs (the three pieces chained).
 
     Parameters
     ----------
@@ -98,115 +308,17 @@ def evaluate_arrays(
         Wheel spin [rad/s]; estimated from kappa, Vx and Re when not given (or all zero).
     mode : int
         Three-digit ``useMode`` (see :mod:`mftire.mf.modes`).
-    extensions : dict, optional
-        The ``[MFTIRE_EXTENSIONS]`` section (see :mod:`mftire.extensions`).
+    extensions : ExtensionSet or mapping, optional
+        The ``[MFTIRE_EXTENSIONS]`` terms (see :mod:`mftire.extensions`).
     variables : dict, optional
-        Extra input arrays the extensions need, by name (e.g. ``temperature``).
-
-    NaN inputs are replaced by 0 (pressure: ``INFLPRES``) with an
-    :class:`~mftire.mf.inputs.MFLimitWarning`.
+        External input arrays the extensions read, by name (e.g. ``temperature``).
 
     Returns
     -------
     dict
         The 30 channels of :data:`OUTPUT_NAMES`, each an array of the broadcast shape.
     """
-    fittyp = p.get("FITTYP")
-    if fittyp not in EVALUATED_FITTYP:
-        shown = int(fittyp) if isinstance(fittyp, float) and fittyp.is_integer() else fittyp
-        raise UnsupportedModelError(
-            f"FITTYP {shown} is not evaluated: mftire evaluates MF 6.1 (61), MF 6.2 (62) and MF 5.2 (6) "
-            "property files; MF 5.0/PAC2002 files can be read and written but not evaluated."
-        )
-    m = Mode.from_code(mode)
-    if Vx is None:
-        Vx = p["LONGVL"]
-    names = list((variables or {}).keys())
-    try:
-        arrays = np.broadcast_arrays(
-            *(np.asarray(v, dtype=float) for v in (Fz, kappa, alpha, gamma, phit, Vx)),
-            *(np.asarray(variables[k], dtype=float) for k in names),
-        )
-    except (ValueError, TypeError) as exc:
-        raise MftireInputError(f"inputs cannot be broadcast together or are not numeric: {exc}") from None
-    shape = arrays[0].shape
-    variables = {k: _clean(k, np.array(a, dtype=float), 0.0) for k, a in zip(names, arrays[6:], strict=True)}
-    arrays = arrays[:6]
-    Fz, kappa, alpha, gamma, phit, Vx = (np.array(a, dtype=float) for a in arrays)
-    Fz = _clean("Fz", Fz, 0.0)
-    kappa = _clean("kappa", kappa, 0.0)
-    alpha = _clean("alpha", alpha, 0.0)
-    gamma = _clean("gamma", gamma, 0.0)
-    phit = _clean("phit", phit, 0.0)
-    Vx = _clean("Vx", Vx, 0.0)
-    if P is None:
-        P = np.full(shape, float(p["INFLPRES"]))
-    else:
-        P = np.broadcast_to(np.asarray(P, dtype=float), shape)
-        P = np.where(np.isnan(P) | (P <= 0.0), float(p["INFLPRES"]), P)
-    if omega is not None:
-        omega = np.broadcast_to(np.asarray(omega, dtype=float), shape)
-        omega = None if not np.any(omega) else _clean("omega", np.array(omega), 0.0)
-
-    with np.errstate(all="ignore"):
-        return _evaluate(p, m, Fz, kappa, alpha, gamma, phit, Vx, P, omega, extensions, variables)
-
-
-def _evaluate(
-    p, m: Mode, Fz, kappa, alpha, gamma, phit, Vx, P, omega, extensions=None, variables=None
-) -> dict[str, np.ndarray]:
-    c = condition_inputs(p, m, Fz, kappa, alpha, gamma, phit, Vx, P)
-    ext = extension_terms(extensions, p, c.Fz, c.kappa, c.alpha, c.gamma, c.Vx, c.P, variables) if extensions else None
-    dpi = (c.P - p["NOMPRES"]) / p["NOMPRES"]  # eq 4.E2b
-    Re, Romega, c.omega = effective_rolling_radius(p, c, dpi, omega)
-    if m.turn_slip:
-        c.phi, c.eps_gamma = turn_slip_spin(p, c)
-    b = basic(p, m, c, ext.mux, ext.muy) if ext else basic(p, m, c)
-
-    z1 = turnslip.zeta1(p, b.dfz, c.kappa, c.phi) if m.turn_slip else 1.0
-    Fx0, mux, Kxk = fx0(p, m, c, b, z1)
-    lat = fy0(p, m, c, b, b.gamma_star, turn_slip=m.turn_slip)
-    Fy_comb, Gyk, _ = fy_combined(p, m, c, b, lat.Fy0, lat.muy, lat.zeta2)
-    terms = aligning_terms(p, m, c, b, lat, Gyk)
-    if m.combined:
-        Fx = fx_combined(p, m, c, b, Fx0)
-        Fy = Fy_comb
-        Mz, t, Mzr = mz_combined(p, m, c, b, terms, Kxk, Fx, Fy, Gyk, lat)
-    else:
-        Fx, Fy = Fx0, lat.Fy0
-        Mz, t, Mzr = mz0(p, m, c, b, terms)
-    generic = ext.generic if ext is not None else None
-    if ext is not None:
-        Fx = Fx + ext.dFx
-        Fy = Fy + ext.dFy
-        if generic is not None and generic[0] in ("Fx", "Fy", "Mz"):
-            Fx, Fy, Mz = (v * generic[1] if n == generic[0] else v for n, v in (("Fx", Fx), ("Fy", Fy), ("Mz", Mz)))
-    Mx = mx(p, c, dpi, Fy)
-    My = my(p, c, Fx)
-    if generic is not None and generic[0] in ("Mx", "My"):
-        Mx, My = (v * generic[1] if n == generic[0] else v for n, v in (("Mx", Mx), ("My", My)))
-    muy = np.abs(lat.muy) if m.limits else lat.muy
-
-    if p["FITTYP"] == 61:
-        rho, Rl, Cz = loaded_radius_61(p, c, dpi, c.omega, Romega, Fx, Fy)
-    else:
-        rho, Rl, Cz = loaded_radius_62(p, c, dpi, c.omega, Romega, Fx, Fy)
-    a, bw = contact_patch(p, c, dpi)
-    Cx, Cy, sigmax, sigmay = relaxation(p, c, Kxk, lat.Kya)
-
-    shape = Fz.shape
-    fy_flat, al_flat = Fy.ravel(), c.alpha.ravel()
-    if fy_flat.size > 1:
-        d = np.diff(fy_flat) / np.diff(al_flat)
-        instKya = np.append(d, d[-1]).reshape(shape)
-    else:
-        instKya = np.zeros(shape)
-
-    out = {
-        "Fx": Fx, "Fy": Fy, "Fz": c.uFz, "Mx": Mx, "My": My, "Mz": Mz, "kappa": c.ukappa_low,
-        "alpha": c.ualpha, "gamma": c.ugamma, "phit": c.phit, "Vx": c.Vx, "P": c.P, "Re": Re, "rho": rho,
-        "2a": 2.0 * a, "t": t, "mux": mux, "muy": muy, "omega": c.omega, "Rl": Rl, "2b": 2.0 * bw,
-        "Mzr": Mzr, "Cx": Cx, "Cy": Cy, "Cz": Cz, "Kya": lat.Kya, "sigmax": sigmax, "sigmay": sigmay,
-        "instKya": instKya, "Kxk": Kxk,
-    }  # fmt: skip
-    return {k: np.broadcast_to(np.real(out[k]), shape).astype(float, copy=False) for k in OUTPUT_NAMES}
+    ext = extensions if isinstance(extensions, ExtensionSet) else parse_section(extensions)
+    pre = prepare(p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, variables)
+    q, offsets = scaled(p, ext, pre)
+    return outputs(q, pre, channels(q, pre, offsets))

@@ -9,12 +9,9 @@
  *
  * MFParams (one double per .tir parameter) is generated from the FMU variable
  * table into mf_params.h by mftire/fmu/variables.py, together with the export-time
- * configuration of the model extensions ([MFTIRE_EXTENSIONS], mftire/extensions.py):
- *   MF_EXT_ACTIVE, MF_EXT_<NAME>   1 when the extension is active in the .tir;
- *   MF_N_DATA, MF_DATA_NAMES       the data variables (extra inputs, MFInputs.data);
- *   MF_EXT_FADE_VAR, MF_EXT_FVAR_VAR, MF_EXT_GEN_VAR
- *                                  the variable each extension reads (MF_XV_*);
- *   MF_EXT_GEN_CHANNEL             the channel of the generic correction (MF_CH_*).
+ * number of external variables of the model extensions ([MFTIRE_EXTENSIONS],
+ * mftire/extensions.py): MF_N_DATA and MF_DATA_NAMES (extra inputs, MFInputs.data).
+ * The extension terms themselves are generated into mf_ext_gen.h.
  */
 #ifndef MF_EVAL_H
 #define MF_EVAL_H
@@ -25,28 +22,8 @@
 extern "C" {
 #endif
 
-/* Room for the data variables of the model extensions (one per extension that reads one). */
-#define MF_MAX_DATA 3
-
-/* Variables an extension may read: mftire.extensions.BUILTIN_VARIABLES (from the
- * conditioned inputs), then the data inputs MFInputs.data[0..MF_N_DATA-1]. */
-#define MF_XV_FZ 0
-#define MF_XV_KAPPA 1
-#define MF_XV_ALPHA 2
-#define MF_XV_GAMMA 3
-#define MF_XV_VX 4
-#define MF_XV_P 5
-#define MF_XV_VS 6
-#define MF_XV_SIGN_ALPHA 7
-#define MF_XV_SIGN_KAPPA 8
-#define MF_XV_DATA0 9
-
-/* Channels of the generic correction (mftire.extensions.GENERIC_CHANNELS). */
-#define MF_CH_FX 0
-#define MF_CH_FY 1
-#define MF_CH_MZ 2
-#define MF_CH_MX 3
-#define MF_CH_MY 4
+/* Room for the external variables of the model extensions (mftire.extensions.MAX_EXTERNAL). */
+#define MF_MAX_DATA 4
 
 /* One operating point as the importer gives it. */
 typedef struct {
@@ -77,7 +54,7 @@ enum {
     MF_W_FZ_HIGH, MF_W_FZ_LOW, MF_W_P_LOW, MF_W_P_HIGH, MF_W_KAPPA_LOW, MF_W_KAPPA_HIGH,
     MF_W_LOW_SPEED,
     MF_W_EX, MF_W_EY, MF_W_EXA, MF_W_EYK, MF_W_ET,
-    MF_W_NAN_DATA0, MF_W_NAN_DATA1, MF_W_NAN_DATA2, /* NaN in MFInputs.data[0..2] */
+    MF_W_NAN_DATA0, MF_W_NAN_DATA1, MF_W_NAN_DATA2, MF_W_NAN_DATA3, /* NaN in MFInputs.data[0..3] */
     MF_W_COUNT
 };
 
