@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import needs_c_compiler
 
 from mftire import load, read_tir
 from mftire.cli import main
@@ -84,3 +85,33 @@ def test_extended_model_round_trips_and_reads_plainly(tmp_path):
     variable = doc["effect"]["variable"]
     out = tyre.evaluate(4000.0, -0.2, 0.0, **({variable: 1e5} if variable in tyre.required_variables else {}))
     assert np.isfinite(out["Fx"])
+
+
+@needs_c_compiler
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_diagnosed_tir_evaluates_everywhere_on_the_data_columns(name, tmp_path):
+    """Every .tir diagnose writes evaluates with `mftire evaluate`, `mftire compare` and the FMU on
+    the columns of the data it was diagnosed on (closed variables), and the FMU agrees with Python."""
+    import pandas as pd
+
+    doc = _diagnose(name, tmp_path / "diag")
+    ext_path = tmp_path / "diag" / doc["extended_tir"]
+    sweeps = DATA / name / "sweeps.csv"
+    assert main(["evaluate", str(ext_path), "--input", str(sweeps), "--output", str(tmp_path / "ev.csv")]) == 0
+    assert main(["compare", "--tir", str(ext_path), "--data", str(sweeps), "--output", str(tmp_path / "cmp"),
+                 "--no-plots"]) == 0  # fmt: skip
+    tyre = load(ext_path)
+    data = pd.read_csv(sweeps)
+    assert set(tyre.required_variables) <= set(data.columns)
+    from mftire.fmu.export import export_fmu
+    from mftire.fmu.host import FMUTyre
+
+    rows = data.iloc[:: max(1, len(data) // 40)]
+    fmu = export_fmu(tyre, tmp_path / "ext.fmu")
+    with FMUTyre(str(fmu), "ME") as f:
+        for _, r in rows.iterrows():
+            extra = {v: float(r[v]) for v in tyre.required_variables}
+            got = f.evaluate(r["Fz"], r["kappa"], r["alpha"], r["gamma"], 0.0, r["Vx"], r["P"], **extra)
+            ref = tyre.evaluate(r["Fz"], r["kappa"], r["alpha"], r["gamma"], 0.0, r["Vx"], r["P"], **extra)
+            for ch in ("Fx", "Fy", "Mz", "Mx", "My"):
+                assert got[ch] == pytest.approx(float(ref[ch]), rel=1e-9, abs=1e-9 * tyre["FNOMIN"]), ch

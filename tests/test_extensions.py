@@ -1,95 +1,158 @@
-"""Model extensions: evaluation, .tir round trip, plain-reader compatibility, CLI."""
+"""Model extensions as scaling-factor terms: evaluation, forms, .tir round trip, the one
+pipeline shared by the evaluator and the fitter, and fitting from an extended template."""
 
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 from conftest import REFERENCE_TYRES
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mftire import OUTPUT_NAMES, MftireInputError, Tyre, load, read_tir, write_tir
 from mftire.cli import main
-from mftire.extensions import LIBRARY, NEUTRAL, SECTION, active_extensions
+from mftire.extensions import FORMS, SECTION, make_extension, parse_section
+from mftire.fitting import fit_tir
+from mftire.fitting.model import Inputs, predict
+from mftire.mf.modes import Mode
+
+MODES = (111, 121, 211, 221, 110, 112, 212, 222)
 
 
-def _extended(tmp_path, values: dict) -> str:
-    params = read_tir(REFERENCE_TYRES["MF61"])
-    for k, v in values.items():
+def _term(n: int, target: str, form: str, variable: str, **numbers) -> dict:
+    out = {f"EXT{n}_TARGET": target, f"EXT{n}_FORM": form, f"EXT{n}_VARIABLE": variable}
+    out.update({f"EXT{n}_{k.upper()}": v for k, v in numbers.items()})
+    return out
+
+
+def _extended(entries: dict, base: str = "MF61") -> Tyre:
+    params = read_tir(REFERENCE_TYRES[base])
+    for k, v in entries.items():
         params.set(k, v, section=SECTION)
-    path = tmp_path / "ext.tir"
-    write_tir(params, path)
-    return str(path)
+    return Tyre(params, name="ext.tir")
 
 
-def test_every_numeric_key_has_a_neutral_value():
-    for ext in LIBRARY.values():
-        for key in ext.keys:
-            assert key in NEUTRAL, key
-
-
-@pytest.mark.parametrize("name", [n for n, e in LIBRARY.items() if e.variable_key is None])
-def test_neutral_extensions_change_nothing(tmp_path, name):
-    keys = {k: NEUTRAL[k] for k in LIBRARY[name].keys}
-    ext = load(_extended(tmp_path, keys))
-    assert active_extensions(ext.extensions) == [name]
-    base = load(REFERENCE_TYRES["MF61"])
-    args = ([3000.0, 6000.0, 9000.0], [-0.3, 0.0, 0.1], [0.1, -0.05, 0.0])
-    a, b = base.evaluate(*args), ext.evaluate(*args)
-    for k in OUTPUT_NAMES:
-        np.testing.assert_allclose(a[k], b[k], rtol=1e-14, atol=1e-12, err_msg=k)
-
-
-def _scaled(factor: float) -> Tyre:
-    """The base tyre with LMUX and LMUY multiplied by ``factor``."""
+def _scaled(**factors: float) -> Tyre:
+    """The base tyre with the named scaling factors multiplied."""
     flat = dict(load(REFERENCE_TYRES["MF61"]).flat)
-    flat["LMUX"] *= factor
-    flat["LMUY"] *= factor
+    for k, f in factors.items():
+        flat[k] *= f
     return Tyre(flat)
 
 
-def _same(a, b, keys=("Fx", "Fy", "Mz", "Mx", "My", "mux", "muy")):
+def _same(a, b, keys=("Fx", "Fy", "Mz", "Mx", "My", "mux", "muy", "Kxk", "Kya")):
     for k in keys:
         np.testing.assert_allclose(a[k], b[k], rtol=1e-12, atol=1e-9, err_msg=k)
 
 
-def test_slip_speed_friction_equals_scaling_lambda_mu(tmp_path):
-    ext = load(_extended(tmp_path, {"VS_DECAY": 0.5}))
-    V0 = ext["LONGVL"]
+ARGS = ([3000.0, 6000.0, 9000.0], [-0.3, 0.0, 0.1], [0.1, -0.05, 0.0])
+
+
+@pytest.mark.parametrize("form", list(FORMS))
+def test_neutral_terms_change_nothing(form):
+    numbers = {"ref": 4000.0} if form == "power" else {}
+    if form == "table":
+        numbers.update(l1=3000.0, l2=6000.0)
+    entries = _term(1, "LMUX LMUY LKX LKY LEX", form, "Fz", **numbers)
+    if FORMS[form].two_variables:
+        entries["EXT1_VARIABLE2"] = "Vs"
+    ext = _extended(entries)
+    base = load(REFERENCE_TYRES["MF61"])
+    a, b = base.evaluate(*ARGS), ext.evaluate(*ARGS)
+    for k in OUTPUT_NAMES:
+        np.testing.assert_allclose(a[k], b[k], rtol=1e-14, atol=1e-12, err_msg=k)
+
+
+def test_slip_speed_decay_is_eq_4E7():
+    """decay(Vs) with SCALE = LONGVL on LMUX, LMUY is Pacejka 2012 eq 4.E7 with LMUV = C1."""
+    ext = _extended(_term(1, "LMUX LMUY", "decay", "Vs", scale=16.7, c1=0.5))
     for Vx, kappa, alpha in [(30.0, -1.0, 0.0), (10.0, -0.1, 0.05), (20.0, 0.0, 0.2)]:
         Vs = Vx * np.hypot(kappa, np.tan(alpha))
-        factor = 1.0 / (1.0 + 0.5 * Vs / V0)  # Pacejka 2012 eq 4.E7
-        _same(ext.evaluate(5000.0, kappa, alpha, Vx=Vx), _scaled(factor).evaluate(5000.0, kappa, alpha, Vx=Vx))
-    # more slip speed, less friction: the locked wheel at 30 m/s has lost more than at 5 m/s
+        f = 1.0 / (1.0 + 0.5 * Vs / 16.7)  # eq 4.E7
+        _same(ext.evaluate(5000.0, kappa, alpha, Vx=Vx), _scaled(LMUX=f, LMUY=f).evaluate(5000.0, kappa, alpha, Vx=Vx))
     base = load(REFERENCE_TYRES["MF61"])
     r5 = float(ext.evaluate(5000.0, -1.0, 0.0, Vx=5.0)["Fx"] / base.evaluate(5000.0, -1.0, 0.0, Vx=5.0)["Fx"])
     r30 = float(ext.evaluate(5000.0, -1.0, 0.0, Vx=30.0)["Fx"] / base.evaluate(5000.0, -1.0, 0.0, Vx=30.0)["Fx"])
     assert r30 < r5 < 1.0
-    # slip stiffness is untouched
     assert float(ext.evaluate(5000.0, 0.0, 0.0)["Kxk"]) == float(base.evaluate(5000.0, 0.0, 0.0)["Kxk"])
 
 
-def test_fade_needs_its_variable_and_names_it(tmp_path):
-    path = _extended(tmp_path, {"FADE_VARIABLE": "energy", "FADE_DEPTH": 0.2, "FADE_SCALE": 1e6})
-    tyre = load(path)
-    assert tyre.required_variables == ["energy"]
-    with pytest.raises(MftireInputError, match="'energy'"):
+def test_stiffness_term_moves_stiffness_not_friction():
+    ext = _extended(_term(1, "LKX LKY", "linear", "temperature", ref=50.0, scale=25.0, c1=-0.2))
+    base = load(REFERENCE_TYRES["MF61"])
+    hot = ext.evaluate(5000.0, 0.0, 0.0, temperature=75.0)
+    ref = base.evaluate(5000.0, 0.0, 0.0)
+    assert float(hot["Kxk"]) == pytest.approx(0.8 * float(ref["Kxk"]), rel=1e-12)
+    assert float(hot["Kya"]) == pytest.approx(0.8 * float(ref["Kya"]), rel=1e-12)
+    assert float(hot["mux"]) == pytest.approx(float(ref["mux"]), rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("form", "numbers", "u", "expected"),
+    [
+        ("linear", {"ref": 10.0, "scale": 5.0, "c1": 0.1}, 20.0, 1.2),
+        ("quadratic", {"ref": 10.0, "scale": 5.0, "c1": 0.1, "c2": -0.05}, 20.0, 1.0),
+        ("saturating", {"ref": 0.0, "scale": 100.0, "c1": -0.3, "c2": 2.0}, 50.0, 1 - 0.3 * (1 - np.exp(-1.0))),
+        ("saturating", {"ref": 0.0, "scale": 100.0, "c1": -0.3, "c2": 2.0}, -50.0, 1.0),
+        ("power", {"ref": 4000.0, "c1": -0.5}, 16000.0, 0.5),
+        ("decay", {"scale": 10.0, "c1": 1.0}, 10.0, 0.5),
+        ("table", {"l1": 0.0, "l2": 1.0, "c1": 0.0, "c2": -0.3}, 0.9, 0.7),
+        ("linear", {"ref": 10.0, "scale": 5.0, "min": 0.0, "max": 15.0, "c1": 0.1}, 40.0, 1.1),  # clipped
+    ],
+)
+def test_form_values(form, numbers, u, expected):
+    t = make_extension(1, "LMUX", form, "x", **numbers)
+    assert float(t.factor(np.array(u), None)) == pytest.approx(expected, rel=1e-12)
+
+
+def test_interaction_acts_only_where_the_flag_is_set():
+    t = make_extension(1, "LMUX LMUY", "interaction", "wet", variable2="Vx", ref2=10.0, scale2=10.0, c1=-0.1,
+                       c2=-0.2)  # fmt: skip
+    f = t.factor(np.array([0.0, 0.0, 1.0, 1.0]), np.array([10.0, 30.0, 10.0, 30.0]))
+    np.testing.assert_allclose(f, [1.0, 1.0, 0.9, 0.5], rtol=1e-12)
+
+
+@settings(max_examples=40, deadline=None)
+@given(c1=st.floats(0.0, 5.0), vs=st.floats(0.0, 60.0))
+def test_decay_never_increases_friction(c1, vs):
+    t = make_extension(1, "LMUX", "decay", "Vs", scale=16.7, c1=c1)
+    f = float(t.factor(np.array(vs), None))
+    assert 0.0 < f <= 1.0
+
+
+def test_external_variable_is_required_and_named():
+    tyre = _extended(_term(1, "LMUX LMUY", "saturating", "time", scale=100.0, c1=-0.2, c2=1.0))
+    assert tyre.required_variables == ["time"]
+    with pytest.raises(MftireInputError, match="'time'"):
         tyre.evaluate(5000.0, -0.2, 0.0)
-    energies = [0.0, 1e6, 1e9]
-    out = tyre.evaluate(5000.0, -0.3, 0.05, energy=energies)
-    for i, e in enumerate(energies):
-        factor = 1 - 0.2 * (1 - np.exp(-e / 1e6))
-        ref = _scaled(factor).evaluate(5000.0, -0.3, 0.05)
-        _same({k: out[k][i] for k in out}, ref)
+    out = tyre.evaluate(5000.0, -0.3, 0.05, time=[0.0, 100.0, 1e6])
+    for i, t in enumerate([0.0, 100.0, 1e6]):
+        f = 1 - 0.2 * (1 - np.exp(-t / 100.0))
+        _same({k: out[k][i] for k in out}, _scaled(LMUX=f, LMUY=f).evaluate(5000.0, -0.3, 0.05))
+
+
+def test_history_quantities_are_not_variables():
+    with pytest.raises(MftireInputError, match="measured history"):
+        _extended(_term(1, "LMUX", "linear", "energy", c1=0.1))
+
+
+def test_offsets_add_force_proportional_to_load():
+    ext = _extended(_term(1, "FY_OFFSET", "linear", "sign_alpha", c1=0.02))
+    base = load(REFERENCE_TYRES["MF61"])
+    d = ext.evaluate(5000.0, 0.0, [0.1, -0.1], mode=110)["Fy"] - base.evaluate(5000.0, 0.0, [0.1, -0.1], mode=110)["Fy"]
+    np.testing.assert_allclose(d, [100.0, -100.0], rtol=1e-12)
 
 
 def test_extended_file_round_trips_and_plain_reader_ignores_section(tmp_path):
-    path = _extended(tmp_path, {"FVAR_VARIABLE": "temperature", "FVAR_REF": 40.0, "FVAR_SCALE": 20.0,
-                                "FVAR_C1": -0.05, "FVAR_C2": -0.01, "RR_FX": 0.012})  # fmt: skip
+    tyre = _extended(_term(1, "LMUX LMUY", "quadratic", "temperature", ref=40.0, scale=20.0, c1=-0.05, c2=-0.01))
+    path = tmp_path / "ext.tir"
+    write_tir(tyre.parameters, path)
     again = tmp_path / "again.tir"
     write_tir(read_tir(path), again)
     assert read_tir(again) == read_tir(path)
-    text = open(path).read()
+    text = path.read_text()
     assert f"[{SECTION}]" in text
-    # a plain MF 6.1 reader (key = value, '$' comments) gets the same MF parameters
     plain = {}
     for line in text.splitlines():
         line = line.split("$")[0].strip()
@@ -99,46 +162,107 @@ def test_extended_file_round_trips_and_plain_reader_ignores_section(tmp_path):
     base = load(REFERENCE_TYRES["MF61"]).flat
     for k in ("PCX1", "PDY1", "QSX3", "FNOMIN"):
         assert float(plain[k]) == base[k]
-    tyre = load(path)
-    out = tyre.evaluate(5000.0, -0.1, 0.05, temperature=60.0)
-    assert np.isfinite(out["Fx"])
+    assert parse_section(read_tir(path).sections[SECTION]) == tyre.extension_set
 
 
 def test_cli_evaluate_passes_extra_columns_and_names_missing_ones(tmp_path, capsys):
-    path = _extended(tmp_path, {"FVAR_VARIABLE": "temperature", "FVAR_REF": 40.0, "FVAR_SCALE": 20.0,
-                                "FVAR_C1": -0.1})  # fmt: skip
+    tyre = _extended(_term(1, "LMUX LMUY", "linear", "temperature", ref=40.0, scale=20.0, c1=-0.1))
+    path = tmp_path / "ext.tir"
+    write_tir(tyre.parameters, path)
     src = tmp_path / "in.csv"
     src.write_text("Fz,kappa,alpha,gamma,temperature\n5000,-0.2,0,0,40\n5000,-0.2,0,0,60\n")
     dst = tmp_path / "out.csv"
-    assert main(["evaluate", path, "--input", str(src), "--output", str(dst)]) == 0
-    fx = np.loadtxt(dst, delimiter=",", skiprows=1)[:, 5]
-    assert fx[0] == pytest.approx(float(_scaled(1.0).evaluate(5000.0, -0.2, 0.0)["Fx"]), rel=1e-12)
-    assert fx[1] == pytest.approx(float(_scaled(0.9).evaluate(5000.0, -0.2, 0.0)["Fx"]), rel=1e-12)
+    assert main(["evaluate", str(path), "--input", str(src), "--output", str(dst)]) == 0
+    out = pd.read_csv(dst)
+    fx = out[[c for c in out.columns if c.startswith("Fx")][0]].to_numpy()
+    assert fx[0] == pytest.approx(float(_scaled().evaluate(5000.0, -0.2, 0.0)["Fx"]), rel=1e-12)
+    assert fx[1] == pytest.approx(float(_scaled(LMUX=0.9, LMUY=0.9).evaluate(5000.0, -0.2, 0.0)["Fx"]), rel=1e-12)
     src.write_text("Fz,kappa,alpha,gamma\n5000,-0.2,0,0\n")
-    assert main(["evaluate", path, "--input", str(src), "--output", str(dst)]) == 2
+    assert main(["evaluate", str(path), "--input", str(src), "--output", str(dst)]) == 2
     assert "temperature" in capsys.readouterr().err
-
-
-def test_generic_correction_is_labelled_not_physics():
-    assert LIBRARY["generic"].physical is False
-    assert all(e.physical for n, e in LIBRARY.items() if n != "generic")
-
-
-def test_mapping_input_with_extension_section():
-    flat = dict(load(REFERENCE_TYRES["MF61"]).flat)
-    flat[SECTION] = {"ASYM_MUY": 0.05}
-    tyre = Tyre(flat)
-    out = tyre.evaluate(5000.0, 0.0, [0.2, -0.2])
-    sym = Tyre({k: v for k, v in flat.items() if k != SECTION}).evaluate(5000.0, 0.0, [0.2, -0.2])
-    assert abs(out["Fy"][0]) > abs(sym["Fy"][0])
-    assert abs(out["Fy"][1]) < abs(sym["Fy"][1])
 
 
 def test_bad_extension_values_raise_input_errors():
     flat = dict(load(REFERENCE_TYRES["MF61"]).flat)
-    flat[SECTION] = {"VS_DECAY": "fast"}
-    with pytest.raises(MftireInputError, match="VS_DECAY"):
-        Tyre(flat).evaluate(5000.0, -0.1, 0.0)
-    flat[SECTION] = {"FVAR_VARIABLE": "phit", "FVAR_C1": 0.1}
+    flat[SECTION] = _term(1, "LMUX", "decay", "Vs", c1="fast")
+    with pytest.raises(MftireInputError, match="EXT1_C1"):
+        Tyre(flat)
+    flat[SECTION] = _term(1, "LMUX", "linear", "phit", c1=0.1)
     with pytest.raises(MftireInputError, match="phit"):
         Tyre(flat)
+    flat[SECTION] = {"VS_DECAY": 0.3}
+    with pytest.raises(MftireInputError, match="VS_DECAY: not an extension key"):
+        Tyre(flat)
+
+
+# --------------------------------------------------------------------------- one pipeline
+
+EXTENDED = {
+    **_term(1, "LMUX LMUY", "decay", "Vs", scale=16.7, c1=0.4),
+    **_term(2, "LKX LKY LTR", "linear", "temperature", ref=50.0, scale=25.0, c1=-0.1),
+    **_term(3, "FX_OFFSET", "linear", "sign_kappa", c1=0.005),
+}
+
+
+@pytest.mark.parametrize("extended", [False, True])
+@pytest.mark.parametrize("mode", MODES)
+def test_fitter_prediction_equals_evaluate(mode, extended):
+    """The fitter's model and Tyre.evaluate are the same pipeline: equal to the last bit."""
+    tyre = _extended(EXTENDED if extended else {}, base="MF62" if mode % 2 else "MF61")
+    rng = np.random.default_rng(mode)
+    n = 200
+    x = Inputs(rng.uniform(1000, 9000, n), rng.uniform(-0.5, 0.5, n), rng.uniform(-0.3, 0.3, n),
+               rng.uniform(-0.08, 0.08, n), rng.uniform(1, 40, n), rng.uniform(1.8e5, 2.8e5, n),
+               {"temperature": rng.uniform(0, 100, n)} if extended else {})  # fmt: skip
+    ref = tyre.evaluate(x.Fz, x.kappa, x.alpha, x.gamma, 0.0, x.Vx, x.P, mode=mode, **x.variables)
+    for ch in ("Fx", "Fy", "Mz", "Mx", "My"):
+        got = predict(tyre.flat, x, ch, Mode.from_code(mode), tyre.extension_set)
+        np.testing.assert_array_equal(got, ref[ch], err_msg=f"{ch} mode {mode}")
+
+
+def _campaign(tyre: Tyre, seed: int = 0) -> pd.DataFrame:
+    """Pure braking and cornering sweeps at three loads and three temperatures, 0.5 % noise."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    for Fz in (3000.0, 5000.0, 7000.0):
+        for temp in (20.0, 50.0, 80.0):
+            k = np.linspace(-0.3, 0.3, 41)
+            a = np.radians(np.linspace(-12, 12, 41))
+            rows.append(pd.DataFrame(dict(Fz=Fz, kappa=k, alpha=0.0, gamma=0.0, Vx=16.7, P=2.2e5, temperature=temp)))
+            rows.append(pd.DataFrame(dict(Fz=Fz, kappa=0.0, alpha=a, gamma=0.0, Vx=16.7, P=2.2e5, temperature=temp)))
+    df = pd.concat(rows, ignore_index=True)
+    out = tyre.evaluate(df["Fz"], df["kappa"], df["alpha"], df["gamma"], 0.0, df["Vx"], df["P"], mode=211,
+                        temperature=df["temperature"].to_numpy())  # fmt: skip
+    for ch in ("Fx", "Fy", "Mz"):
+        y = np.asarray(out[ch])
+        df[ch] = y + rng.normal(0, 0.005 * np.abs(y).max(), len(y))
+    return df
+
+
+def test_fit_from_extended_template_improves_and_evaluates_to_prediction(tmp_path):
+    truth = _extended(_term(1, "LMUX LMUY", "linear", "temperature", ref=50.0, scale=30.0, c1=-0.12))
+    data = _campaign(truth)
+    start = _extended(_term(1, "LMUX LMUY", "linear", "temperature", ref=50.0, scale=30.0, c1=0.0))
+    plain = load(REFERENCE_TYRES["MF61"])
+    res = fit_tir(data, start.parameters, stages="1,2,3")
+    res_plain = fit_tir(data.drop(columns="temperature"), plain.parameters, stages="1,2,3")
+    assert "EXT1_C1" in res.identified
+    assert res.flat["EXT1_C1"] == pytest.approx(-0.12, abs=0.01)
+    path = tmp_path / "fitted.tir"
+    write_tir(res.parameters, path)
+    fitted = load(path)
+    out = fitted.evaluate(data["Fz"], data["kappa"], data["alpha"], data["gamma"], 0.0, data["Vx"], data["P"],
+                          mode=211, temperature=data["temperature"].to_numpy())  # fmt: skip
+    for ch in ("Fx", "Fy", "Mz"):
+        np.testing.assert_allclose(out[ch], res.data[f"fit_{ch}"], rtol=1e-9, atol=1e-9, err_msg=ch)
+        rms = np.sqrt(np.mean((res.data[f"fit_{ch}"] - data[ch]) ** 2))
+        rms_plain = np.sqrt(np.mean((res_plain.data[f"fit_{ch}"] - data[ch]) ** 2))
+        if ch != "Mz":
+            assert rms < 0.5 * rms_plain, (ch, rms, rms_plain)
+
+
+def test_fit_refuses_template_variable_missing_from_data():
+    start = _extended(_term(1, "LMUX LMUY", "linear", "temperature", c1=0.0))
+    data = _campaign(load(REFERENCE_TYRES["MF61"]))
+    with pytest.raises(MftireInputError, match="temperature"):
+        fit_tir(data.drop(columns="temperature"), start.parameters, stages="1")

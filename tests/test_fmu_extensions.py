@@ -1,10 +1,11 @@
 """FMU export of the model extensions ([MFTIRE_EXTENSIONS], mftire/extensions.py).
 
-One small FMU per case (each extension on its own, the generic correction on
-every channel, and all extensions together), compiled once per module.  The FMU
-must agree with the Python evaluator point by point to 1e-9 relative, with the
-absolute floors of tests/test_fmu_export.py, in Model Exchange and Co-Simulation,
-with random values of the data-variable inputs.
+One small FMU per case (each form of :data:`mftire.extensions.FORMS` on its own, the
+force offsets, several targets, builtin and external variables, and many terms
+together), compiled once per module.  The FMU must agree with the Python evaluator
+point by point to 1e-9 relative, with the absolute floors of tests/test_fmu_export.py,
+in Model Exchange and Co-Simulation, in every mode (turn slip 112 and 222 included),
+with random values of the external-variable inputs.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from test_fmu_export import CHANNEL, OUTPUTS, _random_points, _rel_errors, _scal
 
 from mftire import read_tir
 from mftire.errors import MftireError
-from mftire.extensions import LIBRARY, NEUTRAL, SECTION
+from mftire.extensions import FORMS, SECTION, TARGETS, parse_section
 from mftire.fmu import variables as vt
 from mftire.fmu.export import export_fmu, find_compiler, generate_sources
 from mftire.mf.solver import evaluate_arrays
@@ -32,35 +33,47 @@ pytestmark = needs_c_compiler
 BASE_INPUTS = ["Fz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "omega", "muRoad"]
 ODD_NAME = "brake temp [°C]"  # not a C identifier: kept as the FMI name, escaped in the C sources
 
+
+def _term(n: int, target: str, form: str, variable: str, **numbers) -> dict:
+    out = {f"EXT{n}_TARGET": target, f"EXT{n}_FORM": form, f"EXT{n}_VARIABLE": variable}
+    for k, v in numbers.items():
+        out[f"EXT{n}_{k.upper()}"] = v
+    return out
+
+
 #: case -> (base .tir, [MFTIRE_EXTENSIONS] entries)
 CASES: dict[str, tuple[str, dict]] = {
-    "slip_speed_friction": ("JuliaMF62", {"VS_DECAY": 0.6}),
-    "slip_speed_peak": ("JuliaMF61", {"VS_PEAK_GAIN": 0.4, "VS_PEAK_SPEED": 2.5, "VS_PEAK_WIDTH": 0.7}),
-    "speed_friction": ("JuliaMF62", {"VX_FRIC1": -0.08, "VX_FRIC2": 0.03}),
-    "fade": ("JuliaMF62", {"FADE_VARIABLE": "energy", "FADE_DEPTH": 0.25, "FADE_SCALE": 4e5}),
-    "friction_variable": ("JuliaMF61", {"FVAR_VARIABLE": ODD_NAME, "FVAR_REF": 60.0, "FVAR_SCALE": 30.0,
-                                        "FVAR_C1": -0.05, "FVAR_C2": -0.02}),
-    "load_friction": ("MF52", {"LOAD_MU2": -0.06}),
-    "rolling_resistance": ("JuliaMF61", {"RR_FX": 0.012}),
-    "asymmetry": ("JuliaMF62", {"ASYM_MUY": 0.06, "ASYM_FY": 0.015}),
-    "generic_Fy": ("JuliaMF62", {"GEN_VARIABLE": "temperature", "GEN_CHANNEL": "Fy", "GEN_REF": 40.0,
-                                 "GEN_SCALE": 50.0, "GEN_C1": 0.05, "GEN_C2": -0.03, "GEN_C3": 0.01}),
-    "generic_Mx": ("JuliaMF61", {"GEN_VARIABLE": "Vs", "GEN_CHANNEL": "Mx", "GEN_SCALE": 10.0, "GEN_C1": 0.04,
-                                 "GEN_C3": -0.002}),
-    "generic_My": ("JuliaMF62", {"GEN_VARIABLE": "kappa", "GEN_CHANNEL": "My", "GEN_C1": 0.3, "GEN_C2": 0.2}),
-    "fade_Vs_generic_Fx": ("JuliaMF61", {"FADE_VARIABLE": "Vs", "FADE_DEPTH": 0.2, "FADE_SCALE": 5.0,
-                                         "GEN_VARIABLE": "sign_kappa", "GEN_CHANNEL": "Fx", "GEN_C1": 0.05}),
+    "decay_Vs": ("JuliaMF62", _term(1, "LMUX LMUY", "decay", "Vs", scale=16.7, c1=0.6)),
+    "linear_ext": ("JuliaMF61", _term(1, "LKX LKY", "linear", ODD_NAME, ref=60.0, scale=30.0, min=0.0, max=150.0,
+                                      c1=-0.1)),
+    "quadratic_Vx": ("JuliaMF62", _term(1, "LMUX LMUY LEX", "quadratic", "Vx", ref=16.7, scale=10.0, c1=-0.08,
+                                        c2=0.03)),
+    "saturating_time": ("JuliaMF62", _term(1, "LMUX LMUY", "saturating", "time", ref=0.0, scale=100.0, c1=-0.25,
+                                           c2=0.8)),
+    "power_Fz": ("MF52", _term(1, "LMUY", "power", "Fz", ref=4000.0, c1=-0.1)),
+    "table_surface": ("JuliaMF61", _term(1, "LMUX LMUY", "table", "surface", l1=0.0, l2=1.0, l3=2.0, c1=0.0,
+                                         c2=-0.2, c3=-0.45)),
+    "interaction": ("JuliaMF62", {**_term(1, "LMUX LMUY", "interaction", "wet", ref=0.0, scale=1.0, c1=-0.1,
+                                         c2=-0.05), "EXT1_VARIABLE2": "Vx", "EXT1_REF2": 16.7, "EXT1_SCALE2": 10.0}),
+    "offsets": ("JuliaMF61", {**_term(1, "FX_OFFSET", "linear", "sign_kappa", c1=0.01),
+                              **_term(2, "FY_OFFSET", "linear", "dfz", c1=0.02)}),
+    "moments": ("JuliaMF62", {**_term(1, "LTR LRES LKZC LS", "linear", "dpi", c1=0.3),
+                              **_term(2, "LMX LVMX LMY", "linear", "sign_alpha", c1=0.1),
+                              **_term(3, "LCX LCY LHX LHY LVX LVY", "linear", "gamma", scale=0.05, c1=0.2),
+                              **_term(4, "LXAL LYKA LVYKA LKYC LEY LFZO", "quadratic", "kappa", c1=0.2, c2=0.3)}),
     "all": ("JuliaMF62", {
-        "VS_DECAY": 0.3, "VS_PEAK_GAIN": 0.2, "VS_PEAK_SPEED": 3.0, "VX_FRIC1": -0.05, "VX_FRIC2": 0.02,
-        "FADE_VARIABLE": "energy", "FADE_DEPTH": 0.15, "FADE_SCALE": 1e6,
-        "FVAR_VARIABLE": "temperature", "FVAR_REF": 50.0, "FVAR_SCALE": 40.0, "FVAR_C1": -0.04, "FVAR_C2": -0.01,
-        "LOAD_MU2": -0.04, "RR_FX": 0.01, "ASYM_MUY": 0.04, "ASYM_FY": 0.01,
-        "GEN_VARIABLE": "temperature", "GEN_CHANNEL": "Mz", "GEN_REF": 50.0, "GEN_SCALE": 40.0, "GEN_C1": 0.03,
+        **_term(1, "LMUX LMUY", "decay", "Vs", scale=16.7, c1=0.3),
+        **_term(2, "LMUX LMUY", "saturating", "time", scale=300.0, c1=-0.15, c2=1.0),
+        **_term(3, "LKX LKY", "linear", "temperature", ref=50.0, scale=40.0, min=-10.0, max=120.0, c1=-0.04),
+        **_term(4, "LMUY", "linear", "sign_alpha", c1=0.04),
+        **_term(5, "FX_OFFSET", "linear", "sign_kappa", c1=0.01),
+        **_term(6, "LTR", "quadratic", "temperature", ref=50.0, scale=40.0, c1=0.03, c2=-0.01),
     }),
 }  # fmt: skip
 
-#: data variable -> (low, high) of its random values (energy includes negatives: clipped at 0 by fade)
-DATA_RANGES = {"energy": (-2e5, 3e6), "temperature": (-20.0, 140.0), ODD_NAME: (0.0, 200.0)}
+#: external variable -> (low, high) of its random values
+DATA_RANGES = {"time": (-50.0, 3000.0), "temperature": (-20.0, 140.0), ODD_NAME: (-10.0, 200.0),
+               "surface": (-0.5, 2.7), "wet": (0.0, 1.0)}  # fmt: skip
 MODES = (111, 121, 211, 112, 110, 222)
 N_POINTS = 300  # per case and interface
 
@@ -151,12 +164,10 @@ def test_extension_fmu_agrees_with_python_me_and_cs(build, case):
     print(f"{case}: max relative error vs Python over {N_POINTS} points: ME {worst['ME']:.1e}, CS {worst['CS']:.1e}")
 
 
-def test_every_extension_is_covered():
-    from mftire.extensions import active_extensions
-
-    covered = {n for case in CASES for n in active_extensions(CASES[case][1])}
-    assert covered == set(LIBRARY)
-    assert {CASES[c][1].get("GEN_CHANNEL") for c in CASES} >= {"Fx", "Fy", "Mz", "Mx", "My"}
+def test_every_form_and_target_is_covered():
+    sets = [parse_section(entries) for _, entries in CASES.values()]
+    assert {t.form.name for e in sets for t in e.terms} == set(FORMS)
+    assert {x for e in sets for t in e.terms for x in t.targets} == set(TARGETS)
 
 
 def test_extension_fmu_fmi3(build):
@@ -176,7 +187,7 @@ def test_extensions_change_the_outputs(build):
     base = _tyre("all")
     plain = Tyre(read_tir(REFERENCE_TYRES["JuliaMF62"]))
     pt = dict(Fz=5000.0, kappa=-0.15, alpha=0.08, gamma=0.02, phit=0.0, Vx=25.0, P=2.3e5, omega=0.0, muRoad=1.0)
-    data = {"energy": 5e5, "temperature": 90.0}
+    data = {"time": 2500.0, "temperature": 115.0}
     with FMUTyre(unzipdir, "ME") as fmu:
         got = fmu.evaluate(**pt, **data)
     ref_plain = _python(plain, pt, {}, 111)
@@ -197,34 +208,36 @@ def test_data_variables_are_inputs_and_keys_are_parameters(build, version):
     md = read_model_description(str(path))
     by_name = {v.name: v for v in md.modelVariables}
     inputs = [v for v in md.modelVariables if v.causality == "input"]
-    # one input per data variable (temperature is read by two extensions: one input), builtins are not inputs
-    assert [v.name for v in inputs] == [*BASE_INPUTS, "energy", "temperature"]
-    for name in ("energy", "temperature"):
+    # one input per external variable (temperature is read by two terms: one input), builtins are not inputs
+    assert [v.name for v in inputs] == [*BASE_INPUTS, "ext_time", "temperature"]  # 'time' is FMI's
+    for name in ("ext_time", "temperature"):
         v = by_name[name]
         assert v.variability == "continuous" and float(v.start) == 0.0 and v.unit is None
     for unknowns in (md.outputs, md.initialUnknowns):
         assert {u.variable.name for u in unknowns} == set(OUTPUTS)
         for u in unknowns:
             assert {d.name for d in u.dependencies} == {v.name for v in inputs}
-    # every numeric key of an active extension is a tunable parameter: the file's value, else neutral
+    # every numeric key of a term is a tunable parameter with the file's value
     entries = CASES["all"][1]
-    for name in LIBRARY:
-        for key in LIBRARY[name].keys:
+    for t in parse_section(entries).terms:
+        for key, value in vt.term_fields(t):
             v = by_name[key]
             assert (v.causality, v.variability) == ("parameter", "tunable"), key
-            assert float(v.start) == float(entries.get(key, NEUTRAL[key])), key
-            assert v.description.startswith(f"[{SECTION}] {name}")
-    assert "variable temperature, channel Mz; fixed at export" in by_name["GEN_C1"].description
-    assert "FADE_VARIABLE" not in by_name and "GEN_CHANNEL" not in by_name  # string keys are compiled in
-    header = open(os.path.join(unzipdir, "sources", "mf_params.h")).read()
-    assert "#define MF_EXT_GEN_CHANNEL MF_CH_MZ" in header
-    assert re.search(r"#define MF_EXT_FADE_VAR \(MF_XV_DATA0 \+ 0\)", header)
+            assert float(v.start) == value, key
+            assert v.description.startswith(f"[{SECTION}] EXT{t.index}")
+            if key in entries:
+                assert value == entries[key]
+    assert "EXT1_FORM" not in by_name and "EXT1_TARGET" not in by_name  # string keys are compiled in
+    gen = open(os.path.join(unzipdir, "sources", "mf_ext_gen.h")).read()
+    assert "#define MF_N_TERMS 6" in gen
+    for f in FORMS.values():  # every form's C expression comes from mftire.extensions
+        assert f.c_expr in gen
 
 
 def test_odd_data_variable_name_is_kept_for_fmi_and_escaped_for_c(build):
     from fmpy import read_model_description
 
-    path, unzipdir = build("friction_variable")
+    path, unzipdir = build("linear_ext")
     md = read_model_description(str(path))
     assert [v.name for v in md.modelVariables if v.causality == "input"] == [*BASE_INPUTS, ODD_NAME]
     gen = open(os.path.join(unzipdir, "sources", "mf_model_gen.h"), encoding="ascii").read()  # pure ASCII
@@ -234,7 +247,7 @@ def test_odd_data_variable_name_is_kept_for_fmi_and_escaped_for_c(build):
 def test_builtin_variable_is_not_an_input(build):
     from fmpy import read_model_description
 
-    for case in ("generic_Mx", "fade_Vs_generic_Fx", "slip_speed_friction"):
+    for case in ("decay_Vs", "quadratic_Vx", "offsets", "moments"):
         path, _ = build(case)
         md = read_model_description(str(path))
         assert [v.name for v in md.modelVariables if v.causality == "input"] == BASE_INPUTS, case
@@ -243,12 +256,12 @@ def test_builtin_variable_is_not_an_input(build):
 def test_guid_covers_the_compiled_choices():
     """Two files that differ only in a string key (compiled in) get different GUIDs."""
     flat = Tyre(read_tir(REFERENCE_TYRES["JuliaMF62"])).flat
-    sec = {"GEN_VARIABLE": "Vs", "GEN_C1": 0.1}
     guids = set()
-    for extra in ({"GEN_CHANNEL": "Fx"}, {"GEN_CHANNEL": "Mz"}, {"GEN_CHANNEL": "Mz", "GEN_VARIABLE": "Fz"}):
-        spec = vt.extension_spec({**sec, **extra})
+    for target, form, var in (("LMUX", "linear", "Vs"), ("LMUY", "linear", "Vs"), ("LMUY", "quadratic", "Vs"),
+                              ("LMUY", "quadratic", "Fz")):  # fmt: skip
+        spec = vt.extension_spec(_term(1, target, form, var, c1=0.1))
         guids.add(vt.guid(vt.variable_table(flat, extensions=spec), 2))
-    assert len(guids) == 3
+    assert len(guids) == 4
     # a plain tyre's table and GUID are unchanged by the extension machinery
     assert vt.variable_table(flat) == vt.variable_table(flat, extensions=None)
 
@@ -262,14 +275,14 @@ def test_extension_parameter_start_values_change_outputs_as_python(build, iface)
 
     _, unzipdir = build("all")
     tyre = _tyre("all")
-    changed = {"VS_DECAY": 0.9, "FADE_DEPTH": 0.3, "FVAR_C1": -0.1, "RR_FX": 0.02, "ASYM_FY": -0.02,
-               "GEN_C1": 0.08, "LOAD_MU2": 0.05}  # fmt: skip
+    changed = {"EXT1_C1": 0.9, "EXT2_C1": -0.3, "EXT3_C1": -0.1, "EXT5_C1": 0.02, "EXT6_C2": -0.05,
+               "EXT3_REF": 30.0}  # fmt: skip
     params = read_tir(REFERENCE_TYRES["JuliaMF62"])
     for key, value in {**CASES["all"][1], **changed}.items():
         params.set(key, value, section=SECTION)
     tuned_py = Tyre(params)
     pt = dict(Fz=5000.0, kappa=-0.12, alpha=0.06, gamma=0.02, phit=0.0, Vx=20.0, P=2.3e5, omega=0.0, muRoad=1.0)
-    data = {"energy": 4e5, "temperature": 85.0}
+    data = {"time": 700.0, "temperature": 85.0}
     args = [pt[k] for k in ("Fz", "kappa", "alpha", "gamma", "phit", "Vx", "P")]
     with FMUTyre(unzipdir, iface) as base, FMUTyre(unzipdir, iface, start_values=changed) as tuned:
         g0, g1 = base.evaluate(**pt, **data), tuned.evaluate(**pt, **data)
@@ -290,14 +303,14 @@ def test_nan_data_input_is_zeroed_with_a_warning(build):
     _, unzipdir = build("all")
     tyre = _tyre("all")
     pt = dict(Fz=4000.0, kappa=0.05, alpha=0.03, gamma=0.01, phit=0.0, Vx=15.0, P=2.4e5, omega=0.0, muRoad=1.0)
-    data = {"energy": float("nan"), "temperature": float("nan")}
+    data = {"time": float("nan"), "temperature": float("nan")}
     with FMUTyre(unzipdir, "ME") as fmu:
         got = fmu.evaluate(**pt, **data)
         logged = " | ".join(m for s, c, m in fmu.messages if s == 1)
     py_warnings: list[str] = []
     ref = _python(tyre, pt, data, 111, record=py_warnings)
     assert max(_rel_errors(tyre.flat, got, ref).values()) <= 1e-9
-    assert ref == _python(tyre, pt, {"energy": 0.0, "temperature": 0.0}, 111)
+    assert ref == _python(tyre, pt, {"time": 0.0, "temperature": 0.0}, 111)
     assert len(py_warnings) == 2
     for w in py_warnings:
         assert w in logged, (w, logged)
@@ -326,11 +339,14 @@ def _with(entries: dict) -> Tyre:
 @pytest.mark.parametrize(
     ("entries", "match"),
     [
-        ({"GEN_VARIABLE": "Vs", "GEN_CHANNEL": "Fz", "GEN_C1": 0.1}, "GEN_CHANNEL must be one of"),
-        ({"FVAR_VARIABLE": "phit", "FVAR_C1": 0.1}, "'phit': that name is an input of the evaluator"),
-        ({"FADE_VARIABLE": "LMUX", "FADE_DEPTH": 0.1}, "'LMUX' used twice"),
-        ({"FADE_VARIABLE": "a\tb", "FADE_DEPTH": 0.1}, "cannot be an FMI variable name"),
-        ({"VS_DECAY": "fast"}, "VS_DECAY must be a number"),
+        (_term(1, "LQQ", "linear", "Vs", c1=0.1), "each target must be one of"),
+        (_term(1, "LMUX", "linear", "phit", c1=0.1), "'phit': that name is an input of the evaluator"),
+        (_term(1, "LMUX", "linear", "energy", c1=0.1), "needs measured history"),
+        (_term(1, "LMUX", "linear", "a\tb", c1=0.1), "cannot be an FMI variable name"),
+        (_term(1, "LMUX", "linear", "Vs", c1="fast"), "EXT1_C1 = 'fast' must be a number"),
+        (_term(1, "LMUX", "wiggle", "Vs", c1=0.1), "EXT1_FORM = 'wiggle': must be one of"),
+        (_term(1, "LMUX", "linear", "Vs", c2=0.1), "the linear form has no such coefficient"),
+        (_term(1, "LMUX", "power", "Fz", c1=0.1), "EXT1_REF must be > 0"),
     ],
 )
 def test_export_refuses_extensions_it_cannot_evaluate(tmp_path, entries, match):
@@ -341,12 +357,10 @@ def test_export_refuses_extensions_it_cannot_evaluate(tmp_path, entries, match):
 
 
 def test_generate_sources_without_compiler_for_every_case():
-    """The generated headers define every macro the C code reads (checked without compiling)."""
+    """The generated headers define what the C code reads (checked without compiling)."""
     for case in CASES:
         tyre = _tyre(case)
         spec = vt.extension_spec(tyre.extensions)
         _, files = generate_sources(tyre.flat, "x", 2, 111, spec)
-        header = files["mf_params.h"]
-        for name in LIBRARY:
-            assert f"#define MF_EXT_{name.upper()} {int(name in spec.active)}" in header
-        assert f"#define MF_N_DATA {len(tyre.required_variables)}" in header
+        assert f"#define MF_N_DATA {len(tyre.required_variables)}" in files["mf_params.h"]
+        assert f"#define MF_N_TERMS {len(spec.terms)}" in files["mf_ext_gen.h"]

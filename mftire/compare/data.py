@@ -200,7 +200,7 @@ def curve_grid(data: pd.DataFrame, n: int = 81, families: Sequence[str] = FAMILI
 
 _NOT_VARIABLES = {"Fz", "kappa", "alpha", "gamma", "Vx", "P", "phit", "Fx", "Fy", "Mz", "Mx", "My", "Fz_set",
                   "gamma_set", "P_set", "Vx_set", "sweep_id", "sweep_dir", "kappa_set", "alpha_set", "held",
-                  "curve_id", "load_fraction", "run", "time", "meas_no", "weight"}
+                  "curve_id", "load_fraction", "meas_no", "weight"}
 
 
 def _extra_variables(g: pd.DataFrame) -> list[str]:

@@ -145,11 +145,13 @@ class FMUTyre:
     ) -> dict:
         """Set the inputs, advance (CS: one ``doStep``) and return every output by name.
 
-        ``variables`` are the data-variable inputs of the model extensions, by name
-        (e.g. ``temperature=60.0``; ``**{"brake temp": 60.0}`` for other names).
+        ``variables`` are the external-variable inputs of the model extensions, by name
+        (e.g. ``temperature=60.0``; ``**{"brake temp": 60.0}`` for other names; ``time=...``
+        sets the input ``ext_time``).
         """
         values = dict(Fz=Fz, kappa=kappa, alpha=alpha, gamma=gamma, phit=phit, omega=omega, muRoad=muRoad)
-        values.update(variables)
+        # an external variable named like an FMU variable (time) is the input ext_<name>
+        values.update({f"ext_{k}" if f"ext_{k}" in self.vr else k: v for k, v in variables.items()})
         if Vx is not None:
             values["Vx"] = Vx
         if P is not None:

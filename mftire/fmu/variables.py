@@ -149,6 +149,12 @@ def extension_spec(section) -> ExtensionSet | None:
     return ext
 
 
+def fmu_input_name(variable: str, taken) -> str:
+    """The FMU input of an external variable: its own name, or ``ext_<name>`` when an FMU
+    variable already has that name (``time`` is the FMI independent variable)."""
+    return f"ext_{variable}" if variable in taken else variable
+
+
 def term_fields(t: Extension) -> list[tuple[str, float]]:
     """The numeric fields of term ``t`` as FMU parameters, in struct order
     (levels directly before the coefficients, as the C form reads them)."""
@@ -208,10 +214,12 @@ def variable_table(
         out.append(Variable(name, len(out), "input", "Real", "input", "continuous", value, unit, desc, field))
     terms = extensions.terms if extensions else ()
     ext_keys = {k: v for t in terms for k, v in term_fields(t)}
+    taken = {"time", *(i[0] for i in INPUTS), *(o[0] for o in OUTPUTS), "useMode", *flat}
     for i, name in enumerate(extensions.external_variables if extensions else ()):
         users = ", ".join(f"EXT{t.index}" for t in terms if name in t.variables())
-        desc = f"External variable of the model extension(s) {users} (unit as in the fitted data)"
-        out.append(Variable(name, len(out), "input", "Real", "input", "continuous", 0.0, None, desc, f"data[{i}]"))
+        desc = f"External variable '{name}' of the model extension(s) {users} (unit as in the fitted data)"
+        out.append(Variable(fmu_input_name(name, taken), len(out), "input", "Real", "input", "continuous", 0.0, None,
+                            desc, f"data[{i}]"))  # fmt: skip
     for name, field, unit, desc in OUTPUTS:
         out.append(Variable(name, len(out), "output", "Real", "output", "continuous", None, unit, desc, field))
     out.append(
@@ -324,12 +332,12 @@ def extension_header(variables: list[Variable], extensions: ExtensionSet | None 
         return builtin.index(name) if name in builtin else len(builtin) + external.index(name)
 
     def idx(field: str) -> str:
-        return f"MF_PI({field})"
+        return f"MF_PIDX({field})"
 
     lines += [
         "#define MF_TARGET_FX_OFFSET (-1)",
         "#define MF_TARGET_FY_OFFSET (-2)",
-        "#define MF_PI(f) ((int)(offsetof(MFParams, f) / sizeof(double)))",
+        "#define MF_PIDX(f) ((int)(offsetof(MFParams, f) / sizeof(double)))",
         "",
         "typedef struct {",
         "    int form;      /* index in mftire.extensions.FORMS */",

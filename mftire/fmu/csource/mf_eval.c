@@ -14,6 +14,7 @@
 #include <complex.h>
 #include <float.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -882,13 +883,6 @@ static double mf_ext_table(double u, const double *c, int n)
     for (k = 1; k < n; k++)
         if (fabs(u - c[k]) < fabs(u - c[best])) best = k;
     return c[n + best];
-}
-
-/* numpy.minimum/maximum clipping of u to [lo, hi] (NaN stays NaN). */
-static double clip(double u, double lo, double hi)
-{
-    if (isnan(u)) return u;
-    return u < lo ? lo : (u > hi ? hi : u);
 }
 
 /* q = p with the targeted scaling factors multiplied by f; off[0], off[1] the FX/FY offset sums. */
