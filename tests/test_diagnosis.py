@@ -28,6 +28,15 @@ from mftire.extensions import SECTION
 TYRE = load(REFERENCE_TYRES["MF61"])
 
 
+def _term(target: str, form: str, variable: str, **numbers) -> dict:
+    out = {"EXT1_TARGET": target, "EXT1_FORM": form, "EXT1_VARIABLE": variable}
+    out.update({f"EXT1_{k.upper()}": v for k, v in numbers.items()})
+    return out
+
+
+VS_DECAY = _term("LMUX LMUY", "decay", "Vs", scale=TYRE["LONGVL"], c1=0.3)  # Pacejka 2012 eq 4.E7, LMUV = 0.3
+
+
 def _campaign(seed: int = 0) -> pd.DataFrame:
     """Braking at three speeds and cornering, at three loads, with a temperature log."""
     rng = np.random.default_rng(seed)
@@ -102,40 +111,40 @@ def test_null_campaign_reports_nothing(base_df):
 
 
 def test_slip_speed_effect_is_named_and_removed(base_df):
-    d = _measure(base_df, {"VS_DECAY": 0.3})
+    d = _measure(base_df, VS_DECAY)
     res = diagnose(d, _refit(d), progress=False)
     assert res.significant
     assert res.ranking[0].variable == "Vs"
     assert res.effect.name == "slip_speed_friction"
-    assert res.effect.parameters["VS_DECAY"] == pytest.approx(0.3, rel=0.25)
+    assert res.effect.parameters["EXT1_C1"] == pytest.approx(0.3, rel=0.25)
     fx = next(e for e in res.errors if e.channel == "Fx")
     assert fx.rms_after <= 0.5 * fx.rms_before
 
 
 def test_data_column_effect_with_any_name(base_df):
-    sec = {"FVAR_VARIABLE": "tread_temp", "FVAR_REF": 30.0, "FVAR_SCALE": 20.0, "FVAR_C1": -0.12}
+    sec = _term("LMUX LMUY", "linear", "tread_temp", ref=30.0, scale=20.0, c1=-0.12)
     d = _measure(base_df, sec, {"tread_temp": base_df.tread_temp.values})
     res = diagnose(d, _refit(d), progress=False)
     assert res.significant
     assert res.ranking[0].variable == "tread_temp"
-    assert res.effect.name == "friction_variable" and res.effect.physical
+    assert res.effect.name in ("friction_variable", "friction_variable_quadratic") and res.effect.physical
     assert res.extended.required_variables == ["tread_temp"]
     fx = next(e for e in res.errors if e.channel == "Fx")
     assert fx.rms_after < fx.rms_before
 
 
 def test_left_right_asymmetry(base_df):
-    d = _measure(base_df, {"ASYM_MUY": 0.05})
+    d = _measure(base_df, _term("LMUY", "linear", "sign_alpha", c1=0.05))
     res = diagnose(d, _refit(d), progress=False)
     assert res.ranking[0].variable == "sign_alpha"
     assert res.effect.name == "asymmetry"
-    assert res.effect.parameters["ASYM_MUY"] == pytest.approx(0.05, rel=0.3)
+    assert res.effect.parameters["EXT1_C1"] == pytest.approx(0.05, rel=0.3)
     fy = next(e for e in res.errors if e.channel == "Fy")
     assert fy.rms_after <= 0.7 * fy.rms_before
 
 
 def test_report_files_and_round_trip(base_df, tmp_path):
-    d = _measure(base_df, {"VS_DECAY": 0.3})
+    d = _measure(base_df, VS_DECAY)
     res = diagnose(d, _refit(d), progress=False)
     doc = write_report(res, tmp_path)
     on_disk = json.loads((tmp_path / "diagnosis.json").read_text())
@@ -148,7 +157,8 @@ def test_report_files_and_round_trip(base_df, tmp_path):
     for png in ("ranking.png", "curves_before_after.png", "residual_vs_Vs.png"):
         assert (tmp_path / png).read_bytes()[:4] == b"\x89PNG"
     ext = read_tir(tmp_path / on_disk["extended_tir"])
-    assert ext.section(SECTION)["VS_DECAY"] == pytest.approx(on_disk["effect"]["parameters"]["VS_DECAY"])
+    assert ext.section(SECTION)["EXT1_C1"] == pytest.approx(on_disk["effect"]["parameters"]["EXT1_C1"])
+    assert ext.section(SECTION)["EXT1_VARIABLE"] == "Vs"
 
 
 def test_holdout_rules(base_df):
@@ -162,7 +172,7 @@ def test_holdout_rules(base_df):
 
 
 def test_cli_diagnose(base_df, tmp_path, capsys):
-    d = _measure(base_df, {"VS_DECAY": 0.3})
+    d = _measure(base_df, VS_DECAY)
     data = tmp_path / "data.csv"
     d.to_csv(data, index=False)
     tyre = _refit(d)

@@ -27,8 +27,17 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
-from mftire.extensions import BUILTIN_VARIABLES, MAX_LEVELS, SECTION, Extension, make_extension
-from mftire.mf.solver import evaluate_arrays
+from mftire.extensions import (
+    BUILTIN_VARIABLES,
+    MAX_LEVELS,
+    SECTION,
+    Extension,
+    ExtensionSet,
+    make_extension,
+    parse_section,
+)
+from mftire.fitting.model import Inputs, Model
+from mftire.mf.modes import Mode
 from mftire.tyre import Tyre
 
 
@@ -187,13 +196,11 @@ def drop_outliers(prob: _Problem, limit: float = 10.0) -> _Problem:
     (1.4826·MAD) of that channel's residual *along its sweep neighbours*: gross outliers,
     not the smooth systematic residual an effect leaves."""
     d = prob.df
-    out = evaluate_arrays(prob.tyre.flat, d["Fz"].to_numpy(float), d["kappa"].to_numpy(float),
-                          d["alpha"].to_numpy(float), d["gamma"].to_numpy(float), 0.0, d["Vx"].to_numpy(float),
-                          d["P"].to_numpy(float), extensions=prob.tyre.extensions,
-                          variables={k: v for k, v in prob.variables.items()} or None)  # fmt: skip
+    model = _model(prob, prob.tyre.extension_set, prob.variables)
+    out = model.channels(prob.tyre.flat, prob.channels)
     bad = np.zeros(len(d), dtype=bool)
     for c in prob.channels:
-        r = np.where(primary_rows(d, c), d[c].to_numpy(float) - out[c], 0.0)
+        r = np.where(primary_rows(d, c), d[c].to_numpy(float) - getattr(out, c), 0.0)
         # deviation from a running median removes the smooth part of the residual
         smooth = pd.Series(r).rolling(5, center=True, min_periods=1).median().to_numpy()
         dev = r - smooth
@@ -235,21 +242,26 @@ def covered_channels(prob: _Problem) -> list[str]:
     return out
 
 
-def _residuals(
-    prob: _Problem, flat: Mapping[str, float], section: Mapping[str, object] | None,
-    variables: Mapping[str, np.ndarray],
-) -> np.ndarray:
-    """Weighted, peak-scaled residuals of the measured channels for flat parameters."""
+#: Evaluation mode of the diagnosis: MFeval's default, as ``mftire evaluate`` and ``compare``.
+MODE = Mode.from_code(111)
+
+
+def _model(prob: _Problem, ext: ExtensionSet, variables: Mapping[str, np.ndarray]) -> Model:
+    """The model pipeline at the problem's rows (piece 1 done once)."""
+    x = Inputs.from_frame(prob.df)
+    x.variables = {k: np.asarray(v, float) for k, v in variables.items() if k in ext.external_variables}
+    return Model(prob.tyre.flat, x, MODE, ext)
+
+
+def _residuals(prob: _Problem, model: Model, q: Mapping[str, float]) -> np.ndarray:
+    """Weighted, peak-scaled residuals of the measured channels for parameters ``q``."""
     d = prob.df
-    out = evaluate_arrays(
-        flat, d["Fz"].to_numpy(float), d["kappa"].to_numpy(float), d["alpha"].to_numpy(float),
-        d["gamma"].to_numpy(float), 0.0, d["Vx"].to_numpy(float), d["P"].to_numpy(float),
-        extensions=dict(section) if section else None, variables=dict(variables) or None,
-    )  # fmt: skip
+    with np.errstate(all="ignore"):
+        out = model.channels(q, prob.channels)
     parts = []
     sw = np.sqrt(prob.weights)
     for c in prob.channels:
-        r = (d[c].to_numpy(float) - out[c]) / prob.scale[c]
+        r = (d[c].to_numpy(float) - np.real(getattr(out, c))) / prob.scale[c]
         use = prob.masks[c] & np.isfinite(r)
         parts.append(np.where(use, r, 0.0) * sw)
     return np.concatenate(parts)
@@ -334,9 +346,10 @@ def fit_effect(
     variables = dict(prob.variables)
     if term is not None and variable not in BUILTIN_VARIABLES and values is not None:
         variables[variable] = values
-    base_r = _residuals(prob, tyre.flat, base_section, {k: v for k, v in variables.items() if k in
-                                                         set(tyre.required_variables)})  # fmt: skip
+    base_r = _residuals(prob, _model(prob, base, variables), tyre.flat)
     ss0 = float(base_r @ base_r)
+    ext = parse_section({**base_section, **term.section()}) if term is not None else base
+    model = _model(prob, ext, variables)
     refit = [k for ch in covered_channels(prob) for k in REFIT_KEYS.get(ch, ()) if k not in keys]
     refit = list(dict.fromkeys(refit)) if refit_base else []
     lo = [b[0] for b in bounds] + [tyre[k] - 0.5 * abs(tyre[k]) - 1e-3 for k in refit]
@@ -357,8 +370,9 @@ def fit_effect(
         return standard, section
 
     def fun(x):
-        standard, section = build(x)
-        return _residuals(prob, {**tyre.flat, **standard}, section, variables)
+        q = {**tyre.flat, **dict(zip(refit, x[len(keys):], strict=True)), **dict(zip(keys, x[: len(keys)],
+                                                                                      strict=True))}  # fmt: skip
+        return _residuals(prob, model, q)
 
     messages = []
     if not len(start):
