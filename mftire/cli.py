@@ -61,13 +61,8 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     tyre = load(args.tir)
     # columns the model extensions of the file need (e.g. temperature) are required too
     df = read_numeric_csv(args.input, (*EVALUATE_REQUIRED, *tyre.required_variables), EVALUATE_OPTIONAL)
-    kw = {c: df[c].to_numpy() for c in EVALUATE_OPTIONAL if c in df.columns}
-    kw.update({c: df[c].to_numpy() for c in tyre.required_variables})
-    out = tyre.evaluate(
-        df["Fz"].to_numpy(), df["kappa"].to_numpy(), df["alpha"].to_numpy(), df["gamma"].to_numpy(),
-        mode=args.mode, **kw,
-    )  # fmt: skip
-    result = pd.concat([df.reset_index(drop=True), out.to_frame()], axis=1)
+    df = df.reset_index(drop=True)
+    result = pd.concat([df, tyre.evaluate_frame(df, mode=args.mode, name=args.input)], axis=1)
     if args.output == "-":
         result.to_csv(sys.stdout, index=False, float_format="%.17g")
     else:

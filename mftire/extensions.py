@@ -66,6 +66,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mftire.errors import MftireInputError
+from mftire.mf.basic import slip_speed
 
 #: The ``.tir`` section that holds the extension parameters.
 SECTION = "MFTIRE_EXTENSIONS"
@@ -462,11 +463,10 @@ def parse_section(section: Mapping[str, object] | None) -> ExtensionSet:
 def builtin_variables(p: Mapping[str, float], c) -> dict[str, np.ndarray]:
     """The variables of :data:`BUILTIN_VARIABLES` from the file's parameters ``p`` and the
     conditioned inputs ``c`` (:class:`mftire.mf.inputs.Conditions`)."""
-    absVx = np.abs(c.Vx)
     Fz0p = p["LFZO"] * p["FNOMIN"]  # eq 4.E1
     return {
         "Fz": c.Fz, "kappa": c.kappa, "alpha": c.alpha, "gamma": c.gamma, "Vx": c.Vx, "P": c.P,
-        "Vs": absVx * np.sqrt(c.kappa**2 + np.tan(c.alpha) ** 2),  # eqs 4.E5, 3.39
+        "Vs": slip_speed(c.Vx, c.kappa, c.alpha),
         "dfz": (c.Fz - Fz0p) / Fz0p,  # eq 4.E2a
         "dpi": (c.P - p["NOMPRES"]) / p["NOMPRES"],  # eq 4.E2b
         "sign_alpha": np.sign(c.alpha), "sign_kappa": np.sign(c.kappa),

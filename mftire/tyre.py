@@ -62,6 +62,24 @@ class Tyre:
         path = getattr(params, "path", None)
         self.name = name or (os.path.basename(str(path)) if path else "tyre")
 
+    def evaluate_frame(self, df: pd.DataFrame, mode: int = 111, name: str = "data") -> pd.DataFrame:
+        """Evaluate at the rows of a table: the one way to evaluate a table.
+
+        Inputs are taken from the columns by name (``Fz``, ``kappa``, ``alpha`` required;
+        ``gamma``, ``phit``, ``Vx``, ``P``, ``omega`` optional; SI units), a column whose
+        name differs only in letter case or by a same-unit alias (``fz``, ``slip_ratio``:
+        :func:`mftire.iotools.sweeps.find_column`) also counts; the variables of the model
+        extensions are taken from the columns of their names.  ``name`` labels the table in
+        error messages (a missing column names the table and the column).
+
+        Returns
+        -------
+        DataFrame
+            The 30 channels of :data:`OUTPUT_NAMES`, with the index of ``df``.
+        """
+        out = _frame_evaluate(self, df, mode, name)
+        return pd.DataFrame({k: np.broadcast_to(out[k], (len(df),)) for k in OUTPUT_NAMES}, index=df.index)
+
     @classmethod
     def from_file(cls, path: str | os.PathLike) -> Tyre:
         """Read a ``.tir`` file (see :func:`mftire.read_tir`)."""
@@ -127,6 +145,29 @@ class Tyre:
             self.flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, self.extension_set, variables or None
         )
         return MFResult(out)
+
+
+_FRAME_INPUTS = ("Fz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "omega")
+_FRAME_REQUIRED = ("Fz", "kappa", "alpha")
+
+
+def _frame_evaluate(self: Tyre, df: pd.DataFrame, mode: int = 111, name: str = "data") -> MFResult:
+    from mftire.errors import MftireInputError
+    from mftire.iotools.sweeps import find_column
+
+    kw: dict[str, np.ndarray] = {}
+    for col in _FRAME_INPUTS:
+        src = find_column(df.columns, col)
+        if src is not None:
+            kw[col] = df[src].to_numpy(dtype=float)
+    missing = [c for c in _FRAME_REQUIRED if c not in kw]
+    missing += [v for v in self.required_variables if v not in df.columns]
+    if missing:
+        raise MftireInputError(
+            f"{name}: missing column(s) {', '.join(missing)} (have: {', '.join(map(str, df.columns))})"
+        )
+    variables = {v: df[v].to_numpy(dtype=float) for v in self.required_variables}
+    return self.evaluate(**kw, mode=mode, **variables)
 
 
 def load(path: str | os.PathLike) -> Tyre:

@@ -13,7 +13,6 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable, Mapping, Sequence
 
-import numpy as np
 import pandas as pd
 
 from mftire.errors import MftireInputError
@@ -69,19 +68,8 @@ def evaluate_at(
     """
     if len(points) == 0:
         return pd.DataFrame(columns=list(channels), index=points.index, dtype=float)
-    missing = [v for v in tyre.required_variables if v not in points.columns]
-    if missing:
-        raise MftireInputError(
-            f"model {tyre.name}: its extensions need the column(s) {', '.join(missing)} in the data"
-        )
-    col = {c: points[c].to_numpy(float) for c in ("Fz", "kappa", "alpha", "gamma", "Vx", "P")}
-    phit = points["phit"].to_numpy(float) if "phit" in points.columns else 0.0
-    variables = {v: points[v].to_numpy(float) for v in tyre.required_variables}
-    with np.errstate(all="ignore"):
-        out = tyre.evaluate(col["Fz"], col["kappa"], col["alpha"], col["gamma"], phit, col["Vx"], col["P"],
-                            mode=mode, **variables)
-    return pd.DataFrame({c: np.broadcast_to(np.asarray(out[c], dtype=float), (len(points),))
-                         for c in channels}, index=points.index)
+    return tyre.evaluate_frame(points.drop(columns=["omega"], errors="ignore"), mode=mode,
+                               name=f"data for model {tyre.name}")[list(channels)]
 
 
 def evaluate_models(models: Mapping[str, Tyre], points: pd.DataFrame, mode: int = 111) -> dict[str, pd.DataFrame]:

@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 
 from mftire.iotools.sweeps import MEASURED_COLUMNS, REQUIRED_COLUMNS, group_sweeps
+from mftire.mf.basic import slip_speed
 
 #: Derived candidates, in a fixed order.
 DERIVED = ("Vs", "Vx", "P", "Fz_dev", "sign_alpha", "sign_kappa", "sweep_dir", "sequence", "energy")
@@ -73,7 +74,7 @@ def derived_candidates(df: pd.DataFrame) -> dict[str, np.ndarray]:
     kappa = df["kappa"].to_numpy(float)
     alpha = df["alpha"].to_numpy(float)
     out: dict[str, np.ndarray] = {}
-    out["Vs"] = np.abs(Vx) * np.sqrt(kappa**2 + np.tan(alpha) ** 2)
+    out["Vs"] = slip_speed(Vx, kappa, alpha)
     out["Vx"] = Vx
     out["P"] = df["P"].to_numpy(float)
     out["Fz_dev"] = df["Fz"].to_numpy(float) - df["Fz_set"].to_numpy(float)

@@ -91,24 +91,18 @@ def _progress(msg: str, enabled: bool) -> None:
         print(f"[diagnose] {msg}", file=sys.stderr, flush=True)
 
 
-def _model(tyre: Tyre, df: pd.DataFrame, variables: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-    return tyre.evaluate(
-        df["Fz"].to_numpy(float), df["kappa"].to_numpy(float), df["alpha"].to_numpy(float),
-        df["gamma"].to_numpy(float), Vx=df["Vx"].to_numpy(float), P=df["P"].to_numpy(float),
-        **{k: np.asarray(v)[: len(df)] for k, v in variables.items()},
-    )  # fmt: skip
+def _model(tyre: Tyre, df: pd.DataFrame) -> dict[str, np.ndarray]:
+    out = tyre.evaluate_frame(df.drop(columns=["phit", "omega"], errors="ignore"))
+    return {k: out[k].to_numpy() for k in out.columns}
 
 
-def _variables_for(tyre: Tyre, df: pd.DataFrame, cand: Mapping[str, Candidate]) -> dict[str, np.ndarray]:
-    out = {}
-    for name in tyre.required_variables:
-        if name in df.columns:
-            out[name] = df[name].to_numpy(float)
-        elif name in cand:
-            out[name] = cand[name].values
-        else:
-            raise MftireInputError(f"the model's extensions need the input column '{name}', which the data lack")
-    return out
+def _variables_for(tyre: Tyre, df: pd.DataFrame) -> dict[str, np.ndarray]:
+    """The columns the model's extensions read (closed variables: always data columns)."""
+    missing = [v for v in tyre.required_variables if v not in df.columns]
+    if missing:
+        raise MftireInputError(f"the model's extensions need the input column(s) {', '.join(missing)}, which the "
+                               "data lack")  # fmt: skip
+    return {v: df[v].to_numpy(float) for v in tyre.required_variables}
 
 
 def channel_errors(
@@ -168,10 +162,10 @@ def diagnose(
         raise MftireInputError("no measured channel (Fx, Fy, Mz, Mx, My) with data to diagnose")
     cands = candidates(df)
     by_name = {c.name: c for c in cands}
-    variables = _variables_for(tyre, df, by_name)
+    variables = _variables_for(tyre, df)
     _progress(f"{len(df)} rows, {df['sweep_id'].nunique()} sweeps, channels {', '.join(chans)}", progress)
 
-    model = _model(tyre, df, variables)
+    model = _model(tyre, df)
     R0 = tyre["UNLOADED_RADIUS"]
     Fz = df["Fz"].to_numpy(float)
     residuals, peaks = {}, {}
@@ -252,16 +246,10 @@ def diagnose(
     ranking.remove(cause)
     ranking.insert(0, cause)
 
-    extended = effect.apply(tyre)
-    ext_vars = dict(variables)
-    for name in extended.required_variables:
-        if name not in ext_vars:
-            ext_vars[name] = df[name].to_numpy(float) if name in df.columns else by_name[name].values
+    extended = effect.apply(tyre)  # its variables are columns of the data (closed variables)
     dtest = df[test].reset_index(drop=True)
-    before = _model(tyre, dtest, {k: np.asarray(v)[test] for k, v in variables.items()})
-    after = _model(extended, dtest, {k: np.asarray(v)[test] for k, v in ext_vars.items()})
-    errors = channel_errors(dtest, before, after, chans)
-    full_after = _model(extended, df, ext_vars)
+    errors = channel_errors(dtest, _model(tyre, dtest), _model(extended, dtest), chans)
+    full_after = _model(extended, df)
     for ch in chans:
         df[f"residual_after_{ch}"] = df[ch].to_numpy(float) - full_after[ch]
     return DiagnosisResult(True, ranking, effect, {"column": column, "values": values, "n_rows": int(test.sum())},

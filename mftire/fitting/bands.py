@@ -197,12 +197,8 @@ class Bands:
 
 
 def _evaluate(tyre: Tyre, points: pd.DataFrame, mode: int, channels: Sequence[str]) -> dict[str, np.ndarray]:
-    col = {c: points[c].to_numpy(float) for c in ("Fz", "kappa", "alpha", "gamma", "Vx", "P")}
-    variables = {v: points[v].to_numpy(float) for v in tyre.required_variables if v in points.columns}
-    with np.errstate(all="ignore"):
-        out = tyre.evaluate(col["Fz"], col["kappa"], col["alpha"], col["gamma"], 0.0, col["Vx"], col["P"],
-                            mode=mode, **variables)
-    return {ch: np.broadcast_to(np.asarray(out[ch], dtype=float), (len(points),)).copy() for ch in channels}
+    out = tyre.evaluate_frame(points.drop(columns=["phit", "omega"], errors="ignore"), mode=mode)
+    return {ch: out[ch].to_numpy(dtype=float, copy=True) for ch in channels}
 
 
 def resample_sweeps(table: pd.DataFrame, rng: np.random.Generator, strata: Sequence[str] = ("source", "kind"),

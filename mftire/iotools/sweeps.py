@@ -280,6 +280,21 @@ _ALIASES: dict[str, dict[str, str | None]] = {
 }
 
 
+def find_column(columns, column: str) -> str | None:
+    """The name among ``columns`` that holds schema ``column`` in its SI unit: the column
+    itself, a different letter case of it, or an alias of :data:`_ALIASES` that differs in
+    name only (``fz`` for ``Fz``, ``slip_ratio`` for ``kappa``; not ``sa``, usually in
+    degrees).  None when there is none; a :class:`MftireInputError` when several match."""
+    names = [str(c) for c in columns]
+    if column in names:
+        return column
+    same_unit = {a for a, unit in _ALIASES.get(column, {}).items() if unit is None} | {column.lower()}
+    hits = [n for n in names if n.lower() in same_unit]
+    if len(hits) > 1:
+        raise MftireInputError(f"columns {', '.join(map(repr, hits))} all look like {column}: keep one")
+    return hits[0] if hits else None
+
+
 def _alias_hint(df: pd.DataFrame, column: str) -> str:
     """A sentence suggesting how an existing column could become schema ``column``."""
     aliases = _ALIASES.get(column, {})

@@ -34,6 +34,12 @@ def increments(p: dict, Fz: np.ndarray, P: np.ndarray) -> tuple[float, np.ndarra
     return Fz0p, dfz, dpi
 
 
+def slip_speed(Vx, kappa, alpha):
+    """Slip speed Vs = |Vx|·sqrt(kappa² + tan²alpha) [m/s] of the contact point
+    (Pacejka 2012 eqs 4.E5, 2.12, 3.39: Vsx = −kappa·|Vx|, Vsy = tan(alpha)·|Vx|)."""
+    return np.abs(Vx) * np.sqrt(kappa**2 + np.tan(alpha) ** 2)
+
+
 def basic(p: dict, mode: Mode, c: Conditions) -> Basic:
     """Compute :class:`Basic` for the conditioned operating point ``c``.
 
@@ -42,10 +48,9 @@ def basic(p: dict, mode: Mode, c: Conditions) -> Basic:
     """
     Fz0p, dfz, dpi = increments(p, c.Fz, c.P)
     absVx = np.abs(c.Vx)
-    Vsx = -c.kappa * absVx  # eq 4.E5
     # ISO sign convention: no minus sign in eq 2.12 (the book is in adapted SAE).
     Vsy = np.tan(c.alpha) * absVx  # eq 2.12 / 4.E3
-    Vs = np.sqrt(Vsx**2 + Vsy**2)  # eq 3.39
+    Vs = slip_speed(c.Vx, c.kappa, c.alpha)  # eqs 4.E5, 3.39
     Vc = np.sqrt(c.Vx**2 + Vsy**2)  # contact-centre speed, Vcy = Vsy
     if mode.alpha_star:
         alpha_star = np.tan(c.alpha) * np.sign(c.Vx)  # eq 4.E3
