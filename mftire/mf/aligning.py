@@ -111,7 +111,11 @@ def aligning_terms(
         Drp = DDrp * np.sin(CDrp * np.arctan(BDrp * R0 * c.phit))  # TNO manual (uses phit)
         Mzp90 = Mzp_inf * (2.0 / np.pi) * np.arctan(p["QCRP2"] * R0 * np.abs(c.phit)) * Gyk  # eq 4.103
         # acos of a ratio above one is complex in the reference; keep its real outcome.
-        zeta7 = (2.0 / np.pi) * np.arccos((Mzp90 / np.abs(Drp)).astype(complex))  # TNO manual
+        # MFeval departure: with Drp = 0 (no camber torque stiffness, e.g. QDZ8..QDZ11 = 0 at
+        # zero camber) the ratio is infinite and the reference returns Inf or NaN; we take
+        # the limit of the real part of the acos, 0, so that Mzr = Dr.
+        ratio = np.where(Drp == 0.0, 1.0, Mzp90 / np.where(Drp == 0.0, 1.0, np.abs(Drp)))
+        zeta7 = (2.0 / np.pi) * np.arccos(np.asarray(ratio).astype(complex))  # TNO manual
         zeta8 = 1.0 + Drp
     else:
         zeta0, zeta2, zeta7, zeta8 = 1.0, 1.0, 1.0, 1.0

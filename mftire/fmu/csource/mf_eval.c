@@ -575,7 +575,8 @@ static void aligning_terms(const MFParams *p, Ctx *m, const Cond *c, const Basic
         Drp = DDrp * sin(CDrp * atan(BDrp * R0 * c->phit)); /* TNO manual (uses phit) */
         Mzp90 = Mzp_inf * (2.0 / MF_PI) * atan(p->QCRP2 * R0 * fabs(c->phit)) * Gyk; /* eq 4.103 */
         /* acos of a ratio above one is complex in the reference; keep its real outcome. */
-        zeta7 = (2.0 / MF_PI) * cacos(Mzp90 / fabs(Drp) + 0.0 * I); /* TNO manual */
+        /* MFeval departure (as aligning.py): Drp = 0 gives ratio 1, zeta7 = 0, Mzr = Dr. */
+        zeta7 = (2.0 / MF_PI) * cacos((Drp == 0.0 ? 1.0 : Mzp90 / fabs(Drp)) + 0.0 * I); /* TNO manual */
         zeta8 = 1.0 + Drp;
     } else {
         zeta0 = 1.0;
