@@ -65,3 +65,14 @@ def _c_compiler():
 
 #: Marker for tests that build FMU binaries (see :func:`_c_compiler`).
 needs_c_compiler = pytest.mark.usefixtures("_c_compiler")
+
+
+def turn_slip_nan_departure(p, mode: int, channel: str, gamma):
+    """Where MFeval's Mz is NaN and ours finite by design (mftire/mf/aligning.py, "MFeval
+    departure"): turn slip on, and no camber torque stiffness (QDZ8·QDZ9 = QDZ10 = 0 and
+    QDZ11·gamma = 0), so MFeval's spin-moment ratio is infinite."""
+    import numpy as np
+
+    if mode % 10 != 2 or channel not in ("Mz", "Mzr"):
+        return np.zeros(np.shape(gamma), dtype=bool)
+    return (p["QDZ8"] * p["QDZ9"] == 0) & (p["QDZ10"] == 0) & ((p["QDZ11"] == 0) | (np.asarray(gamma) == 0))
