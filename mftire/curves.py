@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from mftire.tyre import Tyre
+from mftire.tyre import Tyre, TyreLike, as_tyre
 
 #: Load factors of the standard curves, × FNOMIN.
 LOAD_FACTORS: tuple[float, ...] = (0.5, 1.0, 1.5)
@@ -29,12 +29,13 @@ def _alpha_grid(tyre: Tyre, n: int) -> np.ndarray:
     return np.linspace(max(tyre["ALPMIN"], -lim), min(tyre["ALPMAX"], lim), n)
 
 
-def standard_curves(tyre: Tyre, n: int = 101, mode: int = 111) -> pd.DataFrame:
-    """Evaluate the standard curves.
+def standard_curves(tyre: TyreLike, n: int = 101, mode: int = 111) -> pd.DataFrame:
+    """Evaluate the standard curves of ``tyre`` (a Tyre, a .tir path, TirParameters or a mapping).
 
     Returns a long DataFrame with a ``curve`` column (``pure_long``, ``pure_lat``,
     ``combined``), ``load_factor``, ``alpha_set_deg`` and the 30 output channels.
     """
+    tyre = as_tyre(tyre)
     F0 = tyre["FNOMIN"]
     frames = []
     kappa = _kappa_grid(tyre, n)

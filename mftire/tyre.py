@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, Union
 
 import numpy as np
 import pandas as pd
@@ -170,9 +170,24 @@ def _frame_evaluate(self: Tyre, df: pd.DataFrame, mode: int = 111, name: str = "
     return self.evaluate(**kw, mode=mode, **variables)
 
 
+TyreLike = Union["Tyre", TirParameters, str, os.PathLike, Mapping[str, Any]]
+
+
+def as_tyre(tyre: TyreLike) -> Tyre:
+    """A :class:`Tyre` from a Tyre, a ``.tir`` path, a :class:`TirParameters` or a flat mapping:
+    every entry point of mftire takes any of them."""
+    if isinstance(tyre, Tyre):
+        return tyre
+    if isinstance(tyre, (str, os.PathLike)):
+        return Tyre.from_file(tyre)
+    if isinstance(tyre, (TirParameters, Mapping)):
+        return Tyre(tyre)
+    raise TypeError(f"expected a Tyre, a .tir path, TirParameters or a mapping, not {type(tyre).__name__}")
+
+
 def load(path: str | os.PathLike) -> Tyre:
     """Load a ``.tir`` property file as a :class:`Tyre`."""
     return Tyre.from_file(path)
 
 
-__all__ = ["MFResult", "OUTPUT_NAMES", "Tyre", "load"]
+__all__ = ["MFResult", "OUTPUT_NAMES", "Tyre", "TyreLike", "as_tyre", "load"]

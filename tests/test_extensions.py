@@ -266,3 +266,17 @@ def test_fit_refuses_template_variable_missing_from_data():
     data = _campaign(load(REFERENCE_TYRES["MF61"]))
     with pytest.raises(MftireInputError, match="temperature"):
         fit_tir(data.drop(columns="temperature"), start.parameters, stages="1")
+
+
+def test_entry_points_accept_path_parameters_or_tyre(tmp_path):
+    from mftire.curves import standard_curves
+    from mftire.tyre import as_tyre
+
+    path = REFERENCE_TYRES["MF61"]
+    tyre = load(path)
+    for obj in (path, str(path), tyre.parameters, tyre):
+        assert as_tyre(obj).flat == tyre.flat
+        curves = standard_curves(obj, n=5)
+        assert np.isfinite(curves["Fx"]).all()
+    with pytest.raises(TypeError):
+        as_tyre(3.0)

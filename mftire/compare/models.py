@@ -16,7 +16,7 @@ from collections.abc import Iterable, Mapping, Sequence
 import pandas as pd
 
 from mftire.errors import MftireInputError
-from mftire.tyre import Tyre, load
+from mftire.tyre import Tyre, as_tyre
 
 __all__ = ["MODEL_CHANNELS", "load_models", "evaluate_at", "evaluate_models"]
 
@@ -33,7 +33,7 @@ def load_models(models: Iterable[str | os.PathLike | Tyre] | Mapping[str, str | 
     items = list(models.items()) if isinstance(models, Mapping) else [(None, m) for m in models]
     out: dict[str, Tyre] = {}
     for name, m in items:
-        tyre = m if isinstance(m, Tyre) else load(m)
+        tyre = as_tyre(m)
         base = name or (os.path.splitext(tyre.name)[0] if not isinstance(m, Tyre) else tyre.name)
         label, i = str(base), 2
         while label in out:

@@ -44,7 +44,7 @@ from mftire.diagnosis.ranking import (
 )
 from mftire.errors import MftireInputError
 from mftire.iotools.sweeps import MEASURED_COLUMNS
-from mftire.tyre import Tyre
+from mftire.tyre import Tyre, TyreLike, as_tyre
 
 
 @dataclass
@@ -132,7 +132,7 @@ def channel_errors(
 
 def diagnose(
     data: pd.DataFrame,
-    tyre: Tyre,
+    tyre: TyreLike,
     holdout: tuple[str, Sequence[float]] | None = None,
     *,
     channels: Sequence[str] | None = None,
@@ -154,6 +154,7 @@ def diagnose(
     channels : sequence of str, optional
         Channels to analyse (default: every measured channel present).
     """
+    tyre = as_tyre(tyre)
     if progress is None:
         progress = sys.stderr.isatty()
     df = with_sweeps(data.reset_index(drop=True))

@@ -274,7 +274,7 @@ def _residual_sigma(result: FitResult, channels: Sequence[str]) -> dict[str, dic
 
 def bootstrap_bands(
     data,
-    template: TirParameters | str | os.PathLike,
+    template: TirParameters | str | os.PathLike | Tyre,
     n: int = 50,
     *,
     level: float = 0.95,

@@ -47,6 +47,7 @@ from mftire.iotools.sweeps import group_sweeps
 from mftire.iotools.tir import TirParameters, read_tir
 from mftire.mf.modes import Mode
 from mftire.parameters import with_defaults
+from mftire.tyre import Tyre
 
 __all__ = ["StageResult", "FitResult", "fit_tir", "LOSS", "F_SCALE", "CONDITION_KEYS"]
 
@@ -491,7 +492,9 @@ def _run_group(
 # ------------------------------------------------------------------------------------
 
 
-def _as_template(template: TirParameters | str | os.PathLike | Mapping) -> TirParameters:
+def _as_template(template) -> TirParameters:
+    if isinstance(template, Tyre):
+        return template.parameters.copy()
     if isinstance(template, TirParameters):
         return template.copy()
     if isinstance(template, (str, os.PathLike)):
@@ -549,7 +552,7 @@ def _as_table(data) -> tuple[pd.DataFrame, int, list[str]]:
 
 def fit_tir(
     data: pd.DataFrame | str | os.PathLike | Sequence,
-    template: TirParameters | str | os.PathLike,
+    template: TirParameters | str | os.PathLike | Mapping | Tyre,
     *,
     stages: str | Sequence | None = None,
     weights: str | Mapping[str, float] | None = None,

@@ -91,8 +91,16 @@ class Prepared:
     dpi: np.ndarray  #: normalised pressure increment [-] (eq 4.E2b)
     Re: np.ndarray  #: effective rolling radius [m]
     Romega: np.ndarray  #: free radius at the wheel spin [m]
-    variables: dict[str, np.ndarray]  #: builtin and external extension variables
+    variables: dict[str, np.ndarray]  #: external extension variables (data columns)
     shape: tuple[int, ...]
+    builtin: dict[str, np.ndarray] | None = None  #: builtin variables, computed when first needed
+
+    def all_variables(self, p: Mapping[str, float]) -> dict[str, np.ndarray]:
+        """External and builtin variables (:data:`mftire.extensions.BUILTIN_VARIABLES`)."""
+        if self.builtin is None:
+            with np.errstate(all="ignore"):
+                self.builtin = builtin_variables(p, self.c)
+        return {**self.variables, **self.builtin}
 
 
 def prepare(
@@ -143,8 +151,7 @@ def prepare(
         c = condition_inputs(p, m, Fz, kappa, alpha, gamma, phit, Vx, P)
         dpi = (c.P - p["NOMPRES"]) / p["NOMPRES"]  # eq 4.E2b
         Re, Romega, c.omega = effective_rolling_radius(p, c, dpi, omega)
-        builtin = builtin_variables(p, c)
-    return Prepared(m, c, dpi, Re, Romega, {**external, **builtin}, shape)
+    return Prepared(m, c, dpi, Re, Romega, external, shape)
 
 
 def scaled(
@@ -159,7 +166,7 @@ def scaled(
     if not extensions:
         return p, {}
     with np.errstate(all="ignore"):
-        return extensions.scale(p, pre.variables)
+        return extensions.scale(p, pre.all_variables(p))
 
 
 @dataclass
