@@ -32,10 +32,12 @@ from mftire.diagnosis.effects import (
     EffectFit,
     choose_effect,
     drop_outliers,
+    effects_for,
     make_problem,
     primary_rows,
 )
 from mftire.diagnosis.holdout import default_holdout, holdout_mask, levels
+from mftire.diagnosis.profile import Profiles, profile_factors
 from mftire.diagnosis.ranking import (
     CandidateScore,
     baseline_features,
@@ -43,6 +45,7 @@ from mftire.diagnosis.ranking import (
     rank_candidates,
 )
 from mftire.errors import MftireInputError
+from mftire.fitting.data import noise_std
 from mftire.iotools.sweeps import MEASURED_COLUMNS
 from mftire.tyre import Tyre, TyreLike, as_tyre
 
@@ -74,6 +77,9 @@ class DiagnosisResult:
     messages: list[str] = field(default_factory=list)
     data: pd.DataFrame | None = None  #: the grouped data with derived candidates and residuals
     train: np.ndarray | None = None  #: boolean mask of the rows used to fit the effect
+    not_measured: dict[str, str] = field(default_factory=dict)  #: channel -> why it was left out
+    profiles: Profiles | None = None  #: per-sweep scaling-factor profiles
+    confounding: list[str] = field(default_factory=list)  #: what the cause is confounded with, in words
 
     def summary(self) -> str:
         if not self.significant:
@@ -94,6 +100,43 @@ def _progress(msg: str, enabled: bool) -> None:
 def _model(tyre: Tyre, df: pd.DataFrame) -> dict[str, np.ndarray]:
     out = tyre.evaluate_frame(df.drop(columns=["phit", "omega"], errors="ignore"))
     return {k: out[k].to_numpy() for k in out.columns}
+
+
+#: A channel whose residual RMS is within this factor of its noise holds nothing to explain.
+NOISE_FLOOR = 1.2
+#: Share of rows with a value below which a channel counts as not measured.
+MIN_PRESENT = 0.5
+
+
+def measured_channels(df: pd.DataFrame, channels: Sequence[str]) -> tuple[list[str], dict[str, str]]:
+    """Channel hygiene: the channels with data, and ``{channel: reason}`` for those left out
+    (absent, all NaN, mostly missing, all zeros or constant: "not measured")."""
+    keep, out = [], {}
+    for ch in channels:
+        if ch not in df.columns:
+            continue
+        y = pd.to_numeric(df[ch], errors="coerce").to_numpy(float)
+        ok = np.isfinite(y)
+        if not ok.any():
+            out[ch] = "not measured: all NaN"
+        elif ok.mean() < MIN_PRESENT:
+            out[ch] = f"not measured: {100 * (1 - ok.mean()):.0f} % missing"
+        elif np.all(y[ok] == 0.0):
+            out[ch] = "not measured: all zeros"
+        elif np.ptp(y[ok]) == 0.0:
+            out[ch] = f"not measured: constant ({y[ok][0]:g})"
+        elif ok.sum() <= 10:
+            out[ch] = "not measured: 10 values or fewer"
+        else:
+            keep.append(ch)
+    return keep, out
+
+
+def channel_noise(df: pd.DataFrame, channel: str) -> float:
+    """Noise standard deviation of a channel along its sweeps [channel unit]."""
+    x = np.where(df["sweep_var"].to_numpy() == "kappa", df["kappa"].to_numpy(float), df["alpha"].to_numpy(float)) \
+        if "sweep_var" in df.columns else df["alpha"].to_numpy(float)
+    return noise_std(df[channel].to_numpy(float), x, df["sweep_id"].to_numpy())
 
 
 def _variables_for(tyre: Tyre, df: pd.DataFrame) -> dict[str, np.ndarray]:
@@ -158,9 +201,10 @@ def diagnose(
     if progress is None:
         progress = sys.stderr.isatty()
     df = with_sweeps(data.reset_index(drop=True))
-    chans = [c for c in (channels or MEASURED_COLUMNS) if c in df.columns and df[c].notna().sum() > 10]
+    chans, not_measured = measured_channels(df, channels or MEASURED_COLUMNS)
     if not chans:
-        raise MftireInputError("no measured channel (Fx, Fy, Mz, Mx, My) with data to diagnose")
+        raise MftireInputError("no measured channel (Fx, Fy, Mz, Mx, My) with data to diagnose"
+                               + "".join(f"; {c}: {why}" for c, why in not_measured.items()))
     cands = candidates(df)
     by_name = {c.name: c for c in cands}
     variables = _variables_for(tyre, df)
@@ -169,13 +213,18 @@ def diagnose(
     model = _model(tyre, df)
     R0 = tyre["UNLOADED_RADIUS"]
     Fz = df["Fz"].to_numpy(float)
-    residuals, peaks = {}, {}
+    residuals, peaks, noise = {}, {}, {}
     for ch in chans:
         y = df[ch].to_numpy(float)
-        residuals[ch] = normalised_residual(ch, y, model[ch], Fz, R0)
         scale = Fz * R0 if ch in ("Mz", "Mx", "My") else Fz
         peaks[ch] = float(np.nanmax(np.abs(y / scale)))
         df[f"residual_{ch}"] = y - model[ch]
+        noise[ch] = channel_noise(df, ch)
+        rms = float(np.sqrt(np.nanmean((y - model[ch])[primary_rows(df, ch)] ** 2)))
+        if rms <= NOISE_FLOOR * noise[ch]:  # nothing systematic left: never outranks the others
+            not_measured[ch] = f"residual at the noise floor (RMS {rms:.3g} vs noise {noise[ch]:.3g})"
+            continue
+        residuals[ch] = normalised_residual(ch, y, model[ch], Fz, R0)
     X0 = baseline_features(df["kappa"].to_numpy(float), df["alpha"].to_numpy(float), df["gamma"].to_numpy(float),
                            Fz, tyre["FNOMIN"])  # fmt: skip
     _progress(f"ranking {len(cands)} candidates", progress)
@@ -184,9 +233,13 @@ def diagnose(
     for name, c in by_name.items():
         if name not in df.columns:
             df[name] = c.values
+    _progress("profiling the scaling factors per sweep", progress)
+    cand_values = {c.name: c.values for c in cands if c.name not in HISTORY_CANDIDATES}
+    profiles = profile_factors(tyre, df, cand_values, [c for c in chans if c in ("Fx", "Fy")], noise, seed=seed)
     significant = [e for e in ranking if e.significant]
     if not significant:
-        return DiagnosisResult(False, ranking, None, None, messages=["no significant effect"], data=df)
+        return DiagnosisResult(False, ranking, None, None, messages=["no significant effect"], data=df,
+                               not_measured=not_measured, profiles=profiles)  # fmt: skip
 
     # hold out an operating condition
     top = significant[0]
@@ -201,7 +254,7 @@ def diagnose(
 
     group = [e for e in significant if e.score >= 0.6 * top.score][:3]
     n_pressures = len(levels(df[train], "P"))
-    best: tuple[EffectFit, CandidateScore] | None = None
+    found: list[tuple[EffectFit, CandidateScore]] = []
     tried: list[EffectFit] = []
     control: EffectFit | None = None  # the refit without any effect, shared by the candidates
     dtrain = df[train].reset_index(drop=True)
@@ -217,7 +270,9 @@ def diagnose(
                     f"column '{variable}' instead")
             c = by_name.get(variable) or Candidate(variable, df[variable].to_numpy(float), False, False)
         v = c.values[train]
-        monotone = bool(np.all(np.diff(v) >= 0))
+        monotone = bool(np.all(np.diff(v) >= 0)) or variable == time_column(df)
+        families = profiles.families_for(variable) or ["friction"]
+        second = profiles.second_variable(variable, cand_values) if len(np.unique(v)) <= 3 else None
         dtr = dtrain.assign(_cand=v)
         prob = make_problem(tyre, dtr, chans)
         prob.variables = {k: np.asarray(val)[train] for k, val in variables.items()}
@@ -225,21 +280,26 @@ def diagnose(
         v = prob.df["_cand"].to_numpy(float)
         _progress(f"fitting effects for {e.variable}", progress)
         eff_ch = [ch for ch, sc in e.channel_scores.items() if sc >= max(0.05, 0.25 * e.score)] or [e.channel]
-        chosen, fits = choose_effect(prob, variable, v, derived, monotone, n_pressures, control, eff_ch)
+        n_levels = int(np.unique(np.round(v[np.isfinite(v)], 9)).size)
+        laws = [(var, law, v if var == variable else None)
+                for var, law in effects_for(variable, derived, monotone, n_levels, families, chans, second)]
+        chosen, fits = choose_effect(prob, laws, n_pressures, control, eff_ch)
         control = fits[0]
         tried += fits[1:] if len(tried) else fits
         if chosen is None or chosen.removed <= 0:
             continue
         if note:
             chosen.messages.insert(0, note)
-        key = (not chosen.physical, chosen.bic)
-        if best is None or key < (not best[0].physical, best[0].bic):
-            best = (chosen, e)
+        found.append((chosen, e))
+    # the lowest held-out error wins; a better-ranked candidate within 10 % of it is preferred
+    lowest = min((f.heldout for f, _ in found), default=np.inf)
+    best = next(((f, e) for f, e in found if f.heldout <= 1.1 * lowest), None)
     if best is None:
         msg = ("no significant effect: candidates were flagged, but no model term explains the residual better "
                "than refitting the model without it")
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
-                               tried=tried, messages=[msg], data=df, train=train)
+                               tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
+                               profiles=profiles)  # fmt: skip
     effect, cause = best
     named = [e for e in ranking if e.variable == effect.variable and e.significant]
     if named and effect.variable != cause.variable:  # e.g. a slip-speed law chosen for Vx: the cause is Vs
@@ -254,5 +314,6 @@ def diagnose(
     for ch in chans:
         df[f"residual_after_{ch}"] = df[ch].to_numpy(float) - full_after[ch]
     return DiagnosisResult(True, ranking, effect, {"column": column, "values": values, "n_rows": int(test.sum())},
-                           errors, extended, tried, data=df, train=train)  # fmt: skip
+                           errors, extended, tried, data=df, train=train, not_measured=not_measured,
+                           profiles=profiles, confounding=profiles.confounding(effect.variable))  # fmt: skip
 

@@ -48,9 +48,24 @@ class Law:
     name: str
     targets: tuple[str, ...]
     form: str
+    variable2: str | None = None  #: second variable of the interaction form
 
 
 _FRICTION = ("LMUX", "LMUY")
+#: Targets of each family of scaling factors, by channel (:mod:`mftire.diagnosis.profile`).
+FAMILY_TARGETS = {
+    "friction": {"Fx": ("LMUX",), "Fy": ("LMUY",)},
+    "stiffness": {"Fx": ("LKX",), "Fy": ("LKY",)},
+    "curvature": {"Fx": ("LEX",), "Fy": ("LEY",)},
+    "shape": {"Fx": ("LCX",), "Fy": ("LCY",)},
+    "shift": {"Fx": ("FX_OFFSET",), "Fy": ("FY_OFFSET",)},
+}
+
+
+def family_targets(family: str, channels: Sequence[str]) -> tuple[str, ...]:
+    """The scaling factors of ``family`` for the force channels present (friction: LMUX, LMUY)."""
+    out = [t for ch in ("Fx", "Fy") if ch in channels for t in FAMILY_TARGETS[family][ch]]
+    return tuple(out) or tuple(t for ts in FAMILY_TARGETS[family].values() for t in ts)
 
 #: Laws tried for each derived candidate (data columns: see :func:`effects_for`);
 #: ``(variable the law reads, law)``: Fz_dev is read as the builtin dfz.
@@ -111,6 +126,8 @@ class EffectFit:
     bic: float
     n_params: int
     messages: list[str] = field(default_factory=list)
+    heldout: float = float("nan")  #: held-out-sweep error relative to the control refit [-]
+    targets: tuple[str, ...] = ()  #: scaling factors (or offsets) the law acts on
 
     @property
     def removed(self) -> float:
@@ -131,21 +148,36 @@ def _tyre_with(tyre: Tyre, standard: Mapping[str, float], section: Mapping[str, 
     return Tyre(params, name=tyre.name)
 
 
-def effects_for(variable: str, derived: bool, monotone: bool, n_levels: int = 99) -> tuple[tuple[str, Law], ...]:
+def effects_for(
+    variable: str, derived: bool, monotone: bool, n_levels: int = 99, families: Sequence[str] = ("friction",),
+    channels: Sequence[str] = ("Fx", "Fy"), second: str | None = None,
+) -> tuple[tuple[str, Law], ...]:
     """Laws to try for a candidate, as ``(variable read, law)``.
 
-    Data columns: a saturating friction fade when the variable never decreases along the
-    sequence (time, distance ...), friction linear and quadratic in it, and a per-level
-    table when it has at most :data:`mftire.extensions.MAX_LEVELS` levels.
+    Derived candidates: their documented laws (:data:`EFFECTS_FOR`).  Data columns, for
+    each family of scaling factors the per-sweep profiles link to the variable (friction
+    when none): a saturating law when the variable never decreases along the sequence
+    (fade or warm-up with time), linear and quadratic laws, a per-level table when it has
+    at most :data:`mftire.extensions.MAX_LEVELS` levels, and, for a flag with a second
+    variable ``second``, the interaction of the two.
     """
-    if derived:
-        return EFFECTS_FOR.get(variable, ())
-    laws = [(variable, Law("friction_fade", _FRICTION, "saturating"))] if monotone else []
-    laws += [(variable, Law("friction_variable", _FRICTION, "linear"))]
-    if n_levels >= 4:
-        laws += [(variable, Law("friction_variable_quadratic", _FRICTION, "quadratic"))]
-    if 2 <= n_levels <= MAX_LEVELS:
-        laws += [(variable, Law("friction_levels", _FRICTION, "table"))]
+    laws: list[tuple[str, Law]] = list(EFFECTS_FOR.get(variable, ())) if derived else []
+    for fam in families:
+        tg = family_targets(fam, channels)
+        if derived and fam == "friction" and laws:
+            continue
+        if variable in ("sequence", "energy", "P"):  # P: the MF's own pressure terms (Pacejka 2012 eq 4.E2b)
+            continue
+        if monotone and not derived:
+            laws.append((variable, Law(f"{fam}_fade" if fam == "friction" else f"{fam}_saturating", tg,
+                                       "saturating")))  # fmt: skip
+        laws.append((variable, Law(f"{fam}_variable", tg, "linear")))
+        if n_levels >= 4:
+            laws.append((variable, Law(f"{fam}_variable_quadratic", tg, "quadratic")))
+        if 2 <= n_levels <= min(MAX_LEVELS, 5) and not derived:
+            laws.append((variable, Law(f"{fam}_levels", tg, "table")))
+        if second is not None and n_levels <= 3:
+            laws.append((variable, Law(f"{fam}_interaction", tg, "interaction", variable2=second)))
     return tuple(laws)
 
 
@@ -214,6 +246,13 @@ def drop_outliers(prob: _Problem, limit: float = 10.0) -> _Problem:
                     {k: np.asarray(v)[keep] for k, v in prob.variables.items()}, prob.weights[keep])  # fmt: skip
 
 
+def take(prob: _Problem, rows: np.ndarray) -> _Problem:
+    """The problem restricted to ``rows`` (a boolean mask or indices)."""
+    idx = np.flatnonzero(rows) if np.asarray(rows).dtype == bool else np.asarray(rows)
+    return _Problem(prob.tyre, prob.df.iloc[idx].reset_index(drop=True), prob.channels, prob.scale,
+                    {k: np.asarray(v)[idx] for k, v in prob.variables.items()}, prob.weights[idx])  # fmt: skip
+
+
 def subsample(prob: _Problem, max_rows: int = MAX_ROWS) -> tuple[_Problem, np.ndarray]:
     """An evenly spaced subsample of the training rows (keeps the sequence and every sweep)."""
     n = len(prob.df)
@@ -249,7 +288,8 @@ MODE = Mode.from_code(111)
 def _model(prob: _Problem, ext: ExtensionSet, variables: Mapping[str, np.ndarray]) -> Model:
     """The model pipeline at the problem's rows (piece 1 done once)."""
     x = Inputs.from_frame(prob.df)
-    x.variables = {k: np.asarray(v, float) for k, v in variables.items() if k in ext.external_variables}
+    x.variables = {k: (np.asarray(variables[k], float) if k in variables else prob.df[k].to_numpy(float))
+                   for k in ext.external_variables}  # fmt: skip
     return Model(prob.tyre.flat, x, MODE, ext)
 
 
@@ -277,7 +317,8 @@ def _degree(v: np.ndarray, most: int) -> int:
     return int(max(1, min(most, levels - 2)))
 
 
-def law_term(law: Law, variable: str, v: np.ndarray | None, tyre: Tyre, index: int) -> Extension:
+def law_term(law: Law, variable: str, v: np.ndarray | None, tyre: Tyre, index: int,
+             v2: np.ndarray | None = None) -> Extension:
     """The extension term of ``law`` in ``variable`` (values ``v`` for data columns), numbered ``index``.
 
     Data variables are normalised by their median and standard deviation and clipped to
@@ -291,12 +332,20 @@ def law_term(law: Law, variable: str, v: np.ndarray | None, tyre: Tyre, index: i
     elif v is not None and np.isfinite(v).any():
         vv = np.asarray(v, float)[np.isfinite(v)]
         sc = float(np.std(vv)) or 1.0
-        numbers.update(REF=float(np.median(vv)), SCALE=sc, MIN=float(vv.min()), MAX=float(vv.max()))
+        span = float(vv.max() - vv.min())
+        # clipped half a span beyond the fitted range: a level just beyond the data is predicted,
+        # a wild extrapolation is not
+        numbers.update(REF=float(np.median(vv)), SCALE=sc, MIN=float(vv.min()) - 0.5 * span,
+                       MAX=float(vv.max()) + 0.5 * span)
         if law.form == "saturating":
             numbers.update(REF=float(vv.min()))
         if law.form == "table":
             for i, lev in enumerate(np.unique(np.round(vv, 9))[:MAX_LEVELS], start=1):
                 numbers[f"L{i}"] = float(lev)
+    if law.variable2 is not None and v2 is not None:
+        vv2 = np.asarray(v2, float)[np.isfinite(v2)]
+        numbers.update(REF2=float(np.min(vv2)), SCALE2=float(np.std(vv2)) or 1.0)
+        return make_extension(index, law.targets, law.form, variable, variable2=law.variable2, **numbers)
     return make_extension(index, law.targets, law.form, variable, **numbers)
 
 
@@ -339,13 +388,20 @@ def fit_effect(
         keys, x0, bounds = [], [], []
     else:
         index = max((t.index for t in base.terms), default=0) + 1
-        term = law_term(law, variable, values, tyre, index)
+        v2 = None
+        if law.variable2 is not None:
+            v2 = prob.variables.get(law.variable2)
+            if v2 is None and law.variable2 in prob.df.columns:
+                v2 = prob.df[law.variable2].to_numpy(float)
+        term = law_term(law, variable, values, tyre, index, v2)
         keys = list(term.coefficient_keys)
         x0 = [term.start(k) for k in keys]
         bounds = [term.bounds(k) for k in keys]
     variables = dict(prob.variables)
     if term is not None and variable not in BUILTIN_VARIABLES and values is not None:
         variables[variable] = values
+    if term is not None and law.variable2 is not None and law.variable2 not in BUILTIN_VARIABLES:
+        variables[law.variable2] = prob.df[law.variable2].to_numpy(float)
     base_r = _residuals(prob, _model(prob, base, variables), tyre.flat)
     ss0 = float(base_r @ base_r)
     ext = parse_section({**base_section, **term.section()}) if term is not None else base
@@ -393,7 +449,8 @@ def fit_effect(
     standard, section = build(res.x)
     section = {k: v for k, v in section.items() if k not in base_section}
     params = {kk: float(vv) for kk, vv in zip(keys, res.x[: len(keys)], strict=True)}
-    fit = EffectFit(law.name, variable, True, params, section, standard, ss0, ss1, float(bic), k, messages)
+    fit = EffectFit(law.name, variable, True, params, section, standard, ss0, ss1, float(bic), k, messages,
+                    targets=law.targets)
     if term is not None:
         fit.messages.append(f"term: {term.describe()}")
     return fit
@@ -411,38 +468,82 @@ def _beats(fit: EffectFit, control: EffectFit) -> bool:
     return fit.ss_after <= MAX_RESIDUAL_VS_CONTROL * ref_ss and fit.bic < ref_bic
 
 
+def fit_residuals(prob: _Problem, fit: EffectFit, values: np.ndarray | None) -> np.ndarray:
+    """Residuals of ``prob`` (e.g. held-out rows) under a fitted effect."""
+    variables = dict(prob.variables)
+    if values is not None and fit.variable not in BUILTIN_VARIABLES:
+        variables[fit.variable] = values
+    ext = parse_section({**(prob.tyre.extensions or {}), **fit.section})
+    q = {**prob.tyre.flat, **fit.standard, **{k: v for k, v in fit.section.items() if isinstance(v, float)}}
+    return _residuals(prob, _model(prob, ext, variables), q)
+
+
+#: Folds of the held-out-sweep comparison of laws.
+CV_FOLDS = 3
+
+
+def heldout_error(
+    prob: _Problem, law: Law, variable: str, values: np.ndarray | None, n_pressures: int,
+    warm: Mapping[str, float] | None, pressure_channels: Sequence[str] | None,
+) -> float:
+    """Sum of squared weighted residuals on held-out sweeps (``CV_FOLDS`` folds by sweep)."""
+    from mftire.diagnosis.ranking import fold_of_groups
+
+    folds = fold_of_groups(prob.df["sweep_id"].to_numpy(), CV_FOLDS, seed=1)
+    total = 0.0
+    for f in range(CV_FOLDS):
+        test = folds == f
+        tr, te = take(prob, ~test), take(prob, test)
+        v_tr = None if values is None else np.asarray(values)[~test]
+        v_te = None if values is None else np.asarray(values)[test]
+        fit = fit_effect(tr, law, variable, v_tr, n_pressures, warm=warm, pressure_channels=pressure_channels)
+        r = fit_residuals(te, fit, v_te)
+        total += float(r @ r)
+    return total
+
+
 def choose_effect(
     prob: _Problem,
-    variable: str,
-    values: np.ndarray | None,
-    derived: bool,
-    monotone: bool,
+    laws: Sequence[tuple[str, Law, np.ndarray | None]],
     n_pressures: int,
     control: EffectFit | None = None,
     effect_channels: Sequence[str] | None = None,
 ) -> tuple[EffectFit | None, list[EffectFit]]:
-    """Fit the laws mapped to ``variable`` (:func:`effects_for`); choose one.
+    """Fit the candidate laws ``(variable read, law, values of the variable or None)``; choose one.
 
     ``effect_channels`` are the channels where the candidate is significant; the
     pressure effect fits only their pressure terms.
 
     Every fit is compared with a *control*: the same coefficients refitted without
-    any extension.  An effect is only chosen if it beats the control (see
-    :func:`_beats`), so refitting alone cannot pass for a missing effect; among those
-    that do, the lowest BIC wins.
+    any extension.  The laws that beat the control on the training data (see
+    :func:`_beats`) are then compared, with the control, by their error on held-out
+    sweeps (:func:`heldout_error`): the law with the lowest held-out error is chosen, and
+    only when it beats the control's held-out error by 10 %.  Training error alone never
+    chooses a law.
 
-    Returns ``(chosen, all_fits)``; chosen is None when no effect beats the control.
+    Returns ``(chosen, all_fits)``; chosen is None when no law beats the control.
     """
     prob, idx = subsample(prob)
-    values = None if values is None else np.asarray(values)[idx]
+    laws = [(var, law, None if v is None else np.asarray(v)[idx]) for var, law, v in laws]
     if control is None:
-        control = fit_effect(prob, CONTROL, variable, values, n_pressures)
-    n_levels = 0 if values is None else int(np.unique(np.round(values[np.isfinite(values)], 9)).size)
-    fits: list[EffectFit] = []
-    for var, law in effects_for(variable, derived, monotone, n_levels):
-        v = values if var == variable else None
-        fits.append(fit_effect(prob, law, var, v, n_pressures, warm=control.standard,
-                               pressure_channels=effect_channels))  # fmt: skip
-    good = [f for f in fits if f.n_params > 0 and _beats(f, control)]
-    fits.insert(0, control)
-    return (min(good, key=lambda f: f.bic) if good else None), fits
+        control = fit_effect(prob, CONTROL, laws[0][0] if laws else "", None, n_pressures)
+    fits: list[tuple[EffectFit, np.ndarray | None, Law]] = []
+    for var, law, v in laws:
+        fits.append((fit_effect(prob, law, var, v, n_pressures, warm=control.standard,
+                                pressure_channels=effect_channels), v, law))  # fmt: skip
+    good = sorted((t for t in fits if t[0].n_params > 0 and _beats(t[0], control)), key=lambda t: t[0].bic)[:3]
+    all_fits = [control] + [f for f, _, _ in fits]
+    if not good:
+        return None, all_fits
+    cv_control = heldout_error(prob, CONTROL, "", None, n_pressures, None, effect_channels)
+    control.messages.append(f"held-out-sweep error {cv_control:.4g}")
+    best, best_cv = None, np.inf
+    for fit, v, law in good:
+        cv = heldout_error(prob, law, fit.variable, v, n_pressures, control.standard, effect_channels)
+        fit.messages.append(f"held-out-sweep error {cv:.4g} (control {cv_control:.4g})")
+        fit.heldout = cv / cv_control if cv_control > 0 else np.inf
+        if cv < best_cv:
+            best, best_cv = fit, cv
+    if best is None or best_cv > MAX_RESIDUAL_VS_CONTROL * cv_control:
+        return None, all_fits
+    return best, all_fits

@@ -1,0 +1,365 @@
+"""Profile the MF scaling factors per sweep: which property of the tyre changes, and with what.
+
+A tyre engineer reads a campaign by refitting a few scaling factors sweep by sweep with
+everything else held at the global fit, and by looking at how they move:
+
+* pure longitudinal sweeps: LMUX (peak friction), LKX (slip stiffness), LEX (curvature),
+  LCX (shape) and an Fx offset;
+* pure lateral sweeps: LMUY, LKY, LEY, LCY and an Fy offset
+
+(Pacejka 2012 §4.3.2, Table 4.4; the offsets are ``FX_OFFSET``/``FY_OFFSET`` of
+:mod:`mftire.extensions`: a force Fz·c, the shifts' effect).  All sweeps are fitted in
+one bounded least-squares problem whose Jacobian is block-diagonal (each sweep has its
+own factors), with a weak prior pulling each factor to 1 (offset 0) so that a sweep that
+cannot identify a factor (no peak reached) leaves it near neutral.
+
+**Which factor changes.** The spread of a factor across sweeps is compared with the
+spread expected from noise: the standard errors of each sweep's factors from the
+Jacobian at the optimum (a local bootstrap), giving χ² = Σ((λ_s − λ̄)/se_s)² on
+n_sweeps − 1 degrees of freedom.  A factor is *affected* when that spread is significant
+(p < 0.001) and large enough to matter (standard deviation of λ ≥ 1 %, offsets ≥ 0.5 %
+of the load).
+
+**With what.** The per-sweep values are correlated with the sweep means of the
+candidate variables: cross-validated by sweep (leave one sweep out, a straight line and
+a per-level mean for categorical variables), with a permutation test over sweeps.
+
+**What is confounded.** A candidate whose sweep means correlate with an MF input
+(load, speed, pressure, camber set points) or with the test order (|r| > 0.5) is
+reported with the within-block correlation of the factor: blocks are the levels of the
+confounder; a significant correlation inside blocks separates the two explanations.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from scipy import sparse, stats
+from scipy.optimize import least_squares
+
+from mftire.fitting.model import Inputs, Model
+from mftire.mf.modes import Mode
+from mftire.tyre import Tyre
+
+#: Profiled factors per channel and the sweep kind they are fitted on.
+FACTORS: dict[str, tuple[str, ...]] = {
+    "Fx": ("LMUX", "LKX", "LEX", "LCX", "FX_OFFSET"),
+    "Fy": ("LMUY", "LKY", "LEY", "LCY", "FY_OFFSET"),
+}
+KIND = {"Fx": "pure_longitudinal", "Fy": "pure_lateral"}
+#: Family of each factor (names used in reports).
+FAMILY = {"LMUX": "friction", "LMUY": "friction", "LKX": "stiffness", "LKY": "stiffness", "LEX": "curvature",
+          "LEY": "curvature", "LCX": "shape", "LCY": "shape", "FX_OFFSET": "shift", "FY_OFFSET": "shift"}  # fmt: skip
+#: Prior standard deviation of each factor (weak: the data decide where they can).
+PRIOR = {"LMU": 0.3, "LK": 0.5, "LE": 1.0, "LC": 0.2, "OFF": 0.05}
+#: Smallest spread that matters: standard deviation of λ across sweeps (offsets: × Fz).
+MIN_SPREAD = {"LMU": 0.01, "LK": 0.02, "LE": 0.05, "LC": 0.01, "OFF": 0.005}
+#: Significance of the spread test.
+SPREAD_ALPHA = 1e-3
+#: Confounding threshold on |r| across sweeps.
+CONFOUND_R = 0.5
+MODE = Mode.from_code(111)
+
+
+def _group(name: str) -> str:
+    return "OFF" if name.endswith("OFFSET") else name[:3] if name.startswith("LMU") else name[:2]
+
+
+@dataclass
+class FactorProfile:
+    """Per-sweep values of one scaling factor."""
+
+    factor: str
+    channel: str
+    sweeps: np.ndarray  #: sweep ids
+    values: np.ndarray  #: λ per sweep (offsets: the factor c of Fz·c)
+    se: np.ndarray  #: standard error per sweep (from noise)
+    chi2_p: float  #: p-value of the spread being noise
+    spread: float  #: standard deviation of the values across sweeps
+    affected: bool
+
+    @property
+    def family(self) -> str:
+        return FAMILY[self.factor]
+
+
+@dataclass
+class VariableLink:
+    """How well a candidate's sweep means predict a factor's per-sweep values."""
+
+    variable: str
+    factor: str
+    score: float  #: 1 − CV MSE / variance [-]
+    p_value: float
+    r: float  #: Pearson correlation across sweeps
+    confounded_with: dict[str, float] = field(default_factory=dict)  #: name -> r across sweeps
+    within_block_p: dict[str, float] = field(default_factory=dict)  #: confounder -> p of the within-block test
+
+
+@dataclass
+class Profiles:
+    """Result of :func:`profile_factors`."""
+
+    factors: list[FactorProfile]
+    links: list[VariableLink]
+    sweep_table: pd.DataFrame  #: one row per profiled sweep: id, kind, factor values, candidate means
+
+    @property
+    def affected(self) -> list[FactorProfile]:
+        return [f for f in self.factors if f.affected]
+
+    def best_link(self) -> VariableLink | None:
+        ok = [link for link in self.links if link.p_value <= 0.05 and link.score > 0.2]
+        return max(ok, key=lambda v: v.score) if ok else None
+
+    def families_for(self, variable: str) -> list[str]:
+        """Families of the affected factors that ``variable`` predicts (best first)."""
+        out: list[str] = []
+        for link in self.links:
+            if link.variable == variable and link.p_value <= 0.05 and link.score > 0.2:
+                fam = FAMILY[link.factor]
+                if fam not in out:
+                    out.append(fam)
+        return out[:2]
+
+    def second_variable(self, variable: str, candidates: Mapping[str, np.ndarray]) -> str | None:
+        """For a flag ``variable``: the candidate that best explains, within the flag's levels,
+        what the flag leaves of the most affected factor it predicts (an interaction)."""
+        links = [lk for lk in self.links if lk.variable == variable and lk.p_value <= 0.05]
+        if not links or self.sweep_table.empty:
+            return None
+        f = links[0]
+        t = self.sweep_table[self.sweep_table["channel"] == next(p.channel for p in self.factors
+                                                                  if p.factor == f.factor)]  # fmt: skip
+        lam, flag = t[f.factor].to_numpy(float), t[variable].to_numpy(float)
+        rest = lam.copy()
+        for level in np.unique(flag):
+            rest[flag == level] -= rest[flag == level].mean()
+        best, best_p = None, 0.01
+        for name in candidates:
+            if name == variable or name not in t.columns:
+                continue
+            v = t[name].to_numpy(float)
+            if not np.all(np.isfinite(v)) or np.std(v) == 0:
+                continue
+            for level in np.unique(flag):
+                m = flag == level
+                if m.sum() >= 3 and np.std(v[m]) > 0 and np.std(rest[m]) > 0:
+                    pv = float(stats.pearsonr(v[m], rest[m]).pvalue)
+                    if pv < best_p:
+                        best, best_p = name, pv
+        return best
+
+    def confounding(self, variable: str) -> list[str]:
+        """What ``variable`` is confounded with across sweeps, and what the data support, in words."""
+        out = []
+        for link in self.links:
+            if link.variable != variable:
+                continue
+            for name, r in link.confounded_with.items():
+                p = link.within_block_p.get(name, 1.0)
+                if p <= 0.05:
+                    verdict = (f"within blocks of constant {name}, {link.factor} still follows {variable} "
+                               f"(p = {p:.2g}): the data separate the two, {variable} is supported")
+                else:
+                    verdict = (f"within blocks of constant {name} the data cannot separate them (p = {p:.2g}): "
+                               f"both explanations remain; test {name} levels in an interleaved (randomised) "
+                               f"order so that {variable} varies within each level")
+                out.append(f"{variable} correlates with {name} across sweeps (r = {r:+.2f}) for {link.factor}; "
+                           + verdict)  # fmt: skip
+        return list(dict.fromkeys(out))
+
+    def summary(self) -> list[str]:
+        out = []
+        for f in self.factors:
+            flag = "AFFECTED" if f.affected else "steady"
+            out.append(f"{f.factor} ({f.family}, {f.channel}): spread {f.spread:.3g} over {len(f.values)} sweeps, "
+                       f"p(noise) {f.chi2_p:.2g}: {flag}")  # fmt: skip
+        return out
+
+
+def _fit_channel(tyre: Tyre, df: pd.DataFrame, channel: str, sigma: float):
+    """Fit the factors of ``channel`` per sweep; returns (sweep ids, values (s, k), se (s, k))."""
+    names = FACTORS[channel]
+    sweep = df["sweep_id"].to_numpy()
+    ids, inv = np.unique(sweep, return_inverse=True)
+    ns, k = len(ids), len(names)
+    x = Inputs.from_frame(df, tyre.required_variables)
+    # the profiled factors act on top of the tyre's own parameters (and extensions)
+    base = Model(tyre.flat, x, MODE, tyre.extension_set)
+    y = df[channel].to_numpy(float)
+    Fz = df["Fz"].to_numpy(float)
+    p = dict(tyre.flat)
+    prior = np.array([PRIOR[_group(n)] for n in names])
+    neutral = np.array([0.0 if n.endswith("OFFSET") else 1.0 for n in names])
+
+    def predict(theta: np.ndarray) -> np.ndarray:
+        lam = theta.reshape(ns, k)[inv]
+        q = dict(p)
+        for j, n in enumerate(names):
+            if not n.endswith("OFFSET"):
+                q[n] = p[n] * lam[:, j]
+        out = getattr(base.channels(q, (channel,)), channel)
+        return np.real(out) + Fz * lam[:, k - 1]
+
+    def fun(theta):
+        r = (predict(theta) - y) / sigma
+        r = np.where(np.isfinite(r), r, 1e3)
+        return np.concatenate([r, (theta - np.tile(neutral, ns)) / np.tile(prior, ns)])
+
+    n = len(y)
+    rows = np.concatenate([np.repeat(np.arange(n), k), n + np.arange(ns * k)])
+    cols = np.concatenate([(inv[:, None] * k + np.arange(k)).ravel(), np.arange(ns * k)])
+    sparsity = sparse.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n + ns * k, ns * k)).tocsr()
+    lo = np.tile([0.3 if not nm.endswith("OFFSET") else -0.3 for nm in names], ns)
+    hi = np.tile([3.0 if not nm.endswith("OFFSET") else 0.3 for nm in names], ns)
+    lo[np.tile(np.array([nm.startswith("LE") for nm in names]), ns)] = -3.0
+    theta0 = np.tile(neutral, ns)
+    with np.errstate(all="ignore"):
+        res = least_squares(fun, theta0, bounds=(lo, hi), jac_sparsity=sparsity, loss="soft_l1", f_scale=3.0,
+                            x_scale=np.tile(prior, ns), max_nfev=60, tr_solver="lsmr")  # fmt: skip
+    theta = res.x.reshape(ns, k)
+    J = res.jac.tocsr() if sparse.issparse(res.jac) else sparse.csr_matrix(res.jac)
+    rdata = res.fun[:n]
+    se = np.full((ns, k), np.inf)
+    for s in range(ns):
+        m = inv == s
+        cols_s = np.arange(s * k, (s + 1) * k)
+        Js = J[np.flatnonzero(m)][:, cols_s].toarray()
+        P = np.diag(1.0 / prior**2)  # the prior's information
+        s2 = max(float(np.median(rdata[m] ** 2) / 0.455), 1.0)  # residual variance in noise units (robust)
+        try:
+            cov = np.linalg.inv(Js.T @ Js + P) * s2
+            se[s] = np.sqrt(np.maximum(np.diag(cov), 0.0))
+        except np.linalg.LinAlgError:
+            pass
+    return ids, theta, se
+
+
+def _cv_score(v: np.ndarray, lam: np.ndarray, categorical: bool) -> float:
+    """Leave-one-sweep-out R² of λ predicted from v (a line, or per-level means)."""
+    n = len(v)
+    if n < 4 or np.std(v) == 0 or np.std(lam) == 0:
+        return 0.0
+    pred = np.empty(n)
+    for i in range(n):
+        m = np.arange(n) != i
+        if categorical:
+            same = m & (v == v[i])
+            pred[i] = lam[same].mean() if same.any() else lam[m].mean()
+        else:
+            a, b = np.polyfit(v[m], lam[m], 1) if np.std(v[m]) > 0 else (0.0, lam[m].mean())
+            pred[i] = a * v[i] + b
+    return 1.0 - float(np.mean((lam - pred) ** 2)) / float(np.var(lam))
+
+
+def _within_block_p(v: np.ndarray, lam: np.ndarray, blocks: np.ndarray) -> float:
+    """p-value of the correlation of λ and v after removing block means (partial correlation)."""
+    vv, ll = v.astype(float).copy(), lam.astype(float).copy()
+    for b in np.unique(blocks):
+        m = blocks == b
+        vv[m] -= vv[m].mean()
+        ll[m] -= ll[m].mean()
+    if np.std(vv) == 0 or np.std(ll) == 0 or len(v) < 5:
+        return 1.0
+    return float(stats.pearsonr(vv, ll).pvalue)
+
+
+def profile_factors(
+    tyre: Tyre,
+    df: pd.DataFrame,
+    candidates: Mapping[str, np.ndarray],
+    channels: Sequence[str],
+    noise: Mapping[str, float],
+    *,
+    n_perm: int = 199,
+    seed: int = 0,
+) -> Profiles:
+    """Profile the scaling factors of ``channels`` (Fx, Fy) per sweep and link them to candidates.
+
+    ``df`` is the grouped sweep table (``sweep_id``, ``kind``, set points); ``candidates``
+    maps a name to its values per row; ``noise`` the noise standard deviation per channel.
+    """
+    rng = np.random.default_rng(seed)
+    df = df.reset_index(drop=True)
+    factors: list[FactorProfile] = []
+    tables = []
+    order = {sid: i for i, sid in enumerate(pd.unique(df["sweep_id"]))}
+    for ch in channels:
+        if ch not in FACTORS:
+            continue
+        rows = (df["kind"] == KIND[ch]).to_numpy() & np.isfinite(df[ch].to_numpy(float))
+        sub = df[rows]
+        counts = sub.groupby("sweep_id").size()
+        good = counts[counts >= 8].index
+        sub = sub[sub["sweep_id"].isin(good)]
+        if sub["sweep_id"].nunique() < 4:
+            continue
+        sigma = max(float(noise.get(ch, 0.0)), 1e-3 * float(np.nanmax(np.abs(sub[ch]))))
+        ids, theta, se = _fit_channel(tyre, sub.reset_index(drop=True), ch, sigma)
+        fz_mean = sub.groupby("sweep_id")["Fz"].mean().reindex(ids).to_numpy()
+        t = pd.DataFrame({"sweep_id": ids, "channel": ch, "order": [order[i] for i in ids]})
+        for j, name in enumerate(FACTORS[ch]):
+            vals, err = theta[:, j], se[:, j]
+            ok = np.isfinite(err) & (err > 0)
+            w = 1.0 / err[ok] ** 2
+            mean = float(np.sum(w * vals[ok]) / np.sum(w)) if ok.any() else float(np.mean(vals))
+            chi2 = float(np.sum(((vals[ok] - mean) / err[ok]) ** 2))
+            dof = max(int(ok.sum()) - 1, 1)
+            p = float(stats.chi2.sf(chi2, dof))
+            spread = float(np.std(vals))
+            affected = p < SPREAD_ALPHA and spread >= MIN_SPREAD[_group(name)]
+            factors.append(FactorProfile(name, ch, ids, vals, err, p, spread, affected))
+            t[name] = vals
+        grp = sub.groupby("sweep_id")
+        at = sub.index.to_numpy()  # positions in df (RangeIndex)
+        for cname, cvals in candidates.items():
+            s = pd.Series(np.asarray(cvals, float)[at], index=sub.index)
+            t[cname] = s.groupby(sub["sweep_id"]).mean().reindex(ids).to_numpy()
+        for sp in ("Fz_set", "Vx_set", "P_set", "gamma_set"):
+            if sp in sub.columns:
+                t[sp] = grp[sp].first().reindex(ids).to_numpy()
+        t["Fz_mean"] = fz_mean
+        tables.append(t)
+    table = pd.concat(tables, ignore_index=True) if tables else pd.DataFrame()
+    links = _link(factors, table, candidates, rng, n_perm)
+    return Profiles(factors, links, table)
+
+
+def _link(factors: list[FactorProfile], table: pd.DataFrame, candidates, rng, n_perm: int) -> list[VariableLink]:
+    links: list[VariableLink] = []
+    for f in factors:
+        if not f.affected:
+            continue
+        t = table[table["channel"] == f.channel]
+        lam = t[f.factor].to_numpy(float)
+        confounders = {sp: t[sp].to_numpy(float) for sp in ("Fz_set", "Vx_set", "P_set", "gamma_set")
+                       if sp in t.columns and np.std(t[sp]) > 0}  # fmt: skip
+        confounders["test order"] = t["order"].to_numpy(float)
+        for cname in candidates:
+            v = t[cname].to_numpy(float)
+            if not np.all(np.isfinite(v)) or np.std(v) == 0:
+                continue
+            categorical = len(np.unique(v)) <= 3
+            score = _cv_score(v, lam, categorical)
+            if score <= 0:
+                continue
+            exceed = 0
+            for _ in range(n_perm):
+                exceed += _cv_score(rng.permutation(v), lam, categorical) >= score
+            r = float(np.corrcoef(v, lam)[0, 1])
+            link = VariableLink(cname, f.factor, score, (1 + exceed) / (1 + n_perm), r)
+            for name, c in confounders.items():
+                if name == cname or (name == "Vx_set" and cname == "Vx"):
+                    continue
+                rc = float(np.corrcoef(v, c)[0, 1])
+                if abs(rc) > CONFOUND_R:
+                    link.confounded_with[name] = rc
+                    blocks = np.round(c, 6) if name != "test order" else np.arange(len(c)) // max(len(c) // 4, 2)
+                    link.within_block_p[name] = _within_block_p(v, lam, blocks)
+            links.append(link)
+    links.sort(key=lambda v: v.score, reverse=True)
+    return links
