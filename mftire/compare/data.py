@@ -31,8 +31,8 @@ import numpy as np
 import pandas as pd
 
 from mftire.errors import MftireInputError
-from mftire.fitting.data import load_sweep_files, prepare_table
 from mftire.iotools.sweeps import group_sweeps, read_sweep_csv
+from mftire.iotools.tables import load_sweep_files, prepare_table
 
 __all__ = [
     "FAMILIES",
