@@ -16,11 +16,12 @@ import pandas as pd
 from matplotlib import colormaps
 
 from mftire.compare.data import CURVE_KEYS, FAMILY_CHANNELS
+from mftire.iotools.units import PLOT_UNITS
 from mftire.plotting import subplots
 
 __all__ = ["plot_family", "plot_stiffness", "plot_trail", "plot_free_rolling", "match_band"]
 
-_UNITS = {"Fx": "N", "Fy": "N", "Mz": "N·m", "Mx": "N·m", "My": "N·m"}
+_UNITS = PLOT_UNITS
 _LINESTYLES = ("-", "--", ":", "-.", (0, (5, 1, 1, 1)), (0, (1, 3)))
 _MARKERS = ("o", "s", "^", "v", "D", "P", "X", "<", ">")
 _TITLES = {

@@ -22,11 +22,12 @@ from mftire.fitting.core import CONDITION_KEYS, FitResult
 from mftire.fitting.model import CHANNELS, Inputs, predict
 from mftire.iotools.atomic import atomic_path, write_text_atomic
 from mftire.iotools.jsonutil import jsonable
+from mftire.iotools.units import PLOT_UNITS
 from mftire.mf.modes import Mode
 
 __all__ = ["compute_metrics", "channel_summary", "write_report", "plot_families"]
 
-_UNITS = {"Fx": "N", "Fy": "N", "Mz": "N·m", "Mx": "N·m", "My": "N·m"}
+_UNITS = PLOT_UNITS
 
 
 def compute_metrics(result: FitResult) -> pd.DataFrame:
