@@ -8,51 +8,19 @@ input print one line naming the file, column and row, and exit with code 2.
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
 
-from mftire.errors import MftireError, MftireInputError
+from mftire.data import default_tir  # noqa: F401  (moved to mftire.data; kept importable from here)
+from mftire.errors import MftireError
+from mftire.iotools.tables import read_numeric_csv
 
 #: Columns of ``mftire evaluate``'s input CSV.
 EVALUATE_REQUIRED = ("Fz", "kappa", "alpha", "gamma")
 EVALUATE_OPTIONAL = ("phit", "Vx", "P", "omega")
-
-
-def read_numeric_csv(path: str, required: Sequence[str], optional: Sequence[str] = ()) -> pd.DataFrame:
-    """Read a CSV whose ``required`` and present ``optional`` columns must be finite numbers.
-
-    Raises :class:`MftireInputError` naming the file, column and (1-based) data row
-    of the first problem: a missing column, a non-numeric cell, a NaN or an infinity.
-    """
-    try:
-        df = pd.read_csv(path, sep=None if path == "-" else ",", engine="python" if path == "-" else "c")
-    except FileNotFoundError:
-        raise MftireInputError(f"{path}: file not found") from None
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise MftireInputError(f"{path}: not a readable CSV file ({exc})") from None
-    df.columns = [str(c).strip() for c in df.columns]
-    missing = [c for c in required if c not in df.columns]
-    if missing:
-        raise MftireInputError(
-            f"{path}: missing column(s) {', '.join(missing)} (have: {', '.join(df.columns)})"
-        )
-    for col in [*required, *(c for c in optional if c in df.columns)]:
-        raw = df[col]
-        values = pd.to_numeric(raw, errors="coerce")
-        bad = values.isna() | ~np.isfinite(values.to_numpy(dtype=float, na_value=np.nan))
-        if bad.any():
-            i = int(np.flatnonzero(bad.to_numpy())[0])
-            cell = raw.iloc[i]
-            what = "empty or NaN" if pd.isna(cell) or str(cell).strip().lower() == "nan" else f"{cell!r}"
-            raise MftireInputError(
-                f"{path}: column '{col}', row {i + 1} (line {i + 2}): {what} is not a finite number"
-            )
-        df[col] = values.astype(float)
-    return df
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
@@ -137,12 +105,6 @@ def _cmd_plot(args: argparse.Namespace) -> int:
         with atomic_path(args.csv) as tmp:
             curves.to_csv(tmp, index=False)
     return 0
-
-
-def default_tir() -> str:
-    """Path of the shipped default ``.tir`` (MF 6.1, 255/55 R20, MFeval example; see data/NOTICE.md)."""
-    here = os.path.dirname(os.path.abspath(__file__))
-    return os.path.join(here, "data", "default.tir")
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:

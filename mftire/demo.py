@@ -37,6 +37,12 @@ class _Steps:
 
 def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progress: bool = True) -> dict:
     """Run the demo; returns a summary dict (also in ``output/report.json``)."""
+    with warnings.catch_warnings():  # the demo's fits warn on degenerate steps; the caller's filters stay as they are
+        warnings.simplefilter("ignore")
+        return _run_demo(output, quick, progress)
+
+
+def _run_demo(output: str | os.PathLike, quick: bool, progress: bool) -> dict:
     from mftire.compare.core import compare
     from mftire.diagnosis.diagnose import diagnose
     from mftire.diagnosis.report import write_report
@@ -51,7 +57,6 @@ def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progre
 
     out = os.fspath(output)
     os.makedirs(out, exist_ok=True)
-    warnings.simplefilter("ignore")
     step = _Steps(8, progress)
 
     step("FE-surrogate campaign of the default tyre" + (" (quick grid)" if quick else ""))
@@ -166,17 +171,14 @@ def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progre
 
 def _headline(comp, diag, path: str) -> None:
     """One figure: braking at the held-out speed, measured vs MF fit vs MF + effect."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from mftire.plotting import subplots
 
     if diag.data is None or diag.train is None or diag.extended is None:
         return
     import numpy as np
     held = diag.data[~diag.train]
     braking = held[np.abs(held["alpha"].to_numpy(float)) < 1e-9]
-    fig, ax = plt.subplots(figsize=(7.5, 4.5), constrained_layout=True)
+    fig, ax = subplots(figsize=(7.5, 4.5), constrained_layout=True)
     for i, (lf, g) in enumerate(braking.groupby("load_fraction")):
         g = g.sort_values("kappa")
         c = f"C{i}"
@@ -192,7 +194,6 @@ def _headline(comp, diag, path: str) -> None:
     ax.legend()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=110)
-    plt.close(fig)
 
 
 def main(output: str = "demo_out", quick: bool = False) -> int:

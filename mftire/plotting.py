@@ -1,22 +1,37 @@
-"""Figures of the standard curves (matplotlib, no screen needed)."""
+"""Figures of the standard curves (matplotlib, no screen needed).
+
+Library code draws with matplotlib's object-oriented API only (:func:`subplots` here):
+no pyplot, no ``matplotlib.use``, so importing or running mftire never changes the
+caller's backend or figure registry. ``Figure.savefig`` picks the Agg canvas for PNG itself.
+"""
 
 from __future__ import annotations
 
 import os
 
-import matplotlib
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
+from mftire.iotools.atomic import atomic_path
 
-from mftire.iotools.atomic import atomic_path  # noqa: E402
+_FIGURE_KW = ("figsize", "dpi", "constrained_layout", "layout", "facecolor")
+
+
+def subplots(nrows: int = 1, ncols: int = 1, **kw) -> tuple[Figure, object]:
+    """``(figure, axes)`` like ``pyplot.subplots`` but without pyplot: a bare :class:`Figure`.
+
+    Figure keywords (``figsize``, ``dpi``, ``constrained_layout``, ``layout``, ``facecolor``)
+    go to :class:`Figure`, the rest (``squeeze``, ``sharex``, ...) to ``Figure.subplots``.
+    Nothing needs closing: the figure is garbage once unreferenced.
+    """
+    fig = Figure(**{k: kw.pop(k) for k in _FIGURE_KW if k in kw})
+    return fig, fig.subplots(nrows, ncols, **kw)
 
 
 def plot_standard_curves(curves: pd.DataFrame, path: str | os.PathLike, title: str = "") -> None:
     """Draw the six standard panels from :func:`mftire.curves.standard_curves` to a PNG."""
-    fig, axes = plt.subplots(2, 3, figsize=(15, 8.5), constrained_layout=True)
+    fig, axes = subplots(2, 3, figsize=(15, 8.5), constrained_layout=True)
     pl = curves[curves.curve == "pure_long"]
     lat = curves[curves.curve == "pure_lat"]
     comb = curves[curves.curve == "combined"]
@@ -41,4 +56,3 @@ def plot_standard_curves(curves: pd.DataFrame, path: str | os.PathLike, title: s
         fig.suptitle(title)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=110, format="png")
-    plt.close(fig)

@@ -22,6 +22,7 @@ import io
 import json
 import os
 import re
+import sys
 from collections.abc import Mapping
 from typing import Any
 
@@ -137,7 +138,7 @@ class HtmlReport:
     def add_figure(self, fig, caption: str | None = None, dpi: int = 100) -> HtmlReport:
         """A matplotlib figure or a PNG file (path or bytes), embedded as base64.
 
-        A figure is rendered to PNG at ``dpi`` and closed.
+        A figure is rendered to PNG at ``dpi`` (and closed if it was made with pyplot).
         """
         if isinstance(fig, (bytes, bytearray)):
             png = bytes(fig)
@@ -151,9 +152,9 @@ class HtmlReport:
             fig.savefig(buf, format="png", dpi=dpi)
             png = buf.getvalue()
             name = "figure"
-            import matplotlib.pyplot as plt
-
-            plt.close(fig)
+            plt = sys.modules.get("matplotlib.pyplot")  # a pyplot figure: release it; never import pyplot here
+            if plt is not None:
+                plt.close(fig)
         if png[:8] != b"\x89PNG\r\n\x1a\n":
             raise ValueError(f"add_figure: {name} is not a PNG image")
         b64 = base64.b64encode(png).decode("ascii")

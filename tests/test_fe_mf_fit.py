@@ -7,7 +7,8 @@ import pandas as pd
 import pytest
 
 import mftire
-from mftire.cli import build_parser, default_tir, main
+from mftire.cli import build_parser, main
+from mftire.data import default_tir
 
 
 def _has_fit_command() -> bool:

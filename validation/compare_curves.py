@@ -22,8 +22,8 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from mftire.cli import default_tir
 from mftire.compare import compare, prepare_comparison_data, write_comparison
+from mftire.data import default_tir
 from mftire.fe.config import load_tyre
 from mftire.fe.sweeps import campaign
 from mftire.fitting.bands import bootstrap_bands, coverage_table

@@ -102,12 +102,9 @@ def bands_frame(bands, grid: pd.DataFrame) -> pd.DataFrame | None:
     if bands is None:
         return None
     if isinstance(bands, (str, os.PathLike)):
-        from mftire.errors import MftireInputError
+        from mftire.iotools.tables import read_numeric_csv
 
-        try:
-            return pd.read_csv(bands)
-        except (OSError, pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
-            raise MftireInputError(f"{os.fspath(bands)}: cannot read bands CSV ({exc})") from None
+        return read_numeric_csv(os.fspath(bands), ())
     if isinstance(bands, pd.DataFrame):
         return bands
     if len(grid) == 0:

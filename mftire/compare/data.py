@@ -31,8 +31,9 @@ import numpy as np
 import pandas as pd
 
 from mftire.errors import MftireInputError
-from mftire.fitting.data import load_sweep_files, prepare_table
+from mftire.iotools.columns import CURVE_COLUMNS, GROUPING_COLUMNS, NOT_VARIABLES
 from mftire.iotools.sweeps import group_sweeps, read_sweep_csv
+from mftire.iotools.tables import load_sweep_files, prepare_table
 
 __all__ = [
     "FAMILIES",
@@ -135,8 +136,7 @@ def prepare_comparison_data(table: pd.DataFrame) -> pd.DataFrame:
     if "phit" not in df.columns:
         df["phit"] = 0.0
     df["phit"] = df["phit"].fillna(0.0)
-    derived = ["Fz_set", "gamma_set", "P_set", "Vx_set", "sweep_id", "kind", "sweep_var", "kappa_set",
-               "alpha_set", "sweep_dir", "direction", "family", "var", "held", "curve_id"]
+    derived = [*GROUPING_COLUMNS, *CURVE_COLUMNS]
     df = df.drop(columns=[c for c in derived if c in df.columns])
     df = group_sweeps(df.reset_index(drop=True))
     return assign_families(df)
@@ -198,12 +198,7 @@ def curve_grid(data: pd.DataFrame, n: int = 81, families: Sequence[str] = FAMILI
     return pd.concat(rows, ignore_index=True) if rows else pd.DataFrame(columns=cols)
 
 
-_NOT_VARIABLES = {"Fz", "kappa", "alpha", "gamma", "Vx", "P", "phit", "Fx", "Fy", "Mz", "Mx", "My", "Fz_set",
-                  "gamma_set", "P_set", "Vx_set", "sweep_id", "sweep_dir", "kappa_set", "alpha_set", "held",
-                  "curve_id", "load_fraction", "meas_no", "weight"}
-
-
 def _extra_variables(g: pd.DataFrame) -> list[str]:
     """Numeric columns that may be model-extension variables (temperature, ...), carried as medians."""
-    return [c for c in g.columns if c not in _NOT_VARIABLES and not str(c).startswith("fit_")
+    return [c for c in g.columns if c not in NOT_VARIABLES and not str(c).startswith("fit_")
             and pd.api.types.is_numeric_dtype(g[c])]

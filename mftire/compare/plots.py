@@ -1,4 +1,4 @@
-"""Comparison figures (matplotlib, Agg backend), one per curve family plus summaries.
+"""Comparison figures (matplotlib, object-oriented API, no pyplot), one per curve family plus summaries.
 
 Encoding, the same in every figure: **colour** = the curve within a panel (load, or
 held slip for combined sweeps), **line style** = MF model, **marker** = data source,
@@ -13,12 +13,15 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
+from matplotlib import colormaps
 
 from mftire.compare.data import CURVE_KEYS, FAMILY_CHANNELS
+from mftire.iotools.units import PLOT_UNITS
+from mftire.plotting import subplots
 
 __all__ = ["plot_family", "plot_stiffness", "plot_trail", "plot_free_rolling", "match_band"]
 
-_UNITS = {"Fx": "N", "Fy": "N", "Mz": "N·m", "Mx": "N·m", "My": "N·m"}
+_UNITS = PLOT_UNITS
 _LINESTYLES = ("-", "--", ":", "-.", (0, (5, 1, 1, 1)), (0, (1, 3)))
 _MARKERS = ("o", "s", "^", "v", "D", "P", "X", "<", ">")
 _TITLES = {
@@ -27,15 +30,6 @@ _TITLES = {
     "combined": "Combined slip: Fx, Fy, Mz against κ at several α (one load per column)",
     "combined_alpha": "Combined slip: Fx, Fy, Mz against α at several κ (one load per column)",
 }
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def _style_maps(sources: Sequence[str], models: Sequence[str]) -> tuple[dict, dict]:
@@ -127,7 +121,6 @@ def plot_family(
     gr = grid[grid["family"] == family]
     if (d.empty and gr.empty) or not channels:
         return None
-    plt = _plt()
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
@@ -138,13 +131,13 @@ def plot_family(
     curves = gr.drop_duplicates("curve_id") if len(gr) else d.drop_duplicates("curve_id")
     panels = list(curves.groupby(pkeys, sort=True))[:max_panels]
     series_vals = sorted(curves[skey].unique())
-    cmap = plt.cm.viridis if family in ("braking", "cornering") else plt.cm.coolwarm
+    cmap = colormaps["viridis"] if family in ("braking", "cornering") else colormaps["coolwarm"]
     colors = {v: cmap(x) for v, x in zip(series_vals, np.linspace(0.05, 0.9, max(len(series_vals), 1)),
                                           strict=False)}
     ncol, nrow = len(panels), len(channels)
     wrap = nrow == 1 and ncol > 3  # one channel: panels in rows of three
     fig_cols, fig_rows = (3, math.ceil(ncol / 3)) if wrap else (ncol, nrow)
-    fig, grid_axes = plt.subplots(fig_rows, fig_cols, figsize=(3.6 * fig_cols + 1.8, 2.8 * fig_rows + 0.6),
+    fig, grid_axes = subplots(fig_rows, fig_cols, figsize=(3.6 * fig_cols + 1.8, 2.8 * fig_rows + 0.6),
                                   squeeze=False)
     axes = grid_axes.reshape(1, -1) if wrap else grid_axes
     for ax in list(axes.flat)[ncol * nrow:]:
@@ -202,16 +195,13 @@ def plot_family(
 def _save(fig, path: str, dpi: int) -> None:
     from mftire.iotools.atomic import atomic_path
 
-    plt = _plt()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=dpi, format="png")
-    plt.close(fig)
 
 
 def _cond_groups(df: pd.DataFrame) -> tuple[list, dict]:
     keys = sorted({tuple(r) for r in df[["gamma_set", "P_set", "Vx_set"]].to_numpy(float)})
-    plt = _plt()
-    cols = plt.cm.tab10(np.arange(len(keys)) % 10)
+    cols = colormaps["tab10"](np.arange(len(keys)) % 10)
     return keys, {k: cols[i] for i, k in enumerate(keys)}
 
 
@@ -223,14 +213,13 @@ def plot_stiffness(stiffness: pd.DataFrame, path: str, dpi: int = 90) -> str | N
     """Cornering and aligning stiffness [per deg] against load: data markers, model lines."""
     if stiffness.empty or stiffness["C_Fa"].notna().sum() == 0:
         return None
-    plt = _plt()
     from matplotlib.lines import Line2D
 
     sources = list(dict.fromkeys(stiffness["source"]))
     models = [w for w in dict.fromkeys(stiffness["who"]) if w != "data"]
     markers, styles = _style_maps(sources, models)
     keys, colors = _cond_groups(stiffness)
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
+    fig, axes = subplots(1, 2, figsize=(11, 3.8))
     what = ((axes[0], "C_Fa_deg", "C_Fα = dFy/dα [N/deg]"), (axes[1], "C_Ma_deg", "C_Mα = dMz/dα [N·m/deg]"))
     for ax, col, lab in what:
         for (who, src, g0, p0, v0), g in stiffness.groupby(["who", "source", "gamma_set", "P_set", "Vx_set"]):
@@ -262,7 +251,6 @@ def plot_trail(
     gr = grid[grid["family"] == "cornering"]
     if trail.empty and gr.empty:
         return None
-    plt = _plt()
     from matplotlib.lines import Line2D
 
     pts = trail.drop_duplicates(["source", "sweep_id", "alpha"])
@@ -272,8 +260,9 @@ def plot_trail(
     base = gr if len(gr) else pts
     panels = list(base.groupby(["gamma_set", "P_set", "Vx_set"], sort=True))[:max_panels]
     loads = sorted(set(base["Fz_set"]))
-    colors = {v: plt.cm.viridis(x) for v, x in zip(loads, np.linspace(0.05, 0.9, max(len(loads), 1)), strict=False)}
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels) + 1.8, 3.6), squeeze=False)
+    colors = {v: colormaps["viridis"](x)
+              for v, x in zip(loads, np.linspace(0.05, 0.9, max(len(loads), 1)), strict=False)}
+    fig, axes = subplots(1, len(panels), figsize=(4.2 * len(panels) + 1.8, 3.6), squeeze=False)
     for ax, (key, _) in zip(axes[0], panels, strict=True):
 
         def sel(df, key=key):
@@ -319,14 +308,13 @@ def plot_free_rolling(free: pd.DataFrame, path: str, dpi: int = 90) -> str | Non
     """Free-rolling Fx (κ = 0) against load: data markers, model lines, colour per condition."""
     if free.empty:
         return None
-    plt = _plt()
     from matplotlib.lines import Line2D
 
     sources = list(dict.fromkeys(free["source"]))
     models = [m for m in dict.fromkeys(free["model"]) if m]
     markers, styles = _style_maps(sources, models)
     keys, colors = _cond_groups(free)
-    fig, ax = plt.subplots(figsize=(8, 3.8))
+    fig, ax = subplots(figsize=(8, 3.8))
     for (src, g0, p0, v0), g in free.groupby(["source", "gamma_set", "P_set", "Vx_set"]):
         c = colors[(g0, p0, v0)]
         d = g.drop_duplicates("sweep_id").sort_values("Fz_set")

@@ -27,18 +27,15 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from mftire.iotools.sweeps import MEASURED_COLUMNS, REQUIRED_COLUMNS, group_sweeps
+from mftire.iotools.columns import NOT_VARIABLES
+from mftire.iotools.sweeps import group_sweeps
 from mftire.mf.basic import slip_speed
 
 #: Derived candidates, in a fixed order.
 DERIVED = ("Vs", "Vx", "P", "Fz_dev", "sign_alpha", "sign_kappa", "sweep_dir", "sequence", "energy")
 
 #: Columns that are never candidates: MF inputs and outputs and mftire's own labels.
-EXCLUDED = {
-    *REQUIRED_COLUMNS, "phit", "omega", *MEASURED_COLUMNS,
-    "Fz_set", "gamma_set", "P_set", "Vx_set", "kappa_set", "alpha_set", "sweep_id", "sweep_dir",
-    "kind", "sweep_var", "direction", "source", "file", "load_fraction",
-}  # fmt: skip
+EXCLUDED = NOT_VARIABLES
 #: Names that look like time (used for the energy integral).
 TIME_NAMES = ("time", "t", "runtime", "time_s", "et", "elapsed_time")
 

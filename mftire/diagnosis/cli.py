@@ -10,7 +10,7 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     from mftire.diagnosis.diagnose import diagnose
     from mftire.diagnosis.holdout import parse_holdout
     from mftire.diagnosis.report import write_report
-    from mftire.fitting.data import load_sweep_files
+    from mftire.iotools.tables import load_sweep_files
     from mftire.tyre import load
 
     tyre = load(args.tir)

@@ -6,15 +6,12 @@ import json
 import os
 from dataclasses import asdict
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from mftire.diagnosis.diagnose import DiagnosisResult  # noqa: E402
-from mftire.iotools.atomic import atomic_path, write_text_atomic  # noqa: E402
-from mftire.iotools.tir import write_tir  # noqa: E402
+from mftire.diagnosis.diagnose import DiagnosisResult
+from mftire.iotools.atomic import atomic_path, write_text_atomic
+from mftire.iotools.tir import write_tir
+from mftire.plotting import subplots
 
 EXTENDED_TIR = "extended.tir"
 
@@ -130,7 +127,7 @@ def _binned(x: np.ndarray, y: np.ndarray, n: int = 15):
 def _figures(result: DiagnosisResult, outdir: str) -> None:
     df = result.data
     ranking = result.ranking
-    fig, ax = plt.subplots(figsize=(8, 0.35 * max(len(ranking), 4) + 1.2), constrained_layout=True)
+    fig, ax = subplots(figsize=(8, 0.35 * max(len(ranking), 4) + 1.2), constrained_layout=True)
     names = [f"{r.variable} ({r.channel})" for r in ranking][::-1]
     scores = [r.score for r in ranking][::-1]
     colors = ["tab:red" if r.significant else "tab:gray" for r in ranking][::-1]
@@ -139,13 +136,12 @@ def _figures(result: DiagnosisResult, outdir: str) -> None:
     ax.set_title("candidates (red: significant)")
     with atomic_path(os.path.join(outdir, "ranking.png")) as tmp:
         fig.savefig(tmp, format="png", dpi=100)
-    plt.close(fig)
 
     for r in ranking[:3]:
         if r.variable not in df.columns or f"residual_{r.channel}" not in df.columns:
             continue
         x = df[r.variable].to_numpy(float)
-        fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
+        fig, ax = subplots(figsize=(7, 4.5), constrained_layout=True)
         y = df[f"residual_{r.channel}"].to_numpy(float)
         ax.plot(x, y, ".", ms=2, alpha=0.3, color="tab:blue")
         ax.plot(*_binned(x, y), "o-", color="tab:blue", label="before (binned mean)")
@@ -161,7 +157,6 @@ def _figures(result: DiagnosisResult, outdir: str) -> None:
         ax.legend()
         with atomic_path(os.path.join(outdir, f"residual_vs_{r.variable}.png")) as tmp:
             fig.savefig(tmp, format="png", dpi=100)
-        plt.close(fig)
 
     if result.effect is None or result.train is None:
         return
@@ -170,7 +165,7 @@ def _figures(result: DiagnosisResult, outdir: str) -> None:
     if not chans:
         return
     sweeps = list(dict.fromkeys(test["sweep_id"]))[:6]
-    fig, axes = plt.subplots(len(chans), 1, figsize=(9, 3.2 * len(chans)), constrained_layout=True, squeeze=False)
+    fig, axes = subplots(len(chans), 1, figsize=(9, 3.2 * len(chans)), constrained_layout=True, squeeze=False)
     for ax, ch in zip(axes[:, 0], chans, strict=True):
         for i, sid in enumerate(sweeps):
             g = test[test["sweep_id"] == sid]
@@ -184,7 +179,6 @@ def _figures(result: DiagnosisResult, outdir: str) -> None:
         ax.set_title(f"held-out sweeps: points data, dashed before, solid after ({ch})")
     with atomic_path(os.path.join(outdir, "curves_before_after.png")) as tmp:
         fig.savefig(tmp, format="png", dpi=100)
-    plt.close(fig)
 
 
 def write_report(result: DiagnosisResult, outdir: str | os.PathLike) -> dict:

@@ -58,16 +58,9 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
 
 
 def _read_tables(paths: list[str]) -> pd.DataFrame:
-    frames = []
-    for p in paths:
-        path = Path(p)
-        if not path.is_file():
-            raise MftireInputError(f"input file not found: {path}")
-        try:
-            frames.append(pd.read_csv(path))
-        except (pd.errors.ParserError, UnicodeDecodeError, pd.errors.EmptyDataError) as exc:
-            raise MftireInputError(f"cannot read {path}: {exc}") from None
-    df = pd.concat(frames, ignore_index=True)
+    from mftire.iotools.tables import read_numeric_csv
+
+    df = pd.concat([read_numeric_csv(str(p), ()) for p in paths], ignore_index=True)
     for col in ("Fz", "kappa", "Vx", "Fx"):
         if col in df.columns and not pd.api.types.is_numeric_dtype(df[col]):
             raise MftireInputError(f"column {col!r} must be numeric")

@@ -31,7 +31,7 @@ def mf_template(tyre: TyreConfig, pressure_terms: bool = True, base: str | None 
         MF 6.1 file giving the start values of the shape coefficients (default: the
         shipped ``default.tir``).
     """
-    from mftire.cli import default_tir
+    from mftire.data import default_tir
 
     params = read_tir(base or default_tir())
     s = tyre.size

@@ -22,11 +22,12 @@ from mftire.fitting.core import CONDITION_KEYS, FitResult
 from mftire.fitting.model import CHANNELS, Inputs, predict
 from mftire.iotools.atomic import atomic_path, write_text_atomic
 from mftire.iotools.jsonutil import jsonable
+from mftire.iotools.units import PLOT_UNITS
 from mftire.mf.modes import Mode
 
 __all__ = ["compute_metrics", "channel_summary", "write_report", "plot_families"]
 
-_UNITS = {"Fx": "N", "Fy": "N", "Mz": "N·m", "Mx": "N·m", "My": "N·m"}
+_UNITS = PLOT_UNITS
 
 
 def compute_metrics(result: FitResult) -> pd.DataFrame:
@@ -147,10 +148,9 @@ def plot_families(result: FitResult, directory: str, max_panels: int = 12) -> li
     Panels are the camber / pressure / speed (and held-slip) conditions, one colour per
     load; the fitted curve is the model at the set points on a fine slip grid.
     """
-    import matplotlib
+    from matplotlib import colormaps
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from mftire.plotting import subplots
 
     df = result.data
     mode = Mode.from_code(result.mode + 100)
@@ -169,11 +169,11 @@ def plot_families(result: FitResult, directory: str, max_panels: int = 12) -> li
             panels = list(d.groupby(panel_keys, sort=True))[:max_panels]
             ncol = min(3, len(panels))
             nrow = math.ceil(len(panels) / ncol)
-            fig, axes = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 3.4 * nrow), squeeze=False)
+            fig, axes = subplots(nrow, ncol, figsize=(4.6 * ncol, 3.4 * nrow), squeeze=False)
             for ax, (key, g) in zip(axes.flat, panels, strict=False):
                 var = key[0]
                 loads = sorted(g["Fz_set"].unique())
-                colors = plt.cm.viridis(np.linspace(0, 0.9, max(len(loads), 1)))
+                colors = colormaps["viridis"](np.linspace(0, 0.9, max(len(loads), 1)))
                 for color, fz in zip(colors, loads, strict=False):
                     s = g[g["Fz_set"] == fz]
                     xv = s[var].to_numpy(float)
@@ -205,7 +205,6 @@ def plot_families(result: FitResult, directory: str, max_panels: int = 12) -> li
             path = os.path.join(directory, f"{kind}_{ch}.png")
             with atomic_path(path) as tmp:
                 fig.savefig(tmp, dpi=90, format="png")
-            plt.close(fig)
             out.append(path)
     return out
 

@@ -37,6 +37,7 @@ import numpy as np
 import pandas as pd
 
 from mftire.errors import MftireInputError
+from mftire.iotools.units import DIMENSIONS, SI_UNITS, is_known_unit, unit_factor
 
 __all__ = [
     "REQUIRED_COLUMNS",
@@ -63,142 +64,9 @@ REQUIRED_COLUMNS: tuple[str, ...] = ("Fz", "kappa", "alpha", "gamma", "Vx", "P")
 OPTIONAL_INPUT_COLUMNS: tuple[str, ...] = ("phit",)
 #: Measured channels; a table holds any subset.
 MEASURED_COLUMNS: tuple[str, ...] = ("Fx", "Fy", "Mz", "Mx", "My")
-#: The SI unit of each schema column (and of the extra channels the TYDEX reader names).
-SI_UNITS: dict[str, str] = {
-    "Fz": "N",
-    "kappa": "-",
-    "alpha": "rad",
-    "gamma": "rad",
-    "Vx": "m/s",
-    "P": "Pa",
-    "phit": "1/m",
-    "Fx": "N",
-    "Fy": "N",
-    "Mz": "Nm",
-    "Mx": "Nm",
-    "My": "Nm",
-    "meas_no": "-",
-    "time": "s",
-    "deflection": "m",
-    "Re": "m",
-    "Rl": "m",
-    "omega": "rad/s",
-}
-#: Physical dimension of each schema column, used to check a unit makes sense.
-DIMENSIONS: dict[str, str] = {
-    "Fz": "force",
-    "Fx": "force",
-    "Fy": "force",
-    "Mx": "moment",
-    "My": "moment",
-    "Mz": "moment",
-    "kappa": "ratio",
-    "alpha": "angle",
-    "gamma": "angle",
-    "Vx": "speed",
-    "P": "pressure",
-    "phit": "curvature",
-    "meas_no": "count",
-    "time": "time",
-    "deflection": "length",
-    "Re": "length",
-    "Rl": "length",
-    "omega": "angular_speed",
-}
 
-# ----------------------------------------------------------------------------------------
-# Units
-# ----------------------------------------------------------------------------------------
-
-_DEG = math.pi / 180.0
-# normalised unit string -> {dimension: factor to SI}.  Normalisation: see _normalise_unit.
-_UNITS: dict[str, dict[str, float]] = {}
-
-
-def _add_units(dimension: str, table: Mapping[str, float]) -> None:
-    for name, factor in table.items():
-        _UNITS.setdefault(name, {})[dimension] = float(factor)
-
-
-_add_units("angle", {"rad": 1.0, "radian": 1.0, "radians": 1.0, "mrad": 1e-3, "deg": _DEG,
-                     "degree": _DEG, "degrees": _DEG, "°": _DEG, "grd": _DEG})
-_add_units("ratio", {"": 1.0, "-": 1.0, "1": 1.0, "none": 1.0, "ratio": 1.0, "frac": 1.0,
-                     "%": 0.01, "percent": 0.01, "pct": 0.01})
-_add_units("speed", {"m/s": 1.0, "km/h": 1 / 3.6, "kmh": 1 / 3.6, "kph": 1 / 3.6,
-                     "km/hr": 1 / 3.6, "mph": 0.44704, "mm/s": 1e-3, "ft/s": 0.3048})
-_add_units("pressure", {"pa": 1.0, "n/m^2": 1.0, "n/m2": 1.0, "hpa": 100.0, "kpa": 1e3,
-                        "mpa": 1e6, "bar": 1e5, "mbar": 100.0, "psi": 6894.757293168,
-                        "n/mm^2": 1e6, "n/mm2": 1e6})
-_add_units("force", {"n": 1.0, "kn": 1e3, "dan": 10.0, "mn": 1e-3, "lbf": 4.4482216152605,
-                     "lb": 4.4482216152605, "kgf": 9.80665, "kp": 9.80665})
-_add_units("moment", {"nm": 1.0, "knm": 1e3, "danm": 10.0, "nmm": 1e-3, "lbfft": 1.3558179483314,
-                      "ftlbf": 1.3558179483314, "lbfin": 0.1129848290276, "inlbf": 0.1129848290276,
-                      "kgfm": 9.80665, "kpm": 9.80665})
-_add_units("length", {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "km": 1e3, "in": 0.0254, "inch": 0.0254,
-                      "ft": 0.3048})
-_add_units("time", {"s": 1.0, "sec": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0})
-_add_units("angular_speed", {"rad/s": 1.0, "1/s": 1.0, "deg/s": _DEG, "rpm": 2 * math.pi / 60,
-                             "1/min": 2 * math.pi / 60, "u/min": 2 * math.pi / 60,
-                             "rev/min": 2 * math.pi / 60, "rps": 2 * math.pi})
-_add_units("curvature", {"1/m": 1.0, "rad/m": 1.0, "1/mm": 1e3, "1/km": 1e-3})
-_add_units("count", {"": 1.0, "-": 1.0, "1": 1.0, "none": 1.0, "#": 1.0, "no": 1.0})
-# recognised (so that file parsers can tell a unit from a comment) but never converted
-_add_units("temperature", {"degc": 1.0, "°c": 1.0, "c": 1.0, "k": 1.0, "degf": 1.0, "°f": 1.0})
-
-
-def _normalise_unit(unit: str | None) -> str:
-    """Lower-case a unit string and drop brackets, blanks and multiplication signs."""
-    if unit is None:
-        return ""
-    u = str(unit).strip()
-    if len(u) >= 2 and u[0] in "[(" and u[-1] in "])":
-        u = u[1:-1].strip()
-    u = u.lower().replace("µ", "u").replace("²", "^2")
-    if u in ("-", "--"):
-        return "-"
-    for ch in (" ", "*", "·", ".", "-", "×"):
-        u = u.replace(ch, "")
-    return u
-
-
-def is_known_unit(unit: str | None) -> bool:
-    """True when ``unit`` (e.g. ``"km/h"``, ``"deg C"``, ``"N*m"``) is a unit mftire knows."""
-    key = _normalise_unit(unit)
-    return bool(key) and key in _UNITS
-
-
-def unit_factor(unit: str | None, dimension: str) -> float:
-    """Factor that turns values in ``unit`` into the SI unit of ``dimension``.
-
-    Parameters
-    ----------
-    unit : str
-        Unit as written in a file, e.g. ``"deg"``, ``"km/h"``, ``"kN"``, ``"%"``, ``"N*m"``.
-    dimension : str
-        One of ``angle, ratio, speed, pressure, force, moment, length, time,
-        angular_speed, curvature, count``.
-
-    Returns
-    -------
-    float
-        ``value_SI = value * factor``.
-
-    Raises
-    ------
-    MftireInputError
-        When the unit is unknown or belongs to another dimension.
-    """
-    key = _normalise_unit(unit)
-    if dimension in ("ratio", "count") and key == "":
-        return 1.0
-    hit = _UNITS.get(key, {})
-    if dimension not in hit:
-        known = sorted(k for k, dims in _UNITS.items() if dimension in dims and k)
-        what = "unknown unit" if not hit else f"unit of {'/'.join(hit)}, not {dimension},"
-        raise MftireInputError(
-            f"{what} {unit!r} for a {dimension} value; known {dimension} units: {', '.join(known)}"
-        )
-    return hit[dimension]
+# The unit table (names, exact SI factors, SI unit and dimension of each column) lives in
+# mftire.iotools.units; re-exported here for the readers and users of the sweep table.
 
 
 def convert_to_si(values: Any, unit: str | None, column: str) -> Any:

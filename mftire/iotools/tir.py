@@ -66,6 +66,9 @@ TIME       second/s/sec 1; millisecond/ms 1e-3; minute/min 60; hour/h 3600
 PRESSURE   pascal/Pa 1; kPa 1e3; MPa 1e6; bar 1e5; psi 6894.757…
 =========  ==================================================================
 
+The full list (also daN, kp, hPa, mbar, ...) is :data:`mftire.iotools.units.UNITS`, the
+one unit table of mftire; names are matched after :func:`~mftire.iotools.units.normalise_unit`.
+
 =====================================================  ==========  ===========
 Parameters (see the table for the full list)           SI unit     Converted
 =====================================================  ==========  ===========
@@ -122,6 +125,7 @@ from typing import Any
 
 from mftire.errors import MftireError
 from mftire.iotools.atomic import write_text_atomic
+from mftire.iotools.units import UNITS, exact_factor
 from mftire.parameters import BY_KEY, STANDARD_SECTIONS, UNIT_DIMENSIONS
 
 __all__ = [
@@ -488,48 +492,9 @@ class TirParameters:
 
 
 # --------------------------------------------------------------------- units
-_PI = Fraction(math.pi)
-_LBF = Fraction("4.4482216152605")
-_INCH = Fraction("0.0254")
-
+# The names and exact factors are those of mftire.iotools.units (one table for every reader).
 _UNIT_FACTORS: dict[str, dict[str, Fraction]] = {
-    "LENGTH": {
-        **dict.fromkeys(("meter", "metre", "meters", "metres", "m"), Fraction(1)),
-        **dict.fromkeys(("mm", "millimeter", "millimetre", "millimeters", "millimetres"), Fraction(1, 1000)),
-        **dict.fromkeys(("cm", "centimeter", "centimetre", "centimeters", "centimetres"), Fraction(1, 100)),
-        **dict.fromkeys(("km", "kilometer", "kilometre", "kilometers", "kilometres"), Fraction(1000)),
-        **dict.fromkeys(("inch", "inches", "in"), _INCH),
-        **dict.fromkeys(("foot", "feet", "ft"), Fraction("0.3048")),
-    },
-    "FORCE": {
-        **dict.fromkeys(("newton", "newtons", "n"), Fraction(1)),
-        **dict.fromkeys(("kn", "kilonewton", "kilonewtons"), Fraction(1000)),
-        **dict.fromkeys(("lbf", "pound_force", "poundforce", "pound-force"), _LBF),
-        **dict.fromkeys(("kgf", "kilogram_force", "kilogram-force"), Fraction("9.80665")),
-    },
-    "ANGLE": {
-        **dict.fromkeys(("radian", "radians", "rad"), Fraction(1)),
-        **dict.fromkeys(("degree", "degrees", "deg"), _PI / 180),
-    },
-    "MASS": {
-        **dict.fromkeys(("kg", "kilogram", "kilograms", "kilogramme"), Fraction(1)),
-        **dict.fromkeys(("gram", "grams", "g", "gramme"), Fraction(1, 1000)),
-        **dict.fromkeys(("tonne", "tonnes", "metric_ton"), Fraction(1000)),
-        **dict.fromkeys(("lbm", "lb", "pound", "pounds", "pound_mass"), Fraction("0.45359237")),
-    },
-    "TIME": {
-        **dict.fromkeys(("second", "seconds", "s", "sec"), Fraction(1)),
-        **dict.fromkeys(("millisecond", "milliseconds", "ms", "msec"), Fraction(1, 1000)),
-        **dict.fromkeys(("minute", "minutes", "min"), Fraction(60)),
-        **dict.fromkeys(("hour", "hours", "h", "hr"), Fraction(3600)),
-    },
-    "PRESSURE": {
-        **dict.fromkeys(("pascal", "pascals", "pa", "n/m^2", "n/m2"), Fraction(1)),
-        **dict.fromkeys(("kpa", "kilopascal", "kilopascals"), Fraction(1000)),
-        **dict.fromkeys(("mpa", "megapascal", "megapascals"), Fraction(10**6)),
-        "bar": Fraction(10**5),
-        "psi": _LBF / _INCH**2,
-    },
+    q: UNITS[q.lower()] for q in ("LENGTH", "FORCE", "ANGLE", "MASS", "TIME", "PRESSURE")
 }
 _UNIT_QUANTITIES = ("LENGTH", "FORCE", "ANGLE", "MASS", "TIME", "PRESSURE")
 _SI_NAMES = {
@@ -543,7 +508,7 @@ _SI_NAMES = {
 
 
 def _unit_factor(quantity: str, name: str) -> Fraction | None:
-    return _UNIT_FACTORS[quantity].get(name.strip().lower())
+    return exact_factor(name, quantity.lower())
 
 
 def _scale(value: int | float, factor: Fraction) -> float:

@@ -61,14 +61,8 @@ import pandas as pd
 
 from mftire.errors import MftireInputError
 from mftire.iotools.atomic import write_text_atomic
-from mftire.iotools.sweeps import (
-    DIMENSIONS,
-    SI_UNITS,
-    convert_from_si,
-    is_known_unit,
-    unit_factor,
-    validate_sweeps,
-)
+from mftire.iotools.sweeps import convert_from_si, validate_sweeps
+from mftire.iotools.units import DIMENSIONS, SI_UNITS, is_known_unit, unit_factor
 
 __all__ = ["TYDEX_CHANNELS", "read_tydex", "write_tydex", "parse_tydex"]
 
