@@ -15,8 +15,8 @@ from typing import Any, Union
 import numpy as np
 import pandas as pd
 
-from mftire.extensions import SECTION, ExtensionSet, parse_section
 from mftire.iotools.tir import TirParameters, as_parameters, read_tir
+from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
 from mftire.mf.solver import OUTPUT_NAMES, OUTPUT_UNITS, evaluate_arrays
 from mftire.parameters import with_defaults
 

@@ -23,7 +23,7 @@ from mftire.diagnosis.diagnose import diagnose
 from mftire.diagnosis.holdout import default_holdout, parse_holdout
 from mftire.diagnosis.report import write_report
 from mftire.errors import MftireInputError
-from mftire.extensions import SECTION
+from mftire.mf.extensions import SECTION
 
 TYRE = load(REFERENCE_TYRES["MF61"])
 

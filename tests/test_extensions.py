@@ -12,9 +12,9 @@ from hypothesis import strategies as st
 
 from mftire import OUTPUT_NAMES, MftireInputError, Tyre, load, read_tir, write_tir
 from mftire.cli import main
-from mftire.extensions import FORMS, SECTION, make_extension, parse_section
 from mftire.fitting import fit_tir
 from mftire.fitting.model import Inputs, predict
+from mftire.mf.extensions import FORMS, SECTION, make_extension, parse_section
 from mftire.mf.modes import Mode
 
 MODES = (111, 121, 211, 221, 110, 112, 212, 222)

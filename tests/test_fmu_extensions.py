@@ -1,6 +1,6 @@
-"""FMU export of the model extensions ([MFTIRE_EXTENSIONS], mftire/extensions.py).
+"""FMU export of the model extensions ([MFTIRE_EXTENSIONS], mftire/mf/extensions.py).
 
-One small FMU per case (each form of :data:`mftire.extensions.FORMS` on its own, the
+One small FMU per case (each form of :data:`mftire.mf.extensions.FORMS` on its own, the
 force offsets, several targets, builtin and external variables, and many terms
 together), compiled once per module.  The FMU must agree with the Python evaluator
 point by point to 1e-9 relative, with the absolute floors of tests/test_fmu_export.py,
@@ -22,9 +22,9 @@ from test_fmu_export import CHANNEL, OUTPUTS, _random_points, _rel_errors, _scal
 
 from mftire import read_tir
 from mftire.errors import MftireError
-from mftire.extensions import FORMS, SECTION, TARGETS, parse_section
 from mftire.fmu import variables as vt
 from mftire.fmu.export import export_fmu, find_compiler, generate_sources
+from mftire.mf.extensions import FORMS, SECTION, TARGETS, parse_section
 from mftire.mf.solver import evaluate_arrays
 from mftire.tyre import Tyre
 
@@ -230,7 +230,7 @@ def test_data_variables_are_inputs_and_keys_are_parameters(build, version):
     assert "EXT1_FORM" not in by_name and "EXT1_TARGET" not in by_name  # string keys are compiled in
     gen = open(os.path.join(unzipdir, "sources", "mf_ext_gen.h")).read()
     assert "#define MF_N_TERMS 6" in gen
-    for f in FORMS.values():  # every form's C expression comes from mftire.extensions
+    for f in FORMS.values():  # every form's C expression comes from mftire.mf.extensions
         assert f.c_expr in gen
 
 

@@ -1,7 +1,7 @@
 """Map a candidate variable to model extensions, fit them, and choose one.
 
 An effect is a law of :data:`LAWS`: MF scaling factors times a form of
-:mod:`mftire.extensions` in the candidate's variable (or the standard pressure terms).
+:mod:`mftire.mf.extensions` in the candidate's variable (or the standard pressure terms).
 Each is fitted by bounded least squares on the
 training data (gross outliers removed; each channel on the rows where it is a primary
 response), together with the peak and curvature coefficients of the measured
@@ -13,7 +13,7 @@ standard MF 6.1 pressure coefficients instead of an extension section.
 Extensions are compared by the Bayesian information criterion of the weighted
 residual, n·ln(SS/n) + k·ln(n), so a term with more parameters must earn them.
 
-Variables are closed (:mod:`mftire.extensions`): a candidate that needs measured
+Variables are closed (:mod:`mftire.mf.extensions`): a candidate that needs measured
 history (``energy``) or the row order (``sequence``) is expressed in the nearest raw
 column, a time column when the data have one, and the effect says so.
 """
@@ -27,7 +27,8 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
-from mftire.extensions import (
+from mftire.fitting.model import Inputs, Model
+from mftire.mf.extensions import (
     BUILTIN_VARIABLES,
     MAX_LEVELS,
     SECTION,
@@ -36,7 +37,6 @@ from mftire.extensions import (
     make_extension,
     parse_section,
 )
-from mftire.fitting.model import Inputs, Model
 from mftire.mf.modes import Mode
 from mftire.tyre import Tyre
 
@@ -158,7 +158,7 @@ def effects_for(
     each family of scaling factors the per-sweep profiles link to the variable (friction
     when none): a saturating law when the variable never decreases along the sequence
     (fade or warm-up with time), linear and quadratic laws, a per-level table when it has
-    at most :data:`mftire.extensions.MAX_LEVELS` levels, and, for a flag with a second
+    at most :data:`mftire.mf.extensions.MAX_LEVELS` levels, and, for a flag with a second
     variable ``second``, the interaction of the two.
     """
     laws: list[tuple[str, Law]] = list(EFFECTS_FOR.get(variable, ())) if derived else []
@@ -480,6 +480,8 @@ def fit_residuals(prob: _Problem, fit: EffectFit, values: np.ndarray | None) -> 
 
 #: Folds of the held-out-sweep comparison of laws.
 CV_FOLDS = 3
+#: Laws whose held-out error is within this share of the lowest count as equally good.
+PARSIMONY = 0.1
 
 
 def heldout_error(
@@ -531,19 +533,21 @@ def choose_effect(
     for var, law, v in laws:
         fits.append((fit_effect(prob, law, var, v, n_pressures, warm=control.standard,
                                 pressure_channels=effect_channels), v, law))  # fmt: skip
-    good = sorted((t for t in fits if t[0].n_params > 0 and _beats(t[0], control)), key=lambda t: t[0].bic)[:3]
+    good = sorted((t for t in fits if t[0].n_params > 0 and _beats(t[0], control)), key=lambda t: t[0].bic)[:4]
     all_fits = [control] + [f for f, _, _ in fits]
     if not good:
         return None, all_fits
     cv_control = heldout_error(prob, CONTROL, "", None, n_pressures, None, effect_channels)
     control.messages.append(f"held-out-sweep error {cv_control:.4g}")
-    best, best_cv = None, np.inf
+    scored = []
     for fit, v, law in good:
         cv = heldout_error(prob, law, fit.variable, v, n_pressures, control.standard, effect_channels)
         fit.messages.append(f"held-out-sweep error {cv:.4g} (control {cv_control:.4g})")
         fit.heldout = cv / cv_control if cv_control > 0 else np.inf
-        if cv < best_cv:
-            best, best_cv = fit, cv
-    if best is None or best_cv > MAX_RESIDUAL_VS_CONTROL * cv_control:
+        scored.append((cv, fit))
+    lowest = min(cv for cv, _ in scored)
+    if lowest > MAX_RESIDUAL_VS_CONTROL * cv_control:
         return None, all_fits
-    return best, all_fits
+    # parsimony: among the laws within PARSIMONY of the lowest held-out error, the fewest coefficients
+    near = [(f.n_params, cv, f) for cv, f in scored if cv <= (1.0 + PARSIMONY) * lowest]
+    return min(near, key=lambda t: (t[0], t[1]))[2], all_fits

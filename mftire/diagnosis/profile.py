@@ -8,7 +8,7 @@ everything else held at the global fit, and by looking at how they move:
 * pure lateral sweeps: LMUY, LKY, LEY, LCY and an Fy offset
 
 (Pacejka 2012 §4.3.2, Table 4.4; the offsets are ``FX_OFFSET``/``FY_OFFSET`` of
-:mod:`mftire.extensions`: a force Fz·c, the shifts' effect).  All sweeps are fitted in
+:mod:`mftire.mf.extensions`: a force Fz·c, the shifts' effect).  All sweeps are fitted in
 one bounded least-squares problem whose Jacobian is block-diagonal (each sweep has its
 own factors), with a weak prior pulling each factor to 1 (offset 0) so that a sweep that
 cannot identify a factor (no peak reached) leaves it near neutral.
@@ -363,3 +363,52 @@ def _link(factors: list[FactorProfile], table: pd.DataFrame, candidates, rng, n_
             links.append(link)
     links.sort(key=lambda v: v.score, reverse=True)
     return links
+
+
+def plot_profiles(result, outdir: str) -> list[str]:
+    """``profile_<factor>.png``: each affected factor's per-sweep values against the cause,
+    with the fitted law drawn over them (scaled to the factor's mean).  Returns the file names."""
+    import os
+
+    from mftire.iotools.atomic import atomic_path
+    from mftire.plotting import subplots
+
+    pr = result.profiles
+    effect = result.effect
+    var = effect.variable if effect is not None else (result.ranking[0].variable if result.ranking else None)
+    if pr is None or var is None or pr.sweep_table.empty or var not in pr.sweep_table.columns:
+        return []
+    term = None
+    if effect is not None and result.extended is not None and result.extended.extension_set:
+        term = result.extended.extension_set.terms[-1]
+    names = []
+    for f in pr.affected:
+        t = pr.sweep_table[pr.sweep_table["channel"] == f.channel]
+        v, lam = t[var].to_numpy(float), t[f.factor].to_numpy(float)
+        if not np.all(np.isfinite(v)):
+            continue
+        fig, ax = subplots(figsize=(6, 4), constrained_layout=True)
+        err = np.where(np.isfinite(f.se), f.se, np.nan)
+        ax.errorbar(v, lam, yerr=err, fmt="o", ms=4, label="per sweep (± noise s.e.)")
+        if term is not None and f.factor in term.targets and term.variable == var:
+            grid = np.linspace(np.min(v), np.max(v), 100)
+            g2 = np.full_like(grid, np.nan)
+            if term.variable2 is not None and term.variable2 in t.columns:
+                g2 = np.full_like(grid, float(np.nanmax(t[term.variable2])))
+            law = np.asarray(term.factor(grid, g2 if term.variable2 else None), float)
+            base = np.asarray(term.factor(v, t[term.variable2].to_numpy(float) if term.variable2 else None), float)
+            if f.factor.endswith("OFFSET"):
+                shift = float(np.mean(lam) - np.mean(base - 1.0))
+                ax.plot(grid, law - 1.0 + shift, "-", label=f"fitted law: {term.form.name}")
+            else:
+                ax.plot(grid, law * float(np.mean(lam) / np.mean(base)), "-", label=f"fitted law: {term.form.name}")
+        ax.set_xlabel(var)
+        ax.set_ylabel(f"{f.factor} per sweep [-]")
+        ax.set_title(f"{f.factor} ({f.family}): spread {f.spread:.3g}, p(noise) {f.chi2_p:.1e}")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+        name = f"profile_{f.factor}.png"
+        with atomic_path(os.path.join(outdir, name)) as tmp:
+            fig.savefig(tmp, format="png", dpi=100)
+        names.append(name)
+    return names

@@ -62,7 +62,24 @@ def to_json(result: DiagnosisResult, extended_tir: str | None) -> dict:
             for f in result.tried
         ],  # fmt: skip
         "messages": result.messages,
+        "not_measured": dict(result.not_measured),
+        "confounding": list(result.confounding),
+        "profiles": _profiles_json(result),
     }
+
+
+def _profiles_json(result: DiagnosisResult) -> dict | None:
+    pr = result.profiles
+    if pr is None:
+        return None
+    return {
+        "factors": [{"factor": f.factor, "family": f.family, "channel": f.channel, "spread": f.spread,
+                     "p_noise": f.chi2_p, "affected": bool(f.affected), "n_sweeps": int(len(f.values))}
+                    for f in pr.factors],
+        "links": [{"variable": lk.variable, "factor": lk.factor, "score": lk.score, "p_value": lk.p_value,
+                   "r": lk.r, "confounded_with": lk.confounded_with, "within_block_p": lk.within_block_p}
+                  for lk in pr.links[:20]],
+    }  # fmt: skip
 
 
 def _markdown(doc: dict) -> str:
@@ -93,6 +110,28 @@ def _markdown(doc: dict) -> str:
         for m in e["messages"]:
             lines.append(f"- note: {m}")
         lines.append("")
+    if doc.get("not_measured"):
+        lines += ["## Channels left out", ""]
+        lines += [f"- {ch}: {why}" for ch, why in doc["not_measured"].items()]
+        lines.append("")
+    pr = doc.get("profiles")
+    if pr:
+        lines += ["## Scaling-factor profiles", "",
+                  "Each factor refitted per sweep with everything else held at the global fit; spread across sweeps "
+                  "against the spread expected from noise (chi-squared), then the candidates that predict it "
+                  "(leave-one-sweep-out, permutation p-value).", "",
+                  "| factor | family | channel | spread | p (noise) | affected |", "|---|---|---|---:|---:|---|"]
+        for f in pr["factors"]:
+            lines.append(f"| {f['factor']} | {f['family']} | {f['channel']} | {f['spread']:.3g} | "
+                         f"{f['p_noise']:.2g} | {'yes' if f['affected'] else 'no'} |")
+        if pr["links"]:
+            lines += ["", "| variable | factor | CV score | p-value | r |", "|---|---|---:|---:|---:|"]
+            for lk in pr["links"][:10]:
+                lines.append(f"| {lk['variable']} | {lk['factor']} | {lk['score']:.2f} | {lk['p_value']:.3f} | "
+                             f"{lk['r']:+.2f} |")
+        lines.append("")
+    if doc.get("confounding"):
+        lines += ["## Confounding", ""] + [f"- {c}" for c in doc["confounding"]] + [""]
     h = doc["holdout"]
     if h is not None and h.get("channels"):
         vals = ", ".join(f"{v:g}" for v in h["values"])
@@ -107,7 +146,9 @@ def _markdown(doc: dict) -> str:
         lines.append("")
     lines += ["## Figures", "", "- `ranking.png`: candidate scores",
               "- `residual_vs_<variable>.png`: residual against the top candidates (cause: before and after)",
-              "- `curves_before_after.png`: held-out sweeps, data against the model before and after", ""]  # fmt: skip
+              "- `curves_before_after.png`: held-out sweeps, data against the model before and after",
+              "- `profile_<factor>.png`: per-sweep values of each affected scaling factor against the cause, with "
+              "the fitted law", ""]  # fmt: skip
     return "\n".join(lines)
 
 
@@ -194,4 +235,8 @@ def write_report(result: DiagnosisResult, outdir: str | os.PathLike) -> dict:
     write_text_atomic(os.path.join(outdir, "diagnosis.json"), json.dumps(doc, indent=2, default=float) + "\n")
     write_text_atomic(os.path.join(outdir, "diagnosis.md"), _markdown(doc))
     _figures(result, outdir)
+    if result.profiles is not None:
+        from mftire.diagnosis.profile import plot_profiles
+
+        plot_profiles(result, outdir)
     return doc

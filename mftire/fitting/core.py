@@ -37,7 +37,6 @@ import pandas as pd
 from scipy.optimize import least_squares
 
 from mftire.errors import MftireInputError
-from mftire.extensions import SECTION, ExtensionSet, parse_section
 from mftire.fitting import initial
 from mftire.fitting.data import load_sweep_files, noise_std, parse_weights, prepare_table, row_weights
 from mftire.fitting.identify import DataLevels, data_levels, split_identified
@@ -45,6 +44,7 @@ from mftire.fitting.model import Inputs, Model, fitting_mode, predict
 from mftire.fitting.stages import FITTED_KEYS, STAGES, Coefficient, Stage, resolve_stages
 from mftire.iotools.sweeps import group_sweeps
 from mftire.iotools.tir import TirParameters, read_tir
+from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
 from mftire.mf.modes import Mode
 from mftire.parameters import with_defaults
 from mftire.tyre import Tyre

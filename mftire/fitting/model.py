@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mftire.extensions import ExtensionSet
+from mftire.mf.extensions import ExtensionSet
 from mftire.mf.modes import Mode
 from mftire.mf.solver import Channels, channels, prepare, scaled
 

@@ -26,8 +26,8 @@ import zipfile
 from pathlib import Path
 
 from mftire.errors import MftireError
-from mftire.extensions import ExtensionSet
 from mftire.fmu import variables as vt
+from mftire.mf.extensions import ExtensionSet
 
 CSOURCE = Path(__file__).parent / "csource"
 

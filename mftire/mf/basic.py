@@ -44,7 +44,7 @@ def basic(p: dict, mode: Mode, c: Conditions) -> Basic:
     """Compute :class:`Basic` for the conditioned operating point ``c``.
 
     The scaling factors of ``p`` may be arrays: the model extensions of
-    :mod:`mftire.extensions` act through them (e.g. LMUX, LMUY in eq 4.E7).
+    :mod:`mftire.mf.extensions` act through them (e.g. LMUX, LMUY in eq 4.E7).
     """
     Fz0p, dfz, dpi = increments(p, c.Fz, c.P)
     absVx = np.abs(c.Vx)

@@ -7,7 +7,7 @@ bands, the diagnosis and the comparison all call (none rebuilds the equations):
    effective rolling radius, and the variables the model extensions read.  Depends
    on the inputs and on never-fitted constants only (FNOMIN, LONGVL, ranges, Q_RE0 ...).
 2. :func:`scaled` -- the effective parameters: the file's scaling factors times the
-   extension terms of ``[MFTIRE_EXTENSIONS]`` (:mod:`mftire.extensions`).
+   extension terms of ``[MFTIRE_EXTENSIONS]`` (:mod:`mftire.mf.extensions`).
 3. :func:`channels` -- the Magic Formula equations by channel, computing only what
    is asked for; :func:`outputs` assembles MFeval's 30 channels.
 
@@ -24,10 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from mftire.errors import MftireError, MftireInputError
-from mftire.extensions import ExtensionSet, builtin_variables, parse_section
 from mftire.mf import turnslip
 from mftire.mf.aligning import aligning_terms, mz0, mz_combined
 from mftire.mf.basic import basic
+from mftire.mf.extensions import ExtensionSet, builtin_variables, parse_section
 from mftire.mf.inputs import Conditions, MFLimitWarning, condition_inputs, turn_slip_spin
 from mftire.mf.lateral import fy0, fy_combined
 from mftire.mf.longitudinal import fx0, fx_combined
@@ -96,7 +96,7 @@ class Prepared:
     builtin: dict[str, np.ndarray] | None = None  #: builtin variables, computed when first needed
 
     def all_variables(self, p: Mapping[str, float]) -> dict[str, np.ndarray]:
-        """External and builtin variables (:data:`mftire.extensions.BUILTIN_VARIABLES`)."""
+        """External and builtin variables (:data:`mftire.mf.extensions.BUILTIN_VARIABLES`)."""
         if self.builtin is None:
             with np.errstate(all="ignore"):
                 self.builtin = builtin_variables(p, self.c)
@@ -316,7 +316,7 @@ def evaluate_arrays(
     mode : int
         Three-digit ``useMode`` (see :mod:`mftire.mf.modes`).
     extensions : ExtensionSet or mapping, optional
-        The ``[MFTIRE_EXTENSIONS]`` terms (see :mod:`mftire.extensions`).
+        The ``[MFTIRE_EXTENSIONS]`` terms (see :mod:`mftire.mf.extensions`).
     variables : dict, optional
         External input arrays the extensions read, by name (e.g. ``temperature``).
 

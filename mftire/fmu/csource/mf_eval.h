@@ -10,7 +10,7 @@
  * MFParams (one double per .tir parameter) is generated from the FMU variable
  * table into mf_params.h by mftire/fmu/variables.py, together with the export-time
  * number of external variables of the model extensions ([MFTIRE_EXTENSIONS],
- * mftire/extensions.py): MF_N_DATA and MF_DATA_NAMES (extra inputs, MFInputs.data).
+ * mftire/mf/extensions.py): MF_N_DATA and MF_DATA_NAMES (extra inputs, MFInputs.data).
  * The extension terms themselves are generated into mf_ext_gen.h.
  */
 #ifndef MF_EVAL_H
@@ -22,7 +22,7 @@
 extern "C" {
 #endif
 
-/* Room for the external variables of the model extensions (mftire.extensions.MAX_EXTERNAL). */
+/* Room for the external variables of the model extensions (mftire.mf.extensions.MAX_EXTERNAL). */
 #define MF_MAX_DATA 4
 
 /* One operating point as the importer gives it. */
