@@ -46,6 +46,7 @@ __all__ = [
     "SweepReport",
     "is_known_unit",
     "unit_factor",
+    "unit_offset",
     "convert_to_si",
     "convert_from_si",
     "to_schema",
@@ -123,7 +124,7 @@ def _add_units(dimension: str, table: Mapping[str, float]) -> None:
 _add_units("angle", {"rad": 1.0, "radian": 1.0, "radians": 1.0, "mrad": 1e-3, "deg": _DEG,
                      "degree": _DEG, "degrees": _DEG, "°": _DEG, "grd": _DEG})
 _add_units("ratio", {"": 1.0, "-": 1.0, "1": 1.0, "none": 1.0, "ratio": 1.0, "frac": 1.0,
-                     "%": 0.01, "percent": 0.01, "pct": 0.01})
+                     "%": 0.01, "percent": 0.01, "pct": 0.01, "unitless": 1.0})
 _add_units("speed", {"m/s": 1.0, "km/h": 1 / 3.6, "kmh": 1 / 3.6, "kph": 1 / 3.6,
                      "km/hr": 1 / 3.6, "mph": 0.44704, "mm/s": 1e-3, "ft/s": 0.3048})
 _add_units("pressure", {"pa": 1.0, "n/m^2": 1.0, "n/m2": 1.0, "hpa": 100.0, "kpa": 1e3,
@@ -133,7 +134,8 @@ _add_units("force", {"n": 1.0, "kn": 1e3, "dan": 10.0, "mn": 1e-3, "lbf": 4.4482
                      "lb": 4.4482216152605, "kgf": 9.80665, "kp": 9.80665})
 _add_units("moment", {"nm": 1.0, "knm": 1e3, "danm": 10.0, "nmm": 1e-3, "lbfft": 1.3558179483314,
                       "ftlbf": 1.3558179483314, "lbfin": 0.1129848290276, "inlbf": 0.1129848290276,
-                      "kgfm": 9.80665, "kpm": 9.80665})
+                      "kgfm": 9.80665, "kpm": 9.80665, "ftlb": 1.3558179483314,
+                      "lbft": 1.3558179483314})
 _add_units("length", {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "km": 1e3, "in": 0.0254, "inch": 0.0254,
                       "ft": 0.3048})
 _add_units("time", {"s": 1.0, "sec": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0})
@@ -141,9 +143,18 @@ _add_units("angular_speed", {"rad/s": 1.0, "1/s": 1.0, "deg/s": _DEG, "rpm": 2 *
                              "1/min": 2 * math.pi / 60, "u/min": 2 * math.pi / 60,
                              "rev/min": 2 * math.pi / 60, "rps": 2 * math.pi})
 _add_units("curvature", {"1/m": 1.0, "rad/m": 1.0, "1/mm": 1e3, "1/km": 1e-3})
-_add_units("count", {"": 1.0, "-": 1.0, "1": 1.0, "none": 1.0, "#": 1.0, "no": 1.0})
-# recognised (so that file parsers can tell a unit from a comment) but never converted
-_add_units("temperature", {"degc": 1.0, "°c": 1.0, "c": 1.0, "k": 1.0, "degf": 1.0, "°f": 1.0})
+_add_units("count", {"": 1.0, "-": 1.0, "1": 1.0, "none": 1.0, "#": 1.0, "no": 1.0, "unitless": 1.0})
+# Temperatures convert to deg C (the unit of rig temperature channels), an affine map:
+# value_C = value * factor + offset (offsets in _UNIT_OFFSETS, see unit_offset).  The
+# TYDEX reader only uses these to recognise a unit; it keeps temperature channels as read.
+_add_units("temperature", {"degc": 1.0, "°c": 1.0, "c": 1.0, "celsius": 1.0, "k": 1.0, "kelvin": 1.0,
+                           "degf": 5.0 / 9.0, "°f": 5.0 / 9.0, "fahrenheit": 5.0 / 9.0})
+#: (normalised unit, dimension) -> additive offset after the factor (affine units only).
+_UNIT_OFFSETS: dict[tuple[str, str], float] = {
+    ("k", "temperature"): -273.15, ("kelvin", "temperature"): -273.15,
+    ("degf", "temperature"): -32.0 * 5.0 / 9.0, ("°f", "temperature"): -32.0 * 5.0 / 9.0,
+    ("fahrenheit", "temperature"): -32.0 * 5.0 / 9.0,
+}  # fmt: skip
 
 
 def _normalise_unit(unit: str | None) -> str:
@@ -199,6 +210,16 @@ def unit_factor(unit: str | None, dimension: str) -> float:
             f"{what} {unit!r} for a {dimension} value; known {dimension} units: {', '.join(known)}"
         )
     return hit[dimension]
+
+
+def unit_offset(unit: str | None, dimension: str) -> float:
+    """Additive offset of an affine unit (temperatures): ``value_SI = value * factor + offset``.
+
+    Zero for every purely multiplicative unit.  Temperatures convert to deg C, e.g.
+    ``unit_factor("degF", "temperature") * 212 + unit_offset("degF", "temperature")`` is 100.
+    """
+    unit_factor(unit, dimension)  # raises on an unknown unit
+    return _UNIT_OFFSETS.get((_normalise_unit(unit), dimension), 0.0)
 
 
 def convert_to_si(values: Any, unit: str | None, column: str) -> Any:
