@@ -118,6 +118,7 @@ from mftire.iotools.sweeps import (
     MEASURED_COLUMNS,
     REQUIRED_COLUMNS,
     _normalise_unit,
+    _set_point,
     cluster_1d,
     sweep_kind,
     unit_factor,
@@ -727,6 +728,7 @@ def segment(
     hold_s: float = 1.0,
     min_segment_s: float = 3.0,
     min_sweep_points: int = 10,
+    min_dwell_s: float = 0.3,
     warmup: str | float | None = "auto",
     points_per_sweep: int | None = None,
     name: str = "",
@@ -735,7 +737,9 @@ def segment(
 
     See the module docstring for the procedure.  Tolerances: ``fz_tol``, ``p_tol`` and
     ``vx_tol`` relative [-] (``vx_abs_tol`` [m/s] added), ``gamma_tol`` and
-    ``alpha_tol`` [rad], ``kappa_tol`` [-].  Times in seconds.
+    ``alpha_tol`` [rad], ``kappa_tol`` [-].  Times in seconds.  A sweep has at least
+    ``min_sweep_points`` rows; the swept slip standing still (within a tenth of its
+    tolerance over 0.1 s) for ``min_dwell_s`` or longer is a dwell, not part of a sweep.
 
     Returns
     -------
@@ -779,7 +783,8 @@ def segment(
             cl = cluster_1d(s[steady], rel_tol=rel, abs_tol=ab)
             ids, counts = np.unique(cl, return_counts=True)
             big = ids[counts >= max(1, int(min_segment_s * fs * 0.5))]
-            centres = np.array([float(np.median(s[steady][cl == i])) for i in big])
+            kind = "angle" if c == "gamma" else "rel"
+            centres = np.array([_set_point(s[steady][cl == i], kind) for i in big])
             if centres.size:
                 order = np.argsort(centres)
                 centres = centres[order]
@@ -858,6 +863,8 @@ def segment(
     sdir = np.zeros(n, dtype=int)
     seg_info: dict[int, dict[str, Any]] = {}
     w_dir = max(3, int(round(0.05 * fs)) | 1)
+    lag = max(1, int(round(0.05 * fs)))
+    min_dwell = max(min_sweep_points, int(round(min_dwell_s * fs)))
     next_id = 0
     for k_seg, entry in enumerate(rep.segments):
         if entry["status"] != "kept":
@@ -873,15 +880,20 @@ def segment(
         var = "alpha" if ra >= rk else "kappa"
         x = a if var == "alpha" else kp
         tol = alpha_tol if var == "alpha" else kappa_tol
+        # direction from the change of the smoothed slip over +-lag; "moving" beyond a dead band
         xs = pd.Series(x).rolling(w_dir, center=True, min_periods=1).mean().to_numpy()
-        d = np.gradient(xs)
-        sg = np.sign(d).astype(float)
-        sg[np.abs(d) < 1e-3 * tol] = np.nan
-        sg = pd.Series(sg).ffill().bfill().fillna(1.0).to_numpy()
+        xp = np.pad(xs, lag, mode="edge")
+        d = xp[2 * lag:] - xp[: -2 * lag]
+        moving = np.abs(d) > 0.1 * tol
+        still = _runs(moving)
+        dwell = ~moving & (np.bincount(still)[still] >= min_dwell)  # the slip is held: not a sweep
+        sg = np.where(moving, np.sign(d), np.nan)
+        sg = pd.Series(sg).ffill().bfill().fillna(1.0).to_numpy(copy=True)
+        sg[dwell] = 0.0
         r = _runs(sg)
         # short flickers near turning points: take the direction of the run before them
         cnt = np.bincount(r)
-        short = cnt[r] < min_sweep_points
+        short = (cnt[r] < min_sweep_points) & ~dwell
         if short.any() and not short.all():
             sg2 = sg.copy()
             sg2[short] = np.nan
@@ -889,10 +901,12 @@ def segment(
             r = _runs(sg)
         span = pd.Series(x).groupby(r).agg(lambda v: float(v.max() - v.min())).to_numpy()
         cnt = np.bincount(r)
-        good = (span[r] > 2 * tol) & (cnt[r] >= min_sweep_points)
-        drop_rows = rows[~good]
+        good = (span[r] > 2 * tol) & (cnt[r] >= min_sweep_points) & (sg != 0)
+        keep[rows[dwell]] = False
+        reason[rows[dwell]] = "dwell (slip held, no sweep)"
+        drop_rows = rows[~good & ~dwell]
         keep[drop_rows] = False
-        reason[drop_rows] = "turning point or dwell (sweep shorter than the minimum)"
+        reason[drop_rows] = "turning point (sweep shorter than the minimum)"
         _, ids = np.unique(r[good], return_inverse=True)
         sweep[rows[good]] = ids + next_id
         sdir[rows[good]] = sg[good].astype(int)
@@ -1057,7 +1071,9 @@ def import_rig(
 
 
 def write_sweeps(table: pd.DataFrame, path: PathLike) -> None:
-    """Write an imported sweep table as CSV, atomically."""
+    """Write an imported sweep table as CSV, atomically (the folder is created if needed)."""
+    folder = os.path.dirname(os.path.abspath(os.fspath(path)))
+    os.makedirs(folder, exist_ok=True)
     with atomic_path(path) as tmp:
         table.to_csv(tmp, index=False, float_format="%.8g")
 
