@@ -61,7 +61,7 @@ data column they would hand the diagnosis the measured force as a "cause".
 
 Segmentation (:func:`segment`)
 ------------------------------
-1. Each condition (Fz, P, inclination, Vx) is median-smoothed over ``smooth_s`` and is
+1. Each condition (Fz, P, inclination, Vx) is averaged over ``smooth_s`` and is
    *steady* where its smoothed value moves less than its tolerance within ``hold_s``.
 2. The levels of each condition are the gap clusters
    (:func:`~mftire.iotools.sweeps.cluster_1d`) of its steady values; a row belongs to a
@@ -772,7 +772,7 @@ def segment(
     level_values: dict[str, np.ndarray] = {}
     for j, c in enumerate(_CONDITIONS):
         x = df[c].to_numpy(float)
-        sm = pd.Series(x).rolling(w_smooth, center=True, min_periods=1).median()
+        sm = pd.Series(x).rolling(w_smooth, center=True, min_periods=1).mean()
         move = (sm.rolling(w_hold, center=True, min_periods=1).max()
                 - sm.rolling(w_hold, center=True, min_periods=1).min()).to_numpy()  # fmt: skip
         s = sm.to_numpy()
@@ -899,7 +899,8 @@ def segment(
             sg2[short] = np.nan
             sg = pd.Series(sg2).ffill().bfill().to_numpy()
             r = _runs(sg)
-        span = pd.Series(x).groupby(r).agg(lambda v: float(v.max() - v.min())).to_numpy()
+        gx = pd.Series(x).groupby(r)
+        span = (gx.max() - gx.min()).to_numpy()
         cnt = np.bincount(r)
         good = (span[r] > 2 * tol) & (cnt[r] >= min_sweep_points) & (sg != 0)
         keep[rows[dwell]] = False
