@@ -250,10 +250,12 @@ def rig_stage(out_dir: str | os.PathLike, raw_file: str | os.PathLike = OUT, *, 
     """The demo's third data source: import the simulated raw file, fit, diagnose, compare.
 
     1. ``mftire import`` (TTC layout, SAE -> ISO, 10 points per sweep) to ``rig_sweeps.csv``;
-    2. MF 6.1 fit (template: the shipped ``mftire/data/default.tir`` constants) on every
-       load but ``holdout_load`` x FNOMIN;
-    3. diagnosis of the residual (the temperature channels are candidates);
-    4. held-out RMS (% of peak) of Fx and Fy at the held-out load, before and after.
+    2. MF 6.1 fit (template: :func:`template_for_fit`) on every load but
+       ``holdout_load`` x FNOMIN;
+    3. diagnosis of the residual (the temperature channels are candidates), with the same
+       load held out of the effect fit;
+    4. held-out RMS (% of peak) of Fx and Fy at the held-out load, before (MF fit) and
+       after (MF + the diagnosed effect).
 
     Returns a summary dict (also written to ``out_dir/rig_summary.json``).
     """
@@ -263,6 +265,7 @@ def rig_stage(out_dir: str | os.PathLike, raw_file: str | os.PathLike = OUT, *, 
     from mftire.diagnosis.diagnose import diagnose
     from mftire.diagnosis.report import write_report
     from mftire.fitting.core import fit_tir
+    from mftire.iotools.atomic import write_text_atomic
     from mftire.iotools.rig import import_rig
     from mftire.iotools.tir import read_tir, write_tir
     from mftire.tyre import Tyre
@@ -278,15 +281,19 @@ def rig_stage(out_dir: str | os.PathLike, raw_file: str | os.PathLike = OUT, *, 
         fit = fit_tir(sweeps[~held].assign(source="rig"), template_for_fit(), progress=False)
     write_tir(fit.parameters, out / "rig_fitted.tir")
     fitted = Tyre(fit.parameters, name="MF 6.1 fit to the rig file")
-    diag = diagnose(sweeps.assign(source="rig"), fitted, progress=False, n_perm=49 if quick else 99)
+    level = float(sweeps.loc[held, "Fz_set"].iloc[0])
+    diag = diagnose(sweeps.assign(source="rig"), fitted, ("Fz", [level]), progress=False, n_perm=49 if quick else 99)
     write_report(diag, out / "rig_diagnosis")
     summary = {"import": str(rep).splitlines()[0], "points": len(sweeps), "sweeps": rep.n_sweeps,
                "dropped_rows": rep.dropped, "heldout_load_N": holdout_load * fnomin,
-               "heldout_rms_pct": heldout_rms(fitted, sweeps[held]),
+               "heldout_rms_pct_before": heldout_rms(fitted, sweeps[held]),
+               "heldout_rms_pct_after": heldout_rms(diag.extended, sweeps[held], {
+                   v: sweeps.loc[held, v].to_numpy() for v in diag.extended.required_variables})
+               if diag.significant else None,
                "diagnosis": diag.summary(),
                "cause": diag.ranking[0].variable if diag.significant else None,
                "diagnosis_heldout": [e.__dict__ for e in diag.errors]}  # fmt: skip
-    (out / "rig_summary.json").write_text(json.dumps(summary, indent=1, default=float) + "\n")
+    write_text_atomic(out / "rig_summary.json", json.dumps(summary, indent=1, default=float) + "\n")
     return summary
 
 

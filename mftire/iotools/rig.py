@@ -276,6 +276,12 @@ def _check_time(path: str, t: np.ndarray, column: str, skip: int, df: pd.DataFra
         )
 
 
+def _no_duplicates(path: str, line: int, names: Sequence[str], what: str) -> None:
+    dups = sorted({n for n in names if names.count(n) > 1 and n})
+    if dups:
+        raise MftireInputError(f"{path}:{line}: column {dups[0]!r} appears twice in the {what}")
+
+
 def _target_of(name: str) -> str | None:
     """Schema column a rig channel name stands for, from the column aliases of the sweep schema."""
     low = name.strip().lower()
@@ -340,9 +346,7 @@ def read_ttc(path: PathLike, *, convention: str = "sae", signs: Mapping[str, flo
         names.pop()
     if not any(names):
         raise MftireInputError(f"{p}:2: empty channel-name line")
-    dups = sorted({n for n in names if names.count(n) > 1 and n})
-    if dups:
-        raise MftireInputError(f"{p}:2: column {dups[0]!r} appears twice in the channel line")
+    _no_duplicates(p, 2, names, "channel line")
     missing = [c for c in TTC_CHANNELS if c not in names]
     if missing:
         raise MftireInputError(
@@ -573,9 +577,7 @@ def read_columns(
         ulist = [u.strip().strip('"') for u in head[skip_lines + 1].split(sep)]
         file_units = dict(zip(names, ulist + [""] * len(names), strict=False))
     skip = skip_lines + (2 if units_line else 1)
-    dups = sorted({n for n in names if names.count(n) > 1 and n})
-    if dups:
-        raise MftireInputError(f"{p}:{header_line}: column {dups[0]!r} appears twice in the header line")
+    _no_duplicates(p, header_line, names, "header line")
     missing_t = [c for c in REQUIRED_COLUMNS if c not in specs]
     if missing_t:
         raise MftireInputError(
