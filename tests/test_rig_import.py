@@ -99,6 +99,18 @@ def test_channel_mapping_sae_to_iso(tmp_path):
     assert flipped["gamma"] == pytest.approx(-math.radians(1.5))
 
 
+def test_extra_channels_of_other_rounds(tmp_path):
+    """Channels beyond the layout are kept under their names, except ones that look like a
+    schema quantity the layout already gives (a second slip channel): left out, with a note."""
+    names = [*TTC_CHANNELS, "RUN", "SL"]
+    rows = [[*_row(0.01 * i), 7.0, 0.5] for i in range(4)]
+    units = "s kph rpm deg deg cm cm kPa N N N N-m N-m - - degC degC degC degC degC - - -".split()
+    p = _tiny_ttc(tmp_path / "x.dat", rows, names=names, unit_line="\t".join(units))
+    d = read_ttc(p)
+    assert (d["RUN"] == 7.0).all() and "SL" not in d.columns and (d["kappa"] == 0).all()
+    assert any("SL looks like kappa" in m for m in d.attrs["messages"])
+
+
 def test_physical_invariants_after_conversion(raw_rows):
     """Invariants of any real tyre, independent of the convention, hold on the converted rows."""
     d = raw_rows

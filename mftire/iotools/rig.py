@@ -358,11 +358,18 @@ def read_ttc(path: PathLike, *, convention: str = "sae", signs: Mapping[str, flo
     body = _read_body(p, "\t", 3, [n or f"_unnamed{i}" for i, n in enumerate(names)])
     dims: dict[str, tuple[str, str]] = {}
     targets: dict[str, str] = {}
+    messages: list[str] = []
+    skipped: set[str] = set()
     for name, unit in zip(names, units, strict=True):
         if not name:
             continue
         target = _target_of(name) if name not in _TTC_EXTRA_DIMENSIONS else None
-        if target is not None and target in DIMENSIONS:
+        if target is not None and name not in TTC_CHANNELS:
+            # e.g. a second slip channel "SL": the layout's own channel (SR) is the one used
+            skipped.add(name)
+            messages.append(f"channel {name} looks like {target} but is not the TTC layout's channel for it; "
+                            "left out")  # fmt: skip
+        elif target is not None and target in DIMENSIONS:
             targets[name] = target
             dims[name] = (unit, DIMENSIONS[target])
         elif name in _TTC_EXTRA_DIMENSIONS:
@@ -371,7 +378,7 @@ def read_ttc(path: PathLike, *, convention: str = "sae", signs: Mapping[str, flo
     out: dict[str, np.ndarray] = {}
     cmap: dict[str, str] = {}
     for name in names:
-        if not name or name in _TTC_DROPPED:
+        if not name or name in _TTC_DROPPED or name in skipped:
             continue
         required = name in TTC_CHANNELS
         x = _numeric(p, body, name, 3, allow_nan=not required)
@@ -385,7 +392,7 @@ def read_ttc(path: PathLike, *, convention: str = "sae", signs: Mapping[str, flo
     df = to_iso(df, convention, signs)
     df.attrs.update({"title": head[0].strip(), "units_read": dict(zip(names, units, strict=True)),
                      "channel_map": cmap, "convention": convention, "time_column": "ET", "header_lines": 3,
-                     "file": p})  # fmt: skip
+                     "file": p, "messages": messages})  # fmt: skip
     return df
 
 
@@ -766,7 +773,8 @@ def segment(
     rep = RigReport(file=name or str(df.attrs.get("file", "")), n_rows=n, duration_s=float(t[-1] - t[0]),
                     sample_rate_hz=fs, convention=str(df.attrs.get("convention", "")),
                     units_read=dict(df.attrs.get("units_read", {})),
-                    channel_map=dict(df.attrs.get("channel_map", {})))  # fmt: skip
+                    channel_map=dict(df.attrs.get("channel_map", {})),
+                    messages=list(df.attrs.get("messages", [])))  # fmt: skip
 
     # 1-2: steady rows and levels of every condition
     labels = np.zeros((n, len(_CONDITIONS)), dtype=np.int64)
