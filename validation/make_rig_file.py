@@ -33,7 +33,7 @@ polynomial form of mftire's ``friction_variable`` extension).  T follows a first
 thermal model driven by friction power:
 
     C dT/dt = ETA * (|Fx * Vsx| + |Fy * Vsy|) + Q_ROLL - H * (T - T_amb),
-    Vsx = -kappa * Vx,  Vsy = Vx * tan(alpha)          (slip velocities, Pacejka eq 2.12)
+    Vsx = -kappa * Vx,  Vsy = Vx * tan(alpha)      (slip velocities, Pacejka 2012 eqs 4.E5, 2.12/4.E3)
 
 solved exactly per sample as a discrete first-order filter; the coupling (grip ->
 force -> power -> temperature) is resolved by fixed-point iteration.  The surface
@@ -181,8 +181,10 @@ def simulate(seed: int = 0, tir: str | os.PathLike = TIR, g_drop: float = G_DROP
         g = grip(T, g_drop)
         tyre.flat.update(LMUX=flat0["LMUX"] * g, LMUY=flat0["LMUY"] * g)
         out = tyre.evaluate(Fz, kappa, sa_iso, gamma, Vx=Vx, P=P)
+        # friction power |Fx Vsx| + |Fy Vsy|, Vsx = -kappa Vx (eq 4.E5), Vsy = tan(alpha) Vx (eq 2.12 / 4.E3)
         power = np.abs(out["Fx"] * (-kappa * Vx)) + np.abs(out["Fy"] * Vx * np.tan(sa_iso))
         target = T_AMB + (ETA * power + Q_ROLL) / H_TH
+        # C dT/dt = ETA P + Q_ROLL - H (T - T_amb), exact for inputs held over a sample
         T_new, _ = lfilter([1 - a], [1, -a], target, zi=[a * T_AMB])
         converged = float(np.max(np.abs(T_new - T))) < 1e-3
         T = T_new
