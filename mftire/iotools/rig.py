@@ -679,6 +679,10 @@ class RigReport:
         return asdict(self)
 
     def __str__(self) -> str:
+        return self.text()
+
+    def text(self, max_listed: int = 20) -> str:
+        """Human-readable summary, listing at most ``max_listed`` dropped segments."""
         lines = [f"{self.file}: {self.n_rows} rows, {self.duration_s:.1f} s at {self.sample_rate_hz:.4g} Hz, "
                  f"{self.convention.upper()} axes -> ISO W"]
         for c, lv in self.levels.items():
@@ -690,10 +694,12 @@ class RigReport:
                      f"-> {self.n_points} points")
         for reason, n in sorted(self.dropped.items(), key=lambda kv: -kv[1]):
             lines.append(f"  dropped {n} rows ({n / max(self.n_rows, 1):.1%}): {reason}")
-        for s in self.segments:
-            if s["status"] != "kept":
-                lines.append(f"    t = {s['t_start']:.2f}-{s['t_end']:.2f} s (rows {s['row_first']}-{s['row_last']}):"
-                             f" {s['reason']}")
+        dropped = [s for s in self.segments if s["status"] != "kept"]
+        for s in dropped[:max_listed]:
+            lines.append(f"    t = {s['t_start']:.2f}-{s['t_end']:.2f} s (rows {s['row_first']}-{s['row_last']}):"
+                         f" {s['reason']}")
+        if len(dropped) > max_listed:
+            lines.append(f"    ... {len(dropped) - max_listed} more dropped segments (see the JSON report)")
         lines.extend(f"  note: {m}" for m in self.messages)
         return "\n".join(lines)
 
