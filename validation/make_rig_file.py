@@ -274,6 +274,8 @@ def rig_stage(out_dir: str | os.PathLike, raw_file: str | os.PathLike = OUT, *, 
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    if not Path(raw_file).exists():  # e.g. an installed package without validation/: simulate it (~5 s)
+        raw_file = make(out / "simulated_ttc_run.dat.gz")
     sweeps, rep = import_rig(raw_file, "ttc", output=out / "rig_sweeps.csv", points_per_sweep=10)
     template = read_tir(TIR)
     fnomin = float(template["FNOMIN"])
