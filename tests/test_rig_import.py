@@ -162,13 +162,42 @@ def test_metric_and_us_variants_give_the_same_table(tmp_path, gen):
     assert rm.n_sweeps == ru.n_sweeps >= 80
     assert list(m.columns) == list(u.columns)
     np.testing.assert_array_equal(m["row_first"], u["row_first"])
-    # half the file resolution of the two variants (2 decimals of lbf, ft-lbf, mph, psi, in, deg F)
-    tol = {"Fx": 0.03, "Fy": 0.03, "Fz": 0.03, "Mx": 0.01, "Mz": 0.01, "Vx": 0.003, "P": 40.0, "RL": 1.5e-4,
-           "RE": 1.5e-4, "TSTC": 0.006, "TSTI": 0.006, "TSTO": 0.006, "AMBTMP": 0.006, "RST": 0.006}
-    for col, atol in tol.items():
-        np.testing.assert_allclose(u[col], m[col], atol=atol, rtol=0, err_msg=col)
+    for col, atol in _SI_RESOLUTION.items():
+        np.testing.assert_allclose(u[col], m[col], atol=atol, rtol=1e-12, err_msg=col)
     for col in ("alpha", "gamma", "kappa", "ET", "Fz_set", "gamma_set", "sweep_id"):
         np.testing.assert_allclose(u[col], m[col], atol=1e-9, err_msg=col)
+
+
+_SI_RANGES = {"V": (5.0, 40.0), "N": (10.0, 200.0), "SA": (-0.3, 0.3), "IA": (-0.1, 0.1), "RL": (0.2, 0.4),
+              "RE": (0.2, 0.4), "P": (5e4, 3e5), "FX": (-8e3, 8e3), "FY": (-8e3, 8e3), "FZ": (-1e4, -100.0),
+              "MX": (-300.0, 300.0), "MZ": (-300.0, 300.0), "RST": (0.0, 80.0), "TSTI": (0.0, 120.0),
+              "TSTC": (0.0, 120.0), "TSTO": (0.0, 120.0), "AMBTMP": (-10.0, 40.0), "SR": (-0.5, 0.5)}
+# largest difference between the two variants in SI: half a step of the last digit of each (2 decimals of kph/mph,
+# cm/in, kPa/psi, N/lbf, N-m/ft-lbf, deg C/deg F)
+_SI_RESOLUTION = {"Vx": 0.0037, "N": 1e-9, "RL": 1.8e-4, "RE": 1.8e-4, "P": 40.0, "Fx": 0.028, "Fy": 0.028,
+                  "Fz": 0.028, "Mx": 0.012, "Mz": 0.012, "RST": 0.008, "TSTI": 0.008, "TSTC": 0.008,
+                  "TSTO": 0.008, "AMBTMP": 0.008}
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.integers(2, 8).flatmap(lambda n: st.fixed_dictionaries(
+    {c: st.lists(st.floats(lo, hi, allow_nan=False), min_size=n, max_size=n) for c, (lo, hi) in _SI_RANGES.items()})))
+def test_unit_variants_round_trip(cols):
+    """Any SI values written in the metric and the US variant read back to the same SI table,
+    within the file resolution of the variants."""
+    import tempfile
+
+    n = len(cols["V"])
+    raw = pd.DataFrame(cols).assign(ET=np.arange(n) * 0.01)
+    with tempfile.TemporaryDirectory() as tmp:
+        write_ttc(raw, Path(tmp) / "m.dat", units="metric")
+        write_ttc(raw, Path(tmp) / "u.dat", units="us")
+        m, u = read_ttc(Path(tmp) / "m.dat"), read_ttc(Path(tmp) / "u.dat")
+    assert list(m.columns) == list(u.columns)
+    for col, res in _SI_RESOLUTION.items():
+        np.testing.assert_allclose(u[col], m[col], atol=res, rtol=1e-12, err_msg=col)
+    np.testing.assert_allclose(m["Fz"], -raw["FZ"], atol=0.006)
+    np.testing.assert_allclose(m["alpha"], -raw["SA"], atol=1e-6)
 
 
 # ------------------------------------------------------------------ bad input
