@@ -164,6 +164,9 @@ def build_parser() -> argparse.ArgumentParser:
     from mftire.compare import cli as compare_cli
 
     compare_cli.add_parser(sub)
+    from mftire.iotools import rig as rig_cli
+
+    rig_cli.add_parser(sub)
     return parser
 
 

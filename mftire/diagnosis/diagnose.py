@@ -28,6 +28,7 @@ import pandas as pd
 
 from mftire.diagnosis.candidates import Candidate, candidates, time_column, with_sweeps
 from mftire.diagnosis.effects import (
+    FIT_CHANNELS,
     HISTORY_CANDIDATES,
     EffectFit,
     choose_effect,
@@ -139,6 +140,47 @@ def channel_noise(df: pd.DataFrame, channel: str) -> float:
     return noise_std(df[channel].to_numpy(float), x, df["sweep_id"].to_numpy())
 
 
+def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4) -> np.ndarray | None:
+    """Held-out folds along the candidate: its levels (a sweep-level variable with 3 to 6 levels: one
+    level out at a time), else ``k`` contiguous ranges of the sweeps' mean value, so that every fold is
+    a range of the variable between or beyond the trained ones, as the held-out condition is."""
+    v = np.asarray(v, float)
+    lv = np.unique(np.round(v[np.isfinite(v)], 6))
+    if sweep_level and 3 <= len(lv) <= 6:
+        return np.round(v, 6)
+    means = pd.Series(v).groupby(sweeps).mean()
+    if means.nunique() < k:
+        return None
+    rank = means.rank(method="first").to_numpy()
+    label = dict(zip(means.index, np.minimum((rank - 1) * k // len(means), k - 1), strict=True))
+    return np.array([label[s] for s in sweeps])
+
+
+#: Pseudo-channel of candidates found by the scaling-factor profiles (their entry names the factor).
+PROFILE_CHANNELS = ("profile",)
+
+
+def _profile_candidates(profiles: Profiles, ranking: list[CandidateScore], by_name: Mapping[str, Candidate],
+                        significant: list[CandidateScore]) -> list[CandidateScore]:
+    """Candidates the per-sweep profiles link to an affected factor (p <= 0.01, CV score >= 0.3) that the
+    residual ranking did not flag: an effect on stiffness or shape, or one a blocked test order hides."""
+    out: list[CandidateScore] = []
+    have = {e.variable for e in significant}
+    for link in profiles.links:
+        if link.variable in have or link.p_value > 0.01 or link.score < 0.3 or link.variable not in by_name:
+            continue
+        c = by_name[link.variable]
+        entry = CandidateScore(link.variable, "profile", link.score, link.p_value, True, abs(link.r), c.sweep_level,
+                               c.derived, {"Fx": link.score} if link.factor.endswith("X") else {"Fy": link.score})
+        old = next((e for e in ranking if e.variable == link.variable), None)
+        if old is not None:
+            ranking.remove(old)
+        ranking.insert(len(significant) + len(out), entry)
+        out.append(entry)
+        have.add(link.variable)
+    return out
+
+
 def _variables_for(tyre: Tyre, df: pd.DataFrame) -> dict[str, np.ndarray]:
     """The columns the model's extensions read (closed variables: always data columns)."""
     missing = [v for v in tyre.required_variables if v not in df.columns]
@@ -224,7 +266,8 @@ def diagnose(
         if rms <= NOISE_FLOOR * noise[ch]:  # nothing systematic left: never outranks the others
             not_measured[ch] = f"residual at the noise floor (RMS {rms:.3g} vs noise {noise[ch]:.3g})"
             continue
-        residuals[ch] = normalised_residual(ch, y, model[ch], Fz, R0)
+        if ch in FIT_CHANNELS:  # the laws act on Fx, Fy, Mz through the scaling factors
+            residuals[ch] = normalised_residual(ch, y, model[ch], Fz, R0)
     X0 = baseline_features(df["kappa"].to_numpy(float), df["alpha"].to_numpy(float), df["gamma"].to_numpy(float),
                            Fz, tyre["FNOMIN"])  # fmt: skip
     _progress(f"ranking {len(cands)} candidates", progress)
@@ -237,6 +280,7 @@ def diagnose(
     cand_values = {c.name: c.values for c in cands if c.name not in HISTORY_CANDIDATES}
     profiles = profile_factors(tyre, df, cand_values, [c for c in chans if c in ("Fx", "Fy")], noise, seed=seed)
     significant = [e for e in ranking if e.significant]
+    significant += _profile_candidates(profiles, ranking, by_name, significant)
     if not significant:
         return DiagnosisResult(False, ranking, None, None, messages=["no significant effect"], data=df,
                                not_measured=not_measured, profiles=profiles)  # fmt: skip
@@ -245,7 +289,8 @@ def diagnose(
     top = significant[0]
     if holdout is None:
         pref = [top.variable] if by_name[top.variable].sweep_level and top.variable in df.columns else []
-        misfit = np.where(primary_rows(df, top.channel), residuals[top.channel] ** 2, np.nan)
+        ch = top.channel if top.channel in residuals else next(iter(residuals))
+        misfit = np.where(primary_rows(df, ch), residuals[ch] ** 2, np.nan)
         holdout = default_holdout(df, pref, misfit)
     column, values = holdout[0], list(holdout[1])
     test = holdout_mask(df, column, values)
@@ -253,6 +298,7 @@ def diagnose(
     _progress(f"holding out {column} = {values} ({int(test.sum())} rows)", progress)
 
     group = [e for e in significant if e.score >= 0.6 * top.score][:3]
+    group += [e for e in significant if e.channel in PROFILE_CHANNELS and e not in group][:2]
     n_pressures = len(levels(df[train], "P"))
     found: list[tuple[EffectFit, CandidateScore]] = []
     tried: list[EffectFit] = []
@@ -280,10 +326,13 @@ def diagnose(
         v = prob.df["_cand"].to_numpy(float)
         _progress(f"fitting effects for {e.variable}", progress)
         eff_ch = [ch for ch, sc in e.channel_scores.items() if sc >= max(0.05, 0.25 * e.score)] or [e.channel]
+        # held-out folds: the levels of a sweep-level candidate (a level never seen in training, as the
+        # held-out condition), else groups of sweeps
+        folds = level_folds(v, prob.df["sweep_id"].to_numpy(), c.sweep_level)
         n_levels = int(np.unique(np.round(v[np.isfinite(v)], 9)).size)
         laws = [(var, law, v if var == variable else None)
                 for var, law in effects_for(variable, derived, monotone, n_levels, families, chans, second)]
-        chosen, fits = choose_effect(prob, laws, n_pressures, control, eff_ch)
+        chosen, fits = choose_effect(prob, laws, n_pressures, control, eff_ch, folds)
         control = fits[0]
         tried += fits[1:] if len(tried) else fits
         if chosen is None or chosen.removed <= 0:

@@ -486,14 +486,16 @@ PARSIMONY = 0.1
 
 def heldout_error(
     prob: _Problem, law: Law, variable: str, values: np.ndarray | None, n_pressures: int,
-    warm: Mapping[str, float] | None, pressure_channels: Sequence[str] | None,
+    warm: Mapping[str, float] | None, pressure_channels: Sequence[str] | None, folds: np.ndarray | None = None,
 ) -> float:
-    """Sum of squared weighted residuals on held-out sweeps (``CV_FOLDS`` folds by sweep)."""
+    """Sum of squared weighted residuals on held-out rows: each label of ``folds`` held out in
+    turn (default ``CV_FOLDS`` groups of whole sweeps)."""
     from mftire.diagnosis.ranking import fold_of_groups
 
-    folds = fold_of_groups(prob.df["sweep_id"].to_numpy(), CV_FOLDS, seed=1)
+    if folds is None:
+        folds = fold_of_groups(prob.df["sweep_id"].to_numpy(), CV_FOLDS, seed=1)
     total = 0.0
-    for f in range(CV_FOLDS):
+    for f in np.unique(folds):
         test = folds == f
         tr, te = take(prob, ~test), take(prob, test)
         v_tr = None if values is None else np.asarray(values)[~test]
@@ -510,6 +512,7 @@ def choose_effect(
     n_pressures: int,
     control: EffectFit | None = None,
     effect_channels: Sequence[str] | None = None,
+    folds: np.ndarray | None = None,
 ) -> tuple[EffectFit | None, list[EffectFit]]:
     """Fit the candidate laws ``(variable read, law, values of the variable or None)``; choose one.
 
@@ -527,6 +530,7 @@ def choose_effect(
     """
     prob, idx = subsample(prob)
     laws = [(var, law, None if v is None else np.asarray(v)[idx]) for var, law, v in laws]
+    folds = None if folds is None else np.asarray(folds)[idx]
     if control is None:
         control = fit_effect(prob, CONTROL, laws[0][0] if laws else "", None, n_pressures)
     fits: list[tuple[EffectFit, np.ndarray | None, Law]] = []
@@ -537,11 +541,11 @@ def choose_effect(
     all_fits = [control] + [f for f, _, _ in fits]
     if not good:
         return None, all_fits
-    cv_control = heldout_error(prob, CONTROL, "", None, n_pressures, None, effect_channels)
+    cv_control = heldout_error(prob, CONTROL, "", None, n_pressures, None, effect_channels, folds)
     control.messages.append(f"held-out-sweep error {cv_control:.4g}")
     scored = []
     for fit, v, law in good:
-        cv = heldout_error(prob, law, fit.variable, v, n_pressures, control.standard, effect_channels)
+        cv = heldout_error(prob, law, fit.variable, v, n_pressures, control.standard, effect_channels, folds)
         fit.messages.append(f"held-out-sweep error {cv:.4g} (control {cv_control:.4g})")
         fit.heldout = cv / cv_control if cv_control > 0 else np.inf
         scored.append((cv, fit))

@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 
 from mftire.errors import MftireInputError
-from mftire.iotools.units import DIMENSIONS, SI_UNITS, is_known_unit, unit_factor
+from mftire.iotools.units import DIMENSIONS, SI_UNITS, is_known_unit, unit_factor, unit_offset
 
 __all__ = [
     "REQUIRED_COLUMNS",
@@ -47,6 +47,7 @@ __all__ = [
     "SweepReport",
     "is_known_unit",
     "unit_factor",
+    "unit_offset",
     "convert_to_si",
     "convert_from_si",
     "to_schema",

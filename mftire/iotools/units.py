@@ -115,7 +115,7 @@ def _add(dimension: str, table: Mapping[Iterable[str] | str, Fraction | int]) ->
 
 _add("angle", {("rad", "radian", "radians"): 1, "mrad": Fraction(1, 1000),
                ("deg", "degree", "degrees", "°", "grd"): _DEG})
-_add("ratio", {("", "-", "1", "none", "ratio", "frac"): 1, ("%", "percent", "pct"): Fraction(1, 100)})
+_add("ratio", {("", "-", "1", "none", "ratio", "frac", "unitless"): 1, ("%", "percent", "pct"): Fraction(1, 100)})
 _add("speed", {"m/s": 1, ("km/h", "kmh", "kph", "km/hr"): Fraction(1000, 3600), "mph": Fraction("0.44704"),
                "mm/s": Fraction(1, 1000), "ft/s": _FT})
 _add("pressure", {("pa", "pascal", "pascals", "n/m^2", "n/m2"): 1, "hpa": 100, "mbar": 100,
@@ -124,7 +124,8 @@ _add("pressure", {("pa", "pascal", "pascals", "n/m^2", "n/m2"): 1, "hpa": 100, "
 _add("force", {("n", "newton", "newtons"): 1, ("kn", "kilonewton", "kilonewtons"): 1000, "dan": 10,
                "mn": Fraction(1, 1000), ("lbf", "lb", "pound_force", "poundforce", "pound-force"): _LBF,
                ("kgf", "kp", "kilogram_force", "kilogram-force"): _KGF})
-_add("moment", {"nm": 1, "knm": 1000, "danm": 10, "nmm": Fraction(1, 1000), ("lbfft", "ftlbf"): _LBF * _FT,
+_add("moment", {"nm": 1, "knm": 1000, "danm": 10, "nmm": Fraction(1, 1000),
+                ("lbfft", "ftlbf", "ftlb", "lbft"): _LBF * _FT,
                 ("lbfin", "inlbf"): _LBF * _INCH, ("kgfm", "kpm"): _KGF})
 _add("length", {("m", "meter", "metre", "meters", "metres"): 1,
                 ("mm", "millimeter", "millimetre", "millimeters", "millimetres"): Fraction(1, 1000),
@@ -140,9 +141,23 @@ _add("time", {("s", "sec", "second", "seconds"): 1,
 _add("angular_speed", {("rad/s", "1/s"): 1, "deg/s": _DEG, ("rpm", "1/min", "u/min", "rev/min"): _RPM,
                        "rps": 2 * _PI})
 _add("curvature", {("1/m", "rad/m"): 1, "1/mm": 1000, "1/km": Fraction(1, 1000)})
-_add("count", {("", "-", "1", "none", "#", "no"): 1})
-# recognised (so that file parsers can tell a unit from a comment) but never converted
-_add("temperature", {("degc", "°c", "c", "k", "degf", "°f"): 1})
+_add("count", {("", "-", "1", "none", "#", "no", "unitless"): 1})
+# Temperatures convert to deg C (the unit of rig temperature channels), an affine map:
+# value_C = value * factor + offset (:func:`unit_offset`).  The TYDEX reader only uses them to
+# recognise a unit; it keeps temperature channels as read.
+_add("temperature", {("degc", "°c", "c", "celsius", "k", "kelvin"): 1,
+                     ("degf", "°f", "fahrenheit"): Fraction(5, 9)})
+#: (normalised unit, dimension) -> additive offset after the factor (affine units only).
+_OFFSETS: dict[tuple[str, str], float] = {
+    **{(normalise_unit(u), "temperature"): -273.15 for u in ("k", "kelvin")},
+    **{(normalise_unit(u), "temperature"): -32.0 * 5.0 / 9.0 for u in ("degf", "°f", "fahrenheit")},
+}
+
+
+def unit_offset(unit: str | None, dimension: str) -> float:
+    """Additive offset of an affine unit (temperatures): ``value_SI = value * factor + offset``."""
+    unit_factor(unit, dimension)  # raises on an unknown unit
+    return _OFFSETS.get((normalise_unit(unit), dimension), 0.0)
 
 _ANY: dict[str, set[str]] = {}
 for _dim, _names in UNITS.items():
