@@ -263,6 +263,7 @@ _TABLE += _rows("SCALING_COEFFICIENTS", [
     ("LGAY", 1.0, "-", "Scale factor of camber for Fy (MF 5.2)", False),
     ("LGAZ", 1.0, "-", "Scale factor of camber for Mz (MF 5.2)", False),
     ("LGYR", 1.0, "-", "Scale factor of gyroscopic torque", False),
+    ("LMUV", 0.0, "-", "Scale factor of friction decay with slip speed (MF 5.2 / PAC2002, eq 4.E7)", False),
 ])
 _TABLE += _rows("LONGITUDINAL_COEFFICIENTS", [
     ("PCX1", 1.65, "-", "Shape factor Cfx for longitudinal force"),

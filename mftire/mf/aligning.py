@@ -12,6 +12,7 @@ import numpy as np
 
 from mftire.mf import turnslip
 from mftire.mf.basic import Basic
+from mftire.mf.family import is_mf52, is_pac2002
 from mftire.mf.inputs import EPSILON, Conditions
 from mftire.mf.lateral import PureLateral, fy0
 from mftire.mf.longitudinal import _clip_curvature, _sign_nonzero
@@ -187,11 +188,15 @@ def mz_combined(
     else:
         lat0 = fy0(p, mode, c, b, np.zeros_like(c.Fz), turn_slip=mode.turn_slip)
     Fy_prime = Gyk * lat0.Fy0  # eq 4.E74; Gyk does not depend on muy or zeta2
-    # MFeval departure: t is multiplied by LFZO, as TNO's solver does.
-    t = _trail_mf(a.Dt, a.Ct, a.Bt, a.Et, alphat_eq, b.alpha_prime) * p["LFZO"]  # eq 4.E73
+    # MFeval departure: t is multiplied by LFZO, as TNO's solver does (not in PAC2002).
+    lfzo = 1.0 if is_pac2002(p) else p["LFZO"]
+    t = _trail_mf(a.Dt, a.Ct, a.Bt, a.Et, alphat_eq, b.alpha_prime) * lfzo  # eq 4.E73
     t = t * c.smooth
     Mzr = np.real(Mzr) * c.smooth
-    if p["FITTYP"] == 6:
+    if is_pac2002(p) and lat is not None:
+        # PAC2002 (Pacejka 2006 eqs 4.E71, 4.E74): F'y = Fy - SVyk = Gyk*Fy0, Fy0 with camber.
+        Mz = -t * (Gyk * lat.Fy0) + Mzr + s * Fx
+    elif is_mf52(p):
         # MF 5.2 (TNO equation manual): kappa-induced side force excluded from the trail term.
         dfz, gamma_star = b.dfz, b.gamma_star
         DVyk = (

@@ -12,9 +12,10 @@ import numpy as np
 
 from mftire.errors import MftireError, MftireInputError
 from mftire.extensions import extension_terms
-from mftire.mf import turnslip
+from mftire.mf import pac2002, turnslip
 from mftire.mf.aligning import aligning_terms, mz0, mz_combined
 from mftire.mf.basic import basic
+from mftire.mf.family import PAC2002_CODE, is_pac2002
 from mftire.mf.inputs import MFLimitWarning, condition_inputs, turn_slip_spin
 from mftire.mf.lateral import fy0, fy_combined
 from mftire.mf.longitudinal import fx0, fx_combined
@@ -45,6 +46,20 @@ EVALUATED_FITTYP = (6, 61, 62)
 
 class UnsupportedModelError(MftireError):
     """The property file describes a model version the evaluator does not evaluate."""
+
+
+def unsupported_message(fittyp) -> str:
+    """Why parameters with this ``FITTYP`` (None or 0: absent) are not evaluated."""
+    shown = int(fittyp) if isinstance(fittyp, float) and fittyp.is_integer() else fittyp
+    evaluated = "mftire evaluates MF 6.1 (FITTYP 61), MF 6.2 (62), MF 5.2 (6) and PAC2002 property files"
+    if shown in (None, 0):
+        return f"the parameters have no FITTYP (and are not a PAC2002 file): {evaluated}."
+    if shown == 5:
+        return (
+            f"FITTYP 5 is not evaluated: MF_05 / MF-Tyre 5.0 files can be read and written, but the MF-Tyre 5.0 "
+            f"equations are not public in a form that can be verified; {evaluated}."
+        )
+    return f"FITTYP {shown} is not evaluated: {evaluated}."
 
 
 def _clean(name: str, x: np.ndarray, fill: float) -> np.ndarray:
@@ -112,12 +127,10 @@ def evaluate_arrays(
         The 30 channels of :data:`OUTPUT_NAMES`, each an array of the broadcast shape.
     """
     fittyp = p.get("FITTYP")
-    if fittyp not in EVALUATED_FITTYP:
-        shown = int(fittyp) if isinstance(fittyp, float) and fittyp.is_integer() else fittyp
-        raise UnsupportedModelError(
-            f"FITTYP {shown} is not evaluated: mftire evaluates MF 6.1 (61), MF 6.2 (62) and MF 5.2 (6) "
-            "property files; MF 5.0/PAC2002 files can be read and written but not evaluated."
-        )
+    if fittyp == PAC2002_CODE:
+        p = pac2002.prepare(p)
+    elif fittyp not in EVALUATED_FITTYP:
+        raise UnsupportedModelError(unsupported_message(fittyp))
     m = Mode.from_code(mode)
     if Vx is None:
         Vx = p["LONGVL"]
@@ -172,6 +185,9 @@ def _evaluate(
         Fx = fx_combined(p, m, c, b, Fx0)
         Fy = Fy_comb
         Mz, t, Mzr = mz_combined(p, m, c, b, terms, Kxk, Fx, Fy, Gyk, lat)
+    elif is_pac2002(p):
+        Fx, Fy = Fx0, lat.Fy0
+        Mz, t, Mzr = pac2002.mz0(p, m, c, b, terms, lat)
     else:
         Fx, Fy = Fx0, lat.Fy0
         Mz, t, Mzr = mz0(p, m, c, b, terms)

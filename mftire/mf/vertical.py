@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from mftire.mf.family import is_mf52
 from mftire.mf.inputs import Conditions
 
 _EPS = np.finfo(float).eps
@@ -192,7 +193,7 @@ def contact_patch(p: dict, c: Conditions, dpi: np.ndarray) -> tuple[np.ndarray, 
     Rl_approx = R0 - Fz / NCz
     bottom = Rl_approx - (p["RIM_RADIUS"] + p["BOTTOM_OFFST"]) < 0.0
     Fz = np.where(bottom, (R0 - p["RIM_RADIUS"] - p["BOTTOM_OFFST"]) * NCz, Fz)
-    if p["FITTYP"] == 6:
+    if is_mf52(p):
         QA1, QA2 = p["Q_A1"], p["Q_A2"]
         if QA1 == 0 and QA2 == 0:
             # Defaults of the reference evaluator when the MF 5.2 file has none.
