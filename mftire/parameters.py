@@ -509,8 +509,9 @@ def with_defaults(params: Any) -> dict[str, float]:
         Every numeric key of :data:`PARAMETERS` (SI units) with the file's value
         where present and numeric, else the default of the table; plus every other
         numeric key the input holds (unknown keys are passed through).  A file
-        without ``FITTYP`` (PAC2002) gets MFeval's default 0: check
-        ``TirParameters.fittyp`` / ``model`` before evaluating.  ``INFLPRES``
+        without ``FITTYP`` (PAC2002) gets MFeval's default 0 here;
+        :class:`mftire.tyre.Tyre` then marks a PAC2002 file with the evaluator's
+        model code (:data:`mftire.mf.family.PAC2002_CODE`).  ``INFLPRES``
         falls back to ``NOMPRES`` (file value or 220000 Pa) when absent.
     """
     if hasattr(params, "flat") and callable(params.flat):

@@ -105,6 +105,12 @@ the message: :class:`MalformedLineError`, :class:`NonNumericValueError`,
 :class:`UnknownUnitError`, :class:`UnknownFittypError`,
 :class:`MissingFittypError`, :class:`DuplicateKeyError` (a key twice in one
 section), :class:`EmptyFileError`.
+
+Tolerated quirks of real files: a blank value (``KEY =``) or a non-numeric value on
+a standard numeric key that the evaluator does not use (``MASS = kg``) is a
+:class:`TirWarning` (file, line, key) and the key is treated as absent; on a key the
+evaluator uses (:func:`mftire.mf.usedkeys.evaluator_keys`) it is an error.
+``read_tir(path, strict=True)`` makes every warning an error.
 """
 
 from __future__ import annotations

@@ -29,7 +29,10 @@ pressure keys          ``[TIRE_CONDITIONS]`` IP / IP_NOM and QPZ1, QPZ2, QPX1
                        of newer PAC2002 files are the MF 6.1 INFLPRES /
                        NOMPRES, PPZ1, PPZ2, PPMX1 (:func:`prepare`)
 terms absent in 2006   PKY4 = 2 (the fixed "2" of eq 4.E25), and PKY5, PEY5,
-                       RBX3, RBY4, QDZ10, QDZ11, QSX12-QSX14 = 0
+                       RBX3, RBY4, QDZ10, QDZ11, QSX12-QSX14 = 0; the MF 6.2
+                       vertical terms (Q_CAM*, Q_FYS*, Q_FCY2) = 0, so the
+                       loaded radius is the closed-form root of the MF 6.1
+                       equation (solver.py) instead of an iteration
 QSY5..QSY8             not in the published PAC2002/MF 5.2 rolling-resistance
                        equation (eq 4.E70); nonzero values are ignored with a
                        warning
@@ -100,6 +103,15 @@ _ABSENT = {
     "QSX12": 0.0,
     "QSX13": 0.0,
     "QSX14": 0.0,
+    # MF 6.2 vertical terms: without them the MF 6.2 loaded-radius equation of the MF 5.2
+    # path is the MF 6.1 one, whose closed-form root mftire uses for PAC2002
+    "Q_FCY2": 0.0,
+    "Q_CAM1": 0.0,
+    "Q_CAM2": 0.0,
+    "Q_CAM3": 0.0,
+    "Q_FYS1": 0.0,
+    "Q_FYS2": 0.0,
+    "Q_FYS3": 0.0,
 }
 
 #: PAC2002 pressure keys -> the MF 6.1 keys of the shared equations.

@@ -203,7 +203,7 @@ def _evaluate(
         Mx, My = (v * generic[1] if n == generic[0] else v for n, v in (("Mx", Mx), ("My", My)))
     muy = np.abs(lat.muy) if m.limits else lat.muy
 
-    if p["FITTYP"] == 61:
+    if p["FITTYP"] == 61 or is_pac2002(p):  # PAC2002: the MF 6.2 equation reduces to 6.1 (pac2002._ABSENT)
         rho, Rl, Cz = loaded_radius_61(p, c, dpi, c.omega, Romega, Fx, Fy)
     else:
         rho, Rl, Cz = loaded_radius_62(p, c, dpi, c.omega, Romega, Fx, Fy)

@@ -1125,7 +1125,7 @@ int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *
 #endif
     muy = m.limits ? fabs(lat.muy) : lat.muy;
 
-    if (p->FITTYP == 61.0)
+    if (p->FITTYP == 61.0 || is_pac2002(p)) /* PAC2002: the MF 6.2 equation reduces to 6.1 */
         loaded_radius_61(p, &c, dpi, c.omega, Romega, Fx, Fy, &rho, &Rl, &Cz);
     else
         loaded_radius_62(p, &c, dpi, c.omega, Romega, Fx, Fy, &rho, &Rl, &Cz);
