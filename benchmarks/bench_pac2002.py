@@ -1,7 +1,7 @@
 """PAC2002 evaluation speed against MF 6.1 and MF 5.2, measured in the same run.
 
 Run: ``python benchmarks/bench_pac2002.py``.  Each tyre is evaluated on the same
-random operating points (loads scaled to its own nominal load), one point per call
+random operating points (loads relative to its own FNOMIN), one point per call
 and in batches of 1e3 and 1e5 points, combined slip, mode 111.  The ratio column is
 PAC2002 throughput over MF 6.1 throughput (>= 1 means PAC2002 is at least as
 fast).  Each figure is the best of 5 repeats, and the tyres are measured
@@ -11,14 +11,16 @@ interleaved over several rounds, against the noise of a shared machine.
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 import timeit
 import warnings
 from pathlib import Path
 
-import numpy as np
-
 import mftire
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_evaluate import _inputs  # noqa: E402  (the same random operating points)
 
 ROOT = Path(__file__).resolve().parents[1]
 TYRES = {
@@ -26,18 +28,6 @@ TYRES = {
     "MF 5.2": ROOT / "tests" / "data" / "tir" / "MagicFormula52_Parameters.tir",
     "PAC2002": ROOT / "tests" / "data" / "tir" / "chrono_HMMWV_Pac02Tire.tir",
 }
-
-
-def _inputs(tyre: mftire.Tyre, n: int, seed: int = 0) -> dict[str, np.ndarray]:
-    rng = np.random.default_rng(seed)
-    F0 = tyre["FNOMIN"] * tyre["LFZO"]
-    return dict(
-        Fz=rng.uniform(0.3 * F0, 1.5 * F0, n),
-        kappa=rng.uniform(-0.5, 0.5, n),
-        alpha=rng.uniform(-0.3, 0.3, n),
-        gamma=rng.uniform(-0.05, 0.05, n),
-        Vx=rng.uniform(5.0, 40.0, n),
-    )
 
 
 def _rate(fn, n_points: int, min_time: float) -> float:
@@ -71,7 +61,7 @@ def _rates(tyre: mftire.Tyre, min_time: float) -> dict[str, float]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--min-time", type=float, default=1.0, help="seconds per measurement")
-    ap.add_argument("--rounds", type=int, default=3, help="interleaved rounds; the best of each is kept")
+    ap.add_argument("--rounds", type=int, default=5, help="interleaved rounds; the best of each is kept")
     args = ap.parse_args()
     warnings.simplefilter("ignore")
     tyres = {k: mftire.load(p) for k, p in TYRES.items()}
