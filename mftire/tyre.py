@@ -17,6 +17,7 @@ import pandas as pd
 
 from mftire.extensions import SECTION, required_variables
 from mftire.iotools.tir import TirParameters, as_parameters, read_tir
+from mftire.mf import pac2002
 from mftire.mf.family import PAC2002_CODE
 from mftire.mf.solver import OUTPUT_NAMES, OUTPUT_UNITS, UnsupportedModelError, evaluate_arrays, unsupported_message
 from mftire.parameters import with_defaults
@@ -56,6 +57,7 @@ class Tyre:
         if self.parameters.format == "PAC2002":
             # internal model code of the evaluator, not the file's FITTYP (mftire.mf.family)
             self.flat["FITTYP"] = PAC2002_CODE
+            pac2002.warn_unused(self.parameters.flat())
         ext = self.parameters.sections.get(SECTION)
         #: The ``[MFTIRE_EXTENSIONS]`` section (model extensions), or None.
         self.extensions: dict[str, Any] | None = dict(ext) if ext else None

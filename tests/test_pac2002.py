@@ -29,7 +29,7 @@ from hypothesis import strategies as st
 
 from mftire.iotools.tir import read_tir
 from mftire.mf.family import PAC2002_CODE
-from mftire.mf.pac2002 import PAC2002Warning, prepare
+from mftire.mf.pac2002 import PAC2002Warning
 from mftire.mf.solver import OUTPUT_NAMES, UnsupportedModelError, evaluate_arrays
 from mftire.tyre import Tyre, load
 
@@ -139,8 +139,16 @@ def test_lmuv_decays_friction_with_slip_speed():
 
 
 def test_rolling_terms_outside_pac2002_are_ignored_with_a_warning():
+    params = read_tir(HMMWV)
+    params.set("QSY7", 0.85)
     with pytest.warns(PAC2002Warning, match="QSY7"):
-        prepare(_flat(QSY7=0.85))
+        tyre = Tyre(params)
+    ref = load(HMMWV).evaluate(20000.0, 0.1, 0.02)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PAC2002Warning)
+        assert tyre.evaluate(20000.0, 0.1, 0.02)["My"] == ref["My"]
+        # the MF 6.1 defaults of QSY7/QSY8 filled in for a file without them are not the file's
+        Tyre(read_tir(WILD / "chrono_Sedan_Pac02Tire.tir"))
 
 
 # ------------------------------------------------------------------ independent transcription

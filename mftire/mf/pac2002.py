@@ -58,7 +58,7 @@ from mftire.mf.inputs import Conditions
 from mftire.mf.lateral import PureLateral
 from mftire.mf.modes import Mode
 
-__all__ = ["PAC2002_CODE", "PAC2002Warning", "camber_folding", "mz0", "prepare"]
+__all__ = ["PAC2002_CODE", "PAC2002Warning", "camber_folding", "mz0", "prepare", "warn_unused"]
 
 
 class PAC2002Warning(UserWarning):
@@ -153,7 +153,17 @@ def prepare(p: dict) -> dict:
     for pac_key, mf_key in _PRESSURE.items():
         if pac_key in p:
             q[mf_key] = float(p[pac_key])
-    unused = [k for k in _UNUSED_ROLLING if p.get(k, 0.0) != 0.0]
+    q["FITTYP"] = PAC2002_CODE
+    return q
+
+
+def warn_unused(file_values: dict) -> None:
+    """Warn about coefficients of a PAC2002 file that its equations do not use.
+
+    ``file_values`` are the file's own values (``TirParameters.flat()``, not the
+    defaults-filled dict: the MF 6.1 defaults of QSY7/QSY8 are not the file's).
+    """
+    unused = [k for k in _UNUSED_ROLLING if isinstance(file_values.get(k), (int, float)) and file_values[k] != 0]
     if unused:
         warnings.warn(
             f"PAC2002: {', '.join(unused)} are not part of the published PAC2002 rolling-resistance "
@@ -161,8 +171,6 @@ def prepare(p: dict) -> dict:
             PAC2002Warning,
             stacklevel=3,
         )
-    q["FITTYP"] = PAC2002_CODE
-    return q
 
 
 def mz0(
