@@ -56,9 +56,9 @@ def read_numeric_csv(path: str, required: Sequence[str], optional: Sequence[str]
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
-    from mftire.tyre import load
+    from mftire.tyre import Tyre
 
-    tyre = load(args.tir, strict=args.strict)
+    tyre = Tyre.from_file(args.tir, strict=args.strict)
     # columns the model extensions of the file need (e.g. temperature) are required too
     df = read_numeric_csv(args.input, (*EVALUATE_REQUIRED, *tyre.required_variables), EVALUATE_OPTIONAL)
     kw = {c: df[c].to_numpy() for c in EVALUATE_OPTIONAL if c in df.columns}
@@ -86,9 +86,9 @@ def _cmd_convert(args: argparse.Namespace) -> int:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    from mftire.tyre import load
+    from mftire.tyre import Tyre
 
-    print(tyre_info(load(args.tir, strict=args.strict)))
+    print(tyre_info(Tyre.from_file(args.tir, strict=args.strict)))
     return 0
 
 

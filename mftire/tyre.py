@@ -141,9 +141,9 @@ class Tyre:
         return MFResult(out)
 
 
-def load(path: str | os.PathLike, strict: bool = False) -> Tyre:
-    """Load a ``.tir`` property file as a :class:`Tyre` (``strict``: reader warnings are errors)."""
-    return Tyre.from_file(path, strict=strict)
+def load(path: str | os.PathLike) -> Tyre:
+    """Load a ``.tir`` property file as a :class:`Tyre`."""
+    return Tyre.from_file(path)
 
 
 __all__ = ["MFResult", "OUTPUT_NAMES", "Tyre", "load"]

@@ -21,7 +21,7 @@ from mftire.cli import main
 from mftire.iotools.tir import MalformedLineError, NonNumericValueError, TirError, TirWarning, read_tir
 from mftire.mf.solver import UnsupportedModelError
 from mftire.mf.usedkeys import evaluator_keys
-from mftire.tyre import load
+from mftire.tyre import Tyre, load
 
 WILD = DATA / "tir_wild"
 MF61 = TIR / "MagicFormula61_Parameters.tir"
@@ -78,7 +78,7 @@ def test_strict_makes_warnings_errors(tmp_path):
     with pytest.raises(NonNumericValueError, match=r"q\.tir, line \d+: MASS needs a number \(strict reading\)"):
         read_tir(path, strict=True)
     with pytest.raises(TirError, match="strict"):
-        load(path, strict=True)
+        Tyre.from_file(path, strict=True)
 
 
 def test_cli_strict(tmp_path, capsys):

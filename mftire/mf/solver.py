@@ -15,7 +15,7 @@ from mftire.extensions import extension_terms
 from mftire.mf import pac2002, turnslip
 from mftire.mf.aligning import aligning_terms, mz0, mz_combined
 from mftire.mf.basic import basic
-from mftire.mf.family import PAC2002_CODE, is_pac2002
+from mftire.mf.family import PAC2002_CODE
 from mftire.mf.inputs import MFLimitWarning, condition_inputs, turn_slip_spin
 from mftire.mf.lateral import fy0, fy_combined
 from mftire.mf.longitudinal import fx0, fx_combined
@@ -185,9 +185,6 @@ def _evaluate(
         Fx = fx_combined(p, m, c, b, Fx0)
         Fy = Fy_comb
         Mz, t, Mzr = mz_combined(p, m, c, b, terms, Kxk, Fx, Fy, Gyk, lat)
-    elif is_pac2002(p):
-        Fx, Fy = Fx0, lat.Fy0
-        Mz, t, Mzr = pac2002.mz0(p, m, c, b, terms, lat)
     else:
         Fx, Fy = Fx0, lat.Fy0
         Mz, t, Mzr = mz0(p, m, c, b, terms)
@@ -203,7 +200,7 @@ def _evaluate(
         Mx, My = (v * generic[1] if n == generic[0] else v for n, v in (("Mx", Mx), ("My", My)))
     muy = np.abs(lat.muy) if m.limits else lat.muy
 
-    if p["FITTYP"] == 61 or is_pac2002(p):  # PAC2002: the MF 6.2 equation reduces to 6.1 (pac2002._ABSENT)
+    if p["FITTYP"] == 61:
         rho, Rl, Cz = loaded_radius_61(p, c, dpi, c.omega, Romega, Fx, Fy)
     else:
         rho, Rl, Cz = loaded_radius_62(p, c, dpi, c.omega, Romega, Fx, Fy)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mftire.mf.family import is_mf52
+from mftire.mf.family import is_mf52, is_pac2002
 from mftire.mf.inputs import Conditions
 
 _EPS = np.finfo(float).eps
@@ -145,6 +145,8 @@ def loaded_radius_62(
 
     Returns ``(rho [m], Rl [m], Cz [N/m])``.
     """
+    if is_pac2002(p):  # no MF 6.2 vertical terms in PAC2002 (pac2002._ABSENT): the 6.1 closed form
+        return loaded_radius_61(p, c, dpi, omega, Romega, Fx, Fy)
     target = c.Fz
     g = c.gamma
 

@@ -267,21 +267,23 @@ static void basic(const MFParams *p, const Ctx *m, const Cond *c, double muRoad,
      * suggests Amu = 10, Amu = 1 matches TNO).  muRoad scales LMUX and LMUY; mu_x and
      * mu_y (1 without extensions) carry the friction-type model extensions. */
     LMUV = 0.0;
+    (void)LMUV;
     b->LMUX_star = p->LMUX * muRoad;              /* eq 4.E7 with LMUV = 0 */
     b->LMUY_star = p->LMUY * muRoad;              /* eq 4.E7 with LMUV = 0 */
-    if (is_pac2002(p) && p->LMUV != 0.0) {
-        /* PAC2002: friction decays with the slip speed (Pacejka 2006 eq 4.E7) */
-        double Vsx = -c->kappa * absVx;           /* eq 4.E5 */
-        double Vs = sqrt(sq(Vsx) + sq(Vsy));      /* eq 3.39 */
-        LMUV = p->LMUV;
-        b->LMUX_star = p->LMUX / (1.0 + LMUV * Vs / p->LONGVL) * muRoad;
-        b->LMUY_star = p->LMUY / (1.0 + LMUV * Vs / p->LONGVL) * muRoad;
-    }
     b->LMUX_star = b->LMUX_star * mu_x;
     b->LMUY_star = b->LMUY_star * mu_y;
     Amu = 1.0;
     b->LMUX_prime = Amu * b->LMUX_star / (1.0 + (Amu - 1.0) * b->LMUX_star); /* eq 4.E8 */
     b->LMUY_prime = Amu * b->LMUY_star / (1.0 + (Amu - 1.0) * b->LMUY_star); /* eq 4.E8 */
+    if (is_pac2002(p) && p->LMUV != 0.0) {
+        /* PAC2002: friction decays with the slip speed, lambda_mu/(1 + LMUV*Vs/V0) (Pacejka 2006
+           eq 4.E7; Vsx = -kappa*|Vx| eq 4.E5, Vs eq 3.39); Amu = 1, so lambda' = lambda* (eq 4.E8) */
+        double f = 1.0 + p->LMUV * sqrt(sq(c->kappa * absVx) + sq(Vsy)) / p->LONGVL;
+        b->LMUX_star /= f;
+        b->LMUY_star /= f;
+        b->LMUX_prime = b->LMUX_star;
+        b->LMUY_prime = b->LMUY_star;
+    }
 }
 
 /* ------------------------------------------------------------------ vertical.py (radii) */
@@ -621,20 +623,6 @@ static double residual(double Dr, double complex Cr, double u, double factor)
     return creal(Dr * ccos(Cr * u) * factor);
 }
 
-/* Pure-slip aligning moment (eqs 4.E31-4.E36): Mz0, t0, Mzr0. */
-static void mz0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, const AlignTerms *a, double *Mz,
-                double *t_out, double *Mzr_out)
-{
-    PureLat lat0;
-    double t0, Mzr0;
-    fy0(p, m, c, b, 0.0, 0, &lat0); /* Fy0 at gamma = phi = 0 */
-    t0 = trail_mf(a->Dt, a->Ct, a->Bt, a->Et, a->alphat, b->alpha_prime) * c->smooth; /* eq 4.E33 */
-    Mzr0 = residual(a->Dr, a->Cr, atan(a->Br * a->alphar), cos(b->alpha_prime)) * c->smooth; /* 4.E36 */
-    *Mz = -t0 * lat0.Fy0 + Mzr0; /* eqs 4.E32, 4.E31 */
-    *t_out = t0;
-    *Mzr_out = Mzr0;
-}
-
 /* PAC2002 pure-slip aligning moment (mftire.mf.pac2002.mz0): Mz0 = -t*Fy0 + Mzr with Fy0 at the
    actual camber (Pacejka 2006 eqs 4.E31, 4.E32) and cos(alpha) once in Mzr (inside Dr, eq 4.E36). */
 static void mz0_pac2002(const Cond *c, const Basic *b, const AlignTerms *a, const PureLat *lat, double *Mz,
@@ -643,6 +631,25 @@ static void mz0_pac2002(const Cond *c, const Basic *b, const AlignTerms *a, cons
     double t0 = trail_mf(a->Dt, a->Ct, a->Bt, a->Et, a->alphat, b->alpha_prime) * c->smooth; /* eq 4.E33 */
     double Mzr0 = residual(a->Dr, a->Cr, atan(a->Br * a->alphar), 1.0) * c->smooth;          /* eq 4.E36 */
     *Mz = -t0 * lat->Fy0 + Mzr0;
+    *t_out = t0;
+    *Mzr_out = Mzr0;
+}
+
+/* Pure-slip aligning moment (eqs 4.E31-4.E36): Mz0, t0, Mzr0. */
+static void mz0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, const AlignTerms *a, double *Mz,
+                double *t_out, double *Mzr_out)
+{
+    PureLat lat0;
+    double t0, Mzr0;
+    if (is_pac2002(p)) { /* PAC2002: Fy0 at the actual camber (mz0_pac2002) */
+        fy0(p, m, c, b, b->gamma_star, m->turn_slip, &lat0);
+        mz0_pac2002(c, b, a, &lat0, Mz, t_out, Mzr_out);
+        return;
+    }
+    fy0(p, m, c, b, 0.0, 0, &lat0); /* Fy0 at gamma = phi = 0 */
+    t0 = trail_mf(a->Dt, a->Ct, a->Bt, a->Et, a->alphat, b->alpha_prime) * c->smooth; /* eq 4.E33 */
+    Mzr0 = residual(a->Dr, a->Cr, atan(a->Br * a->alphar), cos(b->alpha_prime)) * c->smooth; /* 4.E36 */
+    *Mz = -t0 * lat0.Fy0 + Mzr0; /* eqs 4.E32, 4.E31 */
     *t_out = t0;
     *Mzr_out = Mzr0;
 }
@@ -1095,10 +1102,6 @@ int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *
         Fx = fx_combined(p, &m, &c, &b, Fx0);
         Fy = Fy_comb;
         mz_combined(p, &m, &c, &b, &at, Kxk, Fx, Fy, Gyk, &lat, &Mz, &t, &Mzr);
-    } else if (is_pac2002(p)) {
-        Fx = Fx0;
-        Fy = lat.Fy0;
-        mz0_pac2002(&c, &b, &at, &lat, &Mz, &t, &Mzr);
     } else {
         Fx = Fx0;
         Fy = lat.Fy0;
