@@ -24,9 +24,9 @@ EVALUATE_OPTIONAL = ("phit", "Vx", "P", "omega")
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
-    from mftire.tyre import load
+    from mftire.tyre import Tyre
 
-    tyre = load(args.tir)
+    tyre = Tyre.from_file(args.tir, strict=args.strict)
     # columns the model extensions of the file need (e.g. temperature) are required too
     df = read_numeric_csv(args.input, (*EVALUATE_REQUIRED, *tyre.required_variables), EVALUATE_OPTIONAL)
     df = df.reset_index(drop=True)
@@ -49,9 +49,9 @@ def _cmd_convert(args: argparse.Namespace) -> int:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    from mftire.tyre import load
+    from mftire.tyre import Tyre
 
-    print(tyre_info(load(args.tir)))
+    print(tyre_info(Tyre.from_file(args.tir, strict=args.strict)))
     return 0
 
 
@@ -66,7 +66,8 @@ def tyre_info(tyre) -> str:
         model = params.model
     except Exception:  # noqa: BLE001 - plain mappings have no model name
         model = ""
-    lines.append(f"model:           FITTYP {tyre.fittyp} {model}".rstrip())
+    lines.append(f"model:           {tyre.format} ({model})" if model and model not in tyre.format else
+                 f"model:           {tyre.format}")
     w, ar, rim = f["WIDTH"], f["ASPECT_RATIO"], f["RIM_RADIUS"]
     lines.append(
         f"size:            width {w * 1000:.0f} mm, aspect ratio {ar * 100:.0f} %, rim {2 * rim / 0.0254:.1f} in,"
@@ -123,6 +124,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--input", required=True, help="CSV with Fz,kappa,alpha,gamma[,phit,Vx,P,omega] (SI, rad)")
     p.add_argument("--output", required=True, help="output CSV, or - for standard output")
     p.add_argument("--mode", type=int, default=111, help="MFeval useMode (default 111)")
+    p.add_argument("--strict", action="store_true", help="reading warnings (blank/non-numeric values) are errors")
     p.set_defaults(func=_cmd_evaluate)
 
     p = sub.add_parser("convert", help="read a .tir and write it back (SI units)")
@@ -132,6 +134,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("info", help="summarise a .tir")
     p.add_argument("tir", metavar="TIR")
+    p.add_argument("--strict", action="store_true", help="reading warnings (blank/non-numeric values) are errors")
     p.set_defaults(func=_cmd_info)
 
     p = sub.add_parser("plot", help="draw the standard curves at 0.5, 1 and 1.5 x FNOMIN")

@@ -263,6 +263,7 @@ _TABLE += _rows("SCALING_COEFFICIENTS", [
     ("LGAY", 1.0, "-", "Scale factor of camber for Fy (MF 5.2)", False),
     ("LGAZ", 1.0, "-", "Scale factor of camber for Mz (MF 5.2)", False),
     ("LGYR", 1.0, "-", "Scale factor of gyroscopic torque", False),
+    ("LMUV", 0.0, "-", "Scale factor of friction decay with slip speed (MF 5.2 / PAC2002, eq 4.E7)", False),
 ])
 _TABLE += _rows("LONGITUDINAL_COEFFICIENTS", [
     ("PCX1", 1.65, "-", "Shape factor Cfx for longitudinal force"),
@@ -508,8 +509,9 @@ def with_defaults(params: Any) -> dict[str, float]:
         Every numeric key of :data:`PARAMETERS` (SI units) with the file's value
         where present and numeric, else the default of the table; plus every other
         numeric key the input holds (unknown keys are passed through).  A file
-        without ``FITTYP`` (PAC2002) gets MFeval's default 0: check
-        ``TirParameters.fittyp`` / ``model`` before evaluating.  ``INFLPRES``
+        without ``FITTYP`` (PAC2002) gets MFeval's default 0 here;
+        :class:`mftire.tyre.Tyre` then marks a PAC2002 file with the evaluator's
+        model code (:data:`mftire.mf.family.PAC2002_CODE`).  ``INFLPRES``
         falls back to ``NOMPRES`` (file value or 220000 Pa) when absent.
     """
     if hasattr(params, "flat") and callable(params.flat):

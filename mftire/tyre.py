@@ -16,8 +16,10 @@ import numpy as np
 import pandas as pd
 
 from mftire.iotools.tir import TirParameters, as_parameters, read_tir
+from mftire.mf import pac2002
 from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
-from mftire.mf.solver import OUTPUT_NAMES, OUTPUT_UNITS, evaluate_arrays
+from mftire.mf.family import PAC2002_CODE
+from mftire.mf.solver import OUTPUT_NAMES, OUTPUT_UNITS, UnsupportedModelError, evaluate_arrays, unsupported_message
 from mftire.parameters import with_defaults
 
 
@@ -52,6 +54,12 @@ class Tyre:
         #: non-standard keys outside sections are kept in :attr:`flat` only).
         self.parameters: TirParameters = as_parameters(params, unknown="drop")
         self.flat: dict[str, float] = with_defaults(params)
+        if self.parameters.format == "PAC2002":
+            # internal model code of the evaluator, not the file's FITTYP (mftire.mf.family)
+            self.flat["FITTYP"] = PAC2002_CODE
+            pac2002.warn_unused(self.parameters.flat())
+            # the folded parameter set every pipeline evaluates (evaluator, fitter, diagnosis, FMU)
+            self.flat = pac2002.prepare(self.flat)
         ext = self.parameters.sections.get(SECTION)
         #: The ``[MFTIRE_EXTENSIONS]`` section (model extensions), or None.
         self.extensions: dict[str, Any] | None = dict(ext) if ext else None
@@ -81,20 +89,25 @@ class Tyre:
         return pd.DataFrame({k: np.broadcast_to(out[k], (len(df),)) for k in OUTPUT_NAMES}, index=df.index)
 
     @classmethod
-    def from_file(cls, path: str | os.PathLike) -> Tyre:
-        """Read a ``.tir`` file (see :func:`mftire.read_tir`)."""
-        return cls(read_tir(path))
+    def from_file(cls, path: str | os.PathLike, strict: bool = False) -> Tyre:
+        """Read a ``.tir`` file (see :func:`mftire.read_tir`; ``strict`` makes its warnings errors)."""
+        return cls(read_tir(path, strict=strict))
 
     @property
-    def fittyp(self) -> int:
-        """Magic Formula version number (61, 62, 6 for MF 5.2, ...)."""
-        return int(self.flat["FITTYP"])
+    def fittyp(self) -> int | None:
+        """The file's ``FITTYP`` (61, 62, 6 for MF 5.2, ...), None when the file has none (PAC2002)."""
+        return self.parameters.fittyp
+
+    @property
+    def format(self) -> str:
+        """The file's format: ``'PAC2002'``, ``'MF_05'``, ``'FITTYP 61'``, ... (see ``TirParameters.format``)."""
+        return self.parameters.format
 
     def __getitem__(self, key: str) -> float:
         return self.flat[key.upper()]
 
     def __repr__(self) -> str:
-        return f"Tyre({self.name!r}, FITTYP={self.fittyp}, FNOMIN={self.flat['FNOMIN']:g} N)"
+        return f"Tyre({self.name!r}, {self.format}, FNOMIN={self.flat['FNOMIN']:g} N)"
 
     def evaluate(
         self,
@@ -141,6 +154,9 @@ class Tyre:
         MFResult
             The 30 channels of :data:`mftire.mf.solver.OUTPUT_NAMES`.
         """
+        if self.flat.get("FITTYP") in (None, 0, 0.0, 5, 5.0):
+            why = unsupported_message(5 if self.format == "MF_05" else self.fittyp)
+            raise UnsupportedModelError(f"{self.name} ({self.format}): {why}")
         out = evaluate_arrays(
             self.flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, self.extension_set, variables or None
         )

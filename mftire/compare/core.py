@@ -206,7 +206,7 @@ def _conditions_readable(df: pd.DataFrame) -> pd.DataFrame:
 
 def _markdown(comp: Comparison, pngs: list[str]) -> str:
     L = ["# MF / FE / measurement comparison", ""]
-    L += [f"Models: {', '.join(f'`{m}` ({t.fittyp})' for m, t in comp.models.items())}.", ""]
+    L += [f"Models: {', '.join(f'`{m}` ({t.format})' for m, t in comp.models.items())}.", ""]
     L += ["## Data sources", "", _md_table(comp.sources())]
     L += ["## Notes", ""] + [f"- {n}" for n in comp.notes] + [""]
     L += ["## Error summary (per model, source, family, channel)", "",
@@ -245,8 +245,8 @@ def write_comparison(comp: Comparison, directory: str | os.PathLike, plots: bool
     md = os.path.join(directory, "compare.md")
     write_text_atomic(md, _markdown(comp, pngs))
     payload = {
-        "models": {m: {"file": getattr(t.parameters, "path", None) and str(t.parameters.path), "fittyp": t.fittyp}
-                   for m, t in comp.models.items()},
+        "models": {m: {"file": getattr(t.parameters, "path", None) and str(t.parameters.path), "fittyp": t.fittyp,
+                       "format": t.format} for m, t in comp.models.items()},
         "mode": comp.mode,
         "notes": comp.notes,
         "sources": comp.sources().to_dict(orient="records"),

@@ -27,7 +27,9 @@ from pathlib import Path
 
 from mftire.errors import MftireError
 from mftire.fmu import variables as vt
+from mftire.mf import pac2002
 from mftire.mf.extensions import ExtensionSet
+from mftire.mf.family import PAC2002_CODE
 
 CSOURCE = Path(__file__).parent / "csource"
 
@@ -113,6 +115,11 @@ def _load(tir):
         raise FMUExportError(f"{tir}: cannot be exported: {exc}") from None
     name = Path(tyre.name).stem if tyre.name else "tyre"
     flat = dict(tyre.flat)
+    if flat["FITTYP"] == PAC2002_CODE:
+        # the camber scaling factors and PAC2002 key mapping are folded in at export (fixed)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            flat = pac2002.prepare(flat)
     try:
         spec = vt.extension_spec(tyre.extensions) if tyre.extensions else None
         vt.variable_table(flat, vt.DEFAULT_USE_MODE, spec)  # data-variable names must not collide
@@ -231,8 +238,8 @@ def export_fmu(
         raise FMUExportError(f"model identifier {ident!r} is not a C identifier")
     variables, files = generate_sources(flat, ident, fmi_version, use_mode, spec)
     platform, suffix = _platform(fmi_version)
-    fittyp = int(flat["FITTYP"])
-    description = f"Magic Formula tyre {name} (FITTYP {fittyp}) exported by mftire; ISO-W axes, SI units"
+    fmt = "PAC2002" if flat["FITTYP"] == PAC2002_CODE else f"FITTYP {int(flat['FITTYP'])}"
+    description = f"Magic Formula tyre {name} ({fmt}) exported by mftire; ISO-W axes, SI units"
     if spec:
         description += f"; model extensions: {'; '.join(t.describe() for t in spec.terms)}"
     xml = vt.model_description_xml(

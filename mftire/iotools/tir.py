@@ -39,9 +39,9 @@ is a carriage return, and the MFeval and ADAMS example files all use CRLF.
 family), 61 (MF 6.1) or 62 (MF 6.2); anything else raises
 :class:`UnknownFittypError`.  A file without ``FITTYP`` raises
 :class:`MissingFittypError`, except a PAC2002 file
-(``PROPERTY_FILE_FORMAT = 'PAC2002'``), which reads with ``fittyp`` None and
-``model`` ``"PAC2002"``: no MF version number is invented for it, so an evaluator
-can refuse it clearly.  When a file has both (e.g. ``'PAC2002'`` and
+(``PROPERTY_FILE_FORMAT = 'PAC2002'``) or an MF-Tyre 5.0 file (``'MF_05'``), which
+read with ``fittyp`` None and ``format`` ``"PAC2002"`` / ``"MF_05"``: no MF version
+number is invented for them.  When a file has both (e.g. ``'PAC2002'`` and
 ``FITTYP = 5``) the explicit ``FITTYP`` decides.
 
 Units
@@ -108,6 +108,12 @@ the message: :class:`MalformedLineError`, :class:`NonNumericValueError`,
 :class:`UnknownUnitError`, :class:`UnknownFittypError`,
 :class:`MissingFittypError`, :class:`DuplicateKeyError` (a key twice in one
 section), :class:`EmptyFileError`.
+
+Tolerated quirks of real files: a blank value (``KEY =``) or a non-numeric value on
+a standard numeric key that the evaluator does not use (``MASS = kg``) is a
+:class:`TirWarning` (file, line, key) and the key is treated as absent; on a key the
+evaluator uses (:func:`mftire.mf.usedkeys.evaluator_keys`) it is an error.
+``read_tir(path, strict=True)`` makes every warning an error.
 """
 
 from __future__ import annotations
@@ -139,6 +145,7 @@ __all__ = [
     "TirError",
     "TirParameters",
     "TirTable",
+    "TirWarning",
     "UnknownFittypError",
     "UnknownUnitError",
     "format_tir",
@@ -152,8 +159,8 @@ Value = float | int | str
 #: FITTYP values the reader accepts, with the model they denote.
 FITTYP_MODELS: dict[int, str] = {5: "MF-Tyre 5.0", 6: "MF 5.2", 21: "MF 5.2", 61: "MF 6.1", 62: "MF 6.2"}
 
-#: PROPERTY_FILE_FORMAT values for which a missing FITTYP is accepted.
-_FORMATS_WITHOUT_FITTYP = {"PAC2002": "PAC2002"}
+#: PROPERTY_FILE_FORMAT values for which a missing FITTYP is accepted, with the model they denote.
+_FORMATS_WITHOUT_FITTYP = {"PAC2002": "PAC2002", "MF_05": "MF-Tyre 5.0"}
 
 
 # --------------------------------------------------------------------------- errors
@@ -206,6 +213,10 @@ class UnknownFittypError(FittypError):
 
 class MissingFittypError(FittypError):
     """The file has no ``FITTYP`` and its ``PROPERTY_FILE_FORMAT`` does not imply a model."""
+
+
+class TirWarning(UserWarning):
+    """A tolerated problem in a ``.tir`` file (``read_tir(..., strict=True)`` makes it a :class:`TirError`)."""
 
 
 class DuplicateKeyError(TirError):
@@ -405,6 +416,24 @@ class TirParameters:
             return _FORMATS_WITHOUT_FITTYP[fmt.strip().upper()]
         return "unknown"
 
+    @property
+    def format(self) -> str:
+        """The format as the file states it, no version invented.
+
+        ``"FITTYP 61"`` (``62``, ``6``, ``21``) for a file with a ``FITTYP``,
+        ``"MF_05"`` for an MF-Tyre 5.0 file (``FITTYP = 5`` or
+        ``PROPERTY_FILE_FORMAT = 'MF_05'``), ``"PAC2002"`` for a PAC2002 file without
+        ``FITTYP``, else the ``PROPERTY_FILE_FORMAT`` string or ``"unknown"``.
+        """
+        fittyp = self.fittyp
+        fmt = self.get("PROPERTY_FILE_FORMAT")
+        fmt = fmt.strip().upper() if isinstance(fmt, str) else None
+        if fittyp == 5 or (fittyp is None and fmt == "MF_05"):
+            return "MF_05"
+        if fittyp is not None:
+            return f"FITTYP {fittyp}"
+        return fmt or "unknown"
+
     # ---------------------------------------------------------------- changing
     def set(self, key: str, value: Value, section: str | None = None) -> None:
         """Set ``key`` to ``value``.
@@ -524,6 +553,9 @@ def _scale(value: int | float, factor: Fraction) -> float:
 
 
 # --------------------------------------------------------------------- reading
+_NO_VALUE = "missing value after '='"
+
+
 class _LineProblem(Exception):
     """Internal: a problem in one line, turned into a TirError with its location."""
 
@@ -537,7 +569,7 @@ def _split_value(rest: str) -> tuple[Value, bool, str | None]:
     """Parse the text after ``=``: return (value, was_quoted, comment)."""
     rest = rest.strip()
     if not rest or rest[0] in "$!":
-        raise _LineProblem(MalformedLineError, "missing value after '='")
+        raise _LineProblem(MalformedLineError, _NO_VALUE)
     if rest[0] in "'\"":
         quote = rest[0]
         end = rest.find(quote, 1)
@@ -570,7 +602,7 @@ def _decode(data: bytes) -> str:
     return text[1:] if text.startswith("\ufeff") else text
 
 
-def parse_tir(text: str, path: Any = None) -> TirParameters:
+def parse_tir(text: str, path: Any = None, strict: bool = False) -> TirParameters:
     """Parse the text of a ``.tir`` file.
 
     Parameters
@@ -579,6 +611,8 @@ def parse_tir(text: str, path: Any = None) -> TirParameters:
         File content.
     path : str or path-like, optional
         Name used in error messages and stored as ``path``.
+    strict : bool, default False
+        Make every :class:`TirWarning` a :class:`TirError` (see :func:`read_tir`).
 
     Returns
     -------
@@ -602,6 +636,18 @@ def parse_tir(text: str, path: Any = None) -> TirParameters:
 
     def fail(cls: type[TirError], reason: str, lineno: int, line: str) -> TirError:
         return cls(reason, source, lineno, line)
+
+    def tolerate(cls: type[TirError], key: str, reason: str, lineno: int, line: str) -> None:
+        """Blank or non-numeric value: an error on a key the evaluator uses (or strict), else a warning."""
+        from mftire.mf.usedkeys import evaluator_keys
+
+        if key in evaluator_keys():
+            raise fail(cls, f"{reason} (the evaluator uses {key})", lineno, line)
+        if strict:
+            raise fail(cls, f"{reason} (strict reading)", lineno, line)
+        warnings.warn(
+            TirWarning(f"{source}, line {lineno}: {reason}: {line!r}; {key} is treated as absent"), stacklevel=4
+        )
 
     for lineno, raw in enumerate(lines, 1):
         line = raw.strip()
@@ -667,12 +713,16 @@ def parse_tir(text: str, path: Any = None) -> TirParameters:
         try:
             value, quoted, comment = _split_value(line[eq + 1 :])
         except _LineProblem as problem:
-            raise fail(problem.cls, problem.reason, lineno, line) from None
+            if problem.reason != _NO_VALUE:
+                raise fail(problem.cls, problem.reason, lineno, line) from None
+            tolerate(problem.cls, key, f"{key} has no value", lineno, line)
+            continue
         p = BY_KEY.get(key)
         if current != "UNITS" and p is not None and p.unit != "str" and not _is_number(value):
             number = _parse_number(value.strip()) if quoted and isinstance(value, str) else None
             if number is None:
-                raise fail(NonNumericValueError, f"{key} needs a number", lineno, line)
+                tolerate(NonNumericValueError, key, f"{key} needs a number", lineno, line)
+                continue
             value = number
         if key in body:
             first = where[(current, key)][0]
@@ -686,12 +736,12 @@ def parse_tir(text: str, path: Any = None) -> TirParameters:
     if not found_data:
         raise EmptyFileError("empty file: no section and no parameter", source, max(len(lines), 1), "")
 
-    _convert_units(params, where, section_line, source)
+    _convert_units(params, where, section_line, source, strict)
     _check_fittyp(params, where, section_line, source, lines)
     return params
 
 
-def _convert_units(params: TirParameters, where: dict, section_line: dict, source: str) -> None:
+def _convert_units(params: TirParameters, where: dict, section_line: dict, source: str, strict: bool = False) -> None:
     """Convert every known dimensional value to SI and make ``[UNITS]`` report SI."""
     units = params.sections.get("UNITS")
     if isinstance(units, TirTable):
@@ -730,6 +780,9 @@ def _convert_units(params: TirParameters, where: dict, section_line: dict, sourc
                     factor *= factors[quantity] ** power
                 if factor != 1:
                     body[key] = _scale(value, factor)
+        if unconverted and strict:
+            raise TirError(f"non-SI [UNITS]; unknown keys left unconverted: {', '.join(unconverted)} "
+                           "(strict reading)", source)
         if unconverted:
             warnings.warn(
                 f"{source}: non-SI [UNITS]; unknown keys left unconverted: {', '.join(unconverted)}",
@@ -764,17 +817,25 @@ def _check_fittyp(params: TirParameters, where: dict, section_line: dict, source
     else:
         lineno = next((i for i, t in enumerate(lines, 1) if t.strip()), 1)
         line = lines[lineno - 1].strip() if lines else ""
-    raise MissingFittypError("no FITTYP in [MODEL] (and no PROPERTY_FILE_FORMAT = 'PAC2002')",
+    raise MissingFittypError("no FITTYP in [MODEL] (and no PROPERTY_FILE_FORMAT = 'PAC2002' or 'MF_05')",
                              source, lineno, line)
 
 
-def read_tir(path: str | os.PathLike[str]) -> TirParameters:
+def read_tir(path: str | os.PathLike[str], strict: bool = False) -> TirParameters:
     """Read a ``.tir`` tyre property file.
+
+    Real-world files have quirks.  A blank value (``KEY =``) or a non-numeric value
+    on a standard numeric key (``MASS = kg``) is tolerated when the evaluator does
+    not use the key (:func:`mftire.mf.usedkeys.evaluator_keys`): a
+    :class:`TirWarning` naming file, line and key, and the key is treated as absent.
+    On a key the evaluator uses it is an error naming file, line and key.
 
     Parameters
     ----------
     path : str or path-like
         The file.
+    strict : bool, default False
+        Make every warning an error (tolerated values, unconverted unknown keys).
 
     Returns
     -------
@@ -789,7 +850,7 @@ def read_tir(path: str | os.PathLike[str]) -> TirParameters:
         If the file cannot be read.
     """
     data = Path(path).read_bytes()
-    return parse_tir(_decode(data), path=os.fspath(path))
+    return parse_tir(_decode(data), path=os.fspath(path), strict=strict)
 
 
 # --------------------------------------------------------------------- writing

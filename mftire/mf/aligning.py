@@ -12,6 +12,7 @@ import numpy as np
 
 from mftire.mf import turnslip
 from mftire.mf.basic import Basic
+from mftire.mf.family import is_mf52, is_pac2002
 from mftire.mf.inputs import EPSILON, Conditions
 from mftire.mf.lateral import PureLateral, fy0
 from mftire.mf.longitudinal import _clip_curvature, _sign_nonzero
@@ -150,6 +151,10 @@ def mz0(p: dict, mode: Mode, c: Conditions, b: Basic, a: AligningTerms) -> tuple
     Returns ``(Mz0 [N·m], t0 [m], Mzr0 [N·m])``; the trail and residual torque carry
     the low-speed reduction like the combined-slip ones.
     """
+    if is_pac2002(p):  # PAC2002: Fy0 at the actual camber (mftire.mf.pac2002.mz0)
+        from mftire.mf import pac2002
+
+        return pac2002.mz0(p, mode, c, b, a, fy0(p, mode, c, b, b.gamma_star, turn_slip=mode.turn_slip))
     no_ts = Mode(mode.limits, mode.alpha_star, False, mode.combined, mode.code)
     lat0 = fy0(p, no_ts, c, b, np.zeros_like(c.Fz), turn_slip=False)  # Fy0 at gamma = phi = 0
     t0 = _trail_mf(a.Dt, a.Ct, a.Bt, a.Et, a.alphat, b.alpha_prime) * c.smooth  # eq 4.E33
@@ -191,11 +196,15 @@ def mz_combined(
     else:
         lat0 = fy0(p, mode, c, b, np.zeros_like(c.Fz), turn_slip=mode.turn_slip)
     Fy_prime = Gyk * lat0.Fy0  # eq 4.E74; Gyk does not depend on muy or zeta2
-    # MFeval departure: t is multiplied by LFZO, as TNO's solver does.
-    t = _trail_mf(a.Dt, a.Ct, a.Bt, a.Et, alphat_eq, b.alpha_prime) * p["LFZO"]  # eq 4.E73
+    # MFeval departure: t is multiplied by LFZO, as TNO's solver does (not in PAC2002).
+    lfzo = 1.0 if is_pac2002(p) else p["LFZO"]
+    t = _trail_mf(a.Dt, a.Ct, a.Bt, a.Et, alphat_eq, b.alpha_prime) * lfzo  # eq 4.E73
     t = t * c.smooth
     Mzr = np.real(Mzr) * c.smooth
-    if p["FITTYP"] == 6:
+    if is_pac2002(p) and lat is not None:
+        # PAC2002 (Pacejka 2006 eqs 4.E71, 4.E74): F'y = Fy - SVyk = Gyk*Fy0, Fy0 with camber.
+        Mz = -t * (Gyk * lat.Fy0) + Mzr + s * Fx
+    elif is_mf52(p):
         # MF 5.2 (TNO equation manual): kappa-induced side force excluded from the trail term.
         dfz, gamma_star = b.dfz, b.gamma_star
         DVyk = (

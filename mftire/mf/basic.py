@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mftire.mf.family import is_pac2002
 from mftire.mf.inputs import EPSILON, Conditions
 from mftire.mf.modes import Mode
 
@@ -62,8 +63,9 @@ def basic(p: dict, mode: Mode, c: Conditions) -> Basic:
     alpha_prime = np.arccos(c.Vx / Vc_prime)  # eq 4.E6
     # Friction decaying with slip speed: LMUV is not part of MF 6.1/6.2 .tir files,
     # so it is 0 as in the reference evaluator; Amu = 1 (MFeval departure: the book
-    # suggests Amu = 10, Amu = 1 matches TNO).
-    LMUV = 0.0
+    # suggests Amu = 10, Amu = 1 matches TNO).  PAC2002 uses the file's LMUV
+    # (Pacejka 2006 eq 4.E7, see mftire.mf.pac2002).
+    LMUV = p["LMUV"] if is_pac2002(p) else 0.0
     LMUX_star = p["LMUX"] / (1.0 + LMUV * Vs / p["LONGVL"]) if LMUV else p["LMUX"]  # eq 4.E7
     LMUY_star = p["LMUY"] / (1.0 + LMUV * Vs / p["LONGVL"]) if LMUV else p["LMUY"]  # eq 4.E7
     Amu = 1.0

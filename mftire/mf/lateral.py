@@ -8,6 +8,7 @@ import numpy as np
 
 from mftire.mf import turnslip
 from mftire.mf.basic import Basic
+from mftire.mf.family import is_mf52
 from mftire.mf.inputs import EPSILON, Conditions
 from mftire.mf.longitudinal import _clip_curvature, _sign_nonzero
 from mftire.mf.modes import Mode
@@ -63,8 +64,8 @@ def fy0(
 
     Kya = _kya(p, Fz, Fz0p, dpi, gamma_star, zeta3)  # eq 4.E25
     SVyg = Fz * (p["PVY3"] + p["PVY4"] * dfz) * gamma_star * p["LKYC"] * b.LMUY_prime * zeta2  # eq 4.E28
-    fittyp = p["FITTYP"]
-    if fittyp == 6:
+    mf52 = is_mf52(p)
+    if mf52:
         # MF 5.2 (TNO MF-Tyre equation manual), as the reference evaluator does.
         Kya0_52 = p["PKY1"] * Fz0p * np.sin(p["PKY4"] * np.arctan(Fz / (p["PKY2"] * Fz0p))) * p["LKYC"]
         Kyg0 = (p["PHY3"] * Kya0_52 + Fz * (p["PVY3"] + p["PVY4"] * dfz)) * p["LKYC"]
@@ -93,7 +94,7 @@ def fy0(
     else:
         zeta0, zeta4 = 1.0, 1.0
 
-    if fittyp == 6:
+    if mf52:
         SHy = (p["PHY1"] + p["PHY2"] * dfz) * p["LHY"] + p["PHY3"] * gamma_star * p["LKYC"]  # MF 5.2 manual
     else:
         SHy = (

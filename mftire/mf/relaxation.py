@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from mftire.mf.family import is_mf52
 from mftire.mf.inputs import Conditions
 
 
@@ -20,7 +21,7 @@ def relaxation(
     dpi = (c.P - p["NOMPRES"]) / p["NOMPRES"]  # eq 4.E2b
     Cx = p["LONGITUDINAL_STIFFNESS"] * (1.0 + p["PCFX1"] * dfz + p["PCFX2"] * dfz**2) * (1.0 + p["PCFX3"] * dpi)  # 17
     Cy = p["LATERAL_STIFFNESS"] * (1.0 + p["PCFY1"] * dfz + p["PCFY2"] * dfz**2) * (1.0 + p["PCFY3"] * dpi)  # 18
-    if p["FITTYP"] == 6:
+    if is_mf52(p):
         # MF 5.2 relaxation lengths (TNO equation manual)
         sigmax = (p["PTX1"] + p["PTX2"] * dfz) * np.exp(-p["PTX3"] * dfz) * p["LSGKP"] * R0 * c.Fz / Fz0
         sigmay = (

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from mftire.mf.family import is_mf52
 from mftire.mf.inputs import Conditions
 
 
@@ -22,7 +23,7 @@ def my(p: dict, c: Conditions, Fx: np.ndarray) -> np.ndarray:
     Vx, kappa = c.Vx, c.ukappa
     R0, Fz0, V0 = p["UNLOADED_RADIUS"], p["FNOMIN"], p["LONGVL"]
     vr = Vx / V0
-    if p["FITTYP"] == 6:
+    if is_mf52(p):
         # MF 5.2 (TNO equation manual)
         My = -R0 * Fz * p["LMY"] * (p["QSY1"] + p["QSY2"] * (Fx / Fz0) + p["QSY3"] * np.abs(vr) + p["QSY4"] * vr**4)
     else:

@@ -24,10 +24,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from mftire.errors import MftireError, MftireInputError
-from mftire.mf import turnslip
+from mftire.mf import pac2002, turnslip
 from mftire.mf.aligning import aligning_terms, mz0, mz_combined
 from mftire.mf.basic import basic
 from mftire.mf.extensions import ExtensionSet, builtin_variables, parse_section
+from mftire.mf.family import PAC2002_CODE
 from mftire.mf.inputs import Conditions, MFLimitWarning, condition_inputs, turn_slip_spin
 from mftire.mf.lateral import fy0, fy_combined
 from mftire.mf.longitudinal import fx0, fx_combined
@@ -60,6 +61,20 @@ class UnsupportedModelError(MftireError):
     """The property file describes a model version the evaluator does not evaluate."""
 
 
+def unsupported_message(fittyp) -> str:
+    """Why parameters with this ``FITTYP`` (None or 0: absent) are not evaluated."""
+    shown = int(fittyp) if isinstance(fittyp, float) and fittyp.is_integer() else fittyp
+    evaluated = "mftire evaluates MF 6.1 (FITTYP 61), MF 6.2 (62), MF 5.2 (6) and PAC2002 property files"
+    if shown in (None, 0):
+        return f"the parameters have no FITTYP (and are not a PAC2002 file): {evaluated}."
+    if shown == 5:
+        return (
+            f"FITTYP 5 is not evaluated: MF_05 / MF-Tyre 5.0 files can be read and written, but the MF-Tyre 5.0 "
+            f"equations are not public in a form that can be verified; {evaluated}."
+        )
+    return f"FITTYP {shown} is not evaluated: {evaluated}."
+
+
 def _clean(name: str, x: np.ndarray, fill: float) -> np.ndarray:
     """Replace NaN by ``fill`` with a warning (documented input policy)."""
     bad = np.isnan(x)
@@ -74,12 +89,8 @@ def _clean(name: str, x: np.ndarray, fill: float) -> np.ndarray:
 def check_fittyp(p: Mapping[str, float]) -> None:
     """Raise :class:`UnsupportedModelError` unless the evaluator handles ``p['FITTYP']``."""
     fittyp = p.get("FITTYP")
-    if fittyp not in EVALUATED_FITTYP:
-        shown = int(fittyp) if isinstance(fittyp, float) and fittyp.is_integer() else fittyp
-        raise UnsupportedModelError(
-            f"FITTYP {shown} is not evaluated: mftire evaluates MF 6.1 (61), MF 6.2 (62) and MF 5.2 (6) "
-            "property files; MF 5.0/PAC2002 files can be read and written but not evaluated."
-        )
+    if fittyp not in EVALUATED_FITTYP and fittyp != PAC2002_CODE:
+        raise UnsupportedModelError(unsupported_message(fittyp))
 
 
 @dataclass
@@ -325,6 +336,8 @@ def evaluate_arrays(
     dict
         The 30 channels of :data:`OUTPUT_NAMES`, each an array of the broadcast shape.
     """
+    if p.get("FITTYP") == PAC2002_CODE:
+        p = pac2002.prepare(p)  # idempotent: a Tyre's flat parameters are prepared already
     ext = extensions if isinstance(extensions, ExtensionSet) else parse_section(extensions)
     pre = prepare(p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, variables)
     q, offsets = scaled(p, ext, pre)

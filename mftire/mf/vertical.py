@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from mftire.mf.family import is_mf52, is_pac2002
 from mftire.mf.inputs import Conditions
 
 _EPS = np.finfo(float).eps
@@ -144,6 +145,8 @@ def loaded_radius_62(
 
     Returns ``(rho [m], Rl [m], Cz [N/m])``.
     """
+    if is_pac2002(p):  # no MF 6.2 vertical terms in PAC2002 (pac2002._ABSENT): the 6.1 closed form
+        return loaded_radius_61(p, c, dpi, omega, Romega, Fx, Fy)
     target = c.Fz
     g = c.gamma
 
@@ -192,7 +195,7 @@ def contact_patch(p: dict, c: Conditions, dpi: np.ndarray) -> tuple[np.ndarray, 
     Rl_approx = R0 - Fz / NCz
     bottom = Rl_approx - (p["RIM_RADIUS"] + p["BOTTOM_OFFST"]) < 0.0
     Fz = np.where(bottom, (R0 - p["RIM_RADIUS"] - p["BOTTOM_OFFST"]) * NCz, Fz)
-    if p["FITTYP"] == 6:
+    if is_mf52(p):
         QA1, QA2 = p["Q_A1"], p["Q_A2"]
         if QA1 == 0 and QA2 == 0:
             # Defaults of the reference evaluator when the MF 5.2 file has none.

@@ -40,6 +40,16 @@ static double sign_nonzero(double x) { return sgn(x) + (x == 0.0 ? 1.0 : 0.0); }
 
 static double sq(double x) { return x * x; }
 
+/* ------------------------------------------------------------------ family.py (PAC2002) */
+
+/* Internal model code of a PAC2002 file (no FITTYP in the file), mftire.mf.family. */
+#define MF_PAC2002_CODE 2002.0
+
+/* The MF 5.2 equation family: FITTYP 6 and PAC2002. */
+static int is_mf52(const MFParams *p) { return p->FITTYP == 6.0 || p->FITTYP == MF_PAC2002_CODE; }
+
+static int is_pac2002(const MFParams *p) { return p->FITTYP == MF_PAC2002_CODE; }
+
 /* numpy.clip(v, lo, hi): NaN passes through */
 static double clip(double v, double lo, double hi)
 {
@@ -100,7 +110,7 @@ int mf_check_mode(int code, char *msg, unsigned long n)
 
 int mf_check_fittyp(const MFParams *p, char *msg, unsigned long n)
 {
-    if (p->FITTYP == 6.0 || p->FITTYP == 61.0 || p->FITTYP == 62.0) return MF_OK;
+    if (p->FITTYP == 6.0 || p->FITTYP == 61.0 || p->FITTYP == 62.0 || is_pac2002(p)) return MF_OK;
     snprintf(msg, n,
              "FITTYP %.17g is not evaluated: mftire evaluates MF 6.1 (61), MF 6.2 (62) and MF 5.2 (6) property files",
              p->FITTYP);
@@ -263,6 +273,15 @@ static void basic(const MFParams *p, const Ctx *m, const Cond *c, double muRoad,
     Amu = 1.0;
     b->LMUX_prime = Amu * b->LMUX_star / (1.0 + (Amu - 1.0) * b->LMUX_star); /* eq 4.E8 */
     b->LMUY_prime = Amu * b->LMUY_star / (1.0 + (Amu - 1.0) * b->LMUY_star); /* eq 4.E8 */
+    if (is_pac2002(p) && p->LMUV != 0.0) {
+        /* PAC2002: friction decays with the slip speed, lambda_mu/(1 + LMUV*Vs/V0) (Pacejka 2006
+           eq 4.E7; Vsx = -kappa*|Vx| eq 4.E5, Vs eq 3.39); Amu = 1, so lambda' = lambda* (eq 4.E8) */
+        double f = 1.0 + p->LMUV * sqrt(sq(c->kappa * absVx) + sq(Vsy)) / p->LONGVL;
+        b->LMUX_star /= f;
+        b->LMUY_star /= f;
+        b->LMUX_prime = b->LMUX_star;
+        b->LMUY_prime = b->LMUY_star;
+    }
 }
 
 /* ------------------------------------------------------------------ vertical.py (radii) */
@@ -423,12 +442,12 @@ static void fy0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double
     double Fz = c->Fz, dfz = b->dfz, dpi = b->dpi, Fz0p = b->Fz0p;
     double zeta2 = 1.0, zeta3 = 1.0, zeta0, zeta4, Kya, SVyg, Kyg0, sKya, SHy, SVy, alphay, Cy, muy, Dy, Ey, By, Ba,
            Fy0;
-    double fittyp = p->FITTYP;
+    int mf52 = is_mf52(p);
     if (turn_slip) zeta2_zeta3(p, dfz, c->alpha, c->phi, &zeta2, &zeta3);
 
     Kya = kya(p, Fz, Fz0p, dpi, gamma_star, zeta3); /* eq 4.E25 */
     SVyg = Fz * (p->PVY3 + p->PVY4 * dfz) * gamma_star * p->LKYC * b->LMUY_prime * zeta2; /* eq 4.E28 */
-    if (fittyp == 6.0) {
+    if (mf52) {
         /* MF 5.2 (TNO MF-Tyre equation manual), as the reference evaluator does. */
         double Kya0_52 = p->PKY1 * Fz0p * sin(p->PKY4 * atan(Fz / (p->PKY2 * Fz0p))) * p->LKYC;
         Kyg0 = (p->PHY3 * Kya0_52 + Fz * (p->PVY3 + p->PVY4 * dfz)) * p->LKYC;
@@ -459,7 +478,7 @@ static void fy0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double
         zeta4 = 1.0;
     }
 
-    if (fittyp == 6.0) {
+    if (mf52) {
         SHy = (p->PHY1 + p->PHY2 * dfz) * p->LHY + p->PHY3 * gamma_star * p->LKYC; /* MF 5.2 manual */
     } else {
         SHy = (p->PHY1 + p->PHY2 * dfz) * p->LHY + ((Kyg0 * gamma_star - SVyg) / (Kya + MF_EPSILON * sKya)) * zeta0 +
@@ -603,12 +622,29 @@ static double residual(double Dr, double complex Cr, double u, double factor)
     return creal(Dr * ccos(Cr * u) * factor);
 }
 
+/* PAC2002 pure-slip aligning moment (mftire.mf.pac2002.mz0): Mz0 = -t*Fy0 + Mzr with Fy0 at the
+   actual camber (Pacejka 2006 eqs 4.E31, 4.E32) and cos(alpha) once in Mzr (inside Dr, eq 4.E36). */
+static void mz0_pac2002(const Cond *c, const Basic *b, const AlignTerms *a, const PureLat *lat, double *Mz,
+                        double *t_out, double *Mzr_out)
+{
+    double t0 = trail_mf(a->Dt, a->Ct, a->Bt, a->Et, a->alphat, b->alpha_prime) * c->smooth; /* eq 4.E33 */
+    double Mzr0 = residual(a->Dr, a->Cr, atan(a->Br * a->alphar), 1.0) * c->smooth;          /* eq 4.E36 */
+    *Mz = -t0 * lat->Fy0 + Mzr0;
+    *t_out = t0;
+    *Mzr_out = Mzr0;
+}
+
 /* Pure-slip aligning moment (eqs 4.E31-4.E36): Mz0, t0, Mzr0. */
 static void mz0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, const AlignTerms *a, double *Mz,
                 double *t_out, double *Mzr_out)
 {
     PureLat lat0;
     double t0, Mzr0;
+    if (is_pac2002(p)) { /* PAC2002: Fy0 at the actual camber (mz0_pac2002) */
+        fy0(p, m, c, b, b->gamma_star, m->turn_slip, &lat0);
+        mz0_pac2002(c, b, a, &lat0, Mz, t_out, Mzr_out);
+        return;
+    }
     fy0(p, m, c, b, 0.0, 0, &lat0); /* Fy0 at gamma = phi = 0 */
     t0 = trail_mf(a->Dt, a->Ct, a->Bt, a->Et, a->alphat, b->alpha_prime) * c->smooth; /* eq 4.E33 */
     Mzr0 = residual(a->Dr, a->Cr, atan(a->Br * a->alphar), cos(b->alpha_prime)) * c->smooth; /* 4.E36 */
@@ -640,11 +676,14 @@ static void mz_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b
         fy0(p, m, c, b, 0.0, m->turn_slip, &lat0);
     }
     Fy_prime = Gyk * lat0.Fy0; /* eq 4.E74; Gyk does not depend on muy or zeta2 */
-    /* MFeval departure: t is multiplied by LFZO, as TNO's solver does. */
-    t = trail_mf(a->Dt, a->Ct, a->Bt, a->Et, alphat_eq, b->alpha_prime) * p->LFZO; /* eq 4.E73 */
+    /* MFeval departure: t is multiplied by LFZO, as TNO's solver does (not in PAC2002). */
+    t = trail_mf(a->Dt, a->Ct, a->Bt, a->Et, alphat_eq, b->alpha_prime) * (is_pac2002(p) ? 1.0 : p->LFZO); /* 4.E73 */
     t = t * c->smooth;
     Mzr = Mzr * c->smooth;
-    if (p->FITTYP == 6.0) {
+    if (is_pac2002(p) && lat != NULL) {
+        /* PAC2002 (Pacejka 2006 eqs 4.E71, 4.E74): F'y = Fy - SVyk = Gyk*Fy0, Fy0 with camber. */
+        Mz = -t * (Gyk * lat->Fy0) + Mzr + s * Fx;
+    } else if (is_mf52(p)) {
         /* MF 5.2 (TNO equation manual): kappa-induced side force excluded from the trail term. */
         double dfz = b->dfz, gamma_star = b->gamma_star, DVyk, SVyk;
         DVyk = lat0.muy * c->Fz * (p->RVY1 + p->RVY2 * dfz + p->RVY3 * gamma_star) *
@@ -695,7 +734,7 @@ static double my(const MFParams *p, const Cond *c, double Fx)
     double R0 = p->UNLOADED_RADIUS, Fz0 = p->FNOMIN, V0 = p->LONGVL, vr, My, high, low;
     if (Fz < FZMIN) Fz = Fz * (Fz / FZMIN);
     vr = Vx / V0;
-    if (p->FITTYP == 6.0) {
+    if (is_mf52(p)) {
         /* MF 5.2 (TNO equation manual) */
         My = -R0 * Fz * p->LMY * (p->QSY1 + p->QSY2 * (Fx / Fz0) + p->QSY3 * fabs(vr) + p->QSY4 * pow(vr, 4.0));
     } else {
@@ -820,7 +859,7 @@ static void contact_patch(const MFParams *p, const Cond *c, double dpi, double *
     double NCz = p->VERTICAL_STIFFNESS * (1.0 + p->PFZ1 * dpi); /* Besselink 2010 eq 5 */
     double Fz = c->uFz, Rl_approx = R0 - Fz / NCz;
     if (Rl_approx - (p->RIM_RADIUS + p->BOTTOM_OFFST) < 0.0) Fz = (R0 - p->RIM_RADIUS - p->BOTTOM_OFFST) * NCz;
-    if (p->FITTYP == 6.0) {
+    if (is_mf52(p)) {
         double QA1 = p->Q_A1, QA2 = p->Q_A2;
         if (QA1 == 0.0 && QA2 == 0.0) {
             /* Defaults of the reference evaluator when the MF 5.2 file has none. */
@@ -849,7 +888,7 @@ static void relaxation(const MFParams *p, const Cond *c, double Kxk, double Kya,
     double dpi = (c->P - p->NOMPRES) / p->NOMPRES; /* eq 4.E2b */
     double Cx = p->LONGITUDINAL_STIFFNESS * (1.0 + p->PCFX1 * dfz + p->PCFX2 * sq(dfz)) * (1.0 + p->PCFX3 * dpi); /* 17 */
     double Cy = p->LATERAL_STIFFNESS * (1.0 + p->PCFY1 * dfz + p->PCFY2 * sq(dfz)) * (1.0 + p->PCFY3 * dpi); /* 18 */
-    if (p->FITTYP == 6.0) {
+    if (is_mf52(p)) {
         /* MF 5.2 relaxation lengths (TNO equation manual) */
         *sx_out = (p->PTX1 + p->PTX2 * dfz) * exp(-p->PTX3 * dfz) * p->LSGKP * R0 * c->Fz / Fz0;
         *sy_out = p->PTY1 * sin(2.0 * atan(c->Fz / (p->PTY2 * Fz0p))) * (1.0 - p->PKY3 * fabs(c->gamma)) * R0 *
@@ -996,7 +1035,7 @@ int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *
     My = my(p, &c, Fx);
     muy = m.limits ? fabs(lat.muy) : lat.muy;
 
-    if (p->FITTYP == 61.0)
+    if (p->FITTYP == 61.0 || is_pac2002(p)) /* PAC2002: the MF 6.2 equation reduces to 6.1 */
         loaded_radius_61(p, &c, dpi, c.omega, Romega, Fx, Fy, &rho, &Rl, &Cz);
     else
         loaded_radius_62(p, &c, dpi, c.omega, Romega, Fx, Fy, &rho, &Rl, &Cz);
