@@ -184,6 +184,7 @@ def export_fmu(
     model_identifier: str | None = None,
     use_mode: int = vt.DEFAULT_USE_MODE,
     compiler: str | None = None,
+    transient: bool = False,
 ) -> Path:
     """Export a tyre as an FMU.
 
@@ -201,6 +202,9 @@ def export_fmu(
         Start value of the ``useMode`` parameter (default 111).
     compiler : str, optional
         C compiler command; default ``$CC``, then cc, gcc, clang.
+    transient : bool
+        Export the transient tyre instead (wheel kinematics in, relaxation-length
+        states; FMI 2.0 only): :func:`mftire.fmu.transient_export.export_transient_fmu`.
 
     Returns
     -------
@@ -221,6 +225,13 @@ def export_fmu(
 
     if fmi_version not in (2, 3):
         raise FMUExportError(f"fmi_version must be 2 or 3, not {fmi_version!r}")
+    if transient:
+        if fmi_version != 2:
+            raise FMUExportError("--transient exports FMI 2.0 only (Model Exchange with states + Co-Simulation)")
+        from mftire.fmu.transient_export import export_transient_fmu
+
+        return export_transient_fmu(tir, output, model_identifier=model_identifier, use_mode=use_mode,
+                                    compiler=compiler)  # fmt: skip
     Mode.from_code(use_mode)
     cc = find_compiler(compiler)  # fail early, before any work
     flat, name, spec = _load(tir)
