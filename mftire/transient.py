@@ -57,8 +57,8 @@ from mftire.mf.solver import evaluate_arrays
 #: Constants of the transient model: (name, default, unit, description).  They are the
 #: tunable parameters of the transient FMU too (written into its C header).
 CONSTANTS: tuple[tuple[str, float, str, str], ...] = (
-    ("TR_TAU_X", 0.05, "s", "Low-speed damping time constant, longitudinal (damping = Cx*tau)"),
-    ("TR_TAU_Y", 0.05, "s", "Low-speed damping time constant, lateral (damping = Cy*tau)"),
+    ("TR_TAU_X", 0.01, "s", "Low-speed damping time constant, longitudinal (damping = Cx*tau)"),
+    ("TR_TAU_Y", 0.01, "s", "Low-speed damping time constant, lateral (damping = Cy*tau)"),
     ("TR_KAPPA_LIM", 1.0, "-", "Transient slip |u/sigma_kappa| beyond which the deflection limiter acts"),
     ("TR_TANALPHA_LIM", 1.0, "-", "Transient |tan alpha| = |v/sigma_alpha| beyond which the limiter acts"),
     ("TR_LIM_GAIN", 100.0, "-", "Gain of the deflection limiter (slip overshoot ~ 1/sqrt(gain))"),
@@ -143,6 +143,8 @@ class TransientTyre:
         unknown = sorted(set(constants or {}) - set(DEFAULT_CONSTANTS))
         if unknown:
             raise MftireInputError(f"unknown transient constant(s) {', '.join(unknown)}")
+        if tyre.extensions:
+            raise MftireInputError(f"{tyre.name}: the transient model does not support [MFTIRE_EXTENSIONS] yet")
         self.tyre = tyre
         self.mode = int(mode)
         self.constants = {**DEFAULT_CONSTANTS, **{k: float(v) for k, v in (constants or {}).items()}}
