@@ -296,3 +296,30 @@ def test_cli_transient_flag_fmi3_refused(tmp_path, capsys):
     rc = main(["export-fmu", str(TIR), "--transient", "--fmi-version", "3", "--output", str(tmp_path / "x.fmu")])
     assert rc == 2
     assert "FMI 2.0 only" in capsys.readouterr().err
+
+
+@needs_c_compiler
+def test_vehicle_example_stop_and_hold(tmp_path, fmu_path):
+    """validation/vehicle_example.py, transient part: four FMU instances, launch, stop, hold on 20 %."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    spec = importlib.util.spec_from_file_location("vehicle_example", root / "validation" / "vehicle_example.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules["vehicle_example"] = mod
+    spec.loader.exec_module(mod)
+    png = tmp_path / "stop.png"
+    res = mod.run_transient(TIR, png, fmu_path=fmu_path)
+    assert png.stat().st_size > 10_000
+    sc = mod.StopAndHold()
+    t = res["t"]
+    still = t < sc.launch
+    assert np.all(res["Fx"][still] == 0.0) and np.all(res["V"][still] == 0.0)  # standing still: no force, no creep
+    assert res["V"].max() > 3.0
+    assert res["drift"] < 1e-3  # parked on the 20 % slope: below 1 mm/s
+    # held by the tyres: the four forces carry the slope force m·g·sin(theta)
+    veh = mod.Vehicle()
+    total = res["Fx"][-1].sum()
+    assert total == pytest.approx(veh.m * veh.g * np.sin(np.arctan(sc.grade)), rel=1e-3)
