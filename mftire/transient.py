@@ -101,9 +101,12 @@ def output_names() -> list[str]:
     """Output names of the transient model (and FMU), in order."""
     from mftire.fmu.variables import OUTPUTS
 
-    return [n for n, *_ in OUTPUTS[:2]] + ["Mz", "Mx", "My"] + [n for n, *_ in TRANSIENT_OUTPUTS] + [
-        n for n, *_ in OUTPUTS if n not in ("Fx", "Fy", "Mz", "Mx", "My")
-    ]
+    return (
+        [n for n, *_ in OUTPUTS[:2]]
+        + ["Mz", "Mx", "My"]
+        + [n for n, *_ in TRANSIENT_OUTPUTS]
+        + [n for n, *_ in OUTPUTS if n not in ("Fx", "Fy", "Mz", "Mx", "My")]
+    )
 
 
 @dataclass
@@ -339,5 +342,41 @@ def step_exact(model: TransientTyre, kin: Kinematics, u: float, v: float, h: flo
     return out[0], out[1]
 
 
-__all__ = ["CONSTANTS", "DEFAULT_CONSTANTS", "INPUTS", "Kinematics", "STATES", "TransientTyre", "output_names",
-           "simulate", "step_exact"]  # fmt: skip
+def advance(model: TransientTyre, kin: Kinematics, u: float, v: float, H: float) -> tuple[float, float]:
+    """Advance ``(u, v)`` by ``H`` with the inputs held: the FMU's Co-Simulation step.
+
+    One exact step (:func:`step_exact`) while the deflection limiter stays inactive (the
+    linear lag moves monotonically towards its steady state), else ``ceil(H/TR_CS_STEP)``
+    equal sub-steps.
+    """
+    c = model.constants
+    if not H > 0.0:
+        return u, v
+    absVx = abs(float(kin.Vx))
+
+    def idle(s, f, sig, lim):
+        ulim, a = float(sig) * lim, absVx / float(sig)
+        end = f / a if a > 0.0 else s + f * H
+        return abs(s) <= ulim and abs(end) <= ulim
+
+    if idle(u, -float(kin.Vsx), kin.sigx, c["TR_KAPPA_LIM"]) and idle(v, float(kin.Vsy), kin.sigy,
+                                                                      c["TR_TANALPHA_LIM"]):  # fmt: skip
+        return step_exact(model, kin, u, v, H)
+    n = max(int(math.ceil(H / c["TR_CS_STEP"] - 1e-9)), 1)
+    for _ in range(n):
+        u, v = step_exact(model, kin, u, v, H / n)
+    return u, v
+
+
+__all__ = [
+    "CONSTANTS",
+    "DEFAULT_CONSTANTS",
+    "INPUTS",
+    "Kinematics",
+    "STATES",
+    "TransientTyre",
+    "advance",
+    "output_names",
+    "simulate",
+    "step_exact",
+]

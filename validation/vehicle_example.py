@@ -285,43 +285,46 @@ def simulate_stop_and_hold(tyres, veh: Vehicle = Vehicle(), sc: StopAndHold = St
     wheel spins) advances with semi-implicit Euler.  The brakes are Coulomb friction
     with stiction: a wheel whose free motion the brake torque can stop is held at zero spin.
     """
+    import math
+
     n = int(round(sc.t_end / sc.dt))
     L = veh.a + veh.b
-    J = sc.wheel_inertia
-    V, X, om = 0.0, 0.0, [0.0] * 4
+    J, dt, m, g = sc.wheel_inertia, sc.dt, veh.m, veh.g
+    V, X, om = 0.0, 0.0, [0.0, 0.0, 0.0, 0.0]
     Fx_sum = 0.0
-    t_hist = np.zeros(n + 1)
-    rec = {k: np.zeros(n + 1) for k in ("V", "X", "grade")}
-    Fx_h, Fz_h, om_h, Re_h = (np.zeros((n + 1, 4)) for _ in range(4))
+    rec = np.zeros((n + 1, 4))  # t, V, X, grade
+    Y = np.zeros((n + 1, 4, tyres.m))  # tyre outputs
+    W = np.zeros((n + 1, 4, 2))  # Fz, omega
     u = tyres.u
+    Tb_max = (sc.brake_front, sc.brake_front, sc.brake_rear, sc.brake_rear)
     for i in range(n + 1):
-        t = i * sc.dt
+        t = i * dt
         grade = sc.grade * min(max((t - sc.tilt) / sc.tilt_time, 0.0), 1.0)
-        th = np.arctan(grade)
-        cos_t, sin_t = float(np.cos(th)), float(np.sin(th))
+        th = math.atan(grade)
+        cos_t, sin_t = math.cos(th), math.sin(th)
         # quasi-static pitch load transfer from the previous step's total tyre force
-        Fz_front = (veh.m * veh.g * cos_t * veh.b - veh.h * Fx_sum) / L / 2.0
-        Fz_rear = veh.m * veh.g * cos_t / 2.0 - Fz_front
-        for j in range(4):
-            u[j, 0] = Fz_front if j < 2 else Fz_rear
-            u[j, 1] = V
-            u[j, 2] = 0.0
-            u[j, 3] = om[j]
-        y = tyres.step(t, sc.dt)  # Fx, Fy, Mz, My, Re
-        t_hist[i], rec["V"][i], rec["X"][i], rec["grade"][i] = t, V, X, grade
-        Fx_h[i], Fz_h[i], om_h[i], Re_h[i] = y[:, 0], u[:, 0], om, y[:, 4]
-        Fx_sum = float(np.sum(y[:, 0]))
+        Fz_f = (m * g * cos_t * veh.b - veh.h * Fx_sum) / L / 2.0
+        Fz_r = m * g * cos_t / 2.0 - Fz_f
+        u[:, 0] = (Fz_f, Fz_f, Fz_r, Fz_r)
+        u[:, 1] = V
+        u[:, 3] = om
+        y = tyres.step(t, dt)  # Fx, Fy, Mz, My, Re (Vy stays 0)
+        rec[i] = (t, V, X, grade)
+        Y[i] = y
+        W[i, :, 0], W[i, :, 1] = (Fz_f, Fz_f, Fz_r, Fz_r), om
+        Fx, _, _, My, Re = y.T.tolist()
+        Fx_sum = Fx[0] + Fx[1] + Fx[2] + Fx[3]
         bk = min(max((t - sc.brake) / sc.ramp, 0.0), 1.0)  # brakes ramp on as the drive ramps off
         drive = sc.drive_torque * min(max((t - sc.launch) / sc.ramp, 0.0), 1.0) * (1.0 - bk)
         for j in range(4):
-            Tb = bk * (sc.brake_front if j < 2 else sc.brake_rear)
             Td = drive if j >= 2 else 0.0
-            free = om[j] + sc.dt * (Td - y[j, 4] * y[j, 0] + y[j, 3]) / J  # wheel spin without the brake
-            lim = sc.dt * Tb / J
-            om[j] = 0.0 if abs(free) <= lim else free - np.copysign(lim, free)  # brake with stiction
-        V += sc.dt * (Fx_sum / veh.m - veh.g * sin_t)
-        X += sc.dt * V
-    return {"t": t_hist, **rec, "Fx": Fx_h, "Fz": Fz_h, "omega": om_h, "Re": Re_h}
+            free = om[j] + dt * (Td - Re[j] * Fx[j] + My[j]) / J  # wheel spin without the brake
+            lim = dt * bk * Tb_max[j] / J
+            om[j] = 0.0 if abs(free) <= lim else free - math.copysign(lim, free)  # brake with stiction
+        V += dt * (Fx_sum / m - g * sin_t)
+        X += dt * V
+    return {"t": rec[:, 0], "V": rec[:, 1], "X": rec[:, 2], "grade": rec[:, 3], "Fx": Y[:, :, 0],
+            "Fz": W[:, :, 0], "omega": W[:, :, 1], "Re": Y[:, :, 4]}  # fmt: skip
 
 
 def run_transient(tir=DEFAULT_TIR, output: str | Path | None = "vehicle_example_transient.png",

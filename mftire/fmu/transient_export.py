@@ -75,7 +75,9 @@ def transient_variable_table(flat: dict[str, float], use_mode: int = vt.DEFAULT_
     ``field`` of both is the state index).
     """
     V = vt.Variable
-    out: list[vt.Variable] = [V("time", 0, "time", "Real", "independent", "continuous", None, "s", "Simulation time", "")]
+    out: list[vt.Variable] = [
+        V("time", 0, "time", "Real", "independent", "continuous", None, "s", "Simulation time", "")
+    ]
     for name, unit, desc, start in INPUTS:
         value = float(flat[start]) if isinstance(start, str) else float(start)
         out.append(V(name, len(out), "input", "Real", "input", "continuous", value, unit, desc, name))
@@ -145,7 +147,8 @@ def transient_model_header(variables: list[vt.Variable], model_identifier: str) 
     lines += [f"    {vt.c_string(v.name)}," for v in by_vr]
     lines += ["};", "", "static const MTInputs MT_INPUT_START = {"]
     lines += [f"    .{v.field} = {vt._c_double(v.start)}," for v in by_vr if v.kind == "input"]
-    lines += ["};", "", f"static const double MT_STATE_START[2] = {{{', '.join(vt._c_double(v.start) for v in states)}}};"]
+    state_start = ", ".join(vt._c_double(v.start) for v in states)
+    lines += ["};", "", f"static const double MT_STATE_START[2] = {{{state_start}}};"]
     lines += ["", "static const MFParams MT_PARAM_START = {"]
     lines += [f"    .{v.field} = {vt._c_double(v.start)}," for v in by_vr if v.kind == "param"]
     lines += ["};", "", "#endif /* MT_MODEL_GEN_H */", ""]
@@ -230,8 +233,7 @@ def _check_transient(tir):
     flat, name, spec = _load(tir)
     if spec is not None and spec.data:
         raise FMUExportError(
-            f"{name}: --transient does not support model extensions that read data variables "
-            f"({', '.join(spec.data)})"
+            f"{name}: --transient does not support model extensions that read data variables ({', '.join(spec.data)})"
         )
     if spec is not None:
         raise FMUExportError(f"{name}: --transient does not support [MFTIRE_EXTENSIONS] model extensions yet")

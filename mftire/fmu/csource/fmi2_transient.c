@@ -3,9 +3,10 @@
  * transient tyre (mf_transient.c): two continuous states u, v with derivatives.
  *
  * Model Exchange: fmi2GetDerivatives returns (du/dt, dv/dt) of mftire/transient.py.
- * Co-Simulation: fmi2DoStep holds the inputs over the communication step and splits
- * it into n = ceil(h / TR_CS_STEP) equal sub-steps (TR_CS_STEP: tunable parameter,
- * default 1e-4 s) of the exponential-Euler update mt_step (exact for the linear lag).
+ * Co-Simulation: fmi2DoStep holds the inputs over the communication step H and solves
+ * the linear lag exactly in one step while the deflection limiter stays inactive; else
+ * it takes n = ceil(H / TR_CS_STEP) equal exponential-Euler sub-steps (TR_CS_STEP:
+ * tunable parameter, default 1e-4 s).  See mt_advance in mf_transient.c.
  *
  * The value-reference table, start values and GUID come from mt_model_gen.h, generated
  * by mftire/fmu/transient_export.py from one variable table.
@@ -546,8 +547,7 @@ FMI2_Export fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2V
 FMI2_Export fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                                   fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
-    double H = communicationStepSize, h;
-    long n, i;
+    double H = communicationStepSize;
     (void)noSetFMUStatePriorToCurrentPoint;
     if (!c) return fmi2Error;
     if (!(H >= 0.0)) {
@@ -555,11 +555,7 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunication
         return fmi2Error;
     }
     if (update_kin(INS)) return fmi2Error; /* inputs are held over the step */
-    n = (long)ceil(H / INS->params.TR_CS_STEP - 1e-9);
-    if (n < 1) n = 1;
-    h = H / (double)n;
-    if (H > 0.0)
-        for (i = 0; i < n; i++) mt_step(&INS->params, &INS->kin, INS->x, h);
+    mt_advance(&INS->params, &INS->kin, INS->x, H);
     INS->time = currentCommunicationPoint + H;
     INS->out_ok = 0;
     return update_out(INS) ? fmi2Error : fmi2OK;

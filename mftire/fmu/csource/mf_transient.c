@@ -90,3 +90,30 @@ void mt_step(const MFParams *p, const MTKin *k, double x[2], double h)
     phi = ah < 1e-12 ? h : -expm1(-ah) / ay;
     x[1] = x[1] * exp(-ah) + k->Vsy * phi;
 }
+
+/* Is the deflection limiter inactive over a step of length H (state s, forcing f, leak |Vx|/sig)?  The
+ * linear lag moves s monotonically towards f/a (a > 0) or drifts linearly (a = 0), so it suffices that
+ * the start and the end point (or the steady state) lie within the limit. */
+static int limiter_idle(double s, double f, double sig, double lim, double absVx, double H)
+{
+    double ulim = sig * lim, a = absVx / sig, end;
+    if (fabs(s) > ulim) return 0;
+    end = a > 0.0 ? f / a : s + f * H;
+    return fabs(end) <= ulim;
+}
+
+void mt_advance(const MFParams *p, const MTKin *k, double x[2], double H)
+{
+    double h, absVx = fabs(k->Vx);
+    long n, i;
+    if (!(H > 0.0)) return;
+    if (limiter_idle(x[0], -k->Vsx, k->sigx, p->TR_KAPPA_LIM, absVx, H) &&
+        limiter_idle(x[1], k->Vsy, k->sigy, p->TR_TANALPHA_LIM, absVx, H)) {
+        mt_step(p, k, x, H); /* exact solution of the linear lag: one step */
+        return;
+    }
+    n = (long)ceil(H / p->TR_CS_STEP - 1e-9);
+    if (n < 1) n = 1;
+    h = H / (double)n;
+    for (i = 0; i < n; i++) mt_step(p, k, x, h);
+}

@@ -59,6 +59,10 @@ int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2
 /* One exponential-Euler step of length h (leak rates frozen at the start of the step). */
 void mt_step(const MFParams *p, const MTKin *k, double x[2], double h);
 
+/* Advance the state by H with the inputs held (Co-Simulation step): one exact step mt_step(H) while the
+ * deflection limiter stays inactive, else ceil(H / TR_CS_STEP) equal sub-steps of mt_step. */
+void mt_advance(const MFParams *p, const MTKin *k, double x[2], double H);
+
 #ifdef __cplusplus
 }
 #endif
