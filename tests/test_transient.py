@@ -323,3 +323,36 @@ def test_vehicle_example_stop_and_hold(tmp_path, fmu_path):
     veh = mod.Vehicle()
     total = res["Fx"][-1].sum()
     assert total == pytest.approx(veh.m * veh.g * np.sin(np.arctan(sc.grade)), rel=1e-3)
+
+
+@needs_c_compiler
+def test_fmu_cs_step_equals_python_advance_with_limiter(fmu_path, model):
+    """Spinning wheel at standstill: the deflection limiter acts; FMU CS steps = Python :func:`advance`."""
+    import fmpy
+
+    from mftire.transient import advance
+
+    md = fmpy.read_model_description(str(fmu_path))
+    unzip = fmpy.extract(str(fmu_path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    s = fmpy.fmi2.FMU2Slave(
+        guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier, instanceName="x"
+    )
+    s.instantiate()
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+    ins = dict(Fz=FZ, Vx=0.0, Vy=0.05, omega=30.0)
+    s.setReal([vr[k] for k in ins], list(ins.values()))
+    kin = model.kinematics(**ins)
+    u = v = 0.0
+    for k in range(40):
+        s.doStep(k * 0.01, 0.01)
+        u, v = advance(model, kin, u, v, 0.01)
+    fu, fv, kappa_t = s.getReal([vr["u"], vr["v"], vr["kappa_t"]])
+    s.terminate()
+    s.freeInstance()
+    assert u > float(kin.sigx) * model.constants["TR_KAPPA_LIM"]  # beyond the limit: the limiter acted
+    assert u < 1.5 * float(kin.sigx) * model.constants["TR_KAPPA_LIM"]  # and bounded the deflection
+    assert fu == pytest.approx(u, rel=1e-12) and fv == pytest.approx(v, rel=1e-12)
+    assert np.isfinite(kappa_t)
