@@ -15,6 +15,7 @@ import pytest
 from conftest import REFERENCE_TYRES, needs_c_compiler
 from scipy.integrate import solve_ivp
 
+from mftire.fmu.transient_host import make_callbacks
 from mftire.transient import TransientTyre, output_names, simulate, step_exact
 from mftire.tyre import load
 
@@ -266,11 +267,12 @@ def test_two_instances_are_independent(fmu_path):
     md = fmpy.read_model_description(str(fmu_path))
     unzip = fmpy.extract(str(fmu_path))
     vr = {v.name: v.valueReference for v in md.modelVariables}
+    callbacks = make_callbacks()
     slaves = []
     for name in ("a", "b"):
         s = fmpy.fmi2.FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
                                 instanceName=name)  # fmt: skip
-        s.instantiate()
+        s.instantiate(callbacks=callbacks)
         s.setupExperiment(startTime=0.0)
         s.enterInitializationMode()
         s.exitInitializationMode()
@@ -338,7 +340,9 @@ def test_fmu_cs_step_equals_python_advance_with_limiter(fmu_path, model):
     s = fmpy.fmi2.FMU2Slave(
         guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier, instanceName="x"
     )
-    s.instantiate()
+    messages = []
+    callbacks = make_callbacks(messages)
+    s.instantiate(callbacks=callbacks)
     s.setupExperiment(startTime=0.0)
     s.enterInitializationMode()
     s.exitInitializationMode()
@@ -356,3 +360,5 @@ def test_fmu_cs_step_equals_python_advance_with_limiter(fmu_path, model):
     assert u < 1.5 * float(kin.sigx) * model.constants["TR_KAPPA_LIM"]  # and bounded the deflection
     assert fu == pytest.approx(u, rel=1e-12) and fv == pytest.approx(v, rel=1e-12)
     assert np.isfinite(kappa_t)
+    # the limit warnings of the steady-state evaluation arrive formatted (KPUMAX exceeded), at most 10 + 1
+    assert any("KPUMAX" in m for _, _, m in messages) and len(messages) <= 11

@@ -43,9 +43,13 @@ typedef struct {
 
 #define INS ((Instance *)c)
 
+/* Log through the importer's logger.  The message is formatted here and passed as the format
+ * string with every '%' doubled, without variadic arguments: a logger that does not format (a
+ * plain callback) and one that does (printf-style) both show the same text. */
 static void logf_(Instance *ins, fmi2Status status, const char *category, const char *fmt, ...)
 {
-    char buf[512];
+    char buf[512], esc[1024];
+    size_t i, j;
     va_list ap;
     if (!ins || !ins->cb.logger) return;
     if (status == fmi2Warning && !ins->log_warnings) return;
@@ -53,7 +57,12 @@ static void logf_(Instance *ins, fmi2Status status, const char *category, const 
     va_start(ap, fmt);
     vsnprintf(buf, sizeof buf, fmt, ap);
     va_end(ap);
-    ins->cb.logger(ins->cb.componentEnvironment, ins->name, status, category, "%s", buf);
+    for (i = j = 0; buf[i] && j + 2 < sizeof esc; i++) {
+        if (buf[i] == '%') esc[j++] = '%';
+        esc[j++] = buf[i];
+    }
+    esc[j] = '\0';
+    ins->cb.logger(ins->cb.componentEnvironment, ins->name, status, category, esc);
 }
 
 static void on_warning(void *ctx, int kind, const char *message)
