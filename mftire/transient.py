@@ -182,12 +182,14 @@ class TransientTyre:
                 p = self._params(float(mu.flat[0]) if mu.size else 1.0)
                 return evaluate_arrays(p, a["Fz"], kappa, alpha, *(a[k] for k in keys[1:]), self.mode)
             # friction varying over the points: one evaluation per distinct value
+            keys = tuple(k for k in keys if a[k] is not None)  # omega None: free rolling (estimated)
             arrs = np.broadcast_arrays(mu, kappa, alpha, *(a[k] for k in keys))
             res: dict[str, np.ndarray] = {}
             for m in np.unique(arrs[0]):
                 sel = arrs[0] == m
-                o = evaluate_arrays(self._params(float(m)), arrs[3][sel], arrs[1][sel], arrs[2][sel],
-                                    *(x[sel] for x in arrs[4:]), self.mode)  # fmt: skip
+                rest = dict(zip(keys[1:], (x[sel] for x in arrs[4:]), strict=True))
+                o = evaluate_arrays(self._params(float(m)), arrs[3][sel], arrs[1][sel], arrs[2][sel], rest["gamma"],
+                                    rest["phit"], rest["Vx"], rest["P"], rest.get("omega"), self.mode)  # fmt: skip
                 for k, val in o.items():
                     res.setdefault(k, np.zeros(arrs[0].shape))[sel] = val
             return res
@@ -197,16 +199,20 @@ class TransientTyre:
         p, c = self._p, self.constants
         Fz = _clean(p["FNOMIN"] if Fz is None else Fz, 0.0)
         P = np.asarray(p["INFLPRES"] if P is None else P, dtype=float)
-        Vx, Vy, omega, gamma = (_clean(v, 0.0) for v in (Vx, Vy, omega, gamma))
+        free_rolling = omega is None
+        Vx, Vy, omega, gamma = (_clean(v, 0.0) for v in (Vx, Vy, 0.0 if free_rolling else omega, gamma))
         mu, yawRate = _clean(muRoad, 1.0), _clean(yawRate, 0.0)
         vxlow = p["VXLOW"]
         absVx = np.abs(Vx)
         Vev = np.maximum(absVx, vxlow)  # evaluation speed: forward, never below VXLOW
         phit = -yawRate / np.sqrt(Vev**2 + Vy**2)  # turn slip phi_t = -psi_dot/V (Pacejka 2012 eq 4.75)
-        omega_ev = np.where(omega == 0.0, 1e-300, omega)  # a true 0: not "estimate omega"
+        omega_ev = None if free_rolling else np.where(omega == 0.0, 1e-300, omega)  # a true 0: not "estimate"
         args = dict(Fz=Fz, gamma=gamma, phit=phit, Vx=Vev, P=P, omega=omega_ev, mu=mu)
         zero = self._eval(args, 0.0, 0.0)
-        Vsx = Vx - omega * zero["Re"]  # longitudinal slip velocity (Pacejka 2012 eq 2.5 / 4.E5)
+        if free_rolling:  # Python only: omega = Vx/Re, no longitudinal slip velocity
+            Vsx = np.zeros(np.broadcast(Vx, zero["Re"]).shape)
+        else:
+            Vsx = Vx - omega * zero["Re"]  # longitudinal slip velocity (Pacejka 2012 eq 2.5 / 4.E5)
         sigx = np.maximum(zero["sigmax"], c["TR_SIGMA_MIN"])  # Besselink 2010 eq 19
         sigy = np.maximum(zero["sigmay"], c["TR_SIGMA_MIN"])  # Besselink 2010 eq 19
         r = np.minimum(absVx / vxlow, 1.0)
@@ -245,7 +251,6 @@ class TransientTyre:
         out["My"] = ss["My"] * kin.My_sign  # rolling resistance opposes the rolling direction
         out["kappa_t"] = np.asarray(kappa_t, dtype=float)
         out["alpha_t"] = np.asarray(alpha_t, dtype=float)
-        out["omega"] = np.asarray(kin.args["omega"], dtype=float)
         return {k: np.broadcast_to(out[k], np.shape(out["Fx"])) for k in output_names()}
 
     def outputs(self, x, **inputs) -> dict[str, np.ndarray]:
@@ -272,7 +277,7 @@ def simulate(
     Fz=None,
     Vx=0.0,
     Vy=0.0,
-    omega=0.0,
+    omega=None,
     gamma=0.0,
     P=None,
     muRoad=1.0,
@@ -289,7 +294,10 @@ def simulate(
     """Simulate the transient tyre over the time points ``t`` with :func:`scipy.integrate.solve_ivp`.
 
     Every input may be a scalar, an array on ``t`` (interpolated linearly) or a callable
-    of time.  ``Fz`` and ``P`` default to the file's ``FNOMIN`` and ``INFLPRES``.
+    of time.  ``Fz`` and ``P`` default to the file's ``FNOMIN`` and ``INFLPRES``; ``omega``
+    defaults to free rolling (omega = Vx/Re, no longitudinal slip velocity -- a
+    convenience of the Python model; the FMU's ``omega`` input is the wheel spin, 0 =
+    locked).
 
     Returns a DataFrame indexed by ``t`` with the FMU's output names (``Fx, Fy, Mz,
     Mx, My, kappa_t, alpha_t, ...``) and the states ``u``, ``v``.
@@ -302,10 +310,12 @@ def simulate(
     model = TransientTyre(tyre, mode, constants)
     d = model.defaults()
     given = dict(Fz=Fz, Vx=Vx, Vy=Vy, omega=omega, gamma=gamma, P=P, muRoad=muRoad, yawRate=yawRate)
-    sig = {k: _signal(d[k] if v is None else v, t, k) for k, v in given.items()}
+    sig = {k: _signal(d[k] if v is None else v, t, k) for k, v in given.items() if not (k == "omega" and v is None)}
+
+    free = {} if "omega" in sig else {"omega": None}
 
     def inputs_at(tt):
-        return {k: f(tt) for k, f in sig.items()}
+        return {**{k: f(tt) for k, f in sig.items()}, **free}
 
     def rhs(tt, x):
         kin = model.kinematics(**inputs_at(tt))
@@ -317,7 +327,7 @@ def simulate(
     if not sol.success:
         raise MftireInputError(f"simulate: the ODE solver failed: {sol.message}")
     u, v = sol.y
-    ins = {k: np.array([f(tt) for tt in t]) for k, f in sig.items()}
+    ins = {**{k: np.array([f(tt) for tt in t]) for k, f in sig.items()}, **free}
     out = model.outputs_from(model.kinematics(**ins), u, v)
     frame = pd.DataFrame({k: np.asarray(val, dtype=float) for k, val in out.items()}, index=pd.Index(t, name="t"))
     frame["u"], frame["v"] = u, v

@@ -362,3 +362,16 @@ def test_fmu_cs_step_equals_python_advance_with_limiter(fmu_path, model):
     assert np.isfinite(kappa_t)
     # the limit warnings of the steady-state evaluation arrive formatted (KPUMAX exceeded), at most 10 + 1
     assert any("KPUMAX" in m for _, _, m in messages) and len(messages) <= 11
+
+
+def test_simulate_free_rolling_default_and_varying_friction(tyre):
+    """omega omitted: free rolling (no longitudinal slip); muRoad as an array on t."""
+    t = np.linspace(0.0, 0.6, 13)
+    res = simulate(tyre, t, Fz=FZ, Vx=VX, Vy=0.2)
+    assert np.all(res["kappa_t"] == 0.0)
+    ss = tyre.evaluate(FZ, 0.0, np.arctan(0.2 / VX), Vx=VX)
+    assert res["Fy"].iloc[-1] == pytest.approx(float(ss["Fy"]), rel=1e-6)
+    assert res["Fx"].iloc[-1] == pytest.approx(float(ss["Fx"]), rel=1e-6)
+    mu = np.linspace(0.5, 1.0, t.size)
+    res = simulate(tyre, t, Fz=FZ, Vx=VX, Vy=0.2, muRoad=mu)
+    np.testing.assert_allclose(res["mux"] / res["mux"].iloc[-1], mu, rtol=1e-12)
