@@ -220,7 +220,6 @@ def export_fmu(
     parameters, the data variables its extensions read become extra inputs, and its
     string keys (variables, generic channel) are fixed (see ``docs/fmu.md``).
     """
-    from mftire.iotools.atomic import atomic_path
     from mftire.mf.modes import Mode
 
     if fmi_version not in (2, 3):
@@ -252,6 +251,14 @@ def export_fmu(
         description=description,
         sources=sorted(f for f in files if f.endswith(".c")),
     )
+    return package_fmu(output, xml, files, ident, platform, suffix, cc)
+
+
+def package_fmu(output, xml: str, files: dict[str, str], ident: str, platform: str, suffix: str,
+                cc: list[str]) -> Path:  # fmt: skip
+    """Compile ``files`` (the ``sources/``) and write the FMU zip ``output`` atomically."""
+    from mftire.iotools.atomic import atomic_path
+
     output = Path(output)
     with tempfile.TemporaryDirectory(prefix="mftire-fmu-") as tmp:
         src = Path(tmp) / "sources"

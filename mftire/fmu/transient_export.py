@@ -15,10 +15,7 @@ from __future__ import annotations
 
 import os
 import re
-import shlex
 import subprocess
-import tempfile
-import zipfile
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -32,9 +29,9 @@ from mftire.fmu.export import (
     _fmpy_c_code,
     _load,
     _platform,
-    compile_sources,
     find_compiler,
     model_identifier_for,
+    package_fmu,
 )
 from mftire.transient import CONSTANTS, INPUTS, STATES, TRANSIENT_OUTPUTS, output_names
 
@@ -255,7 +252,6 @@ def export_transient_fmu(
     ``u``, ``v``.  Co-Simulation integrates with sub-steps of at most ``TR_CS_STEP``
     (default 1e-4 s).  See ``docs/transient.md``.
     """
-    from mftire.iotools.atomic import atomic_path
     from mftire.mf.modes import Mode
 
     Mode.from_code(use_mode)
@@ -273,20 +269,7 @@ def export_transient_fmu(
     xml = transient_model_description_xml(
         variables, ident, name, description, sorted(f for f in files if f.endswith(".c"))
     )
-    output = Path(output)
-    with tempfile.TemporaryDirectory(prefix="mftire-fmu-") as tmp:
-        src = Path(tmp) / "sources"
-        src.mkdir()
-        for fname, text in files.items():
-            (src / fname).write_text(text, encoding="utf-8")
-        binary = Path(tmp) / (ident + suffix)
-        compile_sources(src, binary, " ".join(shlex.quote(x) for x in cc))
-        with atomic_path(output) as tmp_out, zipfile.ZipFile(tmp_out, "w", zipfile.ZIP_DEFLATED) as zf:
-            zf.writestr("modelDescription.xml", xml)
-            for fname in sorted(files):
-                zf.writestr(f"sources/{fname}", files[fname])
-            zf.write(binary, f"binaries/{platform}/{ident}{suffix}")
-    return output
+    return package_fmu(output, xml, files, ident, platform, suffix, cc)
 
 
 #: C harness of :func:`build_probe_library`: the model functions with default visibility.
@@ -296,6 +279,13 @@ _PROBE_C = r"""
 #include "mf_transient.h"
 #include "mt_model_gen.h"
 
+static void load_inputs(MTInputs *in, const double *inputs)
+{
+    memset(in, 0, sizeof *in);
+    in->Fz = inputs[0]; in->Vx = inputs[1]; in->Vy = inputs[2]; in->omega = inputs[3];
+    in->gamma = inputs[4]; in->P = inputs[5]; in->muRoad = inputs[6]; in->yawRate = inputs[7];
+}
+
 /* params: NULL = start values; inputs: the 8 kinematic inputs; x: 2 states. */
 __attribute__((visibility("default"))) int mt_probe_rates(int use_mode, const double *inputs, const double *x,
                                                           double *dx, double *kin)
@@ -303,9 +293,7 @@ __attribute__((visibility("default"))) int mt_probe_rates(int use_mode, const do
     MTInputs in;
     MTKin k;
     int rc;
-    memset(&in, 0, sizeof in);
-    in.Fz = inputs[0]; in.Vx = inputs[1]; in.Vy = inputs[2]; in.omega = inputs[3];
-    in.gamma = inputs[4]; in.P = inputs[5]; in.muRoad = inputs[6]; in.yawRate = inputs[7];
+    load_inputs(&in, inputs);
     rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, &k, NULL, NULL);
     if (rc) return rc;
     mt_rates(&MT_PARAM_START, &k, x, dx);
@@ -321,9 +309,7 @@ __attribute__((visibility("default"))) int mt_probe_outputs(int use_mode, const 
     MTKin k;
     MTOutputs o;
     int rc;
-    memset(&in, 0, sizeof in);
-    in.Fz = inputs[0]; in.Vx = inputs[1]; in.Vy = inputs[2]; in.omega = inputs[3];
-    in.gamma = inputs[4]; in.P = inputs[5]; in.muRoad = inputs[6]; in.yawRate = inputs[7];
+    load_inputs(&in, inputs);
     rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, &k, NULL, NULL);
     if (rc) return rc;
     rc = mt_outputs(&MT_PARAM_START, use_mode, &k, x, &o, NULL, NULL);
@@ -342,9 +328,7 @@ __attribute__((visibility("default"))) double mt_probe_bench(int use_mode, const
     double x[2] = {1e-3, -2e-3}, dx[2], acc = 0.0;
     struct timespec t0, t1;
     long i;
-    memset(&in, 0, sizeof in);
-    in.Fz = inputs[0]; in.Vx = inputs[1]; in.Vy = inputs[2]; in.omega = inputs[3];
-    in.gamma = inputs[4]; in.P = inputs[5]; in.muRoad = inputs[6]; in.yawRate = inputs[7];
+    load_inputs(&in, inputs);
     clock_gettime(CLOCK_MONOTONIC, &t0);
     for (i = 0; i < n; i++) {
         in.Vy = inputs[2] + 1e-9 * (double)(i & 1023);
