@@ -69,17 +69,37 @@ CONSTANTS: tuple[tuple[str, float, str, str], ...] = (
 #: Default constants by name.
 DEFAULT_CONSTANTS: dict[str, float] = {name: value for name, value, _, _ in CONSTANTS}
 
-#: Kinematic inputs: (name, unit, description, default) -- default a .tir key or a number.
+#: Kinematic inputs: (name, unit, description, default) -- default a .tir key, a number, or
+#: ``FREE_ROLLING`` (the spin of free rolling at LONGVL under FNOMIN, :func:`input_defaults`).
 INPUTS: tuple[tuple[str, str | None, str, str | float], ...] = (
     ("Fz", "N", "Vertical load (negative: lift-off, treated as 0)", "FNOMIN"),
-    ("Vx", "m/s", "Longitudinal velocity of the wheel centre (W axes)", 0.0),
+    ("Vx", "m/s", "Longitudinal velocity of the wheel centre (W axes)", "LONGVL"),
     ("Vy", "m/s", "Lateral velocity of the wheel centre (W axes, ISO: y to the left)", 0.0),
-    ("omega", "rad/s", "Wheel spin speed", 0.0),
+    ("omega", "rad/s", "Wheel spin speed (default: free rolling at LONGVL, FNOMIN)", "FREE_ROLLING"),
     ("gamma", "rad", "Inclination (camber) angle", 0.0),
     ("P", "Pa", "Inflation pressure (NaN or <= 0: INFLPRES)", "INFLPRES"),
     ("muRoad", None, "Road friction factor, multiplies LMUX and LMUY", 1.0),
     ("yawRate", "rad/s", "Yaw rate of the wheel (turn slip, used when useMode ends in 2)", 0.0),
 )
+
+FREE_ROLLING = "FREE_ROLLING"
+
+
+def input_defaults(flat: Mapping[str, float]) -> dict[str, float]:
+    """Default of every input for the flat parameters ``flat``: the file's FNOMIN, LONGVL,
+    INFLPRES; omega of free rolling there (omega = LONGVL/Re, Re as MFeval estimates it);
+    0; muRoad 1."""
+    out = {}
+    for name, _, _, d in INPUTS:
+        if d == FREE_ROLLING:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                ev = evaluate_arrays(dict(flat), flat["FNOMIN"], 0.0, 0.0, 0.0, 0.0, flat["LONGVL"], None, None, 111)
+            out[name] = float(ev["omega"])
+        else:
+            out[name] = float(flat[d]) if isinstance(d, str) else float(d)
+    return out
+
 
 #: Transient outputs ahead of the steady-state channels (name, unit, description).
 TRANSIENT_OUTPUTS: tuple[tuple[str, str | None, str], ...] = (
@@ -155,8 +175,8 @@ class TransientTyre:
         self._mu_cache: dict[float, dict] = {}
 
     def defaults(self) -> dict[str, float]:
-        """Default value of every input (the file's FNOMIN, INFLPRES; 0; muRoad 1)."""
-        return {n: float(self._p[d]) if isinstance(d, str) else float(d) for n, _, _, d in INPUTS}
+        """Default value of every input (see :func:`input_defaults`)."""
+        return input_defaults(self._p)
 
     def _params(self, mu: float) -> dict:
         # muRoad multiplies LMUX and LMUY (as the FMU's mf_eval.c basic()).
@@ -275,7 +295,7 @@ def simulate(
     tyre,
     t,
     Fz=None,
-    Vx=0.0,
+    Vx=None,
     Vy=0.0,
     omega=None,
     gamma=0.0,
@@ -294,8 +314,8 @@ def simulate(
     """Simulate the transient tyre over the time points ``t`` with :func:`scipy.integrate.solve_ivp`.
 
     Every input may be a scalar, an array on ``t`` (interpolated linearly) or a callable
-    of time.  ``Fz`` and ``P`` default to the file's ``FNOMIN`` and ``INFLPRES``; ``omega``
-    defaults to free rolling (omega = Vx/Re, no longitudinal slip velocity -- a
+    of time.  ``Fz``, ``Vx`` and ``P`` default to the file's ``FNOMIN``, ``LONGVL`` and
+    ``INFLPRES``; ``omega`` defaults to free rolling (omega = Vx/Re, no longitudinal slip velocity -- a
     convenience of the Python model; the FMU's ``omega`` input is the wheel spin, 0 =
     locked).
 
@@ -386,6 +406,7 @@ __all__ = [
     "STATES",
     "TransientTyre",
     "advance",
+    "input_defaults",
     "output_names",
     "simulate",
     "step_exact",

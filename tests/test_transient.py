@@ -237,7 +237,11 @@ def test_fmu_validates_and_declares_states(fmu_path):
     for name in ("Fz", "Vx", "Vy", "omega", "gamma", "P", "muRoad", "yawRate"):
         assert names[name].causality == "input"
     assert float(names["muRoad"].start) == 1.0
-    assert float(names["Fz"].start) == load(TIR)["FNOMIN"]
+    tyre = load(TIR)
+    assert float(names["Fz"].start) == tyre["FNOMIN"]
+    assert float(names["Vx"].start) == tyre["LONGVL"]  # the file's defaults; omega: free rolling there
+    Re = float(tyre.evaluate(tyre["FNOMIN"], 0.0, 0.0, Vx=tyre["LONGVL"])["Re"])
+    assert float(names["omega"].start) == pytest.approx(tyre["LONGVL"] / Re, rel=1e-9)
     for name in ("Fx", "Fy", "Mz", "Mx", "My", "kappa_t", "alpha_t", "sigmay", "Kya"):
         assert names[name].causality == "output"
     assert names["TR_CS_STEP"].causality == "parameter"

@@ -33,7 +33,7 @@ from mftire.fmu.export import (
     model_identifier_for,
     package_fmu,
 )
-from mftire.transient import CONSTANTS, INPUTS, STATES, TRANSIENT_OUTPUTS, output_names
+from mftire.transient import CONSTANTS, INPUTS, STATES, TRANSIENT_OUTPUTS, input_defaults, output_names
 
 #: Hand-written C sources of the transient FMU.
 TRANSIENT_SOURCES = ("mf_eval.c", "mf_eval.h", "mf_transient.c", "mf_transient.h", "fmi2_transient.c")
@@ -75,8 +75,9 @@ def transient_variable_table(flat: dict[str, float], use_mode: int = vt.DEFAULT_
     out: list[vt.Variable] = [
         V("time", 0, "time", "Real", "independent", "continuous", None, "s", "Simulation time", "")
     ]
-    for name, unit, desc, start in INPUTS:
-        value = float(flat[start]) if isinstance(start, str) else float(start)
+    defaults = input_defaults(flat)
+    for name, unit, desc, _ in INPUTS:
+        value = defaults[name]
         out.append(V(name, len(out), "input", "Real", "input", "continuous", value, unit, desc, name))
     for name, field, unit, desc in _output_rows():
         out.append(V(name, len(out), "output", "Real", "output", "continuous", None, unit, desc, field))
