@@ -379,3 +379,20 @@ def test_simulate_free_rolling_default_and_varying_friction(tyre):
     mu = np.linspace(0.5, 1.0, t.size)
     res = simulate(tyre, t, Fz=FZ, Vx=VX, Vy=0.2, muRoad=mu)
     np.testing.assert_allclose(res["mux"] / res["mux"].iloc[-1], mu, rtol=1e-12)
+
+
+def test_model_extensions_refused(tmp_path):
+    """[MFTIRE_EXTENSIONS] are not part of the transient model yet: a clear error, in Python and at export."""
+    from mftire.errors import MftireInputError
+    from mftire.extensions import SECTION
+    from mftire.fmu.export import FMUExportError, export_fmu
+    from mftire.iotools.tir import read_tir
+    from mftire.tyre import Tyre
+
+    params = read_tir(TIR)
+    params.set("RR_FX", 0.01, section=SECTION)
+    tyre = Tyre(params, name="ext.tir")
+    with pytest.raises(MftireInputError, match="MFTIRE_EXTENSIONS"):
+        TransientTyre(tyre)
+    with pytest.raises(FMUExportError, match="MFTIRE_EXTENSIONS"):
+        export_fmu(tyre, tmp_path / "x.fmu", transient=True)

@@ -229,10 +229,6 @@ def generate_transient_sources(
 
 def _check_transient(tir):
     flat, name, spec = _load(tir)
-    if spec is not None and spec.data:
-        raise FMUExportError(
-            f"{name}: --transient does not support model extensions that read data variables ({', '.join(spec.data)})"
-        )
     if spec is not None:
         raise FMUExportError(f"{name}: --transient does not support [MFTIRE_EXTENSIONS] model extensions yet")
     return flat, name
