@@ -46,13 +46,18 @@ import math
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
+from numpy.typing import ArrayLike
 
 from mftire.errors import MftireInputError
 from mftire.mf.modes import Mode
 from mftire.mf.solver import evaluate_arrays
+
+if TYPE_CHECKING:
+    from mftire.tyre import Tyre
 
 #: Constants of the transient model: (name, default, unit, description).  They are the
 #: tunable parameters of the transient FMU too (written into its C header).
@@ -161,7 +166,7 @@ class TransientTyre:
         Overrides of :data:`DEFAULT_CONSTANTS`.
     """
 
-    def __init__(self, tyre, mode: int = 111, constants: Mapping[str, float] | None = None) -> None:
+    def __init__(self, tyre: Tyre, mode: int = 111, constants: Mapping[str, float] | None = None) -> None:
         Mode.from_code(mode)
         unknown = sorted(set(constants or {}) - set(DEFAULT_CONSTANTS))
         if unknown:
@@ -214,8 +219,23 @@ class TransientTyre:
                     res.setdefault(k, np.zeros(arrs[0].shape))[sel] = val
             return res
 
-    def kinematics(self, Fz=None, Vx=0.0, Vy=0.0, omega=0.0, gamma=0.0, P=None, muRoad=1.0, yawRate=0.0) -> Kinematics:
-        """Slip velocities, relaxation lengths, low-speed weights and zero-slip offsets."""
+    def kinematics(
+        self,
+        Fz: ArrayLike | None = None,
+        Vx: ArrayLike = 0.0,
+        Vy: ArrayLike = 0.0,
+        omega: ArrayLike | None = 0.0,
+        gamma: ArrayLike = 0.0,
+        P: ArrayLike | None = None,
+        muRoad: ArrayLike = 1.0,
+        yawRate: ArrayLike = 0.0,
+    ) -> Kinematics:
+        """Slip velocities, relaxation lengths, low-speed weights and zero-slip offsets.
+
+        ``Fz`` and ``P`` default to the file's ``FNOMIN`` and ``INFLPRES``, the others to a
+        wheel at rest (0; ``muRoad`` 1).  ``omega=None`` means free rolling (Python only).
+        Inputs broadcast against each other.
+        """
         p, c = self._p, self.constants
         Fz = _clean(p["FNOMIN"] if Fz is None else Fz, 0.0)
         P = np.asarray(p["INFLPRES"] if P is None else P, dtype=float)
@@ -240,7 +260,7 @@ class TransientTyre:
         My_sign = np.sin(0.5 * np.pi * np.clip(Vx / vxlow, -1.0, 1.0))
         return Kinematics(Vx=Vx, Vsx=Vsx, Vsy=Vy, sigx=sigx, sigy=sigy, w=w, My_sign=My_sign, zero=zero, args=args)
 
-    def rates(self, kin: Kinematics, u, v):
+    def rates(self, kin: Kinematics, u: ArrayLike, v: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """State derivatives (du/dt, dv/dt) for the kinematics ``kin`` and deflections ``u``, ``v``."""
         c = self.constants
         gx = np.maximum(np.abs(u) / (kin.sigx * c["TR_KAPPA_LIM"]) - 1.0, 0.0)  # deflection limiter
@@ -251,12 +271,12 @@ class TransientTyre:
         dv = kin.Vsy - ay * v  # Pacejka 2012 §7.2.1: dv/dt + |Vx|/sigma_alpha*v = Vsy (ISO sign)
         return du, dv
 
-    def derivatives(self, x, **inputs) -> np.ndarray:
+    def derivatives(self, x: ArrayLike, **inputs: ArrayLike) -> np.ndarray:
         """``[du/dt, dv/dt]`` at state ``x = (u, v)`` and the inputs (see :data:`INPUTS`)."""
         kin = self.kinematics(**inputs)
         return np.array(self.rates(kin, x[0], x[1]), dtype=float)
 
-    def outputs_from(self, kin: Kinematics, u, v) -> dict[str, np.ndarray]:
+    def outputs_from(self, kin: Kinematics, u: ArrayLike, v: ArrayLike) -> dict[str, np.ndarray]:
         """All outputs (FMU names) at the kinematics ``kin`` and deflections ``u``, ``v``."""
         c = self.constants
         du, dv = self.rates(kin, u, v)
@@ -273,7 +293,7 @@ class TransientTyre:
         out["alpha_t"] = np.asarray(alpha_t, dtype=float)
         return {k: np.broadcast_to(out[k], np.shape(out["Fx"])) for k in output_names()}
 
-    def outputs(self, x, **inputs) -> dict[str, np.ndarray]:
+    def outputs(self, x: ArrayLike, **inputs: ArrayLike) -> dict[str, np.ndarray]:
         """All outputs at state ``x = (u, v)`` and the inputs."""
         return self.outputs_from(self.kinematics(**inputs), x[0], x[1])
 
@@ -292,8 +312,8 @@ def _signal(value, t: np.ndarray, name: str) -> Callable[[float], float]:
 
 
 def simulate(
-    tyre,
-    t,
+    tyre: Tyre,
+    t: ArrayLike,
     Fz=None,
     Vx=None,
     Vy=0.0,
