@@ -11,6 +11,13 @@ are evaluated twice:
 
 Both trajectories are plotted to a PNG and the script asserts that they agree.
 
+Second part (:func:`run_transient`): the same car on four instances of the
+*transient* tyre FMU (``mftire export-fmu --transient``: wheel kinematics in,
+relaxation-length slip states, low-speed model), in Co-Simulation at 1 kHz: standing
+still, launching, braking to a stop, then held by the brakes while the road tilts to a
+20 % slope.  Tyre forces and vehicle speed through the stop and the hold are plotted
+to ``<output stem>_transient.png``.
+
 Run::
 
     python validation/vehicle_example.py [--tir FILE] [--output vehicle_example.png] [--short]
@@ -252,6 +259,137 @@ def _plot(a: dict, b: dict, mv: Manoeuvre, output) -> None:
     plt.close(fig)
 
 
+@dataclass(frozen=True)
+class StopAndHold:
+    """Standing still, launching, braking to a stop, then parked while the road tilts to a slope."""
+
+    launch: float = 1.0  #: drive torque on [s]
+    drive_torque: float = 700.0  #: per rear wheel [N m]
+    brake: float = 4.0  #: drive off, brakes on [s]
+    brake_front: float = 1100.0  #: brake torque per front wheel [N m]
+    brake_rear: float = 500.0  #: per rear wheel [N m]
+    tilt: float = 7.0  #: the road starts tilting [s]
+    tilt_time: float = 1.0  #: to the final grade in [s]
+    grade: float = 0.20  #: final slope (rise over run) [-]
+    t_end: float = 11.0  #: [s]
+    ramp: float = 0.2  #: torque ramps [s]
+    wheel_inertia: float = 1.2  #: [kg m^2]
+    dt: float = 1e-3  #: communication step [s]
+
+
+def simulate_stop_and_hold(tyres, veh: Vehicle = Vehicle(), sc: StopAndHold = StopAndHold()) -> dict:
+    """Straight-line two-track car on the transient tyres ``tyres`` (a :class:`TransientFMUs`).
+
+    Explicit co-simulation at ``sc.dt``: the tyres see the wheel kinematics at the start
+    of a step and return their forces at its end; the car (speed along the road, four
+    wheel spins) advances with semi-implicit Euler.  The brakes are Coulomb friction
+    with stiction: a wheel whose free motion the brake torque can stop is held at zero spin.
+    """
+    import math
+
+    n = int(round(sc.t_end / sc.dt))
+    L = veh.a + veh.b
+    J, dt, m, g = sc.wheel_inertia, sc.dt, veh.m, veh.g
+    V, X, om = 0.0, 0.0, [0.0, 0.0, 0.0, 0.0]
+    Fx_sum = 0.0
+    rec = np.zeros((n + 1, 4))  # t, V, X, grade
+    Y = np.zeros((n + 1, 4, tyres.m))  # tyre outputs
+    W = np.zeros((n + 1, 4, 2))  # Fz, omega
+    u = tyres.u
+    Tb_max = (sc.brake_front, sc.brake_front, sc.brake_rear, sc.brake_rear)
+    for i in range(n + 1):
+        t = i * dt
+        grade = sc.grade * min(max((t - sc.tilt) / sc.tilt_time, 0.0), 1.0)
+        th = math.atan(grade)
+        cos_t, sin_t = math.cos(th), math.sin(th)
+        # quasi-static pitch load transfer from the previous step's total tyre force
+        Fz_f = (m * g * cos_t * veh.b - veh.h * Fx_sum) / L / 2.0
+        Fz_r = m * g * cos_t / 2.0 - Fz_f
+        u[:, 0] = (Fz_f, Fz_f, Fz_r, Fz_r)
+        u[:, 1] = V
+        u[:, 3] = om
+        y = tyres.step(t, dt)  # Fx, Fy, Mz, My, Re (Vy stays 0)
+        rec[i] = (t, V, X, grade)
+        Y[i] = y
+        W[i, :, 0], W[i, :, 1] = (Fz_f, Fz_f, Fz_r, Fz_r), om
+        Fx, _, _, My, Re = y.T.tolist()
+        Fx_sum = Fx[0] + Fx[1] + Fx[2] + Fx[3]
+        bk = min(max((t - sc.brake) / sc.ramp, 0.0), 1.0)  # brakes ramp on as the drive ramps off
+        drive = sc.drive_torque * min(max((t - sc.launch) / sc.ramp, 0.0), 1.0) * (1.0 - bk)
+        for j in range(4):
+            Td = drive if j >= 2 else 0.0
+            free = om[j] + dt * (Td - Re[j] * Fx[j] + My[j]) / J  # wheel spin without the brake
+            lim = dt * bk * Tb_max[j] / J
+            om[j] = 0.0 if abs(free) <= lim else free - math.copysign(lim, free)  # brake with stiction
+        V += dt * (Fx_sum / m - g * sin_t)
+        X += dt * V
+    return {"t": rec[:, 0], "V": rec[:, 1], "X": rec[:, 2], "grade": rec[:, 3], "Fx": Y[:, :, 0],
+            "Fz": W[:, :, 0], "omega": W[:, :, 1], "Re": Y[:, :, 4]}  # fmt: skip
+
+
+def run_transient(tir=DEFAULT_TIR, output: str | Path | None = "vehicle_example_transient.png",
+                  sc: StopAndHold = StopAndHold(), fmu_path: str | Path | None = None) -> dict:  # fmt: skip
+    """Standstill, launch, stop and hold on a 20 % slope with the transient tyre FMU; plot.
+
+    Returns the trajectory and a few figures (``drift``: the largest speed over the last
+    second, ``seconds``: run time).
+    """
+    from mftire.fmu.export import export_fmu
+    from mftire.fmu.transient_host import TransientFMUs
+
+    with tempfile.TemporaryDirectory(prefix="mftire-vehicle-") as tmp:
+        if fmu_path is None:
+            fmu_path = export_fmu(tir, Path(tmp) / "tyre_transient.fmu", transient=True)
+        t0 = time.perf_counter()
+        with TransientFMUs(fmu_path, WHEELS, outputs=("Fx", "Fy", "Mz", "My", "Re")) as tyres:
+            res = simulate_stop_and_hold(tyres, sc=sc)
+        res["seconds"] = time.perf_counter() - t0
+    last = res["t"] > sc.t_end - 1.0
+    res["drift"] = float(np.max(np.abs(res["V"][last])))
+    assert np.all(np.isfinite(res["Fx"])), "tyre forces must stay finite"
+    assert res["V"].max() > 3.0, "the car should have launched"
+    if output:
+        _plot_transient(res, sc, output)
+    return res
+
+
+def _plot_transient(res: dict, sc: StopAndHold, output) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = res["t"]
+    fig, ax = plt.subplots(2, 2, figsize=(13, 7))
+    ax[0, 0].plot(t, res["V"], lw=2)
+    ax[0, 0].set_ylabel("vehicle speed [m/s]")
+    tw = ax[0, 0].twinx()
+    tw.plot(t, 100 * res["grade"], color="0.6", ls=":")
+    tw.set_ylabel("road grade [%] (dotted)")
+    for j, w in enumerate(WHEELS):
+        ax[0, 1].plot(t, res["Fx"][:, j], label=w)
+    ax[0, 1].set_ylabel("tyre Fx [N]")
+    ax[0, 1].legend()
+    t_stop = float(t[np.argmax((t > sc.brake) & (res["V"] < 0.5))])
+    stop = t > t_stop - 0.2
+    ax[1, 0].plot(t[stop], 1000 * res["V"][stop], lw=2)
+    ax[1, 0].set_ylim(-250.0, 550.0)
+    ax[1, 0].set_ylabel("speed through the stop and the hold [mm/s]")
+    for j, w in enumerate(WHEELS):
+        ax[1, 1].plot(t[stop], res["Fx"][stop, j], label=w)
+    ax[1, 1].set_ylabel("tyre Fx through the stop and the hold [N]")
+    for a in ax.flat:
+        a.set_xlabel("t [s]")
+        a.grid(alpha=0.3)
+    fig.suptitle(
+        "Transient tyre FMU (4 instances, Co-Simulation 1 kHz): standstill, launch, braking to a stop, "
+        f"held on a {100 * sc.grade:.0f} % slope (drift {1000 * res['drift']:.3f} mm/s)"
+    )
+    fig.tight_layout()
+    fig.savefig(output, dpi=110)
+    plt.close(fig)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tir", default=str(DEFAULT_TIR))
@@ -262,6 +400,12 @@ def main(argv=None) -> int:
     print(f"wrote {args.output}")
     print(f"run time: FMU {res['seconds_fmu']:.2f} s, Python {res['seconds_python']:.2f} s")
     print("largest FMU - Python difference: " + ", ".join(f"{k} {v:.1e}" for k, v in res["max_diff"].items()))
+    if not args.short:
+        out = Path(args.output)
+        out_t = out.with_name(out.stem + "_transient.png")
+        tr = run_transient(args.tir, out_t)
+        print(f"wrote {out_t}: transient tyre FMU, stop and hold on a 20 % slope, drift {1000 * tr['drift']:.4f} mm/s "
+              f"(run time {tr['seconds']:.2f} s for {StopAndHold().t_end:g} s)")  # fmt: skip
     return 0
 
 

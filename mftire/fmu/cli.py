@@ -15,8 +15,9 @@ def _cmd_export_fmu(args: argparse.Namespace) -> int:
         model_identifier=args.model_identifier,
         use_mode=args.mode,
         compiler=args.cc,
+        transient=args.transient,
     )
-    kind = f"FMI {args.fmi_version}.0 Model Exchange + Co-Simulation"
+    kind = f"FMI {args.fmi_version}.0 Model Exchange + Co-Simulation" + (", transient" if args.transient else "")
     print(f"mftire export-fmu: wrote {path} ({kind})")
     return 0
 
@@ -34,5 +35,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--fmi-version", type=int, choices=(2, 3), default=2, help="FMI version (default 2)")
     p.add_argument("--mode", type=int, default=111, help="start value of the useMode parameter (default 111)")
     p.add_argument("--model-identifier", help="C identifier of the binary (default: from the file name)")
+    p.add_argument("--transient", action="store_true",
+                   help="transient tyre: wheel kinematics in (Fz, Vx, Vy, omega, ...), relaxation-length slip "
+                   "states, low-speed model (FMI 2.0; see docs/transient.md)")  # fmt: skip
     p.add_argument("--cc", help="C compiler command (default: $CC, then cc, gcc, clang)")
     p.set_defaults(func=_cmd_export_fmu)

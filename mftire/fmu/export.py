@@ -193,6 +193,7 @@ def export_fmu(
     model_identifier: str | None = None,
     use_mode: int = vt.DEFAULT_USE_MODE,
     compiler: str | None = None,
+    transient: bool = False,
 ) -> Path:
     """Export a tyre as an FMU.
 
@@ -210,6 +211,9 @@ def export_fmu(
         Start value of the ``useMode`` parameter (default 111).
     compiler : str, optional
         C compiler command; default ``$CC``, then cc, gcc, clang.
+    transient : bool
+        Export the transient tyre instead (wheel kinematics in, relaxation-length
+        states; FMI 2.0 only): :func:`mftire.fmu.transient_export.export_transient_fmu`.
 
     Returns
     -------
@@ -225,11 +229,17 @@ def export_fmu(
     parameters, the data variables its extensions read become extra inputs, and its
     string keys (variables, generic channel) are fixed (see ``docs/fmu.md``).
     """
-    from mftire.iotools.atomic import atomic_path
     from mftire.mf.modes import Mode
 
     if fmi_version not in (2, 3):
         raise FMUExportError(f"fmi_version must be 2 or 3, not {fmi_version!r}")
+    if transient:
+        if fmi_version != 2:
+            raise FMUExportError("--transient exports FMI 2.0 only (Model Exchange with states + Co-Simulation)")
+        from mftire.fmu.transient_export import export_transient_fmu
+
+        return export_transient_fmu(tir, output, model_identifier=model_identifier, use_mode=use_mode,
+                                    compiler=compiler)  # fmt: skip
     Mode.from_code(use_mode)
     cc = find_compiler(compiler)  # fail early, before any work
     flat, name, spec = _load(tir)
@@ -250,6 +260,14 @@ def export_fmu(
         description=description,
         sources=sorted(f for f in files if f.endswith(".c")),
     )
+    return package_fmu(output, xml, files, ident, platform, suffix, cc)
+
+
+def package_fmu(output, xml: str, files: dict[str, str], ident: str, platform: str, suffix: str,
+                cc: list[str]) -> Path:  # fmt: skip
+    """Compile ``files`` (the ``sources/``) and write the FMU zip ``output`` atomically."""
+    from mftire.iotools.atomic import atomic_path
+
     output = Path(output)
     with tempfile.TemporaryDirectory(prefix="mftire-fmu-") as tmp:
         src = Path(tmp) / "sources"

@@ -1,0 +1,69 @@
+/*
+ * mf_transient.h -- transient (relaxation-length) tyre for the mftire transient FMU:
+ * wheel kinematics in, contact-point slip deflections u, v as states, the
+ * steady-state Magic Formula (mf_eval.c) evaluated at the transient slips.
+ *
+ * The equations are those of mftire/transient.py (Pacejka 2012 ch. 7, §7.2.1 contact-
+ * point lag, §7.2.2 Magic Formula at the transient slips, §7.3 low-speed damping; MF 6.1
+ * relaxation lengths, Besselink et al. 2010 eq 19).  The constants TR_* are members
+ * of MFParams, generated from mftire.transient.CONSTANTS (one table for both).
+ */
+#ifndef MF_TRANSIENT_H
+#define MF_TRANSIENT_H
+
+#include "mf_eval.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Kinematic inputs (mftire.transient.INPUTS), then the data variables of the model extensions. */
+typedef struct {
+    double Fz;      /* vertical load [N] */
+    double Vx;      /* wheel-centre forward velocity, W axes [m/s] */
+    double Vy;      /* wheel-centre lateral velocity, W axes, ISO y left [m/s] */
+    double omega;   /* wheel spin [rad/s] */
+    double gamma;   /* inclination [rad] */
+    double P;       /* inflation pressure [Pa]; NaN or <= 0: INFLPRES */
+    double muRoad;  /* road friction factor [-] */
+    double yawRate; /* yaw rate for turn slip [rad/s] */
+    double data[MF_MAX_DATA];
+} MTInputs;
+
+/* Input-only quantities of one operating point (computed once per input change). */
+typedef struct {
+    double Vx, Vsx, Vsy;  /* forward velocity, slip velocities [m/s] */
+    double sigx, sigy;    /* relaxation lengths [m] */
+    double w;             /* low-speed weight: 1 at standstill, 0 from VXLOW */
+    double My_sign;       /* smooth sign of the rolling-resistance moment */
+    MFInputs ev;          /* evaluator inputs (slips set per evaluation) */
+    MFOutputs zero;       /* steady state at zero slip: offsets, Re, sigma */
+} MTKin;
+
+/* Transient outputs: the steady-state channels at the transient slips plus the slips. */
+typedef struct {
+    MFOutputs ss;  /* Fx, Fy, Mz, My corrected for the low-speed model */
+    double kappa_t, alpha_t;
+} MTOutputs;
+
+/* Kinematics: one steady-state evaluation at zero slip.  Returns MF_OK or an mf_evaluate code. */
+int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, MTKin *k, mf_warning_fn warn, void *ctx);
+
+/* State derivatives dx = (du/dt, dv/dt) at the state x = (u, v). */
+void mt_rates(const MFParams *p, const MTKin *k, const double x[2], double dx[2]);
+
+/* Outputs at the state x: one steady-state evaluation at the transient slips. */
+int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2], MTOutputs *out,
+               mf_warning_fn warn, void *ctx);
+
+/* One exponential-Euler step of length h (leak rates frozen at the start of the step). */
+void mt_step(const MFParams *p, const MTKin *k, double x[2], double h);
+
+/* Advance the state by H with the inputs held (Co-Simulation step): one exact step mt_step(H) while the
+ * deflection limiter stays inactive, else ceil(H / TR_CS_STEP) equal sub-steps of mt_step. */
+void mt_advance(const MFParams *p, const MTKin *k, double x[2], double H);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* MF_TRANSIENT_H */

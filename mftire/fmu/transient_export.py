@@ -1,0 +1,375 @@
+"""The transient tyre FMU (``mftire export-fmu TIR --transient``): FMI 2.0 ME + CS.
+
+Wheel kinematics in (:data:`mftire.transient.INPUTS`), two continuous states ``u``,
+``v`` with their derivatives ``der(u)``, ``der(v)``, the steady-state channels at the
+transient slips out.  One variable table (:func:`transient_variable_table`, built
+from :mod:`mftire.transient` and the steady-state table of
+:mod:`mftire.fmu.variables`) generates the XML, the GUID and the C headers
+(``mf_params.h`` with the transient constants ``TR_*`` as tunable parameters, and
+``mt_model_gen.h``).  The C model is ``csource/mf_transient.c`` (the equations of
+``mftire/transient.py``) on top of the steady-state evaluator ``mf_eval.c``, wrapped
+by ``csource/fmi2_transient.c``.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+from mftire.fmu import variables as vt
+from mftire.fmu.export import (
+    CFLAGS,
+    CSOURCE,
+    FMI_HEADERS,
+    LIBS,
+    FMUExportError,
+    _fmpy_c_code,
+    _load,
+    _platform,
+    find_compiler,
+    model_identifier_for,
+    package_fmu,
+)
+from mftire.transient import CONSTANTS, INPUTS, STATES, TRANSIENT_OUTPUTS, input_defaults, output_names
+
+#: Hand-written C sources of the transient FMU.
+TRANSIENT_SOURCES = ("mf_eval.c", "mf_eval.h", "mf_transient.c", "mf_transient.h", "fmi2_transient.c")
+
+#: Unit names of :data:`mftire.transient.CONSTANTS` -> FMI units.
+_CONST_UNIT = {"s": "s", "m": "m", "-": None}
+
+#: C member of MTOutputs for each output name.
+_STEADY_FIELD = {name: field for name, field, _, _ in vt.OUTPUTS}
+
+
+def _output_rows() -> list[tuple[str, str, str | None, str]]:
+    steady = {name: (field, unit, desc) for name, field, unit, desc in vt.OUTPUTS}
+    trans = {name: (name, unit, desc) for name, unit, desc in TRANSIENT_OUTPUTS}
+    rows = []
+    for name in output_names():
+        if name in trans:
+            field, unit, desc = trans[name]
+        else:
+            field, unit, desc = steady[name]
+            field = "ss." + field
+            if name in ("Fx", "Fy", "Mz", "My"):
+                desc += " (transient; low-speed model below VXLOW)"
+            else:
+                desc += " (at the transient slips)"
+        rows.append((name, field, unit, desc))
+    return rows
+
+
+def transient_variable_table(flat: dict[str, float], use_mode: int = vt.DEFAULT_USE_MODE) -> list[vt.Variable]:
+    """Every variable of the transient FMU (value references 0..n-1).
+
+    ``time``; the inputs; the outputs; ``useMode``; the ``.tir`` parameters (as the
+    steady-state FMU); the transient constants ``TR_*``; the states ``u``, ``v`` and
+    their derivatives ``der(u)``, ``der(v)`` (kinds ``"state"`` and ``"der"``; the
+    ``field`` of both is the state index).
+    """
+    V = vt.Variable
+    out: list[vt.Variable] = [
+        V("time", 0, "time", "Real", "independent", "continuous", None, "s", "Simulation time", "")
+    ]
+    defaults = input_defaults(flat)
+    for name, unit, desc, _ in INPUTS:
+        value = defaults[name]
+        out.append(V(name, len(out), "input", "Real", "input", "continuous", value, unit, desc, name))
+    for name, field, unit, desc in _output_rows():
+        out.append(V(name, len(out), "output", "Real", "output", "continuous", None, unit, desc, field))
+    steady = vt.variable_table(flat, use_mode, None)
+    for v in steady:
+        if v.kind in ("mode", "param"):
+            out.append(V(v.name, len(out), v.kind, v.type, v.causality, v.variability, v.start, v.unit,
+                         v.description, v.field))  # fmt: skip
+    for name, value, unit, desc in CONSTANTS:
+        out.append(V(name, len(out), "param", "Real", "parameter", "tunable", float(value), _CONST_UNIT[unit],
+                     f"[transient] {desc}", name))  # fmt: skip
+    for i, (name, desc) in enumerate(STATES):
+        out.append(V(name, len(out), "state", "Real", "local", "continuous", 0.0, "m", desc, str(i)))
+    for i, (name, _desc) in enumerate(STATES):
+        out.append(V(f"der({name})", len(out), "der", "Real", "local", "continuous", None, "m/s",
+                     f"Time derivative of {name}", str(i)))  # fmt: skip
+    names = [v.name for v in out]
+    assert len(set(names)) == len(names), "transient FMU variable names must be unique"
+    return out
+
+
+def transient_model_header(variables: list[vt.Variable], model_identifier: str) -> str:
+    """``mt_model_gen.h``: GUID, value-reference table, start values, names."""
+    kinds = {"time": "MT_K_TIME", "input": "MT_K_INPUT", "output": "MT_K_OUTPUT", "mode": "MT_K_MODE",
+             "param": "MT_K_PARAM", "state": "MT_K_STATE", "der": "MT_K_DER"}  # fmt: skip
+    structs = {"input": "MTInputs", "output": "MTOutputs", "param": "MFParams"}
+    by_vr = sorted(variables, key=lambda v: v.vr)
+    assert [v.vr for v in by_vr] == list(range(len(by_vr)))
+    mode = next(v for v in variables if v.kind == "mode")
+    states = [v for v in by_vr if v.kind == "state"]
+    lines = [
+        "/* mt_model_gen.h -- GENERATED by mftire/fmu/transient_export.py from the variable table. Do not edit. */",
+        "#ifndef MT_MODEL_GEN_H",
+        "#define MT_MODEL_GEN_H",
+        "",
+        "#include <math.h>",
+        "#include <stddef.h>",
+        '#include "mf_transient.h"',
+        "",
+        "enum { MT_K_TIME = 0, MT_K_INPUT, MT_K_OUTPUT, MT_K_MODE, MT_K_PARAM, MT_K_STATE, MT_K_DER };",
+        "typedef struct {",
+        "    unsigned char kind;",
+        "    unsigned char fixed;",
+        "    unsigned short offset; /* byte offset in MTInputs / MTOutputs / MFParams; state index */",
+        "} MTVarInfo;",
+        "",
+        f'#define MT_GUID "{vt.guid(variables, 2)}"',
+        f'#define MT_MODEL_IDENTIFIER "{model_identifier}"',
+        f"#define MT_N_VARS {len(by_vr)}",
+        f"#define MT_VR_USEMODE {mode.vr}",
+        f"#define MT_USEMODE_START {int(mode.start)}",
+        "",
+        "static const MTVarInfo MT_VARS[MT_N_VARS] = {",
+    ]
+    for v in by_vr:
+        fixed = 1 if v.variability == "fixed" else 0
+        if v.kind in structs:
+            off = f"offsetof({structs[v.kind]}, {v.field})"
+        elif v.kind in ("state", "der"):
+            off = v.field
+        else:
+            off = "0"
+        lines.append(f"    {{{kinds[v.kind]}, {fixed}, {off}}}, /* {v.vr} {vt._c_comment(v.name)} */")
+    lines += ["};", "", "static const char *const MT_VAR_NAMES[MT_N_VARS] = {"]
+    lines += [f"    {vt.c_string(v.name)}," for v in by_vr]
+    lines += ["};", "", "static const MTInputs MT_INPUT_START = {"]
+    lines += [f"    .{v.field} = {vt._c_double(v.start)}," for v in by_vr if v.kind == "input"]
+    state_start = ", ".join(vt._c_double(v.start) for v in states)
+    lines += ["};", "", f"static const double MT_STATE_START[2] = {{{state_start}}};"]
+    lines += ["", "static const MFParams MT_PARAM_START = {"]
+    lines += [f"    .{v.field} = {vt._c_double(v.start)}," for v in by_vr if v.kind == "param"]
+    lines += ["};", "", "#endif /* MT_MODEL_GEN_H */", ""]
+    return "\n".join(lines)
+
+
+def transient_model_description_xml(
+    variables: list[vt.Variable], model_identifier: str, model_name: str, description: str, sources: list[str]
+) -> str:
+    """``modelDescription.xml`` (FMI 2.0, ME + CS) with the states and their derivatives."""
+    a = vt._attrs
+    token = vt.guid(variables, 2)
+    lines = [
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        f'<fmiModelDescription fmiVersion="2.0"{a(modelName=model_name, guid=token, description=description)}'
+        f'{a(generationTool="mftire", variableNamingConvention="flat")} numberOfEventIndicators="0">',
+    ]
+    src = ["    <SourceFiles>"] + [f"      <File name={quoteattr(s)}/>" for s in sources] + ["    </SourceFiles>"]
+    lines += [
+        f"  <ModelExchange modelIdentifier={quoteattr(model_identifier)}"
+        ' completedIntegratorStepNotNeeded="true" canNotUseMemoryManagementFunctions="true"'
+        ' canBeInstantiatedOnlyOncePerProcess="false">',
+        *src,
+        "  </ModelExchange>",
+        f"  <CoSimulation modelIdentifier={quoteattr(model_identifier)}"
+        ' canHandleVariableCommunicationStepSize="true" canNotUseMemoryManagementFunctions="true"'
+        ' canBeInstantiatedOnlyOncePerProcess="false">',
+        *src,
+        "  </CoSimulation>",
+    ]
+    lines += vt._unit_definitions(variables, 2)
+    lines += vt._log_categories()
+    lines.append('  <DefaultExperiment startTime="0" stopTime="1" stepSize="0.001"/>')
+    lines.append("  <ModelVariables>")
+    index: dict[int, int] = {}
+    state_index: dict[str, int] = {}
+    for i, v in enumerate(variables, start=1):
+        index[v.vr] = i
+        if v.kind == "state":
+            state_index[v.field] = i
+        initial = {"state": "exact", "der": "calculated"}.get(v.kind, v.initial if v.kind != "input" else None)
+        attrs = a(name=v.name, valueReference=v.vr, description=v.description, causality=v.causality,
+                  variability=v.variability, initial=initial)  # fmt: skip
+        inner = a(unit=v.unit if v.type == "Real" else None,
+                  derivative=state_index[v.field] if v.kind == "der" else None,
+                  start=None if v.start is None else vt._fmt(v.start))  # fmt: skip
+        lines.append(f"    <ScalarVariable{attrs}><{v.type}{inner}/></ScalarVariable> <!-- {i} -->")
+    lines.append("  </ModelVariables>")
+    inputs = [index[v.vr] for v in variables if v.kind == "input"]
+    states = [index[v.vr] for v in variables if v.kind == "state"]
+    deps = " ".join(map(str, inputs + states))
+    lines.append("  <ModelStructure>")
+    lines.append("    <Outputs>")
+    lines += [f'      <Unknown index="{index[v.vr]}" dependencies="{deps}"/>' for v in variables if v.kind == "output"]
+    lines.append("    </Outputs>")
+    lines.append("    <Derivatives>")
+    lines += [f'      <Unknown index="{index[v.vr]}" dependencies="{deps}"/>' for v in variables if v.kind == "der"]
+    lines.append("    </Derivatives>")
+    lines.append("    <InitialUnknowns>")
+    lines += [f'      <Unknown index="{index[v.vr]}"/>' for v in variables if v.kind in ("output", "der")]
+    lines.append("    </InitialUnknowns>")
+    lines.append("  </ModelStructure>")
+    lines.append("</fmiModelDescription>")
+    return "\n".join(lines) + "\n"
+
+
+def generate_transient_sources(
+    flat: dict[str, float], model_identifier: str, use_mode: int = vt.DEFAULT_USE_MODE
+) -> tuple[list[vt.Variable], dict[str, str]]:
+    """The variable table and every file of ``sources/`` of the transient FMU."""
+    variables = transient_variable_table(flat, use_mode)
+    files = {name: (CSOURCE / name).read_text(encoding="utf-8") for name in TRANSIENT_SOURCES}
+    files["mf_params.h"] = vt.params_header(variables, None)
+    files["mt_model_gen.h"] = transient_model_header(variables, model_identifier)
+    c_code = _fmpy_c_code()
+    for h in FMI_HEADERS[2]:
+        files[h] = (c_code / h).read_text(encoding="utf-8")
+    return variables, files
+
+
+def _check_transient(tir):
+    flat, name, spec = _load(tir)
+    if spec is not None:
+        raise FMUExportError(f"{name}: --transient does not support [MFTIRE_EXTENSIONS] model extensions yet")
+    return flat, name
+
+
+def export_transient_fmu(
+    tir,
+    output: str | os.PathLike,
+    *,
+    model_identifier: str | None = None,
+    use_mode: int = vt.DEFAULT_USE_MODE,
+    compiler: str | None = None,
+) -> Path:
+    """Export a tyre as the transient FMU (FMI 2.0 Model Exchange + Co-Simulation).
+
+    Inputs ``Fz, Vx, Vy, omega, gamma, P, muRoad, yawRate``; outputs ``Fx, Fy, Mz, Mx,
+    My, kappa_t, alpha_t`` and the steady-state channels at the transient slips; states
+    ``u``, ``v``.  Co-Simulation integrates with sub-steps of at most ``TR_CS_STEP``
+    (default 1e-4 s).  See ``docs/transient.md``.
+    """
+    from mftire.mf.modes import Mode
+
+    Mode.from_code(use_mode)
+    cc = find_compiler(compiler)
+    flat, name = _check_transient(tir)
+    ident = model_identifier or model_identifier_for(name + "_transient")
+    if not re.match(r"^[A-Za-z_][A-Za-z0-9_]*$", ident):
+        raise FMUExportError(f"model identifier {ident!r} is not a C identifier")
+    variables, files = generate_transient_sources(flat, ident, use_mode)
+    platform, suffix = _platform(2)
+    description = (
+        f"Transient Magic Formula tyre {name} (FITTYP {int(flat['FITTYP'])}) exported by mftire: wheel kinematics "
+        "in, relaxation-length slip states u, v, low-speed model; ISO-W axes, SI units"
+    )
+    xml = transient_model_description_xml(
+        variables, ident, name, description, sorted(f for f in files if f.endswith(".c"))
+    )
+    return package_fmu(output, xml, files, ident, platform, suffix, cc)
+
+
+#: C harness of :func:`build_probe_library`: the model functions with default visibility.
+_PROBE_C = r"""
+#include <string.h>
+#include <time.h>
+#include "mf_transient.h"
+#include "mt_model_gen.h"
+
+static void load_inputs(MTInputs *in, const double *inputs)
+{
+    memset(in, 0, sizeof *in);
+    in->Fz = inputs[0]; in->Vx = inputs[1]; in->Vy = inputs[2]; in->omega = inputs[3];
+    in->gamma = inputs[4]; in->P = inputs[5]; in->muRoad = inputs[6]; in->yawRate = inputs[7];
+}
+
+/* params: NULL = start values; inputs: the 8 kinematic inputs; x: 2 states. */
+__attribute__((visibility("default"))) int mt_probe_rates(int use_mode, const double *inputs, const double *x,
+                                                          double *dx, double *kin)
+{
+    MTInputs in;
+    MTKin k;
+    int rc;
+    load_inputs(&in, inputs);
+    rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, &k, NULL, NULL);
+    if (rc) return rc;
+    mt_rates(&MT_PARAM_START, &k, x, dx);
+    if (kin) { kin[0] = k.Vsx; kin[1] = k.Vsy; kin[2] = k.sigx; kin[3] = k.sigy; kin[4] = k.w; }
+    return 0;
+}
+
+/* Outputs (Fx, Fy, Mz, Mx, My, kappa_t, alpha_t) at the state x. */
+__attribute__((visibility("default"))) int mt_probe_outputs(int use_mode, const double *inputs, const double *x,
+                                                            double *y)
+{
+    MTInputs in;
+    MTKin k;
+    MTOutputs o;
+    int rc;
+    load_inputs(&in, inputs);
+    rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, &k, NULL, NULL);
+    if (rc) return rc;
+    rc = mt_outputs(&MT_PARAM_START, use_mode, &k, x, &o, NULL, NULL);
+    if (rc) return rc;
+    y[0] = o.ss.Fx; y[1] = o.ss.Fy; y[2] = o.ss.Mz; y[3] = o.ss.Mx; y[4] = o.ss.My;
+    y[5] = o.kappa_t; y[6] = o.alpha_t;
+    return 0;
+}
+
+/* Seconds per Model Exchange derivative evaluation (kinematics + rates), timed in C over n calls
+ * with the inputs changing every call (as between two solver calls). */
+__attribute__((visibility("default"))) double mt_probe_bench(int use_mode, const double *inputs, long n)
+{
+    MTInputs in;
+    MTKin k;
+    double x[2] = {1e-3, -2e-3}, dx[2], acc = 0.0;
+    struct timespec t0, t1;
+    long i;
+    load_inputs(&in, inputs);
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    for (i = 0; i < n; i++) {
+        in.Vy = inputs[2] + 1e-9 * (double)(i & 1023);
+        mt_kinematics(&MT_PARAM_START, use_mode, &in, &k, NULL, NULL);
+        mt_rates(&MT_PARAM_START, &k, x, dx);
+        acc += dx[0] + dx[1];
+    }
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    if (acc != acc) return -1.0;
+    return ((double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec)) / (double)n;
+}
+"""
+
+
+def build_probe_library(tir, directory: str | os.PathLike, compiler: str | None = None) -> Path:
+    """Compile the transient C model with a small harness (``mt_probe_*``) into a shared library.
+
+    For tests (C vs Python derivatives) and the benchmark; the FMU itself exports only
+    the FMI functions.  Returns the library path.
+    """
+    flat, name = _check_transient(tir)
+    _, files = generate_transient_sources(flat, "mt_probe")
+    directory = Path(directory)
+    src = directory / "probe_src"
+    src.mkdir(parents=True, exist_ok=True)
+    for fname, text in files.items():
+        if fname != "fmi2_transient.c":
+            (src / fname).write_text(text, encoding="utf-8")
+    (src / "mt_probe.c").write_text(_PROBE_C, encoding="utf-8")
+    lib = directory / "libmt_probe.so"
+    cc = find_compiler(compiler)
+    cmd = [*cc, *CFLAGS, "-D_POSIX_C_SOURCE=199309L", "-I", str(src), *sorted(str(p) for p in src.glob("*.c")),
+           "-o", str(lib), *LIBS]  # fmt: skip
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    if res.returncode != 0:
+        raise FMUExportError("compiling the probe library failed:\n" + (res.stderr or res.stdout)[-2000:])
+    return lib
+
+
+__all__ = [
+    "build_probe_library",
+    "export_transient_fmu",
+    "generate_transient_sources",
+    "transient_model_description_xml",
+    "transient_model_header",
+    "transient_variable_table",
+]

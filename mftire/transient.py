@@ -1,0 +1,433 @@
+"""Transient tyre: wheel kinematics in, relaxation-length slip dynamics, standstill.
+
+A single-contact-point transient slip model (Pacejka, *Tire and Vehicle Dynamics*,
+3rd ed. 2012, ch. 7: §7.2.1 linear contact-point model, §7.2.2 its semi-non-linear
+form with the steady-state Magic Formula evaluated at the transient slips, §7.3
+enhanced model with the low-speed damping), with the MF 6.1 relaxation lengths
+sigma_kappa = |Kxk/Cx| and sigma_alpha = |Kya/Cy| (Besselink et al. 2010 eq 19,
+:mod:`mftire.mf.relaxation`).
+
+Inputs (ISO-W axes, SI): ``Fz``, the wheel-centre velocity ``Vx``, ``Vy`` (y to the
+left), the wheel spin ``omega``, ``gamma``, ``P``, ``muRoad`` and ``yawRate``.
+States ``x = (u, v)`` [m]: the longitudinal and lateral slip deflections of the
+contact point, scaled so that the transient slips are ``kappa' = u/sigma_kappa`` and
+``tan(alpha') = v/sigma_alpha`` (``v`` is minus the physical lateral deflection in
+ISO axes, because Kya < 0).
+
+State equations (Pacejka 2012 §7.2.1, contact-point lag ``dv/dt + |Vx|·v/sigma = slip
+velocity``), with a deflection limiter (mftire addition, inactive below the limits)::
+
+    du/dt = -Vsx - a_x·u,   Vsx = Vx - omega·Re             (slip velocity, eq 2.5)
+    dv/dt =  Vsy - a_y·v,   Vsy = Vy                        (eq 2.12, ISO sign)
+    a_x = (|Vx| + G·|Vsx|·max(0, |u|/(sigma_kappa·K_lim) - 1)²) / sigma_kappa
+    a_y = (|Vx| + G·|Vsy|·max(0, |v|/(sigma_alpha·A_lim) - 1)²) / sigma_alpha
+
+Outputs: the steady-state Magic Formula at the transient slips, with the low-speed
+model below ``VXLOW`` (see ``docs/transient.md``)::
+
+    kappa_t = (u + w·tau_x·du/dt) / sigma_kappa          (§7.3 low-speed damping)
+    alpha_t = atan((v + w·tau_y·dv/dt) / sigma_alpha)
+    w = (1 + cos(pi·min(|Vx|/VXLOW, 1)))/2              (1 at standstill, 0 at VXLOW)
+
+The Magic Formula is evaluated rolling forward at ``max(|Vx|, VXLOW)`` (no
+slip reduction: the relaxation model replaces MFeval's low-speed slip reduction);
+the rolling offsets of Fx, Fy, Mz fade out with ``w`` (their zero-slip values are
+subtracted times ``w``), My changes sign smoothly with ``Vx``.  At standstill the
+tyre is therefore a damped spring: Fx = Cx·(u + tau_x·du/dt) in the linear range.
+
+The same equations are compiled into the transient FMU (``mftire export-fmu
+--transient``, ``mftire/fmu/csource/mf_transient.c``); the constants of
+:data:`CONSTANTS` are its tunable parameters (one table for both).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pandas as pd
+from numpy.typing import ArrayLike
+
+from mftire.errors import MftireInputError
+from mftire.mf.modes import Mode
+from mftire.mf.solver import evaluate_arrays
+
+if TYPE_CHECKING:
+    from mftire.tyre import Tyre
+
+#: Constants of the transient model: (name, default, unit, description).  They are the
+#: tunable parameters of the transient FMU too (written into its C header).
+CONSTANTS: tuple[tuple[str, float, str, str], ...] = (
+    ("TR_TAU_X", 0.01, "s", "Low-speed damping time constant, longitudinal (damping = Cx*tau)"),
+    ("TR_TAU_Y", 0.01, "s", "Low-speed damping time constant, lateral (damping = Cy*tau)"),
+    ("TR_KAPPA_LIM", 1.0, "-", "Transient slip |u/sigma_kappa| beyond which the deflection limiter acts"),
+    ("TR_TANALPHA_LIM", 1.0, "-", "Transient |tan alpha| = |v/sigma_alpha| beyond which the limiter acts"),
+    ("TR_LIM_GAIN", 100.0, "-", "Gain of the deflection limiter (slip overshoot ~ 1/sqrt(gain))"),
+    ("TR_SIGMA_MIN", 1e-3, "m", "Lower bound of the relaxation lengths (lift-off, Fz = 0)"),
+    ("TR_CS_STEP", 1e-4, "s", "Largest internal step of the Co-Simulation integrator"),
+)
+
+#: Default constants by name.
+DEFAULT_CONSTANTS: dict[str, float] = {name: value for name, value, _, _ in CONSTANTS}
+
+#: Kinematic inputs: (name, unit, description, default) -- default a .tir key, a number, or
+#: ``FREE_ROLLING`` (the spin of free rolling at LONGVL under FNOMIN, :func:`input_defaults`).
+INPUTS: tuple[tuple[str, str | None, str, str | float], ...] = (
+    ("Fz", "N", "Vertical load (negative: lift-off, treated as 0)", "FNOMIN"),
+    ("Vx", "m/s", "Longitudinal velocity of the wheel centre (W axes)", "LONGVL"),
+    ("Vy", "m/s", "Lateral velocity of the wheel centre (W axes, ISO: y to the left)", 0.0),
+    ("omega", "rad/s", "Wheel spin speed (default: free rolling at LONGVL, FNOMIN)", "FREE_ROLLING"),
+    ("gamma", "rad", "Inclination (camber) angle", 0.0),
+    ("P", "Pa", "Inflation pressure (NaN or <= 0: INFLPRES)", "INFLPRES"),
+    ("muRoad", None, "Road friction factor, multiplies LMUX and LMUY", 1.0),
+    ("yawRate", "rad/s", "Yaw rate of the wheel (turn slip, used when useMode ends in 2)", 0.0),
+)
+
+FREE_ROLLING = "FREE_ROLLING"
+
+
+def input_defaults(flat: Mapping[str, float]) -> dict[str, float]:
+    """Default of every input for the flat parameters ``flat``: the file's FNOMIN, LONGVL,
+    INFLPRES; omega of free rolling there (omega = LONGVL/Re, Re as MFeval estimates it);
+    0; muRoad 1."""
+    out = {}
+    for name, _, _, d in INPUTS:
+        if d == FREE_ROLLING:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                ev = evaluate_arrays(dict(flat), flat["FNOMIN"], 0.0, 0.0, 0.0, 0.0, flat["LONGVL"], None, None, 111)
+            out[name] = float(ev["omega"])
+        else:
+            out[name] = float(flat[d]) if isinstance(d, str) else float(d)
+    return out
+
+
+#: Transient outputs ahead of the steady-state channels (name, unit, description).
+TRANSIENT_OUTPUTS: tuple[tuple[str, str | None, str], ...] = (
+    ("kappa_t", None, "Transient longitudinal slip (incl. low-speed damping)"),
+    ("alpha_t", "rad", "Transient slip angle (incl. low-speed damping)"),
+)
+
+#: State names (FMU local variables with their derivatives ``der(u)``, ``der(v)``).
+STATES: tuple[tuple[str, str], ...] = (
+    ("u", "Longitudinal slip deflection of the contact point (kappa' = u/sigma_kappa)"),
+    ("v", "Lateral slip deflection of the contact point (tan alpha' = v/sigma_alpha)"),
+)
+
+#: Steady-state channels published by the FMU under another name than the evaluator's.
+_FMU_NAME = {"Fz": "Fz_out", "2a": "a2", "2b": "b2"}
+
+
+def output_names() -> list[str]:
+    """Output names of the transient model (and FMU), in order."""
+    from mftire.fmu.variables import OUTPUTS
+
+    return (
+        [n for n, *_ in OUTPUTS[:2]]
+        + ["Mz", "Mx", "My"]
+        + [n for n, *_ in TRANSIENT_OUTPUTS]
+        + [n for n, *_ in OUTPUTS if n not in ("Fx", "Fy", "Mz", "Mx", "My")]
+    )
+
+
+@dataclass
+class Kinematics:
+    """Input-only quantities of one operating point (arrays or floats)."""
+
+    Vx: np.ndarray  #: wheel-centre forward velocity [m/s]
+    Vsx: np.ndarray  #: longitudinal slip velocity Vx - omega*Re [m/s]
+    Vsy: np.ndarray  #: lateral slip velocity [m/s]
+    sigx: np.ndarray  #: relaxation length sigma_kappa [m]
+    sigy: np.ndarray  #: relaxation length sigma_alpha [m]
+    w: np.ndarray  #: low-speed weight (1 at standstill, 0 from VXLOW) [-]
+    My_sign: np.ndarray  #: smooth sign of the rolling-resistance moment [-]
+    zero: dict  #: steady-state outputs at zero slip (offsets, Re, sigma)
+    args: dict  #: evaluator arguments except the slips
+
+
+def _clean(x, fill: float) -> np.ndarray:
+    x = np.asarray(x, dtype=float)
+    return np.where(np.isnan(x), fill, x)
+
+
+class TransientTyre:
+    """The transient model of one tyre (:class:`mftire.tyre.Tyre`), mode and constants.
+
+    Parameters
+    ----------
+    tyre : Tyre
+    mode : int
+        ``useMode`` of the steady-state evaluation (default 111).
+    constants : mapping, optional
+        Overrides of :data:`DEFAULT_CONSTANTS`.
+    """
+
+    def __init__(self, tyre: Tyre, mode: int = 111, constants: Mapping[str, float] | None = None) -> None:
+        Mode.from_code(mode)
+        unknown = sorted(set(constants or {}) - set(DEFAULT_CONSTANTS))
+        if unknown:
+            raise MftireInputError(f"unknown transient constant(s) {', '.join(unknown)}")
+        if tyre.extensions:
+            raise MftireInputError(f"{tyre.name}: the transient model does not support [MFTIRE_EXTENSIONS] yet")
+        self.tyre = tyre
+        self.mode = int(mode)
+        self.constants = {**DEFAULT_CONSTANTS, **{k: float(v) for k, v in (constants or {}).items()}}
+        self._p = dict(tyre.flat)
+        self._mu_cache: dict[float, dict] = {}
+
+    def defaults(self) -> dict[str, float]:
+        """Default value of every input (see :func:`input_defaults`)."""
+        return input_defaults(self._p)
+
+    def _params(self, mu: float) -> dict:
+        # muRoad multiplies LMUX and LMUY (as the FMU's mf_eval.c basic()).
+        if mu == 1.0:
+            return self._p
+        p = self._mu_cache.get(mu)
+        if p is None:
+            p = dict(self._p)
+            p["LMUX"] = p["LMUX"] * mu
+            p["LMUY"] = p["LMUY"] * mu
+            if len(self._mu_cache) < 64:
+                self._mu_cache[mu] = p
+        return p
+
+    def _eval(self, kin_args: dict, kappa, alpha) -> dict:
+        a = kin_args
+        keys = ("Fz", "gamma", "phit", "Vx", "P", "omega")
+        with warnings.catch_warnings():
+            # the evaluation speed is max(|Vx|, VXLOW): MFeval's low-speed slip reduction is replaced
+            warnings.filterwarnings("ignore", message="Speed input Vx below the limit")
+            mu = np.asarray(a["mu"], dtype=float)
+            if mu.ndim == 0 or np.all(mu == mu.flat[0]):
+                p = self._params(float(mu.flat[0]) if mu.size else 1.0)
+                return evaluate_arrays(p, a["Fz"], kappa, alpha, *(a[k] for k in keys[1:]), self.mode)
+            # friction varying over the points: one evaluation per distinct value
+            keys = tuple(k for k in keys if a[k] is not None)  # omega None: free rolling (estimated)
+            arrs = np.broadcast_arrays(mu, kappa, alpha, *(a[k] for k in keys))
+            res: dict[str, np.ndarray] = {}
+            for m in np.unique(arrs[0]):
+                sel = arrs[0] == m
+                rest = dict(zip(keys[1:], (x[sel] for x in arrs[4:]), strict=True))
+                o = evaluate_arrays(self._params(float(m)), arrs[3][sel], arrs[1][sel], arrs[2][sel], rest["gamma"],
+                                    rest["phit"], rest["Vx"], rest["P"], rest.get("omega"), self.mode)  # fmt: skip
+                for k, val in o.items():
+                    res.setdefault(k, np.zeros(arrs[0].shape))[sel] = val
+            return res
+
+    def kinematics(
+        self,
+        Fz: ArrayLike | None = None,
+        Vx: ArrayLike = 0.0,
+        Vy: ArrayLike = 0.0,
+        omega: ArrayLike | None = 0.0,
+        gamma: ArrayLike = 0.0,
+        P: ArrayLike | None = None,
+        muRoad: ArrayLike = 1.0,
+        yawRate: ArrayLike = 0.0,
+    ) -> Kinematics:
+        """Slip velocities, relaxation lengths, low-speed weights and zero-slip offsets.
+
+        ``Fz`` and ``P`` default to the file's ``FNOMIN`` and ``INFLPRES``, the others to a
+        wheel at rest (0; ``muRoad`` 1).  ``omega=None`` means free rolling (Python only).
+        Inputs broadcast against each other.
+        """
+        p, c = self._p, self.constants
+        Fz = _clean(p["FNOMIN"] if Fz is None else Fz, 0.0)
+        P = np.asarray(p["INFLPRES"] if P is None else P, dtype=float)
+        free_rolling = omega is None
+        Vx, Vy, omega, gamma = (_clean(v, 0.0) for v in (Vx, Vy, 0.0 if free_rolling else omega, gamma))
+        mu, yawRate = _clean(muRoad, 1.0), _clean(yawRate, 0.0)
+        vxlow = p["VXLOW"]
+        absVx = np.abs(Vx)
+        Vev = np.maximum(absVx, vxlow)  # evaluation speed: forward, never below VXLOW
+        phit = -yawRate / np.sqrt(Vev**2 + Vy**2)  # turn slip phi_t = -psi_dot/V (Pacejka 2012 eq 4.75)
+        omega_ev = None if free_rolling else np.where(omega == 0.0, 1e-300, omega)  # a true 0: not "estimate"
+        args = dict(Fz=Fz, gamma=gamma, phit=phit, Vx=Vev, P=P, omega=omega_ev, mu=mu)
+        zero = self._eval(args, 0.0, 0.0)
+        if free_rolling:  # Python only: omega = Vx/Re, no longitudinal slip velocity
+            Vsx = np.zeros(np.broadcast(Vx, zero["Re"]).shape)
+        else:
+            Vsx = Vx - omega * zero["Re"]  # longitudinal slip velocity (Pacejka 2012 eq 2.5 / 4.E5)
+        sigx = np.maximum(zero["sigmax"], c["TR_SIGMA_MIN"])  # Besselink 2010 eq 19
+        sigy = np.maximum(zero["sigmay"], c["TR_SIGMA_MIN"])  # Besselink 2010 eq 19
+        r = np.minimum(absVx / vxlow, 1.0)
+        w = 0.5 * (1.0 + np.cos(np.pi * r))  # low-speed weight (cosine, as MFeval's VXLOW reduction)
+        My_sign = np.sin(0.5 * np.pi * np.clip(Vx / vxlow, -1.0, 1.0))
+        return Kinematics(Vx=Vx, Vsx=Vsx, Vsy=Vy, sigx=sigx, sigy=sigy, w=w, My_sign=My_sign, zero=zero, args=args)
+
+    def rates(self, kin: Kinematics, u: ArrayLike, v: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """State derivatives (du/dt, dv/dt) for the kinematics ``kin`` and deflections ``u``, ``v``."""
+        c = self.constants
+        gx = np.maximum(np.abs(u) / (kin.sigx * c["TR_KAPPA_LIM"]) - 1.0, 0.0)  # deflection limiter
+        gy = np.maximum(np.abs(v) / (kin.sigy * c["TR_TANALPHA_LIM"]) - 1.0, 0.0)
+        ax = (np.abs(kin.Vx) + c["TR_LIM_GAIN"] * np.abs(kin.Vsx) * gx * gx) / kin.sigx
+        ay = (np.abs(kin.Vx) + c["TR_LIM_GAIN"] * np.abs(kin.Vsy) * gy * gy) / kin.sigy
+        du = -kin.Vsx - ax * u  # Pacejka 2012 §7.2.1: du/dt + |Vx|/sigma_kappa*u = -Vsx
+        dv = kin.Vsy - ay * v  # Pacejka 2012 §7.2.1: dv/dt + |Vx|/sigma_alpha*v = Vsy (ISO sign)
+        return du, dv
+
+    def derivatives(self, x: ArrayLike, **inputs: ArrayLike) -> np.ndarray:
+        """``[du/dt, dv/dt]`` at state ``x = (u, v)`` and the inputs (see :data:`INPUTS`)."""
+        kin = self.kinematics(**inputs)
+        return np.array(self.rates(kin, x[0], x[1]), dtype=float)
+
+    def outputs_from(self, kin: Kinematics, u: ArrayLike, v: ArrayLike) -> dict[str, np.ndarray]:
+        """All outputs (FMU names) at the kinematics ``kin`` and deflections ``u``, ``v``."""
+        c = self.constants
+        du, dv = self.rates(kin, u, v)
+        kappa_t = (u + kin.w * c["TR_TAU_X"] * du) / kin.sigx  # transient slip with low-speed damping (§7.3)
+        alpha_t = np.arctan((v + kin.w * c["TR_TAU_Y"] * dv) / kin.sigy)  # tan alpha' = v/sigma_alpha (§7.2.1)
+        ss = self._eval(kin.args, kappa_t, alpha_t)
+        z = kin.zero
+        out = {_FMU_NAME.get(k, k): np.asarray(val, dtype=float) for k, val in ss.items()}
+        out["Fx"] = ss["Fx"] - kin.w * z["Fx"]  # rolling offsets fade out below VXLOW
+        out["Fy"] = ss["Fy"] - kin.w * z["Fy"]
+        out["Mz"] = ss["Mz"] - kin.w * z["Mz"]
+        out["My"] = ss["My"] * kin.My_sign  # rolling resistance opposes the rolling direction
+        out["kappa_t"] = np.asarray(kappa_t, dtype=float)
+        out["alpha_t"] = np.asarray(alpha_t, dtype=float)
+        return {k: np.broadcast_to(out[k], np.shape(out["Fx"])) for k in output_names()}
+
+    def outputs(self, x: ArrayLike, **inputs: ArrayLike) -> dict[str, np.ndarray]:
+        """All outputs at state ``x = (u, v)`` and the inputs."""
+        return self.outputs_from(self.kinematics(**inputs), x[0], x[1])
+
+
+def _signal(value, t: np.ndarray, name: str) -> Callable[[float], float]:
+    """A function of time from a scalar, an array on ``t`` (linear interpolation) or a callable."""
+    if callable(value):
+        return value
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 0:
+        v = float(arr)
+        return lambda _t: v
+    if arr.shape != t.shape:
+        raise MftireInputError(f"simulate: input {name} has {arr.size} values but t has {t.size}")
+    return lambda tt: float(np.interp(tt, t, arr))
+
+
+def simulate(
+    tyre: Tyre,
+    t: ArrayLike,
+    Fz=None,
+    Vx=None,
+    Vy=0.0,
+    omega=None,
+    gamma=0.0,
+    P=None,
+    muRoad=1.0,
+    yawRate=0.0,
+    *,
+    mode: int = 111,
+    x0=(0.0, 0.0),
+    constants: Mapping[str, float] | None = None,
+    method: str = "LSODA",
+    rtol: float = 1e-8,
+    atol: float = 1e-12,
+    max_step: float | None = None,
+) -> pd.DataFrame:
+    """Simulate the transient tyre over the time points ``t`` with :func:`scipy.integrate.solve_ivp`.
+
+    Every input may be a scalar, an array on ``t`` (interpolated linearly) or a callable
+    of time.  ``Fz``, ``Vx`` and ``P`` default to the file's ``FNOMIN``, ``LONGVL`` and
+    ``INFLPRES``; ``omega`` defaults to free rolling (omega = Vx/Re, no longitudinal slip velocity -- a
+    convenience of the Python model; the FMU's ``omega`` input is the wheel spin, 0 =
+    locked).
+
+    Returns a DataFrame indexed by ``t`` with the FMU's output names (``Fx, Fy, Mz,
+    Mx, My, kappa_t, alpha_t, ...``) and the states ``u``, ``v``.
+    """
+    from scipy.integrate import solve_ivp
+
+    t = np.asarray(t, dtype=float)
+    if t.ndim != 1 or t.size < 2 or np.any(np.diff(t) <= 0):
+        raise MftireInputError("simulate: t must be an increasing 1-D array of at least two times")
+    model = TransientTyre(tyre, mode, constants)
+    d = model.defaults()
+    given = dict(Fz=Fz, Vx=Vx, Vy=Vy, omega=omega, gamma=gamma, P=P, muRoad=muRoad, yawRate=yawRate)
+    sig = {k: _signal(d[k] if v is None else v, t, k) for k, v in given.items() if not (k == "omega" and v is None)}
+
+    free = {} if "omega" in sig else {"omega": None}
+
+    def inputs_at(tt):
+        return {**{k: f(tt) for k, f in sig.items()}, **free}
+
+    def rhs(tt, x):
+        kin = model.kinematics(**inputs_at(tt))
+        return [float(r) for r in model.rates(kin, x[0], x[1])]
+
+    step = max_step if max_step is not None else float(np.min(np.diff(t)))
+    sol = solve_ivp(rhs, (t[0], t[-1]), list(map(float, x0)), method=method, t_eval=t, rtol=rtol, atol=atol,
+                    max_step=step)  # fmt: skip
+    if not sol.success:
+        raise MftireInputError(f"simulate: the ODE solver failed: {sol.message}")
+    u, v = sol.y
+    ins = {**{k: np.array([f(tt) for tt in t]) for k, f in sig.items()}, **free}
+    out = model.outputs_from(model.kinematics(**ins), u, v)
+    frame = pd.DataFrame({k: np.asarray(val, dtype=float) for k, val in out.items()}, index=pd.Index(t, name="t"))
+    frame["u"], frame["v"] = u, v
+    return frame
+
+
+def step_exact(model: TransientTyre, kin: Kinematics, u: float, v: float, h: float) -> tuple[float, float]:
+    """One exponential-Euler step of length ``h`` (the FMU's Co-Simulation sub-step).
+
+    The leak rates a_x, a_y are frozen at the start of the step; for constant inputs
+    and an inactive limiter this is the exact solution of the linear lag.
+    """
+    c = model.constants
+    out = []
+    for s, sig, lim, vs, sign in ((u, kin.sigx, c["TR_KAPPA_LIM"], kin.Vsx, -1.0),
+                                  (v, kin.sigy, c["TR_TANALPHA_LIM"], kin.Vsy, 1.0)):  # fmt: skip
+        g = max(abs(s) / (float(sig) * lim) - 1.0, 0.0)
+        a = (abs(float(kin.Vx)) + c["TR_LIM_GAIN"] * abs(float(vs)) * g * g) / float(sig)
+        ah = a * h
+        phi = h if ah < 1e-12 else -math.expm1(-ah) / a
+        out.append(s * math.exp(-ah) + sign * float(vs) * phi)
+    return out[0], out[1]
+
+
+def advance(model: TransientTyre, kin: Kinematics, u: float, v: float, H: float) -> tuple[float, float]:
+    """Advance ``(u, v)`` by ``H`` with the inputs held: the FMU's Co-Simulation step.
+
+    One exact step (:func:`step_exact`) while the deflection limiter stays inactive (the
+    linear lag moves monotonically towards its steady state), else ``ceil(H/TR_CS_STEP)``
+    equal sub-steps.
+    """
+    c = model.constants
+    if not H > 0.0:
+        return u, v
+    absVx = abs(float(kin.Vx))
+
+    def idle(s, f, sig, lim):
+        ulim, a = float(sig) * lim, absVx / float(sig)
+        end = f / a if a > 0.0 else s + f * H
+        return abs(s) <= ulim and abs(end) <= ulim
+
+    if idle(u, -float(kin.Vsx), kin.sigx, c["TR_KAPPA_LIM"]) and idle(v, float(kin.Vsy), kin.sigy,
+                                                                      c["TR_TANALPHA_LIM"]):  # fmt: skip
+        return step_exact(model, kin, u, v, H)
+    n = max(int(math.ceil(H / c["TR_CS_STEP"] - 1e-9)), 1)
+    for _ in range(n):
+        u, v = step_exact(model, kin, u, v, H / n)
+    return u, v
+
+
+__all__ = [
+    "CONSTANTS",
+    "DEFAULT_CONSTANTS",
+    "INPUTS",
+    "Kinematics",
+    "STATES",
+    "TransientTyre",
+    "advance",
+    "input_defaults",
+    "output_names",
+    "simulate",
+    "step_exact",
+]

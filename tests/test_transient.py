@@ -1,0 +1,398 @@
+"""Transient tyre (issue 13): relaxation-length slip dynamics, standstill, Python and FMU.
+
+Analytic references: in the linear range at constant speed the lateral slip follows
+tan(alpha_t) = (Vy/Vx)·(1 - exp(-t·Vx/sigma_alpha)) (Pacejka 2012 §7.2.1); after 20
+relaxation lengths the transient model equals the steady-state evaluator.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import warnings
+
+import numpy as np
+import pytest
+from conftest import REFERENCE_TYRES, needs_c_compiler
+from scipy.integrate import solve_ivp
+
+from mftire.fmu.transient_host import make_callbacks
+from mftire.transient import TransientTyre, output_names, simulate, step_exact
+from mftire.tyre import load
+
+TIR = REFERENCE_TYRES["JuliaMF61"]
+FZ, VX = 4000.0, 10.0
+
+
+@pytest.fixture(scope="module")
+def tyre():
+    return load(TIR)
+
+
+@pytest.fixture(scope="module")
+def model(tyre):
+    return TransientTyre(tyre)
+
+
+def _free_rolling_omega(model, Fz, Vx):
+    om = Vx / model.tyre["UNLOADED_RADIUS"]
+    for _ in range(20):
+        om = Vx / float(model.kinematics(Fz=Fz, Vx=Vx, omega=om).zero["Re"])
+    return om
+
+
+def _lateral_step_reference(model, t, Vy):
+    om = _free_rolling_omega(model, FZ, VX)
+    kin = model.kinematics(Fz=FZ, Vx=VX, Vy=Vy, omega=om)
+    T = float(kin.sigy) / VX
+    return om, np.arctan(Vy / VX * (1.0 - np.exp(-t / T))), T
+
+
+def test_lateral_step_python(model, tyre):
+    t = np.linspace(0.0, 0.3, 61)
+    Vy = 0.02  # 2 mrad: linear range
+    om, ref, T = _lateral_step_reference(model, t, Vy)
+    assert 0.01 < T < 0.1
+    res = simulate(tyre, t, Fz=FZ, Vx=VX, Vy=Vy, omega=om)
+    assert list(res.columns[: len(output_names())]) == output_names()
+    final = np.arctan(Vy / VX)
+    assert np.max(np.abs(res["alpha_t"].to_numpy() - ref)) < 1e-3 * final
+    # the force follows the same lag in the linear range (offset at t = 0 removed)
+    fy = res["Fy"].to_numpy()
+    ss = tyre.evaluate(FZ, 0.0, final, Vx=VX, omega=om)["Fy"]
+    lag = (fy - fy[0]) / (float(ss) - fy[0])
+    np.testing.assert_allclose(lag, 1.0 - np.exp(-t / T), atol=2e-3)
+
+
+def test_steady_state_after_20_relaxation_lengths(model, tyre):
+    om = _free_rolling_omega(model, FZ, VX) * 1.05  # 5 % drive slip
+    Vy = -0.4
+    kin = model.kinematics(Fz=FZ, Vx=VX, Vy=Vy, omega=om, gamma=0.02)
+    t_end = 20.0 * float(max(kin.sigx, kin.sigy)) / VX
+    res = simulate(tyre, np.linspace(0.0, t_end, 201), Fz=FZ, Vx=VX, Vy=Vy, omega=om, gamma=0.02, rtol=1e-11,
+                   atol=1e-14)  # fmt: skip
+    kappa = (om * float(kin.zero["Re"]) - VX) / VX
+    alpha = np.arctan(Vy / VX)
+    ss = tyre.evaluate(FZ, kappa, alpha, 0.02, Vx=VX, omega=om)
+    last = res.iloc[-1]
+    assert abs(last["kappa_t"] - kappa) < 1e-6 * abs(kappa)
+    assert abs(last["alpha_t"] - alpha) < 1e-6 * abs(alpha)
+    for name in ("Fx", "Fy", "Mz", "Mx", "My"):
+        assert abs(last[name] - float(ss[name])) <= 1e-6 * max(abs(float(ss[name])), 1.0), name
+
+
+def test_standstill_zero_forces_no_nan(model):
+    for omega in (0.0, 1e-12):
+        out = model.outputs([0.0, 0.0], Fz=FZ, Vx=0.0, Vy=0.0, omega=omega)
+        assert all(np.isfinite(float(v)) for v in out.values())
+        for name in ("Fx", "Fy", "Mz", "My"):
+            assert abs(float(out[name])) < 1e-6, name
+        d = model.derivatives([0.0, 0.0], Fz=FZ, Vx=0.0, Vy=0.0, omega=omega)
+        assert np.all(np.abs(d) < 1e-9)
+    # zero load, zero speed, NaN inputs: finite
+    out = model.outputs([1e-3, -1e-3], Fz=0.0, Vx=0.0, Vy=float("nan"), omega=float("nan"))
+    assert all(np.isfinite(float(v)) for v in out.values())
+
+
+def test_standstill_is_a_damped_spring(model):
+    """At rest the tyre force is Cx·(u + tau·du/dt) in the linear range (low-speed model)."""
+    kin = model.kinematics(Fz=FZ, Vx=0.0, omega=0.0)
+    u = 2e-4
+    out = model.outputs_from(kin, u, 0.0)
+    Cx = float(kin.zero["Kxk"]) / float(kin.sigx)
+    assert abs(float(out["Fx"]) - Cx * u) < 0.02 * Cx * u
+    kin = model.kinematics(Fz=FZ, Vx=0.01, omega=0.0)  # sliding forward slowly: damping opposes
+    out2 = model.outputs_from(kin, u, 0.0)
+    assert float(out2["Fx"]) < float(out["Fx"])
+
+
+def _parked_on_slope(model, grade=0.2, mass=425.0, t_end=4.0):
+    g, th = 9.81, np.arctan(grade)
+    Fz = mass * g * np.cos(th)
+
+    def rhs(_t, s):
+        Vx, u, v = s
+        kin = model.kinematics(Fz=Fz, Vx=Vx, omega=0.0)  # wheel held by the brake
+        du, dv = model.rates(kin, u, v)
+        Fx = float(model.outputs_from(kin, u, v)["Fx"])
+        return [(Fx - mass * g * np.sin(th)) / mass, float(du), float(dv)]
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return solve_ivp(rhs, (0.0, t_end), [0.0, 0.0, 0.0], method="LSODA", rtol=1e-8, atol=1e-11, max_step=0.01,
+                         dense_output=True)  # fmt: skip
+
+
+def test_parked_on_20_percent_slope_holds(model):
+    sol = _parked_on_slope(model)
+    assert sol.success
+    t = np.linspace(2.0, 4.0, 201)
+    Vx = sol.sol(t)[0]
+    assert np.max(np.abs(Vx)) < 1e-3  # drift below 1 mm/s after settling
+    u = sol.sol(4.0)[1]
+    assert 0.0 < u < 0.02  # held by a few millimetres of deflection
+
+
+def test_launch_from_rest_no_force_spike(model, tyre):
+    mass, J, torque, Fz = 425.0, 1.2, 2500.0, 4000.0
+
+    def rhs(t, s):
+        Vx, om, u, v = s
+        kin = model.kinematics(Fz=Fz, Vx=Vx, omega=om)
+        du, dv = model.rates(kin, u, v)
+        Fx = float(model.outputs_from(kin, u, v)["Fx"])
+        drive = torque * min(t / 0.05, 1.0)
+        return [Fx / mass, (drive - float(kin.zero["Re"]) * Fx) / J, float(du), float(dv)]
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sol = solve_ivp(rhs, (0.0, 1.0), [0.0, 0.0, 0.0, 0.0], method="LSODA", rtol=1e-8, atol=1e-11,
+                        max_step=0.002, dense_output=True)  # fmt: skip
+        t = np.linspace(0.0, 1.0, 401)
+        S = sol.sol(t)
+        kin = model.kinematics(Fz=Fz, Vx=S[0], omega=S[1])
+        Fx = model.outputs_from(kin, S[2], S[3])["Fx"]
+        # steady-state envelope of the model: the MF curve, rolling offsets removed below VXLOW
+        kap = np.linspace(-1.0, 1.0, 4001)
+        peak = 0.0
+        for V in (0.0, 0.25, 0.5, 1.0, 5.0, 10.0):
+            k0 = model.kinematics(Fz=Fz, Vx=V, omega=0.0)
+            curve = tyre.evaluate(Fz, kap, 0.0, Vx=max(V, tyre["VXLOW"]), omega=1e-300)["Fx"]
+            peak = max(peak, float(np.max(curve - float(k0.w) * float(k0.zero["Fx"]))))
+        plain_peak = float(np.max(tyre.evaluate(Fz, kap, 0.0, Vx=10.0)["Fx"]))
+    assert S[0, -1] > 1.0  # it launched
+    assert np.all(np.isfinite(Fx))
+    assert np.max(Fx) <= peak * (1.0 + 1e-9)
+    assert np.max(Fx) <= plain_peak + abs(float(model.kinematics(Fz=Fz, Vx=0.0).zero["Fx"])) + 1e-6
+
+
+def test_reversal_is_smooth(model):
+    Vx = np.linspace(-2.0, 2.0, 401)
+    out = model.outputs([2e-3, 1e-3], Fz=FZ, Vx=Vx, Vy=0.0, omega=0.0)
+    for name in ("Fx", "Fy", "Mz", "My"):
+        jumps = np.abs(np.diff(out[name]))
+        assert np.all(np.isfinite(out[name]))
+        assert np.max(jumps) < 0.05 * max(np.max(np.abs(out[name])), 1.0), name
+
+
+def test_exponential_step_is_exact_for_the_linear_lag(model):
+    kin = model.kinematics(Fz=FZ, Vx=VX, Vy=0.1, omega=25.0)
+    u, v = 0.0, 0.0
+    for _ in range(100):
+        u, v = step_exact(model, kin, u, v, 1e-3)
+    a = VX / float(kin.sigy)
+    assert v == pytest.approx(0.1 / a * (1.0 - np.exp(-a * 0.1)), rel=1e-12)
+
+
+# ------------------------------------------------------------------ C / FMU
+
+
+@pytest.fixture(scope="module")
+def fmu_path(tmp_path_factory):
+    from mftire.fmu.export import export_fmu
+
+    d = tmp_path_factory.mktemp("tfmu")
+    return export_fmu(TIR, d / "tyre.fmu", transient=True)
+
+
+@pytest.fixture(scope="module")
+def probe(tmp_path_factory):
+    from mftire.fmu.transient_export import build_probe_library
+
+    lib = ctypes.CDLL(str(build_probe_library(TIR, tmp_path_factory.mktemp("probe"))))
+    lib.mt_probe_bench.restype = ctypes.c_double
+    return lib
+
+
+@needs_c_compiler
+def test_c_and_python_derivatives_agree(model, probe):
+    rng = np.random.default_rng(13)
+    D = ctypes.c_double
+    for _ in range(300):
+        ins = dict(Fz=rng.uniform(0, 9000), Vx=rng.uniform(-30, 30) * rng.choice([1.0, 0.02, 0.0]),
+                   Vy=rng.uniform(-3, 3), omega=rng.uniform(-90, 90), gamma=rng.uniform(-0.1, 0.1),
+                   P=rng.uniform(2.0e5, 2.6e5), muRoad=rng.uniform(0.3, 1.2), yawRate=rng.uniform(-1, 1))  # fmt: skip
+        x = rng.normal(0.0, 0.05, 2)
+        dx, y = (D * 2)(), (D * 7)()
+        assert probe.mt_probe_rates(111, (D * 8)(*ins.values()), (D * 2)(*x), dx, None) == 0
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            py = model.derivatives(x, **ins)
+            out = model.outputs(x, **ins)
+        np.testing.assert_allclose(dx[:], py, rtol=1e-9, atol=1e-12)
+        assert probe.mt_probe_outputs(111, (D * 8)(*ins.values()), (D * 2)(*x), y) == 0
+        po = [float(out[k]) for k in ("Fx", "Fy", "Mz", "Mx", "My", "kappa_t", "alpha_t")]
+        np.testing.assert_allclose(y[:], po, rtol=1e-9, atol=1e-9)
+
+
+@needs_c_compiler
+def test_fmu_validates_and_declares_states(fmu_path):
+    import fmpy
+    from fmpy.validation import validate_fmu
+
+    assert validate_fmu(str(fmu_path)) == []
+    md = fmpy.read_model_description(str(fmu_path))
+    assert [d.variable.name for d in md.derivatives] == ["der(u)", "der(v)"]
+    assert [d.variable.derivative.name for d in md.derivatives] == ["u", "v"]
+    names = {v.name: v for v in md.modelVariables}
+    for name in ("Fz", "Vx", "Vy", "omega", "gamma", "P", "muRoad", "yawRate"):
+        assert names[name].causality == "input"
+    assert float(names["muRoad"].start) == 1.0
+    tyre = load(TIR)
+    assert float(names["Fz"].start) == tyre["FNOMIN"]
+    assert float(names["Vx"].start) == tyre["LONGVL"]  # the file's defaults; omega: free rolling there
+    Re = float(tyre.evaluate(tyre["FNOMIN"], 0.0, 0.0, Vx=tyre["LONGVL"])["Re"])
+    assert float(names["omega"].start) == pytest.approx(tyre["LONGVL"] / Re, rel=1e-9)
+    for name in ("Fx", "Fy", "Mz", "Mx", "My", "kappa_t", "alpha_t", "sigmay", "Kya"):
+        assert names[name].causality == "output"
+    assert names["TR_CS_STEP"].causality == "parameter"
+
+
+@needs_c_compiler
+@pytest.mark.parametrize("fmi_type", ["ModelExchange", "CoSimulation"])
+def test_fmu_lateral_step(fmu_path, model, fmi_type):
+    import fmpy
+
+    Vy = 0.02
+    t = np.linspace(0.0, 0.3, 31)
+    om, ref, _T = _lateral_step_reference(model, t, Vy)
+    sig = np.array([(0.0, FZ, VX, Vy, om)], dtype=[("time", float), ("Fz", float), ("Vx", float), ("Vy", float),
+                                                   ("omega", float)])  # fmt: skip
+    kw = dict(relative_tolerance=1e-10) if fmi_type == "ModelExchange" else dict(step_size=1e-3)
+    res = fmpy.simulate_fmu(str(fmu_path), fmi_type=fmi_type, stop_time=0.3, input=sig, output=["alpha_t", "Fy"],
+                            output_interval=0.01, **kw)  # fmt: skip
+    assert np.allclose(res["time"], t)
+    assert np.max(np.abs(res["alpha_t"] - ref)) < 1e-3 * np.arctan(Vy / VX)
+
+
+@needs_c_compiler
+def test_two_instances_are_independent(fmu_path):
+    import fmpy
+
+    md = fmpy.read_model_description(str(fmu_path))
+    unzip = fmpy.extract(str(fmu_path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    callbacks = make_callbacks()
+    slaves = []
+    for name in ("a", "b"):
+        s = fmpy.fmi2.FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
+                                instanceName=name)  # fmt: skip
+        s.instantiate(callbacks=callbacks)
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+        slaves.append(s)
+    a, b = slaves
+    a.setReal([vr["Vx"], vr["Vy"], vr["omega"]], [10.0, 0.3, 25.0])
+    b.setReal([vr["Vx"], vr["Vy"], vr["omega"]], [10.0, 0.0, 25.0])
+    b.doStep(0.0, 1e-3)
+    before = b.getReal([vr["Fy"], vr["v"]])
+    for k in range(50):
+        a.doStep(k * 1e-3, 1e-3)
+    fa, after = a.getReal([vr["Fy"], vr["v"]]), b.getReal([vr["Fy"], vr["v"]])
+    assert fa[1] > 1e-3 and abs(fa[0]) > 1000.0  # a built up its lateral deflection and force
+    assert after == before and after[1] == 0.0  # b untouched
+    for s in slaves:
+        s.terminate()
+        s.freeInstance()
+
+
+def test_cli_transient_flag_fmi3_refused(tmp_path, capsys):
+    from mftire.cli import main
+
+    rc = main(["export-fmu", str(TIR), "--transient", "--fmi-version", "3", "--output", str(tmp_path / "x.fmu")])
+    assert rc == 2
+    assert "FMI 2.0 only" in capsys.readouterr().err
+
+
+@needs_c_compiler
+def test_vehicle_example_stop_and_hold(tmp_path, fmu_path):
+    """validation/vehicle_example.py, transient part: four FMU instances, launch, stop, hold on 20 %."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    spec = importlib.util.spec_from_file_location("vehicle_example", root / "validation" / "vehicle_example.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules["vehicle_example"] = mod
+    spec.loader.exec_module(mod)
+    png = tmp_path / "stop.png"
+    res = mod.run_transient(TIR, png, fmu_path=fmu_path)
+    assert png.stat().st_size > 10_000
+    sc = mod.StopAndHold()
+    t = res["t"]
+    still = t < sc.launch
+    assert np.all(res["Fx"][still] == 0.0) and np.all(res["V"][still] == 0.0)  # standing still: no force, no creep
+    assert res["V"].max() > 3.0
+    assert res["drift"] < 1e-3  # parked on the 20 % slope: below 1 mm/s
+    # held by the tyres: the four forces carry the slope force m·g·sin(theta)
+    veh = mod.Vehicle()
+    total = res["Fx"][-1].sum()
+    assert total == pytest.approx(veh.m * veh.g * np.sin(np.arctan(sc.grade)), rel=1e-3)
+
+
+@needs_c_compiler
+def test_fmu_cs_step_equals_python_advance_with_limiter(fmu_path, model):
+    """Spinning wheel at standstill: the deflection limiter acts; FMU CS steps = Python :func:`advance`."""
+    import fmpy
+
+    from mftire.transient import advance
+
+    md = fmpy.read_model_description(str(fmu_path))
+    unzip = fmpy.extract(str(fmu_path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    s = fmpy.fmi2.FMU2Slave(
+        guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier, instanceName="x"
+    )
+    messages = []
+    callbacks = make_callbacks(messages)
+    s.instantiate(callbacks=callbacks)
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+    ins = dict(Fz=FZ, Vx=0.0, Vy=0.05, omega=30.0)
+    s.setReal([vr[k] for k in ins], list(ins.values()))
+    kin = model.kinematics(**ins)
+    u = v = 0.0
+    for k in range(40):
+        s.doStep(k * 0.01, 0.01)
+        u, v = advance(model, kin, u, v, 0.01)
+    fu, fv, kappa_t = s.getReal([vr["u"], vr["v"], vr["kappa_t"]])
+    s.terminate()
+    s.freeInstance()
+    assert u > float(kin.sigx) * model.constants["TR_KAPPA_LIM"]  # beyond the limit: the limiter acted
+    assert u < 1.5 * float(kin.sigx) * model.constants["TR_KAPPA_LIM"]  # and bounded the deflection
+    assert fu == pytest.approx(u, rel=1e-12) and fv == pytest.approx(v, rel=1e-12)
+    assert np.isfinite(kappa_t)
+    # the limit warnings of the steady-state evaluation arrive formatted (KPUMAX exceeded), at most 10 + 1
+    assert any("KPUMAX" in m for _, _, m in messages) and len(messages) <= 11
+
+
+def test_simulate_free_rolling_default_and_varying_friction(tyre):
+    """omega omitted: free rolling (no longitudinal slip); muRoad as an array on t."""
+    t = np.linspace(0.0, 0.6, 13)
+    res = simulate(tyre, t, Fz=FZ, Vx=VX, Vy=0.2)
+    assert np.all(res["kappa_t"] == 0.0)
+    ss = tyre.evaluate(FZ, 0.0, np.arctan(0.2 / VX), Vx=VX)
+    assert res["Fy"].iloc[-1] == pytest.approx(float(ss["Fy"]), rel=1e-6)
+    assert res["Fx"].iloc[-1] == pytest.approx(float(ss["Fx"]), rel=1e-6)
+    mu = np.linspace(0.5, 1.0, t.size)
+    res = simulate(tyre, t, Fz=FZ, Vx=VX, Vy=0.2, muRoad=mu)
+    np.testing.assert_allclose(res["mux"] / res["mux"].iloc[-1], mu, rtol=1e-12)
+
+
+def test_model_extensions_refused(tmp_path):
+    """[MFTIRE_EXTENSIONS] are not part of the transient model yet: a clear error, in Python and at export."""
+    from mftire.errors import MftireInputError
+    from mftire.extensions import SECTION
+    from mftire.fmu.export import FMUExportError, export_fmu
+    from mftire.iotools.tir import read_tir
+    from mftire.tyre import Tyre
+
+    params = read_tir(TIR)
+    params.set("RR_FX", 0.01, section=SECTION)
+    tyre = Tyre(params, name="ext.tir")
+    with pytest.raises(MftireInputError, match="MFTIRE_EXTENSIONS"):
+        TransientTyre(tyre)
+    with pytest.raises(FMUExportError, match="MFTIRE_EXTENSIONS"):
+        export_fmu(tyre, tmp_path / "x.fmu", transient=True)
