@@ -35,8 +35,22 @@ class _Steps:
             print(f"[{self.i}/{self.total} {time.perf_counter() - self.t0:5.1f} s] {msg}", flush=True)
 
 
+#: Files and folders the demo writes into its output folder.
+OUTPUT_NAMES = ("fe_sweeps.csv", "measured_sweeps.csv", "fitted.tir", "extended.tir", "tyre.fmu", "report.html",
+                "report.json", "headline.png")
+
+
 def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progress: bool = True) -> dict:
-    """Run the demo; returns a summary dict (also in ``output/report.json``)."""
+    """Run the demo; returns a summary dict (also in ``output/report.json``).
+
+    Warnings of the steps are silenced inside the run only (global filters are restored).
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return _run_demo(output, quick, progress)
+
+
+def _run_demo(output: str | os.PathLike, quick: bool, progress: bool) -> dict:
     from mftire.compare.core import compare
     from mftire.diagnosis.diagnose import diagnose
     from mftire.diagnosis.report import write_report
@@ -51,7 +65,6 @@ def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progre
 
     out = os.fspath(output)
     os.makedirs(out, exist_ok=True)
-    warnings.simplefilter("ignore")
     step = _Steps(8, progress)
 
     step("FE-surrogate campaign of the default tyre" + (" (quick grid)" if quick else ""))

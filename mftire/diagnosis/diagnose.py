@@ -160,6 +160,8 @@ def diagnose(
     chans = [c for c in (channels or MEASURED_COLUMNS) if c in df.columns and df[c].notna().sum() > 10]
     if not chans:
         raise MftireInputError("no measured channel (Fx, Fy, Mz, Mx, My) with data to diagnose")
+    if holdout is not None:  # a held-out level given by the user must exist, whatever the ranking finds
+        holdout_mask(df, holdout[0], list(holdout[1]))
     cands = candidates(df)
     by_name = {c.name: c for c in cands}
     variables = _variables_for(tyre, df, by_name)
