@@ -93,6 +93,9 @@ def _cmd_convert(args: argparse.Namespace) -> int:
     from mftire.iotools.tir import read_tir, write_tir
 
     OutputPlan([args.input], args.force).file(args.output)
+    from mftire.tyre import load
+
+    load(args.input)  # refuse to copy a broken file (mftire.iotools.tir_checks)
 
     write_tir(read_tir(args.input), args.output)
     return 0

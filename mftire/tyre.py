@@ -52,6 +52,7 @@ class Tyre:
         #: non-standard keys outside sections are kept in :attr:`flat` only).
         self.parameters: TirParameters = as_parameters(params, unknown="drop")
         self.flat: dict[str, float] = with_defaults(params)
+        _check_constants(self.flat, getattr(params, "path", None))
         ext = self.parameters.sections.get(SECTION)
         #: The ``[MFTIRE_EXTENSIONS]`` section (model extensions), or None.
         self.extensions: dict[str, Any] | None = dict(ext) if ext else None
@@ -61,9 +62,20 @@ class Tyre:
         self.name = name or (os.path.basename(str(path)) if path else "tyre")
 
     @classmethod
-    def from_file(cls, path: str | os.PathLike) -> Tyre:
-        """Read a ``.tir`` file (see :func:`mftire.read_tir`)."""
-        return cls(read_tir(path))
+    def from_file(cls, path: str | os.PathLike, checks: bool = True, strict: bool = False) -> Tyre:
+        """Read a ``.tir`` file (see :func:`mftire.read_tir`) and check it
+        (:mod:`mftire.iotools.tir_checks`): a broken file raises
+        :class:`~mftire.iotools.tir_checks.TirCheckError`, a suspicious one warns
+        (:class:`~mftire.errors.MftireTirWarning`; an error under ``strict``).
+        ``checks=False`` skips the checks except the constants the evaluator divides by."""
+        params = read_tir(path)
+        if checks:
+            from mftire.iotools.tir_checks import check_parameters
+
+            report = check_parameters(params)
+            report.raise_errors(strict=strict)
+            report.warn(stacklevel=3)
+        return cls(params)
 
     @property
     def fittyp(self) -> int:
@@ -127,9 +139,20 @@ class Tyre:
         return MFResult(out)
 
 
-def load(path: str | os.PathLike) -> Tyre:
-    """Load a ``.tir`` property file as a :class:`Tyre`."""
-    return Tyre.from_file(path)
+def load(path: str | os.PathLike, checks: bool = True, strict: bool = False) -> Tyre:
+    """Load a ``.tir`` property file as a :class:`Tyre`, checked (see :meth:`Tyre.from_file`)."""
+    return Tyre.from_file(path, checks=checks, strict=strict)
+
+
+def _check_constants(flat: Mapping[str, float], path: Any) -> None:
+    """FNOMIN and UNLOADED_RADIUS scale every equation: they must be finite and positive."""
+    from mftire.iotools.tir_checks import TirCheckError
+
+    for key in ("FNOMIN", "UNLOADED_RADIUS"):
+        v = flat[key]
+        if not (np.isfinite(v) and v > 0):
+            where = f"{path}: " if path else ""
+            raise TirCheckError(f"{where}{key} = {v:g} must be a finite number > 0")
 
 
 __all__ = ["MFResult", "OUTPUT_NAMES", "Tyre", "load"]

@@ -115,7 +115,7 @@ def test_cli_evaluate_passes_extra_columns_and_names_missing_ones(tmp_path, caps
     assert fx[0] == pytest.approx(float(_scaled(1.0).evaluate(5000.0, -0.2, 0.0)["Fx"]), rel=1e-12)
     assert fx[1] == pytest.approx(float(_scaled(0.9).evaluate(5000.0, -0.2, 0.0)["Fx"]), rel=1e-12)
     src.write_text("Fz,kappa,alpha,gamma\n5000,-0.2,0,0\n")
-    assert main(["evaluate", path, "--input", str(src), "--output", str(dst)]) == 2
+    assert main(["evaluate", path, "--input", str(src), "--output", str(dst), "--force"]) == 2
     assert "temperature" in capsys.readouterr().err
 
 

@@ -12,12 +12,17 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     from mftire.iotools.tir import write_tir
 
     _check_outputs(args)
+    from mftire.tyre import load
+
+    load(args.template)  # a broken template is an error, a suspicious one warns (mftire.iotools.tir_checks)
     fixed = [k.strip() for k in (args.fix or "").split(",") if k.strip()]
     result = fit_tir(args.data, args.template, stages=args.stages, weights=args.weights,
                      alpha_star=args.alpha_star, fixed=fixed)
-    if not result.identified:
-        raise MftireInputError(f"{', '.join(args.data)}: no coefficient could be fitted (no force or moment "
-                               "channel Fx, Fy, Mz, Mx, My with data for the chosen stages); nothing written")
+    data = result.data
+    if not any(s.status == "fitted" or (s.channel in data.columns and data[s.channel].notna().any())
+               for s in result.stages):
+        raise MftireInputError(f"{', '.join(args.data)}: no stage could be fitted (no force or moment channel "
+                               "Fx, Fy, Mz, Mx, My with data for the chosen stages); nothing written")
     write_tir(result.parameters, args.output)
     lines = [f"mftire fit: wrote {args.output} ({len(dict.fromkeys(result.identified))} coefficients fitted, "
              f"{len(result.not_identified)} not identified, {result.time:.1f} s)"]
