@@ -102,9 +102,8 @@ def _cmd_convert(args: argparse.Namespace) -> int:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    from mftire.tyre import load
-
     from mftire.iotools.tir_checks import check_tyre
+    from mftire.tyre import load
 
     tyre = load(args.tir, checks=False)
     report = check_tyre(tyre)
@@ -151,8 +150,8 @@ def tyre_info(tyre) -> str:
 
 def _cmd_plot(args: argparse.Namespace) -> int:
     from mftire.curves import standard_curves
-    from mftire.plotting import plot_standard_curves
     from mftire.iotools.output import OutputPlan
+    from mftire.plotting import plot_standard_curves
     from mftire.tyre import load
 
     plan = OutputPlan([args.tir], args.force)

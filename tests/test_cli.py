@@ -26,7 +26,8 @@ def test_evaluate_writes_inputs_then_30_outputs(tmp_path):
     assert main(["evaluate", MF61, "--input", src, "--output", str(dst)]) == 0
     header = dst.read_text().splitlines()[0].split(",")
     echoed = {"Fz", "kappa", "alpha", "gamma", "Vx"}  # outputs named like an input column get "_model"
-    assert header == ["Fz", "kappa", "alpha", "gamma", "Vx", *(n + "_model" if n in echoed else n for n in OUTPUT_NAMES)]
+    model = [n + "_model" if n in echoed else n for n in OUTPUT_NAMES]
+    assert header == ["Fz", "kappa", "alpha", "gamma", "Vx", *model]
     values = np.loadtxt(dst, delimiter=",", skiprows=1)
     ref = load(MF61).evaluate([4000, 6000], [-0.1, 0], [0.05, 0.1], [0, 0.02], Vx=[20, 30])
     for j, name in enumerate(OUTPUT_NAMES):
