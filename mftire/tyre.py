@@ -8,13 +8,16 @@
 
 from __future__ import annotations
 
+import difflib
 import os
+import warnings
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from mftire.errors import MftireUnitWarning
 from mftire.extensions import SECTION, required_variables
 from mftire.iotools.tir import TirParameters, as_parameters, read_tir
 from mftire.mf.solver import OUTPUT_NAMES, OUTPUT_UNITS, evaluate_arrays
@@ -133,10 +136,65 @@ class Tyre:
         MFResult
             The 30 channels of :data:`mftire.mf.solver.OUTPUT_NAMES`.
         """
+        if variables:
+            _check_variables(variables, self.required_variables)
+        self._unit_check(Fz, alpha)
         out = evaluate_arrays(
             self.flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, self.extensions, variables or None
         )
         return MFResult(out)
+
+    def _unit_check(self, Fz, alpha) -> None:
+        """One :class:`~mftire.errors.MftireUnitWarning` per tyre and cause for inputs that look
+        like degrees (|alpha| > 1.5 rad) or kN (every Fz below 5 % of FNOMIN)."""
+        warned = self.__dict__.setdefault("_unit_warned", set())
+        if "alpha" not in warned:
+            a = np.abs(np.asarray(alpha, dtype=float))
+            top = float(np.nanmax(a)) if a.size and not np.isnan(a).all() else 0.0
+            if np.isfinite(top) and top > UNIT_LIMITS["alpha"]:
+                warned.add("alpha")
+                warnings.warn(f"slip angle alpha up to {top:g} rad ({np.degrees(top):.0f} deg): alpha is in radians; "
+                              "values above 1.5 rad look like degrees (convert with numpy.deg2rad)",
+                              MftireUnitWarning, stacklevel=3)  # fmt: skip
+        if "Fz" not in warned:
+            f = np.asarray(Fz, dtype=float)
+            top = float(np.nanmax(f)) if f.size and not np.isnan(f).all() else 0.0
+            limit = UNIT_LIMITS["Fz"] * self.flat["FNOMIN"]
+            if 0.0 < top < limit:
+                warned.add("Fz")
+                warnings.warn(f"every vertical load Fz is below {limit:g} N (5 % of FNOMIN = {self.flat['FNOMIN']:g} "
+                              f"N; largest {top:g}): Fz is in newtons, the values look like kN (multiply by 1000)",
+                              MftireUnitWarning, stacklevel=3)  # fmt: skip
+
+
+#: Thresholds of the unit warnings of :meth:`Tyre.evaluate`: |alpha| in rad, Fz as a fraction of FNOMIN.
+UNIT_LIMITS = {"alpha": 1.5, "Fz": 0.05}
+#: The keyword arguments of :meth:`Tyre.evaluate` besides the extension variables.
+EVALUATE_ARGUMENTS = ("Fz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "omega", "mode")
+
+
+def _check_variables(given: Mapping[str, Any], required: list[str]) -> None:
+    """Extra keyword arguments must be variables the tyre's extensions need; else a
+    :class:`TypeError` with the likely intended name."""
+    from mftire.iotools.sweeps import _ALIASES  # common names of the schema quantities (one table)
+
+    extra = [k for k in given if k not in required]
+    if not extra:
+        return
+    name = extra[0]
+    known = [*EVALUATE_ARGUMENTS, *required]
+    low = name.lower()
+    guess = next((q for q, names in _ALIASES.items() if low in names and q in known), None)
+    guess = guess or next((k for k in known if k.lower() == low), None)
+    if guess is None:
+        close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
+        guess = close[0] if close else None
+    msg = f"Tyre.evaluate() got an unexpected keyword argument {name!r}"
+    if guess:
+        msg += f"; did you mean {guess!r}?"
+    msg += (f" (the tyre's extensions take: {', '.join(required)})" if required
+            else " (this tyre has no model extensions, so no extra variables)")
+    raise TypeError(msg)
 
 
 def load(path: str | os.PathLike, checks: bool = True, strict: bool = False) -> Tyre:
