@@ -1,7 +1,7 @@
 """A thin object layer over the parameter file and the pure evaluator.
 
 >>> import mftire
->>> tyre = mftire.load("tirfiles/MagicFormula61_Parameters.tir")
+>>> tyre = mftire.load("tirfiles/MF61_255-55R20_mfeval-jl.tir")
 >>> out = tyre.evaluate(Fz=4000.0, kappa=-0.1, alpha=0.0)
 >>> round(float(out["Fx"]), 1)  # doctest: +SKIP
 """
