@@ -210,7 +210,7 @@ def _check_constants(flat: Mapping[str, float], path: Any) -> None:
         v = flat[key]
         if not (np.isfinite(v) and v > 0):
             where = f"{path}: " if path else ""
-            raise TirCheckError(f"{where}{key} = {v:g} must be a finite number > 0")
+            raise TirCheckError(f"{where}{key} = {v:g} must be > 0")
 
 
 __all__ = ["MFResult", "OUTPUT_NAMES", "Tyre", "load"]
