@@ -149,22 +149,31 @@ class Tyre:
         like degrees (|alpha| > 1.5 rad) or kN (every Fz below 5 % of FNOMIN)."""
         warned = self.__dict__.setdefault("_unit_warned", set())
         if "alpha" not in warned:
-            a = np.abs(np.asarray(alpha, dtype=float))
-            top = float(np.nanmax(a)) if a.size and not np.isnan(a).all() else 0.0
+            top = _largest(alpha, absolute=True)
             if np.isfinite(top) and top > UNIT_LIMITS["alpha"]:
                 warned.add("alpha")
                 warnings.warn(f"slip angle alpha up to {top:g} rad ({np.degrees(top):.0f} deg): alpha is in radians; "
                               "values above 1.5 rad look like degrees (convert with numpy.deg2rad)",
                               MftireUnitWarning, stacklevel=3)  # fmt: skip
         if "Fz" not in warned:
-            f = np.asarray(Fz, dtype=float)
-            top = float(np.nanmax(f)) if f.size and not np.isnan(f).all() else 0.0
+            top = _largest(Fz, absolute=False)
             limit = UNIT_LIMITS["Fz"] * self.flat["FNOMIN"]
             if 0.0 < top < limit:
                 warned.add("Fz")
                 warnings.warn(f"every vertical load Fz is below {limit:g} N (5 % of FNOMIN = {self.flat['FNOMIN']:g} "
                               f"N; largest {top:g}): Fz is in newtons, the values look like kN (multiply by 1000)",
                               MftireUnitWarning, stacklevel=3)  # fmt: skip
+
+
+def _largest(x, absolute: bool) -> float:
+    """Largest (absolute) value of ``x`` ignoring NaN; 0 when there is none (fast for scalars)."""
+    if isinstance(x, (int, float)):
+        v = abs(x) if absolute else float(x)
+        return v if v == v else 0.0
+    a = np.asarray(x, dtype=float)
+    if absolute:
+        a = np.abs(a)
+    return float(np.nanmax(a)) if a.size and not np.isnan(a).all() else 0.0
 
 
 #: Thresholds of the unit warnings of :meth:`Tyre.evaluate`: |alpha| in rad, Fz as a fraction of FNOMIN.

@@ -20,6 +20,8 @@ import numpy as np
 import pandas as pd
 import pytest
 from conftest import REFERENCE_TYRES, needs_c_compiler
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import mftire
 from mftire.cli import main
@@ -525,3 +527,22 @@ def test_export_fmu_overwrite_with_force(run):
     run(argv, 0, created={"t.fmu"})
     run(argv, 2, "exists; use --force")
     run(argv + ["--force"], 0, created={"t.fmu"})
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.lists(st.floats(allow_nan=False, allow_infinity=False), min_size=1, max_size=20))
+def test_evaluate_table_writes_shortest_exact_floats(values):
+    """Property: every float written by ``evaluate`` reads back bit-exactly, in its shortest repr."""
+    import io
+
+    from mftire.cli import evaluate_table
+
+    df = pd.DataFrame({"Fz": values})
+    buf = io.StringIO()
+    evaluate_table(df, pd.DataFrame({"Fx": values})).to_csv(buf, index=False)
+    lines = buf.getvalue().splitlines()
+    back = pd.read_csv(io.StringIO(buf.getvalue()))
+    assert lines[0] == "Fz,Fx"
+    assert [np.float64(v).tobytes() for v in back["Fx"]] == [np.float64(v).tobytes() for v in values]
+    assert all(cell == repr(float(v)) for line, v in zip(lines[1:], values, strict=True)
+               for cell in line.split(",")[:1])
