@@ -197,7 +197,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mftire", description=__doc__.splitlines()[0],
         epilog="Outputs: an existing file is replaced only with --force; an output that is one of the inputs is "
-        "refused; missing folders are created; /dev/null and named pipes are written through (docs/cli.md).",
+        "refused; missing folders are created; /dev/null and named pipes are written through (README, Outputs).",
     )  # fmt: skip
     parser.add_argument("--version", action="version", version=f"mftire {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")

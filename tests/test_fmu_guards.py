@@ -132,6 +132,7 @@ def test_the_issue_cases(fmus, interface):
     assert any("input 'Vx' = 1000000 saturated to the bound 200" in m for m in text)
 
 
+@pytest.mark.filterwarnings("ignore:.*(saturated|Low speed mode)")
 def test_inputs_in_range_are_untouched(fmus):
     """The guards do not move a usual operating point: FMU equals Python there."""
     tyre = Tyre(read_tir(REFERENCE_TYRES["MF61"]))
