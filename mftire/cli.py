@@ -69,34 +69,33 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         df["Fz"].to_numpy(), df["kappa"].to_numpy(), df["alpha"].to_numpy(), df["gamma"].to_numpy(),
         mode=args.mode, **kw,
     )  # fmt: skip
-    result = evaluate_table(df, out.to_frame())
+    result = pd.concat([df.reset_index(drop=True), out.to_frame()], axis=1)
     if args.output == "-":
-        result.to_csv(sys.stdout, index=False)
+        evaluate_columns(result, len(df.columns)).to_csv(sys.stdout, index=False)  # shortest exact floats
     else:
         from mftire.iotools.atomic import atomic_path
 
         with atomic_path(args.output) as tmp:
-            result.to_csv(tmp, index=False)
+            evaluate_columns(result, len(df.columns)).to_csv(tmp, index=False)
     return 0
 
 
-def evaluate_table(inputs: pd.DataFrame, outputs: pd.DataFrame) -> pd.DataFrame:
-    """The input columns followed by the model outputs; an output whose name is already an
-    input column (a measured ``Fx``, say) is named ``<name>_model`` (``Fx_model``)."""
-    taken = set(inputs.columns)
-    renamed = outputs.rename(columns={c: f"{c}_model" for c in outputs.columns if c in taken})
-    return pd.concat([inputs.reset_index(drop=True), renamed], axis=1)
+def evaluate_columns(result: pd.DataFrame, n_inputs: int) -> pd.DataFrame:
+    """``result`` (the ``n_inputs`` input columns, then the model outputs) with every output
+    whose name is also an input column (a measured ``Fx``, the echoed ``Fz``) renamed
+    ``<name>_model`` (``Fx_model``), so that no two columns share a name."""
+    inputs = [str(c) for c in result.columns[:n_inputs]]
+    outputs = [f"{c}_model" if str(c) in inputs else str(c) for c in result.columns[n_inputs:]]
+    return result.set_axis([*inputs, *outputs], axis=1)
 
 
 def _cmd_convert(args: argparse.Namespace) -> int:
     from mftire.iotools.output import OutputPlan
     from mftire.iotools.tir import read_tir, write_tir
-
-    OutputPlan([args.input], args.force).file(args.output)
     from mftire.tyre import load
 
+    OutputPlan([args.input], args.force).file(args.output)
     load(args.input)  # refuse to copy a broken file (mftire.iotools.tir_checks)
-
     write_tir(read_tir(args.input), args.output)
     return 0
 

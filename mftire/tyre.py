@@ -17,7 +17,6 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from mftire.errors import MftireUnitWarning
 from mftire.extensions import SECTION, required_variables
 from mftire.iotools.tir import TirParameters, as_parameters, read_tir
 from mftire.mf.solver import OUTPUT_NAMES, OUTPUT_UNITS, evaluate_arrays
@@ -138,31 +137,45 @@ class Tyre:
         """
         if variables:
             _check_variables(variables, self.required_variables)
-        self._unit_check(Fz, alpha)
+        _unit_check(self, Fz, alpha)
         out = evaluate_arrays(
             self.flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, self.extensions, variables or None
         )
         return MFResult(out)
 
-    def _unit_check(self, Fz, alpha) -> None:
-        """One :class:`~mftire.errors.MftireUnitWarning` per tyre and cause for inputs that look
-        like degrees (|alpha| > 1.5 rad) or kN (every Fz below 5 % of FNOMIN)."""
-        warned = self.__dict__.setdefault("_unit_warned", set())
-        if "alpha" not in warned:
-            top = _largest(alpha, absolute=True)
-            if np.isfinite(top) and top > UNIT_LIMITS["alpha"]:
-                warned.add("alpha")
-                warnings.warn(f"slip angle alpha up to {top:g} rad ({np.degrees(top):.0f} deg): alpha is in radians; "
-                              "values above 1.5 rad look like degrees (convert with numpy.deg2rad)",
-                              MftireUnitWarning, stacklevel=3)  # fmt: skip
-        if "Fz" not in warned:
-            top = _largest(Fz, absolute=False)
-            limit = UNIT_LIMITS["Fz"] * self.flat["FNOMIN"]
-            if 0.0 < top < limit:
-                warned.add("Fz")
-                warnings.warn(f"every vertical load Fz is below {limit:g} N (5 % of FNOMIN = {self.flat['FNOMIN']:g} "
-                              f"N; largest {top:g}): Fz is in newtons, the values look like kN (multiply by 1000)",
-                              MftireUnitWarning, stacklevel=3)  # fmt: skip
+
+def load(path: str | os.PathLike) -> Tyre:
+    """Load a ``.tir`` property file as a :class:`Tyre`."""
+    return Tyre.from_file(path)
+
+
+__all__ = ["MFResult", "OUTPUT_NAMES", "Tyre", "load"]
+
+
+# ------------------------------------------------------------------ input and constant checks
+
+
+def _unit_check(tyre: Tyre, Fz, alpha) -> None:
+    """One :class:`~mftire.errors.MftireUnitWarning` per tyre and cause for inputs that look
+    like degrees (|alpha| > 1.5 rad) or kN (every Fz below 5 % of FNOMIN)."""
+    from mftire.errors import MftireUnitWarning
+
+    warned = tyre.__dict__.setdefault("_unit_warned", set())
+    if "alpha" not in warned:
+        top = _largest(alpha, absolute=True)
+        if np.isfinite(top) and top > UNIT_LIMITS["alpha"]:
+            warned.add("alpha")
+            warnings.warn(f"slip angle alpha up to {top:g} rad ({np.degrees(top):.0f} deg): alpha is in radians; "
+                          "values above 1.5 rad look like degrees (convert with numpy.deg2rad)",
+                          MftireUnitWarning, stacklevel=3)  # fmt: skip
+    if "Fz" not in warned:
+        top = _largest(Fz, absolute=False)
+        limit = UNIT_LIMITS["Fz"] * tyre.flat["FNOMIN"]
+        if 0.0 < top < limit:
+            warned.add("Fz")
+            warnings.warn(f"every vertical load Fz is below {limit:g} N (5 % of FNOMIN = {tyre.flat['FNOMIN']:g} "
+                          f"N; largest {top:g}): Fz is in newtons, the values look like kN (multiply by 1000)",
+                          MftireUnitWarning, stacklevel=3)  # fmt: skip
 
 
 def _largest(x, absolute: bool) -> float:
@@ -206,11 +219,6 @@ def _check_variables(given: Mapping[str, Any], required: list[str]) -> None:
     raise TypeError(msg)
 
 
-def load(path: str | os.PathLike, checks: bool = True, strict: bool = False) -> Tyre:
-    """Load a ``.tir`` property file as a :class:`Tyre`, checked (see :meth:`Tyre.from_file`)."""
-    return Tyre.from_file(path, checks=checks, strict=strict)
-
-
 def _check_constants(flat: Mapping[str, float], path: Any) -> None:
     """FNOMIN and UNLOADED_RADIUS scale every equation: they must be finite and positive."""
     from mftire.iotools.tir_checks import TirCheckError
@@ -220,6 +228,3 @@ def _check_constants(flat: Mapping[str, float], path: Any) -> None:
         if not (np.isfinite(v) and v > 0):
             where = f"{path}: " if path else ""
             raise TirCheckError(f"{where}{key} = {v:g} must be > 0")
-
-
-__all__ = ["MFResult", "OUTPUT_NAMES", "Tyre", "load"]

@@ -406,7 +406,7 @@ def test_unit_mismatched_tir_warns_with_a_hint(run):
     with pytest.warns(MftireTirWarning, match="implausible after unit conversion"):
         mftire.load(run.p("tyre.tir"))
     with pytest.raises(TirCheckError):
-        mftire.load(run.p("tyre.tir"), strict=True)
+        mftire.Tyre.from_file(run.p("tyre.tir"), strict=True)
 
 
 def test_info_prints_defaulted_keys_and_checks(run):
@@ -535,11 +535,10 @@ def test_evaluate_table_writes_shortest_exact_floats(values):
     """Property: every float written by ``evaluate`` reads back bit-exactly, in its shortest repr."""
     import io
 
-    from mftire.cli import evaluate_table
+    from mftire.cli import evaluate_columns
 
-    df = pd.DataFrame({"Fz": values})
     buf = io.StringIO()
-    evaluate_table(df, pd.DataFrame({"Fx": values})).to_csv(buf, index=False)
+    evaluate_columns(pd.DataFrame({"Fz": values, "Fx": values}), 1).to_csv(buf, index=False)
     lines = buf.getvalue().splitlines()
     back = pd.read_csv(io.StringIO(buf.getvalue()))
     assert lines[0] == "Fz,Fx"

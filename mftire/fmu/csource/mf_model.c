@@ -106,8 +106,8 @@ static void on_warning(void *ctx, int kind, const char *message)
  *       data variables of the extensions  |.| <= 1e12 (NaN: 0 by the evaluator)
  * Each replacement is logged as a warning through the FMI logger (rate-limited like the
  * evaluator's warnings).  guard_outputs() is the last line: a published output that is
- * still not finite is set to 0 with a logged warning (known case: Mz, Mzr at Fz = 0 or
- * Vx = 0 with turn slip and limits, useMode 112, where the Python evaluator gives NaN too);
+ * still not finite is set to 0 with a logged warning (known case: Mz, Mzr at Fz = 0 with
+ * turn slip and limits, useMode 112, where the Python evaluator gives NaN too);
  * the fuzz test of tests/test_fmu_guards.py drives 10^5 random vectors through it.
  */
 #define MF_GUARD_ALPHA 1.55
