@@ -8,9 +8,7 @@
 
 from __future__ import annotations
 
-import difflib
 import os
-import warnings
 from collections.abc import Mapping
 from typing import Any
 
@@ -64,20 +62,9 @@ class Tyre:
         self.name = name or (os.path.basename(str(path)) if path else "tyre")
 
     @classmethod
-    def from_file(cls, path: str | os.PathLike, checks: bool = True, strict: bool = False) -> Tyre:
-        """Read a ``.tir`` file (see :func:`mftire.read_tir`) and check it
-        (:mod:`mftire.iotools.tir_checks`): a broken file raises
-        :class:`~mftire.iotools.tir_checks.TirCheckError`, a suspicious one warns
-        (:class:`~mftire.errors.MftireTirWarning`; an error under ``strict``).
-        ``checks=False`` skips the checks except the constants the evaluator divides by."""
-        params = read_tir(path)
-        if checks:
-            from mftire.iotools.tir_checks import check_parameters
-
-            report = check_parameters(params)
-            report.raise_errors(strict=strict)
-            report.warn(stacklevel=3)
-        return cls(params)
+    def from_file(cls, path: str | os.PathLike) -> Tyre:
+        """Read a ``.tir`` file (see :func:`mftire.read_tir`)."""
+        return cls(_checked(read_tir(path)))  # mftire.iotools.tir_checks: broken raises, suspicious warns
 
     @property
     def fittyp(self) -> int:
@@ -155,9 +142,23 @@ __all__ = ["MFResult", "OUTPUT_NAMES", "Tyre", "load"]
 # ------------------------------------------------------------------ input and constant checks
 
 
+def _checked(params: TirParameters) -> TirParameters:
+    """Run the ``.tir`` sanity checks of :mod:`mftire.iotools.tir_checks` on a file just read:
+    errors raise :class:`~mftire.iotools.tir_checks.TirCheckError` (one line naming the file),
+    warnings are issued together as one :class:`~mftire.errors.MftireTirWarning`."""
+    from mftire.iotools.tir_checks import check_parameters
+
+    report = check_parameters(params)
+    report.raise_errors()
+    report.warn(stacklevel=4)
+    return params
+
+
 def _unit_check(tyre: Tyre, Fz, alpha) -> None:
     """One :class:`~mftire.errors.MftireUnitWarning` per tyre and cause for inputs that look
     like degrees (|alpha| > 1.5 rad) or kN (every Fz below 5 % of FNOMIN)."""
+    import warnings
+
     from mftire.errors import MftireUnitWarning
 
     warned = tyre.__dict__.setdefault("_unit_warned", set())
@@ -198,6 +199,8 @@ EVALUATE_ARGUMENTS = ("Fz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "omega
 def _check_variables(given: Mapping[str, Any], required: list[str]) -> None:
     """Extra keyword arguments must be variables the tyre's extensions need; else a
     :class:`TypeError` with the likely intended name."""
+    import difflib
+
     from mftire.iotools.sweeps import _ALIASES  # common names of the schema quantities (one table)
 
     extra = [k for k in given if k not in required]
