@@ -52,7 +52,9 @@ class Tyre:
         #: non-standard keys outside sections are kept in :attr:`flat` only).
         self.parameters: TirParameters = as_parameters(params, unknown="drop")
         self.flat: dict[str, float] = with_defaults(params)
-        _check_constants(self.flat, getattr(params, "path", None))
+        from mftire.input_checks import check_constants
+
+        check_constants(self.flat, getattr(params, "path", None))
         ext = self.parameters.sections.get(SECTION)
         #: The ``[MFTIRE_EXTENSIONS]`` section (model extensions), or None.
         self.extensions: dict[str, Any] | None = dict(ext) if ext else None
@@ -64,7 +66,9 @@ class Tyre:
     @classmethod
     def from_file(cls, path: str | os.PathLike) -> Tyre:
         """Read a ``.tir`` file (see :func:`mftire.read_tir`)."""
-        return cls(_checked(read_tir(path)))  # mftire.iotools.tir_checks: broken raises, suspicious warns
+        from mftire.iotools.tir_checks import checked
+
+        return cls(checked(read_tir(path)))  # a broken file raises, a suspicious one warns
 
     @property
     def fittyp(self) -> int:
@@ -122,9 +126,11 @@ class Tyre:
         MFResult
             The 30 channels of :data:`mftire.mf.solver.OUTPUT_NAMES`.
         """
+        from mftire.input_checks import check_keywords, warn_units
+
         if variables:
-            _check_variables(variables, self.required_variables)
-        _unit_check(self, Fz, alpha)
+            check_keywords(variables, self.required_variables)
+        warn_units(self, Fz, alpha)
         out = evaluate_arrays(
             self.flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, self.extensions, variables or None
         )
@@ -138,96 +144,3 @@ def load(path: str | os.PathLike) -> Tyre:
 
 __all__ = ["MFResult", "OUTPUT_NAMES", "Tyre", "load"]
 
-
-# ------------------------------------------------------------------ input and constant checks
-
-
-def _checked(params: TirParameters) -> TirParameters:
-    """Run the ``.tir`` sanity checks of :mod:`mftire.iotools.tir_checks` on a file just read:
-    errors raise :class:`~mftire.iotools.tir_checks.TirCheckError` (one line naming the file),
-    warnings are issued together as one :class:`~mftire.errors.MftireTirWarning`."""
-    from mftire.iotools.tir_checks import check_parameters
-
-    report = check_parameters(params)
-    report.raise_errors()
-    report.warn(stacklevel=4)
-    return params
-
-
-def _unit_check(tyre: Tyre, Fz, alpha) -> None:
-    """One :class:`~mftire.errors.MftireUnitWarning` per tyre and cause for inputs that look
-    like degrees (|alpha| > 1.5 rad) or kN (every Fz below 5 % of FNOMIN)."""
-    import warnings
-
-    from mftire.errors import MftireUnitWarning
-
-    warned = tyre.__dict__.setdefault("_unit_warned", set())
-    if "alpha" not in warned:
-        top = _largest(alpha, absolute=True)
-        if np.isfinite(top) and top > UNIT_LIMITS["alpha"]:
-            warned.add("alpha")
-            warnings.warn(f"slip angle alpha up to {top:g} rad ({np.degrees(top):.0f} deg): alpha is in radians; "
-                          "values above 1.5 rad look like degrees (convert with numpy.deg2rad)",
-                          MftireUnitWarning, stacklevel=3)  # fmt: skip
-    if "Fz" not in warned:
-        top = _largest(Fz, absolute=False)
-        limit = UNIT_LIMITS["Fz"] * tyre.flat["FNOMIN"]
-        if 0.0 < top < limit:
-            warned.add("Fz")
-            warnings.warn(f"every vertical load Fz is below {limit:g} N (5 % of FNOMIN = {tyre.flat['FNOMIN']:g} "
-                          f"N; largest {top:g}): Fz is in newtons, the values look like kN (multiply by 1000)",
-                          MftireUnitWarning, stacklevel=3)  # fmt: skip
-
-
-def _largest(x, absolute: bool) -> float:
-    """Largest (absolute) value of ``x`` ignoring NaN; 0 when there is none (fast for scalars)."""
-    if isinstance(x, (int, float)):
-        v = abs(x) if absolute else float(x)
-        return v if v == v else 0.0
-    a = np.asarray(x, dtype=float)
-    if absolute:
-        a = np.abs(a)
-    return float(np.nanmax(a)) if a.size and not np.isnan(a).all() else 0.0
-
-
-#: Thresholds of the unit warnings of :meth:`Tyre.evaluate`: |alpha| in rad, Fz as a fraction of FNOMIN.
-UNIT_LIMITS = {"alpha": 1.5, "Fz": 0.05}
-#: The keyword arguments of :meth:`Tyre.evaluate` besides the extension variables.
-EVALUATE_ARGUMENTS = ("Fz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "omega", "mode")
-
-
-def _check_variables(given: Mapping[str, Any], required: list[str]) -> None:
-    """Extra keyword arguments must be variables the tyre's extensions need; else a
-    :class:`TypeError` with the likely intended name."""
-    import difflib
-
-    from mftire.iotools.sweeps import _ALIASES  # common names of the schema quantities (one table)
-
-    extra = [k for k in given if k not in required]
-    if not extra:
-        return
-    name = extra[0]
-    known = [*EVALUATE_ARGUMENTS, *required]
-    low = name.lower()
-    guess = next((q for q, names in _ALIASES.items() if low in names and q in known), None)
-    guess = guess or next((k for k in known if k.lower() == low), None)
-    if guess is None:
-        close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
-        guess = close[0] if close else None
-    msg = f"Tyre.evaluate() got an unexpected keyword argument {name!r}"
-    if guess:
-        msg += f"; did you mean {guess!r}?"
-    msg += (f" (the tyre's extensions take: {', '.join(required)})" if required
-            else " (this tyre has no model extensions, so no extra variables)")
-    raise TypeError(msg)
-
-
-def _check_constants(flat: Mapping[str, float], path: Any) -> None:
-    """FNOMIN and UNLOADED_RADIUS scale every equation: they must be finite and positive."""
-    from mftire.iotools.tir_checks import TirCheckError
-
-    for key in ("FNOMIN", "UNLOADED_RADIUS"):
-        v = flat[key]
-        if not (np.isfinite(v) and v > 0):
-            where = f"{path}: " if path else ""
-            raise TirCheckError(f"{where}{key} = {v:g} must be > 0")

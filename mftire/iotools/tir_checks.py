@@ -242,10 +242,20 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
     return rep
 
 
+def checked(params: Any) -> Any:
+    """Check a file just read (:func:`check_parameters`): errors raise :class:`TirCheckError`
+    (one line naming the file), warnings are issued as one :class:`MftireTirWarning`.
+    Returns ``params``; :meth:`mftire.Tyre.from_file` (and so :func:`mftire.load`) calls it."""
+    report = check_parameters(params)
+    report.raise_errors()
+    report.warn(stacklevel=4)
+    return params
+
+
 def check_tyre(tyre: Any) -> CheckReport:
     """:func:`check_parameters` of a :class:`mftire.Tyre`'s parameters."""
     return check_parameters(tyre.parameters, source=getattr(tyre.parameters, "path", None) or tyre.name)
 
 
 __all__ = ["CORE_KEYS", "CheckReport", "OPTIONAL_SECTIONS", "OPTIONAL_SECTIONS_6X", "PLAUSIBLE", "REQUIRED_KEYS",
-           "REQUIRED_SECTIONS", "TirCheckError", "check_parameters", "check_tyre"]
+           "REQUIRED_SECTIONS", "TirCheckError", "check_parameters", "check_tyre", "checked"]
