@@ -143,4 +143,3 @@ def load(path: str | os.PathLike) -> Tyre:
 
 
 __all__ = ["MFResult", "OUTPUT_NAMES", "Tyre", "load"]
-
