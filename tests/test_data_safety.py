@@ -477,10 +477,11 @@ def test_misspelled_keywords_raise_type_error_with_suggestion(kw, guess):
 
 
 def test_extension_variables_are_checked():
+    from test_fmu_guards import extension_entries
+
     params = read_tir(MF61)
-    params.set("FADE_DEPTH", 0.1, section="MFTIRE_EXTENSIONS")
-    params.set("FADE_SCALE", 50.0, section="MFTIRE_EXTENSIONS")
-    params.set("FADE_VARIABLE", "temperature", section="MFTIRE_EXTENSIONS")
+    for k, v in extension_entries(["temperature"]).items():
+        params.set(k, v, section="MFTIRE_EXTENSIONS")
     tyre = mftire.Tyre(params)
     assert tyre.required_variables == ["temperature"]
     tyre.evaluate(4000.0, -0.1, 0.0, temperature=60.0)

@@ -69,6 +69,26 @@ def _fuzz(fmu, interface: str, n: int, seed: int, names=INPUT_NAMES) -> tuple[in
     return n, bad, msgs
 
 
+def extension_entries(variables) -> dict:
+    """``[MFTIRE_EXTENSIONS]`` entries of a friction term per external variable, in the
+    section format of the installed :mod:`mftire.extensions` (terms ``EXTn_*``, or the
+    older keyed extensions ``FADE_*`` / ``FVAR_*``)."""
+    from mftire import extensions as ex
+
+    out: dict = {}
+    if hasattr(ex, "FORMS"):
+        for n, v in enumerate(variables, 1):
+            out.update({f"EXT{n}_TARGET": "LMUX LMUY", f"EXT{n}_FORM": "linear", f"EXT{n}_VARIABLE": v,
+                        f"EXT{n}_REF": 50.0, f"EXT{n}_SCALE": 25.0, f"EXT{n}_C1": -0.1})
+        return out
+    keyed = (("FADE_VARIABLE", {"FADE_DEPTH": 0.2, "FADE_SCALE": 40.0}),
+             ("FVAR_VARIABLE", {"FVAR_C1": 0.05, "FVAR_C2": 0.01, "FVAR_REF": 25.0, "FVAR_SCALE": 10.0}))
+    for v, (key, numbers) in zip(variables, keyed, strict=False):
+        out.update(numbers)
+        out[key] = v
+    return out
+
+
 @pytest.fixture(scope="module")
 def fmus(tmp_path_factory):
     d = tmp_path_factory.mktemp("guards")
@@ -77,11 +97,8 @@ def fmus(tmp_path_factory):
         out[(label, 2)] = str(export_fmu(REFERENCE_TYRES[label], d / f"{label}.fmu"))
     out[("JuliaMF62", 3)] = str(export_fmu(REFERENCE_TYRES["JuliaMF62"], d / "JuliaMF62_3.fmu", fmi_version=3))
     params = read_tir(REFERENCE_TYRES["MF61"])
-    for k, v in {"FADE_DEPTH": 0.2, "FADE_SCALE": 40.0, "FVAR_C1": 0.05, "FVAR_C2": 0.01, "FVAR_REF": 25.0,
-                 "FVAR_SCALE": 10.0, "VS_DECAY": 0.2}.items():
+    for k, v in extension_entries(["energy", "temperature"]).items():
         params.set(k, v, section="MFTIRE_EXTENSIONS")
-    params.set("FADE_VARIABLE", "energy", section="MFTIRE_EXTENSIONS")
-    params.set("FVAR_VARIABLE", "temperature", section="MFTIRE_EXTENSIONS")
     ext = Tyre(params, name="ext")
     assert ext.required_variables == ["energy", "temperature"]
     out["ext"] = str(export_fmu(ext, d / "ext.fmu"))

@@ -41,7 +41,7 @@ typedef struct MFModel {
     int initialized;  /* after ExitInitializationMode */
     int debug_logging;
     unsigned warn_count[MF_W_COUNT];
-    unsigned guard_count[MF_GUARD_SLOTS]; /* input guards of mf_model.c (9 inputs, 3 data, outputs) */
+    unsigned guard_count[MF_GUARD_SLOTS]; /* input guards of mf_model.c (9 inputs, data, outputs) */
     mf_log_fn log;
     void *host;       /* the wrapper's own data (FMI callbacks) */
 } MFModel;
