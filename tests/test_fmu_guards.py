@@ -97,10 +97,10 @@ def fmus(tmp_path_factory):
         out[(label, 2)] = str(export_fmu(REFERENCE_TYRES[label], d / f"{label}.fmu"))
     out[("JuliaMF62", 3)] = str(export_fmu(REFERENCE_TYRES["JuliaMF62"], d / "JuliaMF62_3.fmu", fmi_version=3))
     params = read_tir(REFERENCE_TYRES["MF61"])
-    for k, v in extension_entries(["energy", "temperature"]).items():
+    for k, v in extension_entries(["road_temp", "temperature"]).items():
         params.set(k, v, section="MFTIRE_EXTENSIONS")
     ext = Tyre(params, name="ext")
-    assert ext.required_variables == ["energy", "temperature"]
+    assert ext.required_variables == ["road_temp", "temperature"]
     out["ext"] = str(export_fmu(ext, d / "ext.fmu"))
     return out
 
@@ -123,9 +123,9 @@ def test_fuzz_1e5_vectors_give_finite_outputs(fmus, interface):
 def test_fuzz_fmi3_and_extension_inputs(fmus, interface):
     n, bad, _ = _fuzz(fmus[("JuliaMF62", 3)], interface, 5_000, 7)
     assert bad == [], bad[:3]
-    n, bad, msgs = _fuzz(fmus["ext"], interface, 5_000, 8, names=(*INPUT_NAMES, "energy", "temperature"))
+    n, bad, msgs = _fuzz(fmus["ext"], interface, 5_000, 8, names=(*INPUT_NAMES, "road_temp", "temperature"))
     assert bad == [], bad[:3]
-    assert any("input 'temperature'" in m or "input 'energy'" in m for _, _, m in msgs)
+    assert any("input 'temperature'" in m or "input 'road_temp'" in m for _, _, m in msgs)
 
 
 @pytest.mark.parametrize("interface", ["ME", "CS"])
