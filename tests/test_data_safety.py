@@ -546,3 +546,19 @@ def test_evaluate_table_writes_shortest_exact_floats(values):
     assert [np.float64(v).tobytes() for v in back["Fx"]] == [np.float64(v).tobytes() for v in values]
     assert all(cell == repr(float(v)) for line, v in zip(lines[1:], values, strict=True)
                for cell in line.split(",")[:1])
+
+
+def test_dev_stdout_redirected_by_the_shell_is_written_through(run):
+    """``--output /dev/stdout >> log`` appends to the log (the descriptor is written, not reopened)."""
+    import subprocess
+    import sys
+
+    log = Path(run.p("log.csv"))
+    log.write_text("kept\n")
+    cmd = (f"{sys.executable} -m mftire.cli evaluate {run.p('tyre.tir')} --input {run.p('points.csv')} "
+           f"--output /dev/stdout >> {log}")
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    res = subprocess.run(cmd, shell=True, env=env, capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    lines = log.read_text().splitlines()
+    assert lines[0] == "kept" and lines[1].startswith("Fz,kappa,alpha,gamma,Fx") and len(lines) == 4

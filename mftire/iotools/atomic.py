@@ -12,6 +12,7 @@ import errno
 import os
 import shutil
 import stat
+import sys
 import tempfile
 from collections.abc import Iterator
 
@@ -28,14 +29,14 @@ def atomic_path(path: str | os.PathLike) -> Iterator[str]:
     other non-regular file is refused with :class:`OSError`.  Missing parent
     folders are created, and removed again if the body fails.
     """
+    if writes_through(path):
+        yield from _through(os.fspath(path))
+        return
     path = os.path.realpath(os.fspath(path)) if os.path.islink(path) else os.fspath(path)
     try:
         st = os.stat(path)
     except OSError:
         st = None
-    if st is not None and (stat.S_ISCHR(st.st_mode) or stat.S_ISFIFO(st.st_mode)):
-        yield from _through(path)
-        return
     if st is not None and not stat.S_ISREG(st.st_mode):
         raise IsADirectoryError(errno.EISDIR, "not a regular file; refusing to replace it", path)
     mode = st.st_mode & 0o777 if st is not None else 0o644
@@ -58,13 +59,49 @@ def atomic_path(path: str | os.PathLike) -> Iterator[str]:
         raise
 
 
+def writes_through(path: str | os.PathLike) -> bool:
+    """True when ``path`` is written *through* instead of replaced: it is (or links to) a
+    character device or a FIFO, or it names a descriptor of this process (``/dev/stdout``,
+    ``/dev/fd/N``, ``/proc/self/fd/N``; even when the shell redirected it to a regular file,
+    which must then be filled, not swapped for a new file the shell does not hold)."""
+    name = os.path.abspath(os.fspath(path))
+    if name in ("/dev/stdout", "/dev/stderr") or name.startswith(("/dev/fd/", "/proc/self/fd/")):
+        return os.path.exists(name)
+    try:
+        mode = os.stat(name).st_mode
+    except OSError:
+        return False
+    return stat.S_ISCHR(mode) or stat.S_ISFIFO(mode)
+
+
+def _descriptor(path: str) -> int | None:
+    """The descriptor number ``/dev/stdout``, ``/dev/stderr``, ``/dev/fd/N`` or ``/proc/self/fd/N`` names."""
+    name = os.path.abspath(path)
+    fixed = {"/dev/stdout": 1, "/dev/stderr": 2}
+    if name in fixed:
+        return fixed[name]
+    for prefix in ("/dev/fd/", "/proc/self/fd/"):
+        if name.startswith(prefix) and name[len(prefix):].isdigit():
+            return int(name[len(prefix):])
+    return None
+
+
 def _through(path: str) -> Iterator[str]:
-    """Write into a character device or FIFO: a temporary file elsewhere, then copied in."""
+    """Write into a character device, a FIFO or an open descriptor: a temporary file
+    elsewhere, then copied in.  A descriptor (``/dev/stdout``) is written as it is open,
+    not reopened, so a shell's ``>>`` appends and ``>`` is not truncated twice."""
     fd, tmp = tempfile.mkstemp(prefix="mftire-", suffix=".tmp")
     os.close(fd)
     try:
         yield tmp
-        with open(tmp, "rb") as src, open(path, "wb") as dst:
+        number = _descriptor(path)
+        if number is not None:
+            with contextlib.suppress(AttributeError, ValueError, OSError):
+                sys.stdout.flush()  # what was printed before comes first
+            dst = open(os.dup(number), "wb")  # noqa: SIM115 - closed below
+        else:
+            dst = open(path, "wb")  # noqa: SIM115 - closed below
+        with open(tmp, "rb") as src, dst:
             shutil.copyfileobj(src, dst)
     finally:
         with contextlib.suppress(FileNotFoundError):

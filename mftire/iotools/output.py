@@ -12,9 +12,10 @@ commands:
    command stops with exit code 2 before doing any work.  An existing, non-empty
    output *folder* likewise needs ``--force`` (then files of the same names in it
    are replaced, other files are left alone).  An empty folder is used as is.
-3. A character device or a FIFO that the user names (``/dev/null``, ``/dev/stdout``,
-   a named pipe) is written *through*: the data is streamed into it and the entry
-   is never replaced; ``--force`` is not needed.  Any other non-regular file (a
+3. A character device or a FIFO that the user names (``/dev/null``, a named pipe), and
+   ``/dev/stdout``, ``/dev/stderr``, ``/dev/fd/N`` (whatever the shell redirected them
+   to), are written *through*: the data is streamed into it and the entry is never
+   replaced; ``--force`` is not needed.  Any other non-regular file (a
    folder where a file is expected, a socket, a block device, a symbolic link to a
    missing file) is refused.
 4. A symbolic link to a regular file is followed: the file it points to is
@@ -40,6 +41,7 @@ import tempfile
 from collections.abc import Iterable
 
 from mftire.errors import MftireInputError
+from mftire.iotools.atomic import writes_through
 
 #: Figure formats by file suffix (matplotlib's writers).
 FIGURE_FORMATS = {
@@ -64,15 +66,6 @@ def figure_format(path: str | os.PathLike) -> str:
         known = ", ".join(FIGURE_FORMATS)
         what = f"suffix {suffix!r}" if suffix else "no suffix"
         raise MftireInputError(f"{os.fspath(path)}: {what} is not a figure format ({known})") from None
-
-
-def is_stream(path: str | os.PathLike) -> bool:
-    """True when ``path`` (followed) is a character device or a FIFO (written through, never replaced)."""
-    try:
-        mode = os.stat(path).st_mode
-    except OSError:
-        return False
-    return stat.S_ISCHR(mode) or stat.S_ISFIFO(mode)
 
 
 def _identity(path: str) -> tuple[str, tuple[int, int] | None]:
@@ -160,13 +153,13 @@ class OutputPlan:
         if figure:
             figure_format(path)
         self._not_an_input(path, path)
+        if writes_through(path):
+            return path  # a device, FIFO or /dev/stdout: written through (rule 3)
         if os.path.islink(path) and not os.path.exists(path):
             raise MftireInputError(f"{path}: is a symbolic link to a missing file ({os.readlink(path)}); "
                                    "refusing to write through it")
         if os.path.exists(path):
             mode = os.stat(path).st_mode
-            if stat.S_ISCHR(mode) or stat.S_ISFIFO(mode):
-                return path  # written through (rule 3)
             if not stat.S_ISREG(mode):
                 raise MftireInputError(f"{path}: is {_kind(mode)}; refusing to replace it")
             if not (self.force or replace_ok):
@@ -195,4 +188,4 @@ class OutputPlan:
         return path
 
 
-__all__ = ["FIGURE_FORMATS", "FORCE_HELP", "OutputPlan", "add_force_option", "figure_format", "is_stream"]
+__all__ = ["FIGURE_FORMATS", "FORCE_HELP", "OutputPlan", "add_force_option", "figure_format"]
