@@ -44,7 +44,7 @@ def _rate(fn, n_points: int, min_time: float = 1.0) -> float:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--tir", default=str(ROOT / "tirfiles" / "mfeval" / "MagicFormula61_Paramerters.tir"))
+    ap.add_argument("--tir", default=str(ROOT / "tirfiles" / "mfeval" / "MF61_255-55R20_mfeval4.0.tir"))
     ap.add_argument("--mode", type=int, default=111)
     ap.add_argument("--min-time", type=float, default=1.0, help="seconds per measurement")
     args = ap.parse_args()

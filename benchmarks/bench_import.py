@@ -9,7 +9,7 @@ jobs the wall time can be several times the CPU time.
 The rows are generated here (not timed): a schedule of 30 s blocks cycling through four
 loads, three inclinations, two pressures and two speeds, each block a 2.5 s load ramp, a
 2.5 s dwell and 25 s of slip-angle sweeps (+-12 deg, 1 Hz) or braking sweeps; forces from
-the Magic Formula (``tirfiles/MagicFormula61_Parameters.tir``, Tyre API) in SAE axes,
+the Magic Formula (``tirfiles/MF61_255-55R20_mfeval-jl.tir``, Tyre API) in SAE axes,
 with sensor noise.  Simulated data.
 """
 
@@ -35,7 +35,7 @@ FS = 100.0
 
 def make_rows(n: int, seed: int = 0) -> pd.DataFrame:
     """``n`` rows of TTC channels (SI, SAE axes), vectorised."""
-    tyre = mftire.load(ROOT / "tirfiles" / "MagicFormula61_Parameters.tir")
+    tyre = mftire.load(ROOT / "tirfiles" / "MF61_255-55R20_mfeval-jl.tir")
     rng = np.random.default_rng(seed)
     t = np.arange(n) / FS
     block = (t // 30.0).astype(int)

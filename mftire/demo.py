@@ -35,9 +35,17 @@ class _Steps:
             print(f"[{self.i}/{self.total} {time.perf_counter() - self.t0:5.1f} s] {msg}", flush=True)
 
 
+#: Files and folders the demo writes into its output folder.
+OUTPUT_NAMES = ("fe_sweeps.csv", "measured_sweeps.csv", "fitted.tir", "extended.tir", "tyre.fmu", "report.html",
+                "report.json", "headline.png")
+
+
 def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progress: bool = True) -> dict:
-    """Run the demo; returns a summary dict (also in ``output/report.json``)."""
-    with warnings.catch_warnings():  # the demo's fits warn on degenerate steps; the caller's filters stay as they are
+    """Run the demo; returns a summary dict (also in ``output/report.json``).
+
+    Warnings of the steps are silenced inside the run only (global filters are restored).
+    """
+    with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return _run_demo(output, quick, progress)
 

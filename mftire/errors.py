@@ -9,3 +9,15 @@ class MftireError(Exception):
 
 class MftireInputError(MftireError, ValueError):
     """Bad user input: a missing column, a non-numeric cell, a NaN, an out-of-range value."""
+
+
+class MftireWarning(UserWarning):
+    """Base class of the warnings mftire issues on purpose (the CLI prints them as one line)."""
+
+
+class MftireTirWarning(MftireWarning):
+    """A ``.tir`` file that loads but is suspicious: optional sections missing, implausible values."""
+
+
+class MftireUnitWarning(MftireWarning):
+    """Inputs that look like the wrong unit (degrees for radians, kN for N); see :mod:`mftire.tyre`."""

@@ -30,7 +30,8 @@ def subplots(nrows: int = 1, ncols: int = 1, **kw) -> tuple[Figure, object]:
 
 
 def plot_standard_curves(curves: pd.DataFrame, path: str | os.PathLike, title: str = "") -> None:
-    """Draw the six standard panels from :func:`mftire.curves.standard_curves` to a PNG."""
+    """Draw the six standard panels from :func:`mftire.curves.standard_curves` to a figure file
+    whose format follows the suffix (PNG, PDF, SVG, ...)."""
     fig, axes = subplots(2, 3, figsize=(15, 8.5), constrained_layout=True)
     pl = curves[curves.curve == "pure_long"]
     lat = curves[curves.curve == "pure_lat"]
@@ -54,5 +55,8 @@ def plot_standard_curves(curves: pd.DataFrame, path: str | os.PathLike, title: s
         ax.legend(fontsize=8)
     if title:
         fig.suptitle(title)
+    from mftire.iotools.output import figure_format
+
+    fmt = figure_format(path)  # the format follows the suffix (.png, .pdf, .svg, ...)
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
+        fig.savefig(tmp, dpi=110, format=fmt)

@@ -1,7 +1,7 @@
 """A thin object layer over the parameter file and the pure evaluator.
 
 >>> import mftire
->>> tyre = mftire.load("tirfiles/MagicFormula61_Parameters.tir")
+>>> tyre = mftire.load("tirfiles/MF61_255-55R20_mfeval-jl.tir")
 >>> out = tyre.evaluate(Fz=4000.0, kappa=-0.1, alpha=0.0)
 >>> round(float(out["Fx"]), 1)  # doctest: +SKIP
 """
@@ -60,6 +60,9 @@ class Tyre:
             pac2002.warn_unused(self.parameters.flat())
             # the folded parameter set every pipeline evaluates (evaluator, fitter, diagnosis, FMU)
             self.flat = pac2002.prepare(self.flat)
+        from mftire.input_checks import check_constants
+
+        check_constants(self.flat, getattr(params, "path", None))
         ext = self.parameters.sections.get(SECTION)
         #: The ``[MFTIRE_EXTENSIONS]`` section (model extensions), or None.
         self.extensions: dict[str, Any] | None = dict(ext) if ext else None
@@ -90,8 +93,11 @@ class Tyre:
 
     @classmethod
     def from_file(cls, path: str | os.PathLike, strict: bool = False) -> Tyre:
-        """Read a ``.tir`` file (see :func:`mftire.read_tir`; ``strict`` makes its warnings errors)."""
-        return cls(read_tir(path, strict=strict))
+        """Read a ``.tir`` file (see :func:`mftire.read_tir`; ``strict`` makes its reading warnings errors);
+        a broken file raises, a suspicious one warns (:mod:`mftire.iotools.tir_checks`)."""
+        from mftire.iotools.tir_checks import checked
+
+        return cls(checked(read_tir(path, strict=strict)))
 
     @property
     def fittyp(self) -> int | None:
@@ -157,6 +163,11 @@ class Tyre:
         if self.flat.get("FITTYP") in (None, 0, 0.0, 5, 5.0):
             why = unsupported_message(5 if self.format == "MF_05" else self.fittyp)
             raise UnsupportedModelError(f"{self.name} ({self.format}): {why}")
+        from mftire.input_checks import check_keywords, warn_units
+
+        if variables:
+            check_keywords(variables, self.required_variables)
+        warn_units(self, Fz, alpha)
         out = evaluate_arrays(
             self.flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, self.extension_set, variables or None
         )

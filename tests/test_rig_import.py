@@ -33,7 +33,7 @@ from mftire.iotools.rig import (
 
 ROOT = Path(__file__).resolve().parent.parent
 RAW = ROOT / "validation" / "data" / "rig" / "simulated_ttc_run.dat.gz"
-FNOMIN = 6752.0  # tirfiles/MagicFormula61_Parameters.tir
+FNOMIN = 6752.0  # tirfiles/MF61_255-55R20_mfeval-jl.tir
 
 
 def _generator():

@@ -22,7 +22,7 @@ Schedule (40 km/h, 260 kPa)
 Tyre
 ----
 Forces and moments are the steady-state Magic Formula of
-``tirfiles/MagicFormula61_Parameters.tir`` (``mftire.load`` and ``Tyre.evaluate``),
+``tirfiles/MF61_255-55R20_mfeval-jl.tir`` (``mftire.load`` and ``Tyre.evaluate``),
 with the friction scaling factors LMUX = LMUY = g(T) set per sample from the tread
 temperature T:
 
@@ -60,7 +60,7 @@ import pandas as pd
 from scipy.signal import lfilter
 
 ROOT = Path(__file__).resolve().parent.parent
-TIR = ROOT / "tirfiles" / "MagicFormula61_Parameters.tir"
+TIR = ROOT / "tirfiles" / "MF61_255-55R20_mfeval-jl.tir"
 OUT = ROOT / "validation" / "data" / "rig" / "simulated_ttc_run.dat.gz"
 
 FS = 100.0  #: sample rate [Hz]

@@ -2,7 +2,7 @@
 
 Each case is a measured-like rig programme (pure braking sweeps kappa 0 -> -0.3, cornering
 sweeps alpha -12 -> +12 -> -12 deg, three or four loads tested in blocks), simulated either
-with the Magic Formula evaluator (the shipped MF 6.1 tyre ``tirfiles/MagicFormula61_Parameters.tir``
+with the Magic Formula evaluator (the shipped MF 6.1 tyre ``tirfiles/MF61_255-55R20_mfeval-jl.tir``
 with one term in ``[MFTIRE_EXTENSIONS]`` injecting the effect) or with the FE surrogate
 (:mod:`mftire.fe`, with the friction level changed run by run), plus rig artefacts:
 
@@ -66,7 +66,7 @@ from mftire.iotools.atomic import atomic_path, write_text_atomic
 from mftire.iotools.tir import TirParameters, write_tir
 
 ROOT = Path(__file__).resolve().parents[1]
-TIR = ROOT / "tirfiles" / "MagicFormula61_Parameters.tir"
+TIR = ROOT / "tirfiles" / "MF61_255-55R20_mfeval-jl.tir"
 OUT = ROOT / "validation" / "data" / "unanticipated"
 OUT_REDUCED = ROOT / "validation" / "data" / "unanticipated_reduced"
 
@@ -85,7 +85,7 @@ POINTS = {False: (31, 25), True: (13, 9)}
 PERTURBED = ("PDX1", "PDY1", "PKX1", "PKY1", "PCX1", "PCY1", "PEX1", "PEY1", "PDX2", "PDY2", "QBZ1", "QDZ1")
 PERTURBATION = 0.04
 MODEL_TEXT = {
-    "mf": "MF 6.1 (tirfiles/MagicFormula61_Parameters.tir) with the extension term in 'truth'",
+    "mf": "MF 6.1 (tirfiles/MF61_255-55R20_mfeval-jl.tir) with the extension term in 'truth'",
     "fe": "FE surrogate (mftire.fe, default tyre); 'truth' is the MF term that describes the effect",
 }
 FAMILY = {"LMUX": "friction", "LMUY": "friction", "LKX": "stiffness", "LKY": "stiffness",

@@ -13,6 +13,10 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
     if not args.data and not args.fe:
         raise MftireInputError("give measured sweeps (--data) and/or FE-surrogate sweeps (--fe)")
+    from mftire.iotools.output import OutputPlan
+
+    OutputPlan([*args.tir, *args.data, *args.fe, args.bands], args.force).folder(
+        args.output, ("compare.md", "compare.json", "bands_drawn.csv"))
     data = load_comparison_data(args.data or [], args.fe or [])
     comp = compare(args.tir, data, mode=args.mode, bands=args.bands, alpha_window_deg=args.alpha_window)
     paths = write_comparison(comp, args.output, plots=not args.no_plots)
@@ -48,5 +52,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--alpha-window", type=float, default=2.5, metavar="DEG",
                    help="|alpha| window of the stiffness fits in degrees (default 2.5)")
     p.add_argument("--no-plots", action="store_true", help="tables only")
+    from mftire.iotools.output import add_force_option
+
+    add_force_option(p)
     p.set_defaults(func=_cmd_compare)
     return p

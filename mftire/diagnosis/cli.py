@@ -10,9 +10,11 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     from mftire.diagnosis.diagnose import diagnose
     from mftire.diagnosis.holdout import parse_holdout
     from mftire.diagnosis.report import write_report
+    from mftire.iotools.output import OutputPlan
     from mftire.iotools.tables import load_sweep_files
     from mftire.tyre import load
 
+    OutputPlan([*args.data, args.tir], args.force).folder(args.output, REPORT_FILES)
     tyre = load(args.tir)
     data, _ = load_sweep_files(args.data)
     holdout = parse_holdout(args.holdout) if args.holdout else None
@@ -25,16 +27,25 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     return 0
 
 
+#: Fixed file names of the diagnosis folder (plus residual_vs_<variable>.png).
+REPORT_FILES = ("diagnosis.md", "diagnosis.json", "extended.tir", "ranking.png", "curves_before_after.png")
+
+
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "diagnose",
         help="trace the residual of a fitted .tir to a missing effect, add it, report before/after on held-out data",
+        description="Rank candidate causes of the residual of a fitted .tir, add the most likely missing effect, "
+        "refit and report the error before and after on a held-out operating condition.",
     )
     p.add_argument("data", nargs="+", metavar="DATA", help="sweep data (CSV in the sweep schema, or TYDEX .tdx)")
     p.add_argument("--tir", required=True, help="the fitted .tir")
     p.add_argument("--output", required=True, help="output directory")
     p.add_argument("--holdout", help="held-out condition, COLUMN=V1[,V2...] in SI (e.g. Vx=16.67); default automatic")
     p.add_argument("--permutations", type=int, default=99, help="permutations of the significance test (default 99)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0, help="random seed of the permutation test (default 0)")
+    from mftire.iotools.output import add_force_option
+
+    add_force_option(p)
     p.set_defaults(func=_cmd_diagnose)
     return p

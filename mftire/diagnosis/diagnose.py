@@ -247,6 +247,8 @@ def diagnose(
     if not chans:
         raise MftireInputError("no measured channel (Fx, Fy, Mz, Mx, My) with data to diagnose"
                                + "".join(f"; {c}: {why}" for c, why in not_measured.items()))
+    if holdout is not None:  # a held-out level given by the user must exist, whatever the ranking finds
+        holdout_mask(df, holdout[0], list(holdout[1]))
     cands = candidates(df)
     by_name = {c.name: c for c in cands}
     variables = _variables_for(tyre, df)

@@ -38,12 +38,17 @@ def holdout_mask(df: pd.DataFrame, column: str, values: Sequence[float], rel_tol
         raise MftireInputError(f"--holdout: no column '{column}' in the data (have: {', '.join(map(str, df.columns))})")
     x = df[col].to_numpy(float)
     mask = np.zeros(len(df), dtype=bool)
+    missing = []
     for v in values:
         tol = 1e-3 if column == "gamma" else rel_tol * max(abs(v), 1e-12)
-        mask |= np.abs(x - v) <= tol
-    if not mask.any():
+        hit = np.abs(x - v) <= tol
+        if not hit.any():
+            missing.append(v)
+        mask |= hit
+    if missing:  # every requested level must exist, not just one of them
         levels = ", ".join(f"{u:g}" for u in np.unique(np.round(x, 6))[:12])
-        raise MftireInputError(f"--holdout {column}: no rows at {values} (levels present: {levels})")
+        raise MftireInputError(f"--holdout {column}: no rows at {', '.join(f'{v:g}' for v in missing)} "
+                               f"(levels present: {levels})")
     if mask.all():
         raise MftireInputError(f"--holdout {column}={values} holds out every row; nothing is left to fit")
     return mask

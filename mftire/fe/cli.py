@@ -25,7 +25,9 @@ def _tyre(args: argparse.Namespace):
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
     from mftire.fe.sweeps import sweep, write_csv_atomic
+    from mftire.iotools.output import OutputPlan
 
+    OutputPlan([args.tyre], args.force).file(args.output)
     tyre = _tyre(args)
     if args.Fz is None and args.load_fraction is None:
         raise MftireInputError("give --Fz [N] or --load-fraction")
@@ -43,7 +45,9 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
 def _cmd_campaign(args: argparse.Namespace) -> int:
     from mftire.fe.sweeps import campaign, write_csv_atomic
+    from mftire.iotools.output import OutputPlan
 
+    OutputPlan([args.tyre], args.force).folder(args.output, ("sweeps.csv", "free_rolling.csv"))
     tyre = _tyre(args)
     out = Path(args.output)
     t0 = time.perf_counter()
@@ -69,7 +73,10 @@ def _read_tables(paths: list[str]) -> pd.DataFrame:
 
 def _cmd_identify(args: argparse.Namespace) -> int:
     from mftire.fe.identify import identify_velocity_law
+    from mftire.iotools.output import OutputPlan
 
+    if args.output:
+        OutputPlan([*args.data, args.tyre], args.force).file(args.output)
     data = _read_tables(args.data)
     tyre = _tyre(args) if args.mu_p is None else None
     Fz = args.Fz
@@ -93,12 +100,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     fe = subparsers.add_parser("fe", help="FE-surrogate rolling-contact model (brush model, van der Steen friction)",
                                description="FE-surrogate steady-state rolling-contact model.")
     sub = fe.add_subparsers(dest="fe_command", required=True)
+    from mftire.iotools.output import add_force_option
 
     tyre_help = "tyre file (TOML) or 'default' (the shipped 205/55 R16 tyre)"
 
-    s = sub.add_parser("sweep", help="run one kind of slip sweep")
+    s = sub.add_parser("sweep", help="run one kind of slip sweep",
+                       description="Run one kind of slip sweep of the FE surrogate and write it as CSV.")
     s.add_argument("--tyre", default="default", help=tyre_help)
-    s.add_argument("--kind", required=True, choices=["braking", "cornering", "combined"])
+    s.add_argument("--kind", required=True, choices=["braking", "cornering", "combined"], help="kind of sweep")
     s.add_argument("--Fz", type=float, nargs="+", help="vertical load(s) [N]")
     s.add_argument("--load-fraction", type=float, nargs="+", help="load(s) as fraction of the load-index load")
     s.add_argument("--Vx", type=float, nargs="+", help="speed(s) [m/s]")
@@ -107,15 +116,21 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     s.add_argument("--gamma-deg", type=float, default=0.0, help="camber [deg]")
     s.add_argument("--points", type=int, default=50, help="points per slip sweep (default 50)")
     s.add_argument("--output", required=True, help="output CSV (sweep-table schema)")
+    add_force_option(s)
     s.set_defaults(func=_cmd_sweep)
 
-    c = sub.add_parser("campaign", help="run the thesis's test programme (braking, cornering, combined)")
+    c = sub.add_parser("campaign", help="run the thesis's test programme (braking, cornering, combined)",
+                       description="Run the thesis's test programme with the FE surrogate; write sweeps.csv and "
+                       "free_rolling.csv into a folder.")  # fmt: skip
     c.add_argument("--tyre", default="default", help=tyre_help)
     c.add_argument("--output", required=True, help="output directory (sweeps.csv, free_rolling.csv)")
     c.add_argument("--quick", action="store_true", help="reduced grid (for tests)")
+    add_force_option(c)
     c.set_defaults(func=_cmd_campaign)
 
-    i = sub.add_parser("identify", help="identify the velocity part of the friction law from braking curves (ch. 5)")
+    i = sub.add_parser("identify", help="identify the velocity part of the friction law from braking curves (ch. 5)",
+                       description="Identify the velocity part of the friction law from braking curves at "
+                       "several speeds (thesis ch. 5).")  # fmt: skip
     i.add_argument("data", nargs="+", help="braking sweep CSV file(s), several speeds, sweep-table schema")
     i.add_argument("--tyre", default="default", help=tyre_help + "; used to compute mu_p")
     i.add_argument("--Fz", type=float, help="identification load [N] (default: middle load in the data)")
@@ -124,5 +139,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     i.add_argument("--kappa-max", type=float, default=0.05, help="kappa_max (default 0.05, thesis 5.4)")
     i.add_argument("--mu-p", type=float, help="global pressure factor mu_p (default: simulate with --tyre)")
     i.add_argument("--output", help="write the parameters to this .toml or .json file")
+    add_force_option(i)
     i.set_defaults(func=_cmd_identify)
 

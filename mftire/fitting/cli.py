@@ -7,12 +7,22 @@ import sys
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:
+    from mftire.errors import MftireInputError
     from mftire.fitting.core import fit_tir
     from mftire.iotools.tir import write_tir
 
+    _check_outputs(args)
+    from mftire.tyre import load
+
+    load(args.template)  # a broken template is an error, a suspicious one warns (mftire.iotools.tir_checks)
     fixed = [k.strip() for k in (args.fix or "").split(",") if k.strip()]
     result = fit_tir(args.data, args.template, stages=args.stages, weights=args.weights,
                      alpha_star=args.alpha_star, fixed=fixed)
+    data = result.data
+    if not any(s.status == "fitted" or (s.channel in data.columns and data[s.channel].notna().any())
+               for s in result.stages):
+        raise MftireInputError(f"{', '.join(args.data)}: no stage could be fitted (no force or moment channel "
+                               "Fx, Fy, Mz, Mx, My with data for the chosen stages); nothing written")
     write_tir(result.parameters, args.output)
     lines = [f"mftire fit: wrote {args.output} ({len(dict.fromkeys(result.identified))} coefficients fitted, "
              f"{len(result.not_identified)} not identified, {result.time:.1f} s)"]
@@ -30,6 +40,22 @@ def _cmd_fit(args: argparse.Namespace) -> int:
         lines.extend(_bands(args, result))
     print("\n".join(lines), file=sys.stdout)
     return 0
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Every output of ``fit`` (the .tir, the report folder, the band files) before any work."""
+    import os
+
+    from mftire.iotools.output import OutputPlan
+
+    plan = OutputPlan([*args.data, args.template, *(args.heldout or [])], args.force)
+    plan.file(args.output)
+    bands = ("bands.csv", "bands.json") if args.bands else ()
+    if args.report:
+        plan.folder(args.report, ("report.md", "metrics.json", *bands))
+    else:
+        for name in bands:
+            plan.file(os.path.join(os.path.dirname(os.path.abspath(args.output)), name))
 
 
 def _bands(args: argparse.Namespace, result) -> list[str]:
@@ -85,5 +111,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--jobs", type=int, default=1, help="worker processes for the bootstrap refits (default 1)")
     p.add_argument("--fix", metavar="KEYS", help="coefficients held at their template values, "
                    "comma-separated (e.g. PPX1,PPX2,PPX3,PPX4 to fit without pressure terms)")
+    from mftire.iotools.output import add_force_option
+
+    add_force_option(p)
     p.set_defaults(func=_cmd_fit)
     return p

@@ -7,7 +7,9 @@ import argparse
 
 def _cmd_export_fmu(args: argparse.Namespace) -> int:
     from mftire.fmu.export import export_fmu
+    from mftire.iotools.output import OutputPlan
 
+    OutputPlan([args.tir], args.force).file(args.output)
     path = export_fmu(
         args.tir,
         args.output,
@@ -30,7 +32,7 @@ def add_parser(subparsers) -> None:
         description="Export a .tir as an FMU carrying the Magic Formula as compiled C code "
         "(no Python needed by the importer). Default: FMI 2.0 with Model Exchange and Co-Simulation.",
     )
-    p.add_argument("tir", metavar="TIR")
+    p.add_argument("tir", metavar="TIR", help="the .tir property file")
     p.add_argument("--output", "-o", required=True, help="the .fmu file to write")
     p.add_argument("--fmi-version", type=int, choices=(2, 3), default=2, help="FMI version (default 2)")
     p.add_argument("--mode", type=int, default=111, help="start value of the useMode parameter (default 111)")
@@ -39,4 +41,7 @@ def add_parser(subparsers) -> None:
                    help="transient tyre: wheel kinematics in (Fz, Vx, Vy, omega, ...), relaxation-length slip "
                    "states, low-speed model (FMI 2.0; see docs/transient.md)")  # fmt: skip
     p.add_argument("--cc", help="C compiler command (default: $CC, then cc, gcc, clang)")
+    from mftire.iotools.output import add_force_option
+
+    add_force_option(p)
     p.set_defaults(func=_cmd_export_fmu)

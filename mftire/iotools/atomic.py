@@ -1,14 +1,18 @@
 """Atomic file writes: write to a temporary file beside the target, then rename.
 
 A failed write leaves the target untouched, and readers never see a half-written
-file.  The new file keeps the permissions of the file it replaces (0644 for a new
+file (and no temporary file is left behind).  The new file keeps the permissions of the file it replaces (0644 for a new
 file).
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import shutil
+import stat
+import sys
 import tempfile
 from collections.abc import Iterator
 
@@ -18,14 +22,31 @@ def atomic_path(path: str | os.PathLike) -> Iterator[str]:
     """Yield a temporary path in the target's directory; ``os.replace`` it on success.
 
     If the body raises, the temporary file is removed and ``path`` is untouched.
+
+    The target is resolved first: a symbolic link to a file is followed (the file is
+    replaced, the link stays); a character device or FIFO (``/dev/null``, a named
+    pipe) is written *through* (the data is copied into it, the entry is kept); any
+    other non-regular file is refused with :class:`OSError`.  Missing parent
+    folders are created, and removed again if the body fails.
     """
-    path = os.fspath(path)
-    directory = os.path.dirname(os.path.abspath(path))
+    if writes_through(path):
+        yield from _through(os.fspath(path))
+        return
+    path = os.path.realpath(os.fspath(path)) if os.path.islink(path) else os.fspath(path)
     try:
-        mode = os.stat(path).st_mode & 0o777
+        st = os.stat(path)
     except OSError:
-        mode = 0o644
-    fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.", suffix=".tmp", dir=directory)
+        st = None
+    if st is not None and not stat.S_ISREG(st.st_mode):
+        raise IsADirectoryError(errno.EISDIR, "not a regular file; refusing to replace it", path)
+    mode = st.st_mode & 0o777 if st is not None else 0o644
+    directory = os.path.dirname(os.path.abspath(path))
+    created = _makedirs(directory)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.", suffix=".tmp", dir=directory)
+    except BaseException:
+        _removedirs(created)
+        raise
     os.close(fd)
     try:
         yield tmp
@@ -34,7 +55,77 @@ def atomic_path(path: str | os.PathLike) -> Iterator[str]:
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
+        _removedirs(created)
         raise
+
+
+def writes_through(path: str | os.PathLike) -> bool:
+    """True when ``path`` is written *through* instead of replaced: it is (or links to) a
+    character device or a FIFO, or it names a descriptor of this process (``/dev/stdout``,
+    ``/dev/fd/N``, ``/proc/self/fd/N``; even when the shell redirected it to a regular file,
+    which must then be filled, not swapped for a new file the shell does not hold)."""
+    name = os.path.abspath(os.fspath(path))
+    if name in ("/dev/stdout", "/dev/stderr") or name.startswith(("/dev/fd/", "/proc/self/fd/")):
+        return os.path.exists(name)
+    try:
+        mode = os.stat(name).st_mode
+    except OSError:
+        return False
+    return stat.S_ISCHR(mode) or stat.S_ISFIFO(mode)
+
+
+def _descriptor(path: str) -> int | None:
+    """The descriptor number ``/dev/stdout``, ``/dev/stderr``, ``/dev/fd/N`` or ``/proc/self/fd/N`` names."""
+    name = os.path.abspath(path)
+    fixed = {"/dev/stdout": 1, "/dev/stderr": 2}
+    if name in fixed:
+        return fixed[name]
+    for prefix in ("/dev/fd/", "/proc/self/fd/"):
+        if name.startswith(prefix) and name[len(prefix):].isdigit():
+            return int(name[len(prefix):])
+    return None
+
+
+def _through(path: str) -> Iterator[str]:
+    """Write into a character device, a FIFO or an open descriptor: a temporary file
+    elsewhere, then copied in.  A descriptor (``/dev/stdout``) is written as it is open,
+    not reopened, so a shell's ``>>`` appends and ``>`` is not truncated twice."""
+    fd, tmp = tempfile.mkstemp(prefix="mftire-", suffix=".tmp")
+    os.close(fd)
+    try:
+        yield tmp
+        number = _descriptor(path)
+        if number is not None:
+            with contextlib.suppress(AttributeError, ValueError, OSError):
+                sys.stdout.flush()  # what was printed before comes first
+            dst = open(os.dup(number), "wb")  # noqa: SIM115 - closed below
+        else:
+            dst = open(path, "wb")  # noqa: SIM115 - closed below
+        with open(tmp, "rb") as src, dst:
+            shutil.copyfileobj(src, dst)
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+
+
+def _makedirs(directory: str) -> list[str]:
+    """Create ``directory`` and missing parents; return the created ones, deepest first."""
+    created = []
+    d = directory
+    while not os.path.isdir(d):
+        created.append(d)
+        parent = os.path.dirname(d)
+        if parent == d:
+            break
+        d = parent
+    os.makedirs(directory, exist_ok=True)
+    return created
+
+
+def _removedirs(created: list[str]) -> None:
+    for d in created:
+        with contextlib.suppress(OSError):
+            os.rmdir(d)
 
 
 def write_text_atomic(path: str | os.PathLike, text: str, newline: str | None = "") -> None:

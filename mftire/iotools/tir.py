@@ -759,6 +759,8 @@ def _convert_units(params: TirParameters, where: dict, section_line: dict, sourc
             lineno, line = where[("UNITS", quantity)]
             raise UnknownUnitError(f"unknown {quantity.lower()} unit", source, lineno, line)
         factors[quantity] = factor
+    #: the non-SI units the file declared (read by mftire.iotools.tir_checks for its hints)
+    params.file_units = {q: units[q] for q, f in factors.items() if f != 1}
     for quantity in _UNIT_QUANTITIES[:5]:
         factors.setdefault(quantity, Fraction(1))
     factors.setdefault("PRESSURE", factors["FORCE"] / factors["LENGTH"] ** 2)

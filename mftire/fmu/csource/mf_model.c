@@ -6,6 +6,7 @@
  * Outputs are evaluated lazily: setting an input or a parameter marks the
  * instance dirty, reading an output evaluates once.
  */
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -50,6 +51,7 @@ void mf_model_reset(MFModel *m)
     m->dirty = 1;
     m->initialized = 0;
     memset(m->warn_count, 0, sizeof m->warn_count);
+    memset(m->guard_count, 0, sizeof m->guard_count);
 }
 
 void mf_model_init(MFModel *m, mf_log_fn log, void *host)
@@ -83,12 +85,130 @@ static void on_warning(void *ctx, int kind, const char *message)
                       MF_WARN_REPEAT);
 }
 
+/* ------------------------------------------------------------------ input and output guards
+ *
+ * The importer's inputs pass through guard_inputs() before the evaluator sees them
+ * (docs/fmu.md, "Bad inputs"):
+ *   - NaN keeps the evaluator's own replacement and warning (0; P: INFLPRES), except
+ *     muRoad, which becomes 1 (no friction change) here;
+ *   - +-Inf and finite values beyond the bounds below are saturated to the bound;
+ *   - |x| < 1e-30 (subnormal and tiny values) is 0, silently: 1/x would overflow;
+ *   - the bounds are the file's ranges widened to a guard band, or physical bounds
+ *     where the file has no range:
+ *       Fz     <= 3 FZMAX                 (negative: lift-off, set to 0 by the evaluator)
+ *       kappa  |.| <= max(10, 2 max(|KPUMIN|, |KPUMAX|))
+ *       alpha, gamma  |.| <= 1.55 rad     (just below 90 deg: tan() stays finite)
+ *       phit   |.| <= 100 1/m
+ *       Vx     |.| <= 200 m/s
+ *       P      <= 3 PRESMAX               (<= 0 or -Inf: INFLPRES, as for NaN)
+ *       omega  |.| <= 2000 rad/s
+ *       muRoad 1e-3 .. 10                (no friction at all is outside the model: 0/0)
+ *       data variables of the extensions  |.| <= 1e12 (NaN: 0 by the evaluator)
+ * Each replacement is logged as a warning through the FMI logger (rate-limited like the
+ * evaluator's warnings).  guard_outputs() is the last line: a published output that is
+ * still not finite is set to 0 with a logged warning (known case: Mz, Mzr at Fz = 0 with
+ * turn slip and limits, useMode 112, where the Python evaluator gives NaN too);
+ * the fuzz test of tests/test_fmu_guards.py drives 10^5 random vectors through it.
+ */
+#define MF_GUARD_ALPHA 1.55
+#define MF_GUARD_PHIT 100.0
+#define MF_GUARD_VX 200.0
+#define MF_GUARD_OMEGA 2000.0
+#define MF_GUARD_MU 10.0
+#define MF_GUARD_MU_MIN 1e-3
+#define MF_GUARD_TINY 1e-30
+#define MF_GUARD_DATA 1e12
+#define MF_N_PUBLISHED 19 /* MFOutputs members the FMU publishes (Fx .. sigmay) */
+
+static void guard_log(MFModel *m, unsigned slot, const char *name, double x, double to, const char *why)
+{
+    unsigned n = slot < MF_GUARD_SLOTS ? ++m->guard_count[slot] : MF_WARN_REPEAT + 1;
+    if (m->debug_logging || n <= MF_WARN_REPEAT)
+        mf_model_logf(m, MF_STATUS_WARNING, "logStatusWarning", "t=%.17g: input '%s' = %.17g %s %.17g.", m->time,
+                      name, x, why, to);
+    if (!m->debug_logging && n == MF_WARN_REPEAT)
+        mf_model_logf(m, MF_STATUS_WARNING, "logStatusWarning",
+                      "this warning has been logged %d times and is now muted (enable debug logging to see all)",
+                      MF_WARN_REPEAT);
+}
+
+/* Saturate x (NaN passes through for the evaluator to replace) to [lo, hi]; |x| < 1e-30 is 0. */
+static double guard_clip(MFModel *m, unsigned slot, const char *name, double x, double lo, double hi)
+{
+    if (fabs(x) < MF_GUARD_TINY) x = 0.0 * x; /* keeps the sign of zero; subnormals overflow 1/x */
+    if (x < lo) {
+        guard_log(m, slot, name, x, lo, "saturated to the bound");
+        return lo;
+    }
+    if (x > hi) {
+        guard_log(m, slot, name, x, hi, "saturated to the bound");
+        return hi;
+    }
+    return x;
+}
+
+static void guard_inputs(MFModel *m, MFInputs *in)
+{
+    const MFParams *p = &m->params;
+    double kmax = fmax(10.0, 2.0 * fmax(fabs(p->KPUMIN), fabs(p->KPUMAX)));
+    double fzmax = 3.0 * p->FZMAX, pmax = 3.0 * p->PRESMAX;
+    int k;
+    if (!(fzmax > 0.0)) fzmax = 3.0 * p->FNOMIN;
+    if (!(pmax > 0.0)) pmax = 3.0 * p->INFLPRES;
+    in->Fz = guard_clip(m, 0, "Fz", in->Fz, -HUGE_VAL, fzmax); /* -Inf: lift-off (0) in the evaluator */
+    if (isinf(in->Fz)) in->Fz = 0.0;
+    in->kappa = guard_clip(m, 1, "kappa", in->kappa, -kmax, kmax);
+    in->alpha = guard_clip(m, 2, "alpha", in->alpha, -MF_GUARD_ALPHA, MF_GUARD_ALPHA);
+    in->gamma = guard_clip(m, 3, "gamma", in->gamma, -MF_GUARD_ALPHA, MF_GUARD_ALPHA);
+    in->phit = guard_clip(m, 4, "phit", in->phit, -MF_GUARD_PHIT, MF_GUARD_PHIT);
+    in->Vx = guard_clip(m, 5, "Vx", in->Vx, -MF_GUARD_VX, MF_GUARD_VX);
+    if (isinf(in->P) && in->P < 0.0) in->P = 0.0; /* <= 0 means INFLPRES */
+    in->P = guard_clip(m, 6, "P", in->P, -HUGE_VAL, pmax);
+    in->omega = guard_clip(m, 7, "omega", in->omega, -MF_GUARD_OMEGA, MF_GUARD_OMEGA);
+    if (isnan(in->muRoad)) {
+        guard_log(m, 8, "muRoad", in->muRoad, 1.0, "replaced by");
+        in->muRoad = 1.0;
+    }
+    in->muRoad = guard_clip(m, 8, "muRoad", in->muRoad, MF_GUARD_MU_MIN, MF_GUARD_MU);
+#if MF_N_DATA > 0
+    {
+        static const char *const names[MF_N_DATA] = MF_DATA_NAMES;
+        for (k = 0; k < MF_N_DATA; k++)
+            in->data[k] = guard_clip(m, 9 + (unsigned)k, names[k], in->data[k], -MF_GUARD_DATA, MF_GUARD_DATA);
+    }
+#endif
+    (void)k;
+}
+
+static void guard_outputs(MFModel *m)
+{
+    static const char *const names[] = {"Fx", "Fy", "Fz", "Mx", "My", "Mz", "Re", "Rl", "rho", "a2", "b2", "t",
+                                        "Mzr", "mux", "muy", "Kxk", "Kya", "sigmax", "sigmay", "omega", "Cx", "Cy",
+                                        "Cz"};
+    double *o = (double *)&m->outputs;
+    unsigned i, n = sizeof m->outputs / sizeof(double);
+    for (i = 0; i < n; i++)
+        if (!isfinite(o[i]) && i >= MF_N_PUBLISHED) {
+            o[i] = 0.0; /* internal (omega, Cx, Cy, Cz): not an FMU output */
+        } else if (!isfinite(o[i])) {
+            unsigned c = ++m->guard_count[MF_GUARD_SLOTS - 1];
+            if (m->debug_logging || c <= MF_WARN_REPEAT)
+                mf_model_logf(m, MF_STATUS_WARNING, "logStatusWarning", "t=%.17g: output '%s' = %g is not finite; "
+                              "set to 0.", m->time, i < sizeof names / sizeof names[0] ? names[i] : "?", o[i]);
+            o[i] = 0.0;
+        }
+}
+
 int mf_model_update(MFModel *m)
 {
     char msg[256];
     int rc;
+    MFInputs in;
     if (!m->dirty) return MF_STATUS_OK;
-    rc = mf_evaluate(&m->params, m->use_mode, &m->inputs, &m->outputs, on_warning, m);
+    in = m->inputs;
+    guard_inputs(m, &in);
+    rc = mf_evaluate(&m->params, m->use_mode, &in, &m->outputs, on_warning, m);
+    if (rc == MF_OK) guard_outputs(m);
     if (rc != MF_OK) {
         if (rc == MF_BAD_MODE) mf_check_mode(m->use_mode, msg, sizeof msg);
         else mf_check_fittyp(&m->params, msg, sizeof msg);

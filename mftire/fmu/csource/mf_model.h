@@ -24,6 +24,9 @@ typedef struct {
 /* How many times each kind of warning is logged before it is muted (unless debug logging is on). */
 #define MF_WARN_REPEAT 10
 
+/* Counters of the input/output guards (mf_model.c): 9 inputs, MF_MAX_DATA data inputs, the outputs. */
+#define MF_GUARD_SLOTS (9 + MF_MAX_DATA + 1)
+
 struct MFModel;
 /* category: "logStatusWarning" / "logStatusError"; status: MF_STATUS_* */
 typedef void (*mf_log_fn)(struct MFModel *model, int status, const char *category, const char *message);
@@ -38,6 +41,7 @@ typedef struct MFModel {
     int initialized;  /* after ExitInitializationMode */
     int debug_logging;
     unsigned warn_count[MF_W_COUNT];
+    unsigned guard_count[MF_GUARD_SLOTS]; /* input guards of mf_model.c (9 inputs, data, outputs) */
     mf_log_fn log;
     void *host;       /* the wrapper's own data (FMI callbacks) */
 } MFModel;

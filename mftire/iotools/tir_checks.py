@@ -1,0 +1,261 @@
+"""Sanity checks of a ``.tir`` file on load: completeness and physics.
+
+:func:`check_parameters` classifies the sections of the file's Magic Formula
+version (``FITTYP``) and checks the values in SI units (after the ``[UNITS]``
+conversion of :mod:`mftire.iotools.tir`).  :func:`mftire.load` runs it on every
+file: errors raise :class:`TirCheckError` (one line naming the file), warnings are
+issued together as one :class:`~mftire.errors.MftireTirWarning`.  ``mftire info``
+prints the whole report; ``mftire info --strict`` exits 1 on warnings.
+
+Sections
+--------
+============================  ===========  ==========================================
+section                       MF 5.2/PAC   MF 6.1 / 6.2 (FITTYP 61, 62)
+============================  ===========  ==========================================
+DIMENSION, VERTICAL,          required     required
+LONGITUDINAL_, LATERAL_,
+ALIGNING_COEFFICIENTS
+OVERTURNING_, ROLLING_        optional     optional
+COEFFICIENTS, SCALING_
+COEFFICIENTS, the four
+``*_RANGE`` sections
+OPERATING_CONDITIONS,         not used     optional
+INFLATION_PRESSURE_RANGE
+others (INERTIA, STRUCTURAL,  not checked  not checked (used by other use modes)
+CONTACT_PATCH, TURNSLIP_...)
+============================  ===========  ==========================================
+
+A missing *required* section is an error; a missing *optional* one is a warning
+that lists the keys that take default values.  ``FNOMIN`` and ``UNLOADED_RADIUS``
+are required keys, and the pure-slip core coefficients (:data:`CORE_KEYS`) of a
+present coefficient section must be there too: their absence usually means a
+truncated or hand-cut file.
+
+Physical checks
+---------------
+* errors: ``FNOMIN`` > 0, ``UNLOADED_RADIUS`` > 0, ``WIDTH`` and ``RIM_RADIUS`` ≥ 0,
+  every numeric value finite (a ``nan``/``inf`` coefficient);
+* warnings: ``FNOMIN`` within :data:`PLAUSIBLE` ``["FNOMIN"]``, ``UNLOADED_RADIUS``,
+  ``NOMPRES`` and ``INFLPRES`` within their plausible ranges, ``RIM_RADIUS`` below
+  ``UNLOADED_RADIUS``, ``FZMIN`` < ``FZMAX``.  When a value is out of range and the
+  file declares non-SI ``[UNITS]``, or a power-of-ten factor would make it
+  plausible, the message says so (e.g. ``LENGTH = 'inch'`` with metre values).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from mftire.errors import MftireInputError, MftireTirWarning
+from mftire.parameters import PARAMETERS
+
+#: Sections every file needs.
+REQUIRED_SECTIONS = ("DIMENSION", "VERTICAL", "LONGITUDINAL_COEFFICIENTS", "LATERAL_COEFFICIENTS",
+                     "ALIGNING_COEFFICIENTS")
+#: Sections whose absence is a warning (every FITTYP).
+OPTIONAL_SECTIONS = ("OVERTURNING_COEFFICIENTS", "ROLLING_COEFFICIENTS", "SCALING_COEFFICIENTS",
+                     "VERTICAL_FORCE_RANGE", "LONG_SLIP_RANGE", "SLIP_ANGLE_RANGE", "INCLINATION_ANGLE_RANGE")
+#: Further optional sections of MF 6.1 / 6.2 (pressure terms).
+OPTIONAL_SECTIONS_6X = ("OPERATING_CONDITIONS", "INFLATION_PRESSURE_RANGE")
+#: Keys a file must give (no default is a sensible guess).
+REQUIRED_KEYS = ("FNOMIN", "UNLOADED_RADIUS")
+#: Pure-slip core coefficients of each coefficient section (present in MF 5.2, 6.1 and 6.2).
+CORE_KEYS = {
+    "LONGITUDINAL_COEFFICIENTS": ("PCX1", "PDX1", "PKX1"),
+    "LATERAL_COEFFICIENTS": ("PCY1", "PDY1", "PKY1"),
+    "ALIGNING_COEFFICIENTS": ("QBZ1", "QCZ1", "QDZ1"),
+}
+#: Plausible ranges (SI) of the constants, for any road or rig tyre from a bicycle to an aircraft.
+PLAUSIBLE = {
+    "FNOMIN": (50.0, 5e5),  # N
+    "UNLOADED_RADIUS": (0.05, 2.5),  # m
+    "NOMPRES": (2e4, 5e6),  # Pa (0.2 .. 50 bar)
+    "INFLPRES": (2e4, 5e6),  # Pa
+}
+_UNITS = {"FNOMIN": "N", "UNLOADED_RADIUS": "m", "NOMPRES": "Pa", "INFLPRES": "Pa"}
+_QUANTITY = {"FNOMIN": ("FORCE",), "UNLOADED_RADIUS": ("LENGTH",), "NOMPRES": ("PRESSURE", "FORCE", "LENGTH"),
+             "INFLPRES": ("PRESSURE", "FORCE", "LENGTH")}
+
+
+class TirCheckError(MftireInputError):
+    """A ``.tir`` file that cannot be used: a required section or key missing, a non-physical value."""
+
+
+@dataclass
+class CheckReport:
+    """What :func:`check_parameters` found."""
+
+    source: str
+    fittyp: int | None = None
+    errors: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    #: ``{SECTION: [keys taking their default]}`` for the standard keys of the file's version.
+    defaulted: dict[str, list[str]] = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        return not self.errors
+
+    def exit_code(self, strict: bool = False) -> int:
+        """2 with errors, 1 with warnings under ``strict``, else 0."""
+        return 2 if self.errors else 1 if (strict and self.warnings) else 0
+
+    def format(self) -> str:
+        """The report as text (used by ``mftire info``)."""
+        lines = ["checks:"]
+        lines += [f"  error: {m}" for m in self.errors]
+        lines += [f"  warning: {m}" for m in self.warnings]
+        if not self.errors and not self.warnings:
+            lines.append("  all passed")
+        if self.defaulted:
+            lines.append("keys taking default values:")
+            for sec, keys in self.defaulted.items():
+                lines.append(f"  [{sec}] {', '.join(keys)}")
+        return "\n".join(lines)
+
+    def raise_errors(self, strict: bool = False) -> None:
+        """Raise :class:`TirCheckError` (one line) on errors, and on warnings under ``strict``."""
+        problems = self.errors + (self.warnings if strict else [])
+        if problems:
+            more = f" (and {len(problems) - 1} more problem(s); see mftire info)" if len(problems) > 1 else ""
+            raise TirCheckError(f"{self.source}: {problems[0]}{more}")
+
+    def warn(self, stacklevel: int = 2) -> None:
+        """Issue the warnings as one :class:`MftireTirWarning`."""
+        if self.warnings:
+            warnings.warn(f"{self.source}: " + "; ".join(self.warnings), MftireTirWarning, stacklevel=stacklevel + 1)
+
+
+def _fittyp(flat: Mapping[str, Any]) -> int | None:
+    v = flat.get("FITTYP")
+    try:
+        return int(v) if v is not None else None
+    except (TypeError, ValueError):
+        return None
+
+
+def _number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _unit_hint(key: str, value: float, file_units: Mapping[str, str]) -> str:
+    declared = [f"{q} = {file_units[q]!r}" for q in _QUANTITY[key] if q in file_units]
+    if declared:
+        return f"; check [UNITS] ({', '.join(declared)}): the values may be in other units"
+    lo, hi = PLAUSIBLE[key]
+    for power in (3, -3, 2, -2, 5, -5, 6, -6):
+        if lo <= value * 10.0**power <= hi:
+            return f"; a factor 1e{power} would make it plausible: check [UNITS] or the value's unit"
+    return ""
+
+
+def check_parameters(params: Any, source: str | None = None, sections: bool | None = None) -> CheckReport:
+    """Check a :class:`~mftire.iotools.tir.TirParameters` (or a flat mapping).
+
+    ``sections``: check the section layout (default: when ``params`` was read from a
+    file, i.e. has a ``path``).  Returns a :class:`CheckReport`; raises nothing.
+    """
+    path = getattr(params, "path", None)
+    source = source or (str(path) if path else "tyre parameters")
+    secs = getattr(params, "sections", None)
+    if hasattr(params, "flat") and callable(params.flat):
+        flat = params.flat()
+    else:
+        flat = {str(k).upper(): v for k, v in dict(params).items()}
+    fittyp = _fittyp(flat)
+    rep = CheckReport(os.fspath(source), fittyp)
+    if sections is None:
+        sections = bool(path) and secs is not None
+
+    if sections and secs is not None:
+        present = {s for s, body in secs.items() if isinstance(body, Mapping)}
+        mf6x = fittyp in (61, 62)
+        missing = [s for s in REQUIRED_SECTIONS if s not in present]
+        order = [s for s in secs]
+        if missing:
+            truncated = order and all(s not in present for s in REQUIRED_SECTIONS[REQUIRED_SECTIONS.index(missing[0]):])
+            rep.errors.append(f"required section(s) {', '.join(f'[{s}]' for s in missing)} missing"
+                              + (" (is the file truncated?)" if truncated else ""))
+        optional = OPTIONAL_SECTIONS + (OPTIONAL_SECTIONS_6X if mf6x else ())
+        opt_missing = [s for s in optional if s not in present]
+        if opt_missing:
+            keys = [p.key for p in PARAMETERS if p.section in opt_missing and p.mfeval and p.unit != "str"]
+            shown = ", ".join(keys[:8]) + (f" and {len(keys) - 8} more" if len(keys) > 8 else "")
+            rep.warnings.append(f"optional section(s) {', '.join(f'[{s}]' for s in opt_missing)} missing; "
+                                f"{len(keys)} key(s) take default values ({shown})")
+        for s in present:
+            if s in CORE_KEYS and not secs[s]:
+                rep.errors.append(f"section [{s}] is empty (is the file truncated?)")
+            elif s in CORE_KEYS:
+                lost = [k for k in CORE_KEYS[s] if k not in secs[s]]
+                if lost:
+                    rep.errors.append(f"[{s}] lacks the core coefficient(s) {', '.join(lost)} "
+                                      "(is the file truncated?)")
+        for key in REQUIRED_KEYS:
+            home = next(p.section for p in PARAMETERS if p.key == key)
+            if key not in flat and home in present:
+                rep.errors.append(f"required key {key} missing in [{home}]")
+        std = {p.key: p for p in PARAMETERS if p.mfeval and p.unit != "str"}
+        for key, p in std.items():
+            if key not in flat and p.section in present and (mf6x or p.section not in OPTIONAL_SECTIONS_6X):
+                rep.defaulted.setdefault(p.section, []).append(key)
+        for s in opt_missing:
+            keys = [p.key for p in PARAMETERS if p.section == s and p.mfeval and p.unit != "str"]
+            if keys:
+                rep.defaulted[s] = keys
+
+    # physics, on the file's values in SI (defaults where absent)
+    bad = [k for k, v in flat.items() if _number(v) and not math.isfinite(float(v))]
+    if bad:
+        rep.errors.append(f"non-finite value(s): {', '.join(f'{k} = {flat[k]}' for k in bad[:6])}"
+                          + (f" and {len(bad) - 6} more" if len(bad) > 6 else ""))
+    file_units = getattr(params, "file_units", None) or {}
+    for key, must in (("FNOMIN", "> 0"), ("UNLOADED_RADIUS", "> 0"), ("WIDTH", ">= 0"), ("RIM_RADIUS", ">= 0")):
+        v = flat.get(key)
+        if not _number(v) or not math.isfinite(float(v)):
+            continue
+        if (must == "> 0" and v <= 0) or (must == ">= 0" and v < 0):
+            rep.errors.append(f"{key} = {v:g} must be {must}")
+    odd, hints = [], []
+    for key, (lo, hi) in PLAUSIBLE.items():
+        v = flat.get(key)
+        if not _number(v) or not math.isfinite(float(v)) or v <= 0:
+            continue
+        if not lo <= v <= hi:
+            odd.append(f"{key} = {v:.4g} {_UNITS[key]} (expected {lo:g} .. {hi:g})")
+            hint = _unit_hint(key, float(v), file_units)
+            if hint and hint not in hints:
+                hints.append(hint)
+    if odd:
+        rep.warnings.append("implausible after unit conversion: " + ", ".join(odd) + "".join(hints))
+    r0, rim = flat.get("UNLOADED_RADIUS"), flat.get("RIM_RADIUS")
+    if _number(r0) and _number(rim) and 0 < r0 <= rim:
+        rep.warnings.append(f"RIM_RADIUS = {rim:g} m is not below UNLOADED_RADIUS = {r0:g} m")
+    fzmin, fzmax = flat.get("FZMIN"), flat.get("FZMAX")
+    if _number(fzmin) and _number(fzmax) and fzmin >= fzmax:
+        rep.warnings.append(f"FZMIN = {fzmin:g} N is not below FZMAX = {fzmax:g} N")
+    return rep
+
+
+def checked(params: Any) -> Any:
+    """Check a file just read (:func:`check_parameters`): errors raise :class:`TirCheckError`
+    (one line naming the file), warnings are issued as one :class:`MftireTirWarning`.
+    Returns ``params``; :meth:`mftire.Tyre.from_file` (and so :func:`mftire.load`) calls it."""
+    report = check_parameters(params)
+    report.raise_errors()
+    report.warn(stacklevel=4)
+    return params
+
+
+def check_tyre(tyre: Any) -> CheckReport:
+    """:func:`check_parameters` of a :class:`mftire.Tyre`'s parameters."""
+    return check_parameters(tyre.parameters, source=getattr(tyre.parameters, "path", None) or tyre.name)
+
+
+__all__ = ["CORE_KEYS", "CheckReport", "OPTIONAL_SECTIONS", "OPTIONAL_SECTIONS_6X", "PLAUSIBLE", "REQUIRED_KEYS",
+           "REQUIRED_SECTIONS", "TirCheckError", "check_parameters", "check_tyre", "checked"]

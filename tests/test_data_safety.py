@@ -1,0 +1,564 @@
+"""Never lose data, never accept a broken tyre silently (issue 14).
+
+Every command is driven in-process through :func:`mftire.cli.main` with the usual
+slips of hand.  For each case: the exact exit code, a one-line message, the inputs
+unchanged (SHA-256 before and after) and no file left behind (the work folder's
+listing before and after).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import socket
+import stat
+import threading
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from conftest import REFERENCE_TYRES, needs_c_compiler
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import mftire
+from mftire.cli import main
+from mftire.errors import MftireTirWarning, MftireUnitWarning
+from mftire.fitting.synthetic import synthetic_sweeps
+from mftire.iotools.atomic import atomic_path
+from mftire.iotools.output import OutputPlan, figure_format
+from mftire.iotools.tir import read_tir
+from mftire.iotools.tir_checks import TirCheckError, check_parameters
+
+MF61 = REFERENCE_TYRES["MF61"]
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _sha(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _listing(root: Path) -> set[str]:
+    return {str(p.relative_to(root)) for p in root.rglob("*")}
+
+
+@pytest.fixture(scope="module")
+def ws(tmp_path_factory) -> Path:
+    """A work folder: a tyre, an evaluate input, sweep data, an FE braking table."""
+    d = tmp_path_factory.mktemp("safety")
+    (d / "tyre.tir").write_bytes(MF61.read_bytes())
+    (d / "points.csv").write_text("Fz,kappa,alpha,gamma\n4000,-0.1,0.05,0\n6000,0,0.1,0.02\n")
+    tyre = read_tir(MF61)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        df = synthetic_sweeps(tyre, [4000.0, 6000.0], [0.0], n_kappa=15, n_alpha=15, n_combined=5, seed=1)
+    df.to_csv(d / "sweeps.csv", index=False)
+    (d / "fe_braking.csv").write_text("kind,Fz,Vx,P,kappa,Fx\nbraking,4000,10,2e5,-0.05,-3000\n")
+    return d
+
+
+class Run:
+    """One CLI run in a fresh copy of the work folder, with the safety assertions."""
+
+    def __init__(self, ws: Path, tmp_path: Path, capsys) -> None:
+        self.root = tmp_path / "w"
+        self.root.mkdir()
+        for p in ws.iterdir():
+            (self.root / p.name).write_bytes(p.read_bytes())
+        self.capsys = capsys
+
+    def p(self, name: str) -> str:
+        return str(self.root / name)
+
+    def __call__(self, argv: list[str], rc: int, *fragments: str, created: set[str] = frozenset()) -> str:
+        before = _listing(self.root)
+        sums = {p: _sha(p) for p in self.root.rglob("*") if p.is_file() and not p.is_symlink()}
+        self.capsys.readouterr()
+        got = main(argv)
+        cap = self.capsys.readouterr()
+        assert got == rc, cap.err
+        if rc == 2:
+            lines = cap.err.strip().splitlines()
+            assert len(lines) == 1 and lines[0].startswith(f"mftire {argv[0]}: error: "), cap.err
+            for f in fragments:
+                assert f in lines[0], lines[0]
+            assert _listing(self.root) == before  # nothing left behind, nothing created
+        for p, h in sums.items():  # inputs (and every other file) unchanged
+            if p.exists() and str(p.relative_to(self.root)) not in created:
+                assert _sha(p) == h, p
+        assert not [n for n in _listing(self.root) if n.endswith(".tmp") or "/.mftire" in n]
+        return cap.err
+
+
+@pytest.fixture()
+def run(ws, tmp_path, capsys) -> Run:
+    return Run(ws, tmp_path, capsys)
+
+
+def _commands(r: Run, out: str) -> dict[str, list[str]]:
+    """Every command with its inputs from the work folder, writing to ``out``."""
+    return {
+        "evaluate": ["evaluate", r.p("tyre.tir"), "--input", r.p("points.csv"), "--output", out],
+        "convert": ["convert", r.p("tyre.tir"), out],
+        "plot": ["plot", r.p("tyre.tir"), "--output", out],
+        "plot-csv": ["plot", r.p("tyre.tir"), "--output", r.p("new.png"), "--csv", out],
+        "fit": ["fit", r.p("sweeps.csv"), "--template", r.p("tyre.tir"), "--output", out],
+        "fit-report": ["fit", r.p("sweeps.csv"), "--template", r.p("tyre.tir"), "--output", r.p("new.tir"),
+                       "--report", out],
+        "export-fmu": ["export-fmu", r.p("tyre.tir"), "--output", out],
+        "diagnose": ["diagnose", r.p("sweeps.csv"), "--tir", r.p("tyre.tir"), "--output", out],
+        "compare": ["compare", "--tir", r.p("tyre.tir"), "--data", r.p("sweeps.csv"), "--output", out],
+        "demo": ["demo", "--output", out, "--quick"],
+        "fe-sweep": ["fe", "sweep", "--kind", "braking", "--Fz", "4000", "--Vx", "10", "--points", "5",
+                     "--output", out],
+        "fe-campaign": ["fe", "campaign", "--quick", "--output", out],
+        "fe-identify": ["fe", "identify", r.p("fe_braking.csv"), "--mu-p", "1", "--output", out],
+    }
+
+
+FOLDER_OUTPUTS = {"fit-report", "diagnose", "compare", "demo", "fe-campaign"}
+ALL = ["evaluate", "convert", "plot", "plot-csv", "fit", "fit-report", "export-fmu", "diagnose", "compare", "demo",
+       "fe-sweep", "fe-campaign", "fe-identify"]
+INPUTS = {"evaluate": ["tyre.tir", "points.csv"], "convert": ["tyre.tir"], "plot": ["tyre.tir"],
+          "plot-csv": ["tyre.tir"], "fit": ["sweeps.csv", "tyre.tir"], "export-fmu": ["tyre.tir"],
+          "fe-identify": ["fe_braking.csv"], "fit-report": ["sweeps.csv"], "diagnose": ["sweeps.csv", "tyre.tir"],
+          "compare": ["sweeps.csv", "tyre.tir"]}
+
+
+# --------------------------------------------------------------------------- outputs
+
+
+@pytest.mark.parametrize("cmd,inp", [(c, i) for c, ins in INPUTS.items() for i in ins])
+def test_output_equal_to_an_input_is_refused(run, cmd, inp):
+    argv = _commands(run, run.p(inp))[cmd]
+    if cmd in FOLDER_OUTPUTS:
+        run(argv, 2, run.p(inp), "not a folder")
+    elif cmd == "plot":
+        run(argv, 2, "not a figure format")  # a .tir/.csv is no figure; refused before anything else
+    else:
+        run(argv, 2, "output is the input file", run.p(inp))
+
+
+@pytest.mark.parametrize("cmd", ["evaluate", "convert", "fit", "export-fmu"])
+def test_output_linked_to_an_input_is_refused(run, cmd):
+    os.symlink(run.p("tyre.tir"), run.p("sym.tir"))
+    os.link(run.p("tyre.tir"), run.p("hard.tir"))
+    run(_commands(run, run.p("sym.tir"))[cmd], 2, "output is the input file")
+    run(_commands(run, run.p("hard.tir"))[cmd], 2, "output is the input file")
+
+
+def test_outputs_of_one_command_must_differ(run):
+    run(["plot", run.p("tyre.tir"), "--output", run.p("a.png"), "--csv", run.p("a.png")], 2, "also output")
+
+
+@pytest.mark.parametrize("cmd", ALL)
+def test_existing_output_needs_force(run, cmd):
+    if cmd in FOLDER_OUTPUTS:
+        os.mkdir(run.p("old"))
+        Path(run.p("old/keep.txt")).write_text("mine")
+        run(_commands(run, run.p("old"))[cmd], 2, "folder is not empty; use --force")
+    else:
+        Path(run.p("old.png")).write_text("mine")
+        run(_commands(run, run.p("old.png"))[cmd], 2, "exists; use --force")
+    assert Path(run.p("old/keep.txt") if cmd in FOLDER_OUTPUTS else run.p("old.png")).read_text() == "mine"
+
+
+@pytest.mark.parametrize("cmd", ALL)
+def test_output_under_a_regular_file_is_refused_before_any_work(run, cmd):
+    """'Unwritable folder', root-proof: the parent of the output is a regular file."""
+    out = os.path.join(run.p("points.csv"), "sub", "out.png" if cmd not in FOLDER_OUTPUTS else "dir")
+    run(_commands(run, out)[cmd], 2, "is not a folder")
+
+
+@pytest.mark.parametrize("cmd", ["evaluate", "fit", "compare"])
+def test_output_in_an_unwritable_file_system_is_refused(run, cmd):
+    """/proc takes no new files, even from root."""
+    run(_commands(run, "/proc/mftire-test/out")[cmd], 2, "not writable")
+
+
+def test_fit_checks_the_report_folder_before_writing_the_tir(run):
+    argv = _commands(run, os.path.join(run.p("points.csv"), "report"))["fit-report"]
+    run(argv, 2, "is not a folder")
+    assert not Path(run.p("new.tir")).exists()
+
+
+@pytest.mark.parametrize("cmd", ["evaluate", "convert", "plot", "plot-csv", "fe-sweep", "export-fmu", "fit"])
+def test_dangling_symlink_socket_and_folder_outputs_are_refused(run, cmd):
+    os.symlink(run.p("nowhere/x"), run.p("dangling.png"))
+    run(_commands(run, run.p("dangling.png"))[cmd], 2, "symbolic link to a missing file")
+    os.mkdir(run.p("adir.png"))
+    run(_commands(run, run.p("adir.png"))[cmd], 2, "is a folder")
+    sock = socket.socket(socket.AF_UNIX)
+    try:
+        sock.bind(run.p("s.png"))
+        run(_commands(run, run.p("s.png"))[cmd], 2, "is a socket")
+    finally:
+        sock.close()
+
+
+def test_symlink_to_a_regular_file_replaces_the_target_with_force(run):
+    Path(run.p("target.csv")).write_text("old")
+    os.symlink(run.p("target.csv"), run.p("link.csv"))
+    run(_commands(run, run.p("link.csv"))["evaluate"], 2, "exists; use --force")
+    run(_commands(run, run.p("link.csv"))["evaluate"] + ["--force"], 0, created={"target.csv"})
+    assert os.path.islink(run.p("link.csv"))
+    assert pd.read_csv(run.p("target.csv")).shape == (2, 34)
+
+
+def _char_device(path: str) -> None:
+    try:
+        os.mknod(path, stat.S_IFCHR | 0o666, os.makedev(1, 3))  # a /dev/null of our own
+        with open(path, "wb") as fh:
+            fh.write(b"x")
+    except OSError as exc:
+        pytest.skip(f"cannot make a character device here: {exc}")
+
+
+@pytest.mark.parametrize("cmd", ["evaluate", "convert", "plot-csv", "fe-sweep", "fit", "export-fmu"])
+def test_character_device_is_written_through(run, cmd):
+    if cmd == "export-fmu":
+        pytest.importorskip("fmpy")
+        from conftest import have_c_compiler
+
+        if not have_c_compiler():
+            pytest.skip("no C compiler")
+    dev = run.p("null")
+    _char_device(dev)
+    run(_commands(run, dev)[cmd], 0)
+    assert stat.S_ISCHR(os.stat(dev).st_mode)
+
+
+def test_dev_null_stays_a_device(run):
+    run(_commands(run, "/dev/null")["evaluate"], 0)
+    assert stat.S_ISCHR(os.stat("/dev/null").st_mode)
+
+
+@pytest.mark.parametrize("cmd", ["evaluate", "convert", "plot"])
+def test_fifo_is_written_through(run, cmd):
+    fifo = run.p("pipe.svg")
+    os.mkfifo(fifo)
+    got = []
+    reader = threading.Thread(target=lambda: got.append(Path(fifo).read_bytes()), daemon=True)
+    reader.start()
+    run(_commands(run, fifo)[cmd], 0)
+    reader.join(10)
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+    data = got[0]
+    if cmd == "evaluate":
+        assert data.startswith(b"Fz,kappa,alpha,gamma,Fx,Fy,Fz_model")
+    elif cmd == "convert":
+        assert read_tir(MF61).flat()["PKY1"] == float(
+            next(ln for ln in data.decode().splitlines() if ln.startswith("PKY1")).split("=")[1].split("$")[0])
+    else:
+        assert data.lstrip().startswith(b"<?xml") and b"<svg" in data  # SVG, from the suffix
+
+
+@pytest.mark.parametrize("cmd", ["evaluate", "convert", "plot", "plot-csv", "fe-sweep"])
+def test_missing_folders_are_created(run, cmd):
+    out = run.p("a/b/out.svg" if cmd == "plot" else "a/b/out.csv")
+    run(_commands(run, out)[cmd], 0, created=set())
+    assert Path(out).stat().st_size > 0
+
+
+def test_figure_format_follows_the_suffix(run):
+    for name, magic in (("f.pdf", b"%PDF"), ("f.png", b"\x89PNG"), ("f.svg", b"<?xml")):
+        run(_commands(run, run.p(name))["plot"], 0)
+        assert Path(run.p(name)).read_bytes().startswith(magic)
+    run(_commands(run, run.p("f.gif"))["plot"], 2, "'.gif' is not a figure format")
+    with pytest.raises(mftire.errors.MftireInputError):
+        figure_format("noext")
+
+
+def test_failed_write_leaves_nothing(tmp_path):
+    target = tmp_path / "deep" / "er" / "out.csv"
+    with pytest.raises(RuntimeError), atomic_path(target) as tmp:
+        Path(tmp).write_text("half")
+        raise RuntimeError("disk full")
+    assert list(tmp_path.iterdir()) == []  # neither the temp file nor the created folders
+
+
+def test_output_plan_api(tmp_path):
+    a = tmp_path / "a.csv"
+    a.write_text("x")
+    plan = OutputPlan([a], force=True)
+    with pytest.raises(mftire.errors.MftireInputError, match="is the input"):
+        plan.file(a)
+    assert plan.file(tmp_path / "b.csv") == str(tmp_path / "b.csv")
+    assert plan.file("-", stdout=True) == "-"
+
+
+def test_broken_pipe_exits_quietly(run, monkeypatch):
+    import io
+
+    class Closed(io.StringIO):
+        def write(self, s):
+            raise BrokenPipeError(32, "Broken pipe")
+
+        def fileno(self):
+            raise io.UnsupportedOperation("fileno")
+
+    monkeypatch.setattr("sys.stdout", Closed())
+    assert main(_commands(run, "-")["evaluate"]) == 141
+    assert run.capsys.readouterr().err == ""
+
+
+def test_version_and_help_texts(capsys):
+    import argparse
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0 and capsys.readouterr().out.strip() == f"mftire {mftire.__version__}"
+    from mftire.cli import build_parser
+
+    def walk(parser, name):
+        assert parser.description, name
+        for a in parser._actions:
+            if isinstance(a, argparse._SubParsersAction):
+                for n, sp in a.choices.items():
+                    walk(sp, f"{name} {n}")
+            else:
+                assert a.help, f"{name} {a.option_strings or a.dest}"
+
+    walk(build_parser(), "mftire")
+
+
+# --------------------------------------------------------------------------- broken .tir files
+
+
+def _variant(kind: str) -> str:
+    text = MF61.read_text()
+    lines = text.splitlines(keepends=True)
+    if kind == "truncated":  # half the lines
+        return "".join(lines[: len(lines) // 2])
+    if kind == "truncated-midline":  # half the bytes, cut inside a line
+        return text[: len(text) // 2]
+    if kind == "sectionless":
+        out, skip = [], False
+        for ln in lines:
+            if ln.startswith("["):
+                skip = ln.startswith("[LONGITUDINAL_COEFFICIENTS]")
+            if not skip:
+                out.append(ln)
+        return "".join(out)
+    key, value = {"nan": ("PDX1", "nan"), "negative": ("UNLOADED_RADIUS", "-0.3"), "fnomin0": ("FNOMIN", "0"),
+                  "inch": ("LENGTH", "'inch'")}[kind]
+    return "".join(f"{key} = {value}\n" if ln.split("=")[0].strip() == key else ln for ln in lines)
+
+
+BROKEN = {
+    "truncated": "required section(s) [LATERAL_COEFFICIENTS], [ALIGNING_COEFFICIENTS] missing (is the file truncated?)",
+    "sectionless": "required section(s) [LONGITUDINAL_COEFFICIENTS] missing",
+    "nan": "non-finite value(s): PDX1 = nan",
+    "negative": "UNLOADED_RADIUS = -0.3 must be > 0",
+    "fnomin0": "FNOMIN = 0 must be > 0",
+    "truncated-midline": "expected KEY = value",
+}
+TIR_READERS = ["evaluate", "convert", "plot", "fit", "export-fmu", "diagnose", "compare", "info"]
+
+
+def _tir_argv(r: Run, cmd: str) -> list[str]:
+    if cmd == "info":
+        return ["info", r.p("tyre.tir")]
+    return _commands(r, r.p("new.out" if cmd not in ("plot", "diagnose", "compare") else
+                            {"plot": "new.png", "diagnose": "diag", "compare": "cmp"}[cmd]))[cmd]
+
+
+@pytest.mark.parametrize("kind", sorted(BROKEN))
+@pytest.mark.parametrize("cmd", TIR_READERS)
+def test_broken_tir_is_an_error_naming_the_file(run, cmd, kind):
+    Path(run.p("tyre.tir")).write_text(_variant(kind))
+    if cmd == "info" and kind != "truncated-midline":  # info prints every failed check, then exits 2
+        before = _sha(Path(run.p("tyre.tir")))
+        run.capsys.readouterr()
+        assert main(_tir_argv(run, cmd)) == 2
+        cap = run.capsys.readouterr()
+        assert f"  error: {BROKEN[kind]}" in cap.out and cap.err == ""
+        assert _sha(Path(run.p("tyre.tir"))) == before
+        return
+    err = run(_tir_argv(run, cmd), 2, run.p("tyre.tir"), BROKEN[kind])
+    assert "Traceback" not in err
+
+
+def test_broken_tir_in_python():
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        for kind, msg in BROKEN.items():
+            p = Path(d) / f"{kind}.tir"
+            p.write_text(_variant(kind))
+            with pytest.raises(mftire.errors.MftireError) as exc:
+                mftire.load(p)
+            assert msg in str(exc.value) and str(p) in str(exc.value)
+
+
+def test_unit_mismatched_tir_warns_with_a_hint(run):
+    Path(run.p("tyre.tir")).write_text(_variant("inch"))
+    err = run(_commands(run, run.p("o.csv"))["evaluate"], 0, created={"o.csv"})
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("mftire evaluate: warning: ")
+    assert "NOMPRES = 4.03e+08 Pa" in lines[0] and "LENGTH = 'inch'" in lines[0]
+    err = run(["info", run.p("tyre.tir")], 0)
+    assert run(["info", run.p("tyre.tir"), "--strict"], 1) == ""
+    with pytest.warns(MftireTirWarning, match="implausible after unit conversion"):
+        mftire.load(run.p("tyre.tir"))
+    with pytest.raises(TirCheckError):
+        check_parameters(read_tir(run.p("tyre.tir"))).raise_errors(strict=True)
+
+
+def test_info_prints_defaulted_keys_and_checks(run):
+    run.capsys.readouterr()
+    assert main(["info", run.p("tyre.tir")]) == 0
+    out = run.capsys.readouterr().out
+    assert "checks:\n  all passed" in out
+    Path(run.p("tyre.tir")).write_text(_variant("sectionless").replace("[ROLLING_COEFFICIENTS]", "[ROLLING_X]"))
+    assert main(["info", run.p("tyre.tir")]) == 2
+    out = run.capsys.readouterr().out
+    assert "error: required section(s) [LONGITUDINAL_COEFFICIENTS] missing" in out
+    assert "warning: optional section(s) [ROLLING_COEFFICIENTS] missing; 8 key(s) take default values" in out
+    assert "[ROLLING_COEFFICIENTS] QSY1, QSY2" in out
+
+
+def test_shipped_tir_files_pass_every_check():
+    root = Path(__file__).resolve().parents[1]
+    files = [*root.glob("tirfiles/**/*.tir"), *root.glob("tests/data/tir/**/*.tir"), root / "mftire/data/default.tir"]
+    assert len(files) >= 19
+    for f in files:
+        rep = check_parameters(read_tir(f))
+        assert rep.errors == [] and rep.warnings == [], f
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            mftire.load(f)
+
+
+# --------------------------------------------------------------------------- inputs
+
+
+def test_degrees_and_kn_warn_once_as_one_line(run):
+    Path(run.p("deg.csv")).write_text("Fz,kappa,alpha,gamma\n4000,0,5,0\n4000,0,-8,0\n")
+    argv = ["evaluate", run.p("tyre.tir"), "--input", run.p("deg.csv"), "--output", run.p("o.csv")]
+    err = run(argv, 0, created={"o.csv"})
+    lines = [ln for ln in err.splitlines() if "MftireUnitWarning" in ln or "look like degrees" in ln]
+    assert lines == ["mftire evaluate: warning: slip angle alpha up to 8 rad (458 deg): alpha is in radians; "
+                     "values above 1.5 rad look like degrees (convert with numpy.deg2rad)"]
+    assert all(ln.startswith("mftire evaluate: warning: ") for ln in err.splitlines())  # no source lines
+    Path(run.p("kn.csv")).write_text("Fz,kappa,alpha,gamma\n4,0,0.1,0\n6,0,0.1,0\n")
+    argv = ["evaluate", run.p("tyre.tir"), "--input", run.p("kn.csv"), "--output", run.p("o.csv"), "--force"]
+    err = run(argv, 0, created={"o.csv"})
+    assert "the values look like kN" in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.filterwarnings("ignore:.*saturated")
+def test_unit_warnings_in_python_modes_and_rate():
+    tyre = mftire.load(MF61)
+    for mode in (111, 211):
+        t = mftire.load(MF61)
+        with pytest.warns(MftireUnitWarning, match="look like degrees"):
+            t.evaluate(4000.0, 0.0, 5.0, mode=mode)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for _ in range(5):
+            tyre.evaluate(4.0, 0.0, 0.1)
+    assert sum(issubclass(w.category, MftireUnitWarning) for w in caught) == 1  # once per tyre and cause
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MftireUnitWarning)
+        tyre.evaluate(np.array([100.0, 4000.0]), 0.0, np.array([0.1, 1.2]))  # a real batch: no warning
+
+
+@pytest.mark.parametrize("kw,guess", [("vx", "Vx"), ("pressure", "P"), ("Fzz", "Fz"), ("speed", "Vx"),
+                                      ("alfa", "alpha"), ("Omega", "omega")])
+def test_misspelled_keywords_raise_type_error_with_suggestion(kw, guess):
+    tyre = mftire.load(MF61)
+    with pytest.raises(TypeError, match=f"unexpected keyword argument '{kw}'; did you mean '{guess}'"):
+        tyre.evaluate(4000.0, 0.0, 0.0, **{kw: 1.0})
+
+
+def test_extension_variables_are_checked():
+    from test_fmu_guards import extension_entries
+
+    params = read_tir(MF61)
+    for k, v in extension_entries(["temperature"]).items():
+        params.set(k, v, section="MFTIRE_EXTENSIONS")
+    tyre = mftire.Tyre(params)
+    assert tyre.required_variables == ["temperature"]
+    tyre.evaluate(4000.0, -0.1, 0.0, temperature=60.0)
+    with pytest.raises(TypeError, match="'temprature'; did you mean 'temperature'"):
+        tyre.evaluate(4000.0, -0.1, 0.0, temprature=60.0)
+    with pytest.raises(TypeError, match="extensions take: temperature"):
+        tyre.evaluate(4000.0, -0.1, 0.0, temperature=60.0, humidity=0.5)
+
+
+# --------------------------------------------------------------------------- evaluate CSV, small things
+
+
+def test_evaluate_names_model_outputs_apart_and_writes_shortest_floats(run):
+    df = pd.DataFrame({"Fz": [4000.0, 6000.0], "kappa": [-0.1, 0.0], "alpha": [0.05, 0.1], "gamma": [0.0, 0.02],
+                       "Fx": [-3000.5, 10.25], "Fy": [1.0, 2.0]})
+    df.to_csv(run.p("meas.csv"), index=False)
+    argv = ["evaluate", run.p("tyre.tir"), "--input", run.p("meas.csv"), "--output", run.p("o.csv")]
+    run(argv, 0, created={"o.csv"})
+    out = pd.read_csv(run.p("o.csv"))
+    assert list(out.columns[:8]) == ["Fz", "kappa", "alpha", "gamma", "Fx", "Fy", "Fx_model", "Fy_model"]
+    assert out["Fx"].tolist() == [-3000.5, 10.25]
+    ref = mftire.load(MF61).evaluate(df["Fz"], df["kappa"], df["alpha"], df["gamma"])
+    np.testing.assert_array_equal(out["Fx_model"], ref["Fx"])  # bit-exact round trip
+    text = Path(run.p("o.csv")).read_text().splitlines()[1]
+    assert text.startswith("4000.0,-0.1,0.05,0.0,-3000.5,1.0,")  # shortest repr, not %.17g
+    assert all(len(c) <= 24 for c in text.split(","))
+
+
+def test_fit_without_force_channel_is_an_error(run):
+    df = pd.read_csv(run.p("sweeps.csv")).drop(columns=["Fx", "Fy", "Mz", "Mx", "My"], errors="ignore")
+    df.to_csv(run.p("noforce.csv"), index=False)
+    argv = ["fit", run.p("noforce.csv"), "--template", run.p("tyre.tir"), "--output", run.p("f.tir")]
+    run(argv, 2, "no stage could be fitted", "nothing written")
+
+
+def test_diagnose_holdout_level_must_exist(run):
+    argv = _commands(run, run.p("diag"))["diagnose"] + ["--holdout", "Fz=4000,5000", "--permutations", "9"]
+    run(argv, 2, "--holdout Fz: no rows at 5000")
+
+
+@needs_c_compiler
+def test_export_fmu_overwrite_with_force(run):
+    argv = _commands(run, run.p("t.fmu"))["export-fmu"]
+    run(argv, 0, created={"t.fmu"})
+    run(argv, 2, "exists; use --force")
+    run(argv + ["--force"], 0, created={"t.fmu"})
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.lists(st.floats(allow_nan=False, allow_infinity=False), min_size=1, max_size=20))
+def test_evaluate_table_writes_shortest_exact_floats(values):
+    """Property: every float written by ``evaluate`` reads back bit-exactly, in its shortest repr."""
+    import io
+
+    from mftire.cli import evaluate_columns
+
+    buf = io.StringIO()
+    evaluate_columns(pd.DataFrame({"Fz": values, "Fx": values}), 1).to_csv(buf, index=False)
+    lines = buf.getvalue().splitlines()
+    back = pd.read_csv(io.StringIO(buf.getvalue()))
+    assert lines[0] == "Fz,Fx"
+    assert [np.float64(v).tobytes() for v in back["Fx"]] == [np.float64(v).tobytes() for v in values]
+    assert all(cell == repr(float(v)) for line, v in zip(lines[1:], values, strict=True)
+               for cell in line.split(",")[:1])
+
+
+def test_dev_stdout_redirected_by_the_shell_is_written_through(run):
+    """``--output /dev/stdout >> log`` appends to the log (the descriptor is written, not reopened)."""
+    import subprocess
+    import sys
+
+    log = Path(run.p("log.csv"))
+    log.write_text("kept\n")
+    cmd = (f"{sys.executable} -m mftire.cli evaluate {run.p('tyre.tir')} --input {run.p('points.csv')} "
+           f"--output /dev/stdout >> {log}")
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    res = subprocess.run(cmd, shell=True, env=env, capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    lines = log.read_text().splitlines()
+    assert lines[0] == "kept" and lines[1].startswith("Fz,kappa,alpha,gamma,Fx") and len(lines) == 4
