@@ -149,7 +149,12 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from mftire import __version__
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        __version__ = version("mftire")
+    except PackageNotFoundError:  # a source tree that is not installed
+        __version__ = "unknown"
     from mftire.iotools.output import add_force_option
 
     parser = argparse.ArgumentParser(

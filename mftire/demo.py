@@ -158,10 +158,15 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool) -> dict:
         rep.add_table(pd.DataFrame([vars(e) for e in diag.errors]),
                       caption=f"held-out {diag.holdout['column']} = {diag.holdout['values']}: before and after",
                       key="diagnosis_heldout")  # fmt: skip
-    for png in ("ranking.png", "curves_before_after.png"):
+    profiles = sorted(f for f in os.listdir(os.path.join(out, "diagnosis")) if f.startswith("profile_"))
+    for png in ("ranking.png", "curves_before_after.png", *profiles):
         p = os.path.join(out, "diagnosis", png)
         if os.path.exists(p):
-            rep.add_figure(p, caption=png[:-4].replace("_", " "))
+            caption = png[:-4].replace("_", " ")
+            if png.startswith("profile_"):
+                caption = (f"scaling factor {png[8:-4]} refitted per sweep against the cause, with the fitted law "
+                           "(mftire.diagnosis.profile)")  # fmt: skip
+            rep.add_figure(p, caption=caption)
     rep.add_heading("Uncertainty")
     rep.add_text(f"Bootstrap over sweeps, {len(bands.replicates)} replicates, level {bands.level:g}: "
                  "prediction bands (replicate spread plus residual scatter).")  # fmt: skip

@@ -16,15 +16,12 @@ from __future__ import annotations
 import difflib
 import warnings
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from mftire.errors import MftireUnitWarning
 from mftire.iotools.tir_checks import TirCheckError
-
-if TYPE_CHECKING:
-    from mftire.tyre import Tyre
 
 #: Thresholds of the unit warnings: |alpha| in rad, Fz as a fraction of FNOMIN.
 UNIT_LIMITS = {"alpha": 1.5, "Fz": 0.05}
@@ -32,7 +29,7 @@ UNIT_LIMITS = {"alpha": 1.5, "Fz": 0.05}
 EVALUATE_ARGUMENTS = ("Fz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "omega", "mode")
 
 
-def warn_units(tyre: Tyre, Fz, alpha) -> None:
+def warn_units(tyre: Any, Fz, alpha) -> None:
     """One :class:`~mftire.errors.MftireUnitWarning` per tyre and cause for inputs that look
     like degrees (|alpha| > 1.5 rad) or kN (every Fz below 5 % of FNOMIN)."""
     warned = tyre.__dict__.setdefault("_unit_warned", set())

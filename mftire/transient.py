@@ -122,16 +122,8 @@ STATES: tuple[tuple[str, str], ...] = (
 _FMU_NAME = {"Fz": "Fz_out", "2a": "a2", "2b": "b2"}
 
 
-def output_names() -> list[str]:
-    """Output names of the transient model (and FMU), in order."""
-    from mftire.fmu.variables import OUTPUTS
-
-    return (
-        [n for n, *_ in OUTPUTS[:2]]
-        + ["Mz", "Mx", "My"]
-        + [n for n, *_ in TRANSIENT_OUTPUTS]
-        + [n for n, *_ in OUTPUTS if n not in ("Fx", "Fy", "Mz", "Mx", "My")]
-    )
+#: The outputs that come first (the FMU's order), then every steady-state channel of the evaluator.
+FIRST_OUTPUTS = ("Fx", "Fy", "Mz", "Mx", "My", "kappa_t", "alpha_t")
 
 
 @dataclass
@@ -291,7 +283,8 @@ class TransientTyre:
         out["My"] = ss["My"] * kin.My_sign  # rolling resistance opposes the rolling direction
         out["kappa_t"] = np.asarray(kappa_t, dtype=float)
         out["alpha_t"] = np.asarray(alpha_t, dtype=float)
-        return {k: np.broadcast_to(out[k], np.shape(out["Fx"])) for k in output_names()}
+        names = (*FIRST_OUTPUTS, *(k for k in out if k not in FIRST_OUTPUTS))
+        return {k: np.broadcast_to(out[k], np.shape(out["Fx"])) for k in names}
 
     def outputs(self, x: ArrayLike, **inputs: ArrayLike) -> dict[str, np.ndarray]:
         """All outputs at state ``x = (u, v)`` and the inputs."""
@@ -427,7 +420,7 @@ __all__ = [
     "TransientTyre",
     "advance",
     "input_defaults",
-    "output_names",
+    "FIRST_OUTPUTS",
     "simulate",
     "step_exact",
 ]

@@ -20,7 +20,7 @@ from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 from mftire.fmu import variables as vt
-from mftire.fmu.export import (
+from mftire.fmu.build import (
     CFLAGS,
     CSOURCE,
     FMI_HEADERS,
@@ -33,7 +33,19 @@ from mftire.fmu.export import (
     model_identifier_for,
     package_fmu,
 )
-from mftire.transient import CONSTANTS, INPUTS, STATES, TRANSIENT_OUTPUTS, input_defaults, output_names
+from mftire.transient import CONSTANTS, INPUTS, STATES, TRANSIENT_OUTPUTS, input_defaults
+
+
+def output_names() -> list[str]:
+    """Output names of the transient FMU, in order: the forces and moments, the transient slips,
+    then the steady-state channels of the steady-state FMU (:data:`mftire.fmu.variables.OUTPUTS`)."""
+    return (
+        [n for n, *_ in vt.OUTPUTS[:2]]
+        + ["Mz", "Mx", "My"]
+        + [n for n, *_ in TRANSIENT_OUTPUTS]
+        + [n for n, *_ in vt.OUTPUTS if n not in ("Fx", "Fy", "Mz", "Mx", "My")]
+    )
+
 
 #: Hand-written C sources of the transient FMU.
 TRANSIENT_SOURCES = ("mf_eval.c", "mf_eval.h", "mf_transient.c", "mf_transient.h", "fmi2_transient.c")
@@ -220,6 +232,7 @@ def generate_transient_sources(
     variables = transient_variable_table(flat, use_mode)
     files = {name: (CSOURCE / name).read_text(encoding="utf-8") for name in TRANSIENT_SOURCES}
     files["mf_params.h"] = vt.params_header(variables, None)
+    files["mf_ext_gen.h"] = vt.extension_header(variables, None)  # no extension terms (refused above)
     files["mt_model_gen.h"] = transient_model_header(variables, model_identifier)
     c_code = _fmpy_c_code()
     for h in FMI_HEADERS[2]:

@@ -201,7 +201,10 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
             if key not in flat and home in present:
                 rep.errors.append(f"required key {key} missing in [{home}]")
         std = {p.key: p for p in PARAMETERS if p.mfeval and p.unit != "str"}
+        pac = str(flat.get("PROPERTY_FILE_FORMAT", "")).strip().upper() == "PAC2002"
         for key, p in std.items():
+            if pac and key == "FITTYP":  # a PAC2002 file names its format instead
+                continue
             if key not in flat and p.section in present and (mf6x or p.section not in OPTIONAL_SECTIONS_6X):
                 rep.defaulted.setdefault(p.section, []).append(key)
         for s in opt_missing:

@@ -151,10 +151,6 @@ def mz0(p: dict, mode: Mode, c: Conditions, b: Basic, a: AligningTerms) -> tuple
     Returns ``(Mz0 [N·m], t0 [m], Mzr0 [N·m])``; the trail and residual torque carry
     the low-speed reduction like the combined-slip ones.
     """
-    if is_pac2002(p):  # PAC2002: Fy0 at the actual camber (mftire.mf.pac2002.mz0)
-        from mftire.mf import pac2002
-
-        return pac2002.mz0(p, mode, c, b, a, fy0(p, mode, c, b, b.gamma_star, turn_slip=mode.turn_slip))
     no_ts = Mode(mode.limits, mode.alpha_star, False, mode.combined, mode.code)
     lat0 = fy0(p, no_ts, c, b, np.zeros_like(c.Fz), turn_slip=False)  # Fy0 at gamma = phi = 0
     t0 = _trail_mf(a.Dt, a.Ct, a.Bt, a.Et, a.alphat, b.alpha_prime) * c.smooth  # eq 4.E33

@@ -28,7 +28,7 @@ from mftire.mf import pac2002, turnslip
 from mftire.mf.aligning import aligning_terms, mz0, mz_combined
 from mftire.mf.basic import basic
 from mftire.mf.extensions import ExtensionSet, builtin_variables, parse_section
-from mftire.mf.family import PAC2002_CODE
+from mftire.mf.family import PAC2002_CODE, is_pac2002
 from mftire.mf.inputs import Conditions, MFLimitWarning, condition_inputs, turn_slip_spin
 from mftire.mf.lateral import fy0, fy_combined
 from mftire.mf.longitudinal import fx0, fx_combined
@@ -250,7 +250,10 @@ def channels(
             if m.combined:
                 out.Mz, out.t, out.Mzr = mz_combined(q, m, c, b, terms, out.Kxk, out.Fx, out.Fy, out.Gyk, out.lat)
             else:
-                out.Mz, out.t, out.Mzr = mz0(q, m, c, b, terms)
+                if is_pac2002(q):  # PAC2002: pure-slip Mz0 with Fy0 at the actual camber (docs/pac2002.md)
+                    out.Mz, out.t, out.Mzr = pac2002.mz0(q, m, c, b, terms, out.lat)
+                else:
+                    out.Mz, out.t, out.Mzr = mz0(q, m, c, b, terms)
         if "Mx" in todo:
             out.Mx = mx(q, c, pre.dpi, out.Fy)
         if "My" in todo:

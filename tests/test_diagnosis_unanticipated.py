@@ -1,0 +1,81 @@
+"""Issue 11: effects nobody anticipated, on the reduced simulated campaigns of
+validation/data/unanticipated_reduced/ (made by validation/make_unanticipated_campaigns.py).
+
+For each case with an effect: the right variable ranks first, the right scaling-factor
+family is named, and the held-out Fx+Fy RMS (a condition not used in any fit, from
+``expected.json``) is cut by at least 60 %.  For each null case: no finding.
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from mftire import load
+from mftire.diagnosis.diagnose import diagnose
+from mftire.diagnosis.effects import FAMILY_TARGETS
+
+DATA = Path(__file__).resolve().parents[1] / "validation" / "data" / "unanticipated_reduced"
+CASES = sorted(p.name for p in DATA.iterdir() if (p / "expected.json").exists())
+
+#: Known failures, kept visible (strict xfail: the test fails loudly once they pass).
+KNOWN = {
+    "fade_blocked_load": "a friction fade in time with blocked loads: time is named, but the law chosen by held-out "
+                         "sweeps (linear) extrapolates to the repeated blocks worse than the plain fit",
+    "zero_channel_with_effect": "sliding-speed friction of the FE surrogate: the speed law fits the trained speeds "
+                                "but does not improve the held-out middle speed the plain fit already matches",
+}  # fmt: skip
+
+
+def _run(case: str):
+    d = DATA / case
+    exp = json.loads((d / "expected.json").read_text())
+    h = exp["holdout"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = diagnose(pd.read_csv(d / "sweeps.csv"), load(d / "fitted.tir"), holdout=(h["column"], h["values"]),
+                       n_perm=49, progress=False)  # fmt: skip
+    return exp, res
+
+
+def _cut(res) -> float:
+    ssb = sum(c.rms_before**2 * c.n for c in res.errors if c.channel in ("Fx", "Fy"))
+    ssa = sum(c.rms_after**2 * c.n for c in res.errors if c.channel in ("Fx", "Fy"))
+    return 1.0 - float(np.sqrt(ssa / ssb))
+
+
+@pytest.mark.parametrize(
+    "case", [pytest.param(c, marks=pytest.mark.xfail(strict=True, reason=KNOWN[c])) if c in KNOWN else c
+             for c in CASES],  # fmt: skip
+)
+def test_unanticipated_campaign(case):
+    exp, res = _run(case)
+    if not exp["effect"]:
+        assert not res.significant, res.summary()
+        assert res.extended is None
+        return
+    assert res.significant, res.messages
+    assert res.ranking[0].variable == exp["variable"], [r.variable for r in res.ranking[:3]]
+    expected = set(exp.get("scaling_factors") or ())
+    family = exp.get("family")
+    if family in FAMILY_TARGETS:
+        expected |= {t for ts in FAMILY_TARGETS[family].values() for t in ts}
+    assert set(res.effect.targets) & expected, (res.effect.name, res.effect.targets, expected)
+    assert _cut(res) >= 0.6, [(c.channel, c.rms_pct_before, c.rms_pct_after) for c in res.errors]
+
+
+def test_all_zero_channel_is_not_measured():
+    d = DATA / "zero_channel_with_effect"
+    df = pd.read_csv(d / "sweeps.csv")
+    assert (df["Mx"] == 0).all()
+    from mftire.diagnosis.candidates import with_sweeps
+    from mftire.diagnosis.diagnose import measured_channels
+
+    chans, out = measured_channels(with_sweeps(df), ("Fx", "Fy", "Mz", "Mx", "My"))
+    assert "Mx" not in chans and out["Mx"] == "not measured: all zeros"
+    assert {"Fx", "Fy"} <= set(chans)
