@@ -415,9 +415,10 @@ def test_diagnosis_names_tread_temperature(chain, gen):
         cut = 1.0 - errs[ch].rms_after / errs[ch].rms_before
         assert cut >= 0.5, (ch, cut)
         assert errs[ch].rms_pct_after < 2.0
-    # the plain MF fit misses the grip window at the held-out load; with TSTC it is recovered
+    # the plain MF fit misses the grip window at the held-out load; with the temperature it is recovered
     h = data[held]
     before = gen.heldout_rms(fitted, h)
-    after = gen.heldout_rms(diag.extended, h, {"TSTC": h["TSTC"].to_numpy()})
+    var = diag.effect.variable
+    after = gen.heldout_rms(diag.extended, h, {var: h[var].to_numpy()})
     assert before["Fx"] > 2.0
     assert after["Fx"] < 2.0 and after["Fy"] < 2.0, after
