@@ -2,17 +2,19 @@
 
 Procedure (:func:`diagnose`)
 ----------------------------
-1. Residuals of every measured channel, data minus the fitted model.
+1. Channel hygiene (:func:`measured_channels`): channels not measured (all zeros, constant,
+   all NaN, mostly missing) and channels whose residual is at the noise floor are left out.
 2. Candidates (:mod:`mftire.diagnosis.candidates`) ranked by the residual variance
    they explain beyond the MF inputs, cross-validated by sweep, with a permutation
-   test (:mod:`mftire.diagnosis.ranking`).
+   test (:mod:`mftire.diagnosis.ranking`); the MF scaling factors profiled per sweep
+   (:mod:`mftire.diagnosis.profile`) add the candidates that predict an affected factor.
 3. No significant candidate: "no significant effect", nothing changes.
 4. Otherwise a condition is held out (``holdout`` or an interior level of the top
    candidate, else of load, speed or pressure).  For the significant candidates
-   close to the top (score >= 60 % of the best, at most three), the mapped model
-   extensions are fitted on the remaining data (:mod:`mftire.diagnosis.effects`);
-   the candidate whose effect fits best (lowest BIC, physical before generic) is
-   the cause, and is listed first.
+   close to the top, laws on the affected families of scaling factors are fitted on the
+   remaining data (:mod:`mftire.diagnosis.effects`) and compared by their error on
+   held-out sweeps with a control refit; the candidate whose law predicts best is the
+   cause, and is listed first, with what it is confounded with (:meth:`Profiles.confounding`).
 5. Before/after errors on the held-out condition per channel: RMS, RMS in % of the
    channel's peak, and the share of residual variance removed.
 """

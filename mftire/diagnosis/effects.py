@@ -307,16 +307,6 @@ def _residuals(prob: _Problem, model: Model, q: Mapping[str, float]) -> np.ndarr
     return np.concatenate(parts)
 
 
-def _degree(v: np.ndarray, most: int) -> int:
-    """Polynomial degree a variable with few distinct levels supports: levels − 2, at least 1.
-
-    A polynomial of degree levels − 1 (with the friction level) would interpolate the
-    levels exactly and say nothing between them.
-    """
-    levels = len(np.unique(np.round(np.asarray(v, float)[np.isfinite(v)], 9)))
-    return int(max(1, min(most, levels - 2)))
-
-
 def law_term(law: Law, variable: str, v: np.ndarray | None, tyre: Tyre, index: int,
              v2: np.ndarray | None = None) -> Extension:
     """The extension term of ``law`` in ``variable`` (values ``v`` for data columns), numbered ``index``.
