@@ -21,11 +21,9 @@ from pathlib import Path
 from mftire.errors import MftireError
 from mftire.fmu import variables as vt
 from mftire.fmu.build import (  # noqa: F401 (re-exported)
-    CFLAGS,
     CORE_SOURCES,
     CSOURCE,
     FMI_HEADERS,
-    LIBS,
     FMUExportError,
     _fmpy_c_code,
     _load,
