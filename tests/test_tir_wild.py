@@ -110,7 +110,7 @@ def test_evaluator_keys_come_from_the_code():
 
 # ------------------------------------------------------------------ the wild collection
 #: Files of the collection that are refused by name (MF_05 / MF-Tyre 5.0, not evaluated).
-MF05 = {"chrono_335_65R22_5_G275MSA_60psi.tir", "chrono_feda_335_65R22_5_G275MSA_40psi.tir"}
+MF05 = {"chrono_335_65R22_5_G275MSA_60psi.tir"} | {f"chrono_feda_335_65R22_5_G275MSA_{p}psi.tir" for p in (40, 70, 95)}
 #: Files that evaluate but have no longitudinal characteristic (PCX1 = PDX1 = 0): MFeval's deliberately
 #: broken example, which also has VERTICAL_STIFFNESS = 0.  The loader warns about both.
 NO_FX = {"mfeval_Model_Unstable.tir"}
@@ -183,7 +183,7 @@ def test_wild_collection_evaluates_with_plausible_signs_and_magnitudes(tmp_path)
             raise AssertionError(f"implausible: {path.name} {q}")
     assert {"PAC2002", "FITTYP 6", "FITTYP 61", "FITTYP 62"} <= formats
     assert refused == MF05 and no_fx == NO_FX
-    assert len(files) == 23 and len(plausible) == 20 == len(files) - len(MF05) - len(NO_FX)
+    assert len(files) == 25 and len(plausible) == 20 == len(files) - len(MF05) - len(NO_FX)
     print(f"\nwild collection: {len(plausible)} of {len(files)} plausible; refused by name (MF_05): "
           f"{len(refused)}; no longitudinal characteristic: {len(no_fx)}")
 
