@@ -23,15 +23,6 @@ from mftire.diagnosis.effects import FAMILY_TARGETS
 DATA = Path(__file__).resolve().parents[1] / "validation" / "data" / "unanticipated_reduced"
 CASES = sorted(p.name for p in DATA.iterdir() if (p / "expected.json").exists())
 
-#: Known failures, kept visible (strict xfail: the test fails loudly once they pass).
-KNOWN = {
-    "fade_blocked_load": "a friction fade in time with blocked loads: time is named, but the law chosen by held-out "
-                         "sweeps (linear) extrapolates to the repeated blocks worse than the plain fit",
-    "zero_channel_with_effect": "sliding-speed friction of the FE surrogate: the speed law fits the trained speeds "
-                                "but does not improve the held-out middle speed the plain fit already matches",
-}  # fmt: skip
-
-
 def _run(case: str):
     d = DATA / case
     exp = json.loads((d / "expected.json").read_text())
@@ -49,10 +40,7 @@ def _cut(res) -> float:
     return 1.0 - float(np.sqrt(ssa / ssb))
 
 
-@pytest.mark.parametrize(
-    "case", [pytest.param(c, marks=pytest.mark.xfail(strict=True, reason=KNOWN[c])) if c in KNOWN else c
-             for c in CASES],  # fmt: skip
-)
+@pytest.mark.parametrize("case", CASES)
 def test_unanticipated_campaign(case):
     exp, res = _run(case)
     if not exp["effect"]:
@@ -67,6 +55,8 @@ def test_unanticipated_campaign(case):
         expected |= {t for ts in FAMILY_TARGETS[family].values() for t in ts}
     assert set(res.effect.targets) & expected, (res.effect.name, res.effect.targets, expected)
     assert _cut(res) >= 0.6, [(c.channel, c.rms_pct_before, c.rms_pct_after) for c in res.errors]
+    for name in exp.get("confounded_with", ()):  # said, with what the within-block variation supports
+        assert any(name in note for note in res.confounding), res.confounding
 
 
 def test_all_zero_channel_is_not_measured():

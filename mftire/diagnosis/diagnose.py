@@ -427,8 +427,8 @@ def diagnose(
         ranked = sorted((f for f in fits[1:] if np.isfinite(f.heldout) and f.heldout < 1.0 and f.name in by_law),
                         key=lambda f: f.heldout)  # fmt: skip
         ranked = [chosen] + [f for f in ranked if f is not chosen]
-        context[id(chosen)] = (prob, dtr, [(f, *by_law[f.name]) for f in ranked if f.name in by_law], eff_ch, folds,
-                               blocks is not None)
+        context[id(chosen)] = (prob, [(f, *by_law[f.name]) for f in ranked if f.name in by_law], eff_ch, folds,
+                               blocks is not None, control.cv)
     # the lowest held-out error wins; a better-ranked candidate within 10 % of it is preferred
     lowest = min((f.heldout for f, _ in found), default=np.inf)
     best = next(((f, e) for f, e in found if f.heldout <= 1.1 * lowest), None)
@@ -441,8 +441,8 @@ def diagnose(
     effect, cause = best
     # the chosen candidate's best laws and the control, refitted with every MF coefficient
     _progress(f"refitting every coefficient with the laws of {effect.variable}", progress)
-    prob, dtr, law_fits, eff_ch, folds, in_blocks = context[id(effect)]
-    refined, extended, notes = refine_effect(prob, dtr, law_fits, n_pressures, eff_ch, folds)
+    prob, law_fits, eff_ch, folds, in_blocks, control_cv = context[id(effect)]
+    refined, extended, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv)
     if refined is None:
         msg = ("no significant effect: the best laws did not beat the control once every coefficient was "
                "refitted (" + "; ".join(notes) + ")")

@@ -147,6 +147,7 @@ class EffectFit:
     n_params: int
     messages: list[str] = field(default_factory=list)
     heldout: float = float("nan")  #: held-out-sweep error relative to the control refit [-]
+    cv: float = float("nan")  #: held-out-sweep error (sum of squared weighted residuals) [-]
     targets: tuple[str, ...] = ()  #: scaling factors (or offsets) the law acts on
 
     @property
@@ -561,11 +562,13 @@ def choose_effect(
         return None, all_fits
     cv_control = heldout_error(prob, CONTROL, "", None, n_pressures, None, effect_channels, folds)
     control.messages.append(f"held-out-sweep error {cv_control:.4g}")
+    control.cv = cv_control
     scored = []
     for fit, v, law in good:
         cv = heldout_error(prob, law, fit.variable, v, n_pressures, control.standard, effect_channels, folds)
         fit.messages.append(f"held-out-sweep error {cv:.4g} (control {cv_control:.4g})")
         fit.heldout = cv / cv_control if cv_control > 0 else np.inf
+        fit.cv = cv
         scored.append((cv, fit))
     lowest = min(cv for cv, _ in scored)
     if lowest > MAX_RESIDUAL_VS_CONTROL * cv_control:
@@ -577,24 +580,27 @@ def choose_effect(
 
 #: Laws refined by a full refit (:func:`refine_effect`): the best of the local comparison.
 REFINE_LAWS = 3
+#: Stages of the full refit: pure and combined Fx, Fy, Mz (:mod:`mftire.fitting.stages`).
+REFIT_STAGES = "1,2,3,4,5"
 
 
 def _full_refit(data: pd.DataFrame, tyre: Tyre) -> Tyre:
-    """The staged fit of every coefficient (:func:`mftire.fitting.fit_tir`) of the training rows, started
-    from ``tyre`` (its extension terms included): a global refit, with the fitter's own start values."""
+    """The staged fit (:func:`mftire.fitting.fit_tir`) of the training rows, started from ``tyre`` (its
+    extension terms included): a global refit of every coefficient of the force and aligning-moment
+    stages (:data:`REFIT_STAGES`), with the fitter's own start values; Mx and My stay as fitted."""
     import warnings
 
     from mftire.fitting.core import fit_tir
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = fit_tir(data, tyre.parameters, progress=False)
+        res = fit_tir(data, tyre.parameters, stages=REFIT_STAGES, progress=False)
     return Tyre(res.parameters, name=tyre.name)
 
 
 def refine_effect(
-    prob: _Problem, data: pd.DataFrame, fits: Sequence[tuple[EffectFit, Law, np.ndarray | None]], n_pressures: int,
-    effect_channels: Sequence[str] | None, folds: np.ndarray | None,
+    prob: _Problem, fits: Sequence[tuple[EffectFit, Law, np.ndarray | None]], n_pressures: int,
+    effect_channels: Sequence[str] | None, folds: np.ndarray | None, local_control_cv: float = float("nan"),
 ) -> tuple[EffectFit | None, Tyre | None, list[str]]:
     """Refit the best laws and the control with every MF coefficient (the staged fitter), then choose
     among them by held-out-sweep error, each model's law and main coefficients refitted on each fold.
@@ -602,17 +608,25 @@ def refine_effect(
     The local fits of :func:`choose_effect` start at the base fit, which has absorbed part of the
     effect into coefficients it does not refit (a drift in time with blocked loads moves the load
     sensitivity, the stiffness and the shifts together); the staged fitter restarts every coefficient
-    from the data.  Returns ``(chosen, extended tyre, messages)``; chosen is None when no refined law
-    beats the refined control by :data:`MAX_RESIDUAL_VS_CONTROL` on held-out sweeps.
+    from the data.  Each law competes as fitted locally (its held-out error ``fit.cv``) and as refitted in
+    full; the control is the better of the local (``local_control_cv``) and the full refit without an
+    effect.  Returns ``(chosen, extended tyre, messages)``; chosen is None when no law beats the control
+    by :data:`MAX_RESIDUAL_VS_CONTROL` on held-out sweeps.
     """
     base = prob.tyre
-    cols = [c for c in data.columns if not str(c).startswith(("residual_", "_"))]
-    train = data[cols]
+    prob, idx = subsample(prob)
+    folds = None if folds is None else np.asarray(folds)[idx]
+    fits = [(f, law, None if v is None else np.asarray(v)[idx]) for f, law, v in fits]
+    cols = [c for c in prob.df.columns if not str(c).startswith(("residual_", "_"))]
+    train = prob.df[cols]  # the training rows without gross outliers, subsampled
     control_tyre = _full_refit(train, base)
     cv_control = heldout_error(replace_tyre(prob, control_tyre), CONTROL, "", None, n_pressures, None,
                                effect_channels, folds)  # fmt: skip
+    if np.isfinite(local_control_cv):
+        cv_control = min(cv_control, local_control_cv)  # the better control: the stricter test
     messages = [f"full refit without an effect: held-out-sweep error {cv_control:.4g}"]
-    best: tuple[float, EffectFit, Tyre] | None = None
+    # each law as fitted locally (its held-out error from choose_effect) and refitted in full
+    options: list[tuple[float, EffectFit, Tyre]] = [(f.cv, f, f.apply(base)) for f, _, _ in fits if np.isfinite(f.cv)]
     for fit, _law, values in list(fits)[:REFINE_LAWS]:
         tyre = _full_refit(train, fit.apply(base))
         new = [t for t in tyre.extension_set.terms if t.index not in {u.index for u in base.extension_set.terms}]
@@ -621,18 +635,20 @@ def refine_effect(
         if values is not None and fit.variable not in BUILTIN_VARIABLES:
             p.variables = {**p.variables, fit.variable: np.asarray(values)}
         cv = heldout_error(p, CONTROL, "", None, n_pressures, None, effect_channels, folds, extra_keys=keys)
-        messages.append(f"full refit with {fit.name} in {fit.variable}: held-out-sweep error {cv:.4g}")
-        if best is None or cv < best[0]:
-            best = (cv, fit, tyre)
-    if best is None or best[0] > MAX_RESIDUAL_VS_CONTROL * cv_control:
+        messages.append(f"full refit with {fit.name} in {fit.variable}: held-out-sweep error {cv:.4g} (as fitted "
+                        f"with the main coefficients only: {fit.cv:.4g})")  # fmt: skip
+        options.append((cv, fit, tyre))
+    if not options:
         return None, None, messages
-    cv, fit, tyre = best
+    cv, fit, tyre = min(options, key=lambda o: o[0])
+    if cv > MAX_RESIDUAL_VS_CONTROL * cv_control:
+        return None, None, messages
     section = {k: v for k, v in (tyre.extensions or {}).items() if k not in (base.extensions or {})}
     standard = {k: float(v) for k, v in tyre.flat.items() if k in base.flat and v != base.flat[k]}
     refined = EffectFit(fit.name, fit.variable, fit.physical,
                         {k: float(v) for k, v in section.items() if isinstance(v, float) and "_C" in k}, section,
                         standard, fit.ss_before, fit.ss_after, fit.bic, fit.n_params, [*fit.messages, *messages],
-                        cv / cv_control if cv_control > 0 else np.inf, fit.targets)  # fmt: skip
+                        cv / cv_control if cv_control > 0 else np.inf, fit.targets, cv)  # fmt: skip
     return refined, tyre, messages
 
 

@@ -14,8 +14,9 @@ own factors), with a weak prior pulling each factor to 1 (offset 0) so that a sw
 cannot identify a factor (no peak reached) leaves it near neutral.
 
 **Which factor changes.** The spread of a factor across sweeps is compared with the
-spread expected from noise: the standard errors of each sweep's factors from the
-Jacobian at the optimum (a local bootstrap), giving χ² = Σ((λ_s − λ̄)/se_s)² on
+spread expected from noise: the standard errors of each sweep's factors by a wild bootstrap
+of the linearised fit (:data:`N_BOOT` replicates, residual signs flipped at random; never below
+the noise-only standard error), giving χ² = Σ((λ_s − λ̄)/se_s)² on
 n_sweeps − 1 degrees of freedom.  A factor is *affected* when that spread is significant
 (p < 0.001) and large enough to matter (standard deviation of λ ≥ 1 %, offsets ≥ 0.5 %
 of the load).
@@ -61,6 +62,8 @@ MIN_SPREAD = {"LMU": 0.01, "LK": 0.02, "LE": 0.05, "LC": 0.01, "OFF": 0.005}
 SPREAD_ALPHA = 1e-3
 #: Confounding threshold on |r| across sweeps.
 CONFOUND_R = 0.5
+#: Bootstrap replicates of each sweep's factors (their spread expected from noise).
+N_BOOT = 200
 MODE = Mode.from_code(111)
 
 
@@ -181,7 +184,7 @@ class Profiles:
         return out
 
 
-def _fit_channel(tyre: Tyre, df: pd.DataFrame, channel: str, sigma: float):
+def _fit_channel(tyre: Tyre, df: pd.DataFrame, channel: str, sigma: float, rng: np.random.Generator):
     """Fit the factors of ``channel`` per sweep; returns (sweep ids, values (s, k), se (s, k))."""
     names = FACTORS[channel]
     sweep = df["sweep_id"].to_numpy()
@@ -224,18 +227,22 @@ def _fit_channel(tyre: Tyre, df: pd.DataFrame, channel: str, sigma: float):
     theta = res.x.reshape(ns, k)
     J = res.jac.tocsr() if sparse.issparse(res.jac) else sparse.csr_matrix(res.jac)
     rdata = res.fun[:n]
+    # standard errors by a wild bootstrap of the linearised per-sweep fit (Rademacher signs on the
+    # residuals, which keeps their size and any heteroscedasticity; residuals clipped at the loss's
+    # scale), never below the noise-only standard error
     se = np.full((ns, k), np.inf)
+    P = np.diag(1.0 / prior**2)  # the prior's information
     for s in range(ns):
-        m = inv == s
-        cols_s = np.arange(s * k, (s + 1) * k)
-        Js = J[np.flatnonzero(m)][:, cols_s].toarray()
-        P = np.diag(1.0 / prior**2)  # the prior's information
-        s2 = max(float(np.median(rdata[m] ** 2) / 0.455), 1.0)  # residual variance in noise units (robust)
+        m = np.flatnonzero(inv == s)
+        Js = J[m][:, np.arange(s * k, (s + 1) * k)].toarray()
         try:
-            cov = np.linalg.inv(Js.T @ Js + P) * s2
-            se[s] = np.sqrt(np.maximum(np.diag(cov), 0.0))
+            N = np.linalg.inv(Js.T @ Js + P)
         except np.linalg.LinAlgError:
-            pass
+            continue
+        r = np.clip(rdata[m], -3.0, 3.0)
+        signs = rng.choice((-1.0, 1.0), size=(N_BOOT, len(m)))
+        draws = (signs * r) @ Js @ N  # (N_BOOT, k): θ* − θ̂ of each replicate
+        se[s] = np.maximum(draws.std(axis=0), np.sqrt(np.maximum(np.diag(N), 0.0)))
     return ids, theta, se
 
 
@@ -299,7 +306,7 @@ def profile_factors(
         if sub["sweep_id"].nunique() < 4:
             continue
         sigma = max(float(noise.get(ch, 0.0)), 1e-3 * float(np.nanmax(np.abs(sub[ch]))))
-        ids, theta, se = _fit_channel(tyre, sub.reset_index(drop=True), ch, sigma)
+        ids, theta, se = _fit_channel(tyre, sub.reset_index(drop=True), ch, sigma, rng)
         fz_mean = sub.groupby("sweep_id")["Fz"].mean().reindex(ids).to_numpy()
         t = pd.DataFrame({"sweep_id": ids, "channel": ch, "order": [order[i] for i in ids]})
         for j, name in enumerate(FACTORS[ch]):
