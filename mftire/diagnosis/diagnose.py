@@ -170,19 +170,24 @@ def confounding_blocks(df: pd.DataFrame, v: np.ndarray, threshold: float = CONFO
 
 
 def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4,
-                blocks: np.ndarray | None = None) -> np.ndarray | None:
+                blocks: np.ndarray | None = None, kinds: np.ndarray | None = None) -> np.ndarray | None:
     """Held-out folds along the candidate: its levels (a sweep-level variable with 3 to 6 levels: one
     level out at a time), else ``k`` contiguous ranges of the sweeps' mean value, so that every fold is
     a range of the variable between or beyond the trained ones, as the held-out condition is.
 
     With ``blocks`` (:func:`confounding_blocks`) the ranges are taken inside each block, so that every
     fold keeps every operating condition in training and tests the candidate by its variation within
-    the blocks; a block of a single sweep is never held out (label -1)."""
+    the blocks; a block of a single sweep is never held out (label -1).  The ranges are taken per sweep
+    kind (``kinds``: braking, cornering, combined), so that no fold holds out every sweep of a kind, which
+    the refitted coefficients of that channel need."""
     v = np.asarray(v, float)
     lv = np.unique(np.round(v[np.isfinite(v)], 6))
     if sweep_level and 3 <= len(lv) <= 6 and blocks is None:
         return np.unique(np.round(v, 6), return_inverse=True)[1]
-    frame = pd.DataFrame({"v": v, "s": sweeps, "b": np.zeros(len(v), int) if blocks is None else blocks})
+    b = np.zeros(len(v), int) if blocks is None else np.asarray(blocks)
+    if kinds is not None:
+        b = pd.MultiIndex.from_arrays([b, np.asarray(kinds)]).factorize()[0]
+    frame = pd.DataFrame({"v": v, "s": sweeps, "b": b})
     means = frame.groupby("s").agg(v=("v", "mean"), b=("b", "first"))
     if means["v"].nunique() < k:
         return None
@@ -411,7 +416,8 @@ def diagnose(
         # held-out folds: the levels of a sweep-level candidate (a level never seen in training, as the
         # held-out condition), else groups of sweeps
         blocks = confounding_blocks(prob.df, v)
-        folds = level_folds(v, prob.df["sweep_id"].to_numpy(), c.sweep_level, blocks=blocks)
+        kinds = prob.df["sweep_var"].to_numpy() if "sweep_var" in prob.df.columns else None
+        folds = level_folds(v, prob.df["sweep_id"].to_numpy(), c.sweep_level, blocks=blocks, kinds=kinds)
         n_levels = int(np.unique(np.round(v[np.isfinite(v)], 9)).size)
         laws = [(var, law, v if var == variable else None)
                 for var, law in effects_for(variable, derived, monotone, n_levels, families, chans, second)]
