@@ -235,12 +235,16 @@ def jacobian(
             stack.extend((parent, False) for parent, _ in node.edges if id(parent) not in seen)
         adjoint: dict[int, object] = {id(out): 1.0}
         for node in reversed(order):
-            a = adjoint.get(id(node))
-            if a is None or not node.edges:
+            if not node.edges:  # a coefficient: its adjoint is its Jacobian column
                 continue
-            del adjoint[id(node)]
+            a = adjoint.pop(id(node), None)
+            if a is None:
+                continue
             for parent, local in node.edges:
-                contribution = a * local
+                if isinstance(local, float) and local in (1.0, -1.0):
+                    contribution = a if local == 1.0 else -a
+                else:
+                    contribution = a * local
                 pid = id(parent)
                 adjoint[pid] = contribution if pid not in adjoint else adjoint[pid] + contribution
         for j, leaf in enumerate(leaves):
