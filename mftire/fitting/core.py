@@ -11,6 +11,9 @@ problem solved with :func:`scipy.optimize.least_squares` (trust-region reflectiv
   residuals beyond 3σ (gross outliers) count linearly, not quadratically;
 * bounds from :mod:`mftire.fitting.stages` (widened to hold the template value) and
   parameter scales ``x_scale = max(|start|, typical magnitude)``;
+* exact Jacobians: algorithmic (reverse-mode) derivatives through the model pipeline
+  (:mod:`mftire.fitting.derivatives`), finite differences only for a stage that fits
+  an extension coefficient; BLAS held to one thread inside the solver (threadpoolctl);
 * two passes: first the nominal and load coefficients, then every identified
   coefficient;
 * the start values are the template's, replaced by data estimates
