@@ -34,7 +34,7 @@ __all__ = ["Var", "jacobian"]
 class Var:
     """A value in the computation graph: ``v`` and the ``(parent, local derivative)`` edges."""
 
-    __slots__ = ("v", "edges", "__weakref__")
+    __slots__ = ("v", "edges")
     __array_priority__ = 1000.0
 
     def __init__(self, v, edges: tuple = ()):
