@@ -7,10 +7,15 @@ The top level offers the parameter-file API and the tyre object:
 * :class:`TirError` for bad property files.
 """
 
+from mftire._lazy import lazy_names
 from mftire.errors import MftireError, MftireInputError
 from mftire.iotools.tir import TirError, TirParameters, read_tir, write_tir
-from mftire.mf.solver import OUTPUT_NAMES
-from mftire.tyre import MFResult, Tyre, load
+
+# imported on first use (start-up of the command line, see mftire._lazy)
+__getattr__, __dir__ = lazy_names(
+    __name__, {"OUTPUT_NAMES": "mftire.mf.solver", "MFResult": "mftire.tyre", "Tyre": "mftire.tyre",
+               "load": "mftire.tyre"}
+)
 
 __version__ = "0.1.0"
 

@@ -8,16 +8,17 @@ input print one line naming the file, column and row, and exit with code 2.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 from collections.abc import Sequence
-
-import numpy as np
-import pandas as pd
+from typing import TYPE_CHECKING
 
 from mftire.data import default_tir  # noqa: F401  (moved to mftire.data; kept importable from here)
 from mftire.errors import MftireError
-from mftire.iotools.tables import read_numeric_csv
+
+if TYPE_CHECKING:  # pandas, scipy, matplotlib and the feature packages load when a command needs them
+    import pandas as pd
 
 #: Columns of ``mftire evaluate``'s input CSV.
 EVALUATE_REQUIRED = ("Fz", "kappa", "alpha", "gamma")
@@ -25,7 +26,10 @@ EVALUATE_OPTIONAL = ("phit", "Vx", "P", "omega")
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
+    import pandas as pd
+
     from mftire.iotools.output import OutputPlan
+    from mftire.iotools.tables import read_numeric_csv
     from mftire.tyre import Tyre
 
     OutputPlan([args.tir, args.input], args.force).file(args.output, stdout=True)
@@ -103,8 +107,8 @@ def tyre_info(tyre) -> str:
     lines.append("ranges:")
     lines.append(f"  Fz    {f['FZMIN']:g} .. {f['FZMAX']:g} N")
     lines.append(f"  kappa {f['KPUMIN']:g} .. {f['KPUMAX']:g}")
-    lines.append(f"  alpha {np.degrees(f['ALPMIN']):.2f} .. {np.degrees(f['ALPMAX']):.2f} deg")
-    lines.append(f"  gamma {np.degrees(f['CAMMIN']):.2f} .. {np.degrees(f['CAMMAX']):.2f} deg")
+    lines.append(f"  alpha {math.degrees(f['ALPMIN']):.2f} .. {math.degrees(f['ALPMAX']):.2f} deg")
+    lines.append(f"  gamma {math.degrees(f['CAMMIN']):.2f} .. {math.degrees(f['CAMMAX']):.2f} deg")
     lines.append(f"  P     {f['PRESMIN'] / 1e5:g} .. {f['PRESMAX'] / 1e5:g} bar")
     lines.append("parameters per section (in file / standard keys absent, taking defaults):")
     sections = getattr(params, "sections", None) or {}
@@ -228,7 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
     from mftire.compare import cli as compare_cli
 
     compare_cli.add_parser(sub)
-    from mftire.iotools import rig as rig_cli
+    from mftire.iotools import rig_cli
 
     rig_cli.add_parser(sub)
     return parser

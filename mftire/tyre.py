@@ -10,10 +10,9 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
-from typing import Any, Union
+from typing import TYPE_CHECKING, Any, Union
 
 import numpy as np
-import pandas as pd
 
 from mftire.iotools.tir import TirParameters, as_parameters, read_tir
 from mftire.mf import pac2002
@@ -21,6 +20,9 @@ from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
 from mftire.mf.family import PAC2002_CODE
 from mftire.mf.solver import OUTPUT_NAMES, OUTPUT_UNITS, UnsupportedModelError, evaluate_arrays, unsupported_message
 from mftire.parameters import with_defaults
+
+if TYPE_CHECKING:  # pandas is imported by the table methods only (fast ``mftire info``)
+    import pandas as pd
 
 
 class MFResult(dict):
@@ -33,6 +35,8 @@ class MFResult(dict):
 
     def to_frame(self) -> pd.DataFrame:
         """All channels as a DataFrame (inputs are flattened to one row per point)."""
+        import pandas as pd
+
         return pd.DataFrame({k: np.ravel(v) for k, v in self.items()})
 
 
@@ -88,6 +92,8 @@ class Tyre:
         DataFrame
             The 30 channels of :data:`OUTPUT_NAMES`, with the index of ``df``.
         """
+        import pandas as pd
+
         out = _frame_evaluate(self, df, mode, name)
         return pd.DataFrame({k: np.broadcast_to(out[k], (len(df),)) for k in OUTPUT_NAMES}, index=df.index)
 

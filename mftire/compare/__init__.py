@@ -15,17 +15,18 @@
 >>> write_comparison(comp, "compare_out")                                # doctest: +SKIP
 """
 
-from mftire.compare.core import Comparison, bands_frame, compare, write_comparison
-from mftire.compare.data import curve_grid, load_comparison_data, prepare_comparison_data
-from mftire.compare.models import evaluate_at, load_models
-from mftire.compare.tables import (
-    curve_errors,
-    error_summary,
-    free_rolling_table,
-    linear_stiffness,
-    stiffness_table,
-    trail_points,
-    trail_summary,
+from mftire._lazy import lazy_names
+
+# imported on first use (see mftire._lazy)
+__getattr__, __dir__ = lazy_names(
+    __name__, {"Comparison": "mftire.compare.core", "bands_frame": "mftire.compare.core",
+     "compare": "mftire.compare.core", "write_comparison": "mftire.compare.core",
+     "curve_grid": "mftire.compare.data", "load_comparison_data": "mftire.compare.data",
+     "prepare_comparison_data": "mftire.compare.data", "evaluate_at": "mftire.compare.models",
+     "load_models": "mftire.compare.models", "curve_errors": "mftire.compare.tables",
+     "error_summary": "mftire.compare.tables", "free_rolling_table": "mftire.compare.tables",
+     "linear_stiffness": "mftire.compare.tables", "stiffness_table": "mftire.compare.tables",
+     "trail_points": "mftire.compare.tables", "trail_summary": "mftire.compare.tables"}
 )
 
 __all__ = [

@@ -9,10 +9,15 @@ docs/fe_surrogate.md for the model and the solution scheme.
 >>> df = sweep(tyre, "braking", 0.8 * tyre.load_index_load, 60 / 3.6, tyre.size.nominal_pressure)  # doctest: +SKIP
 """
 
-from mftire.fe.config import TyreConfig, load_tyre
-from mftire.fe.identify import IdentifiedFriction, identify_velocity_law
-from mftire.fe.solver import SteadyStateResult, solve
-from mftire.fe.sweeps import campaign, free_rolling, sweep
+from mftire._lazy import lazy_names
+
+# imported on first use (see mftire._lazy)
+__getattr__, __dir__ = lazy_names(
+    __name__, {"TyreConfig": "mftire.fe.config", "load_tyre": "mftire.fe.config",
+     "IdentifiedFriction": "mftire.fe.identify", "identify_velocity_law": "mftire.fe.identify",
+     "SteadyStateResult": "mftire.fe.solver", "solve": "mftire.fe.solver", "campaign": "mftire.fe.sweeps",
+     "free_rolling": "mftire.fe.sweeps", "sweep": "mftire.fe.sweeps"}
+)
 
 __all__ = [
     "IdentifiedFriction",

@@ -7,14 +7,16 @@ All quantities on the command line are SI (N, m/s, Pa); ``--load-fraction`` and 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from pathlib import Path
-
-import numpy as np
-import pandas as pd
+from typing import TYPE_CHECKING
 
 from mftire.errors import MftireInputError
+
+if TYPE_CHECKING:  # numpy and pandas are imported by the commands (fast ``mftire --help``)
+    import pandas as pd
 
 
 def _tyre(args: argparse.Namespace):
@@ -36,7 +38,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if not speeds:
         raise MftireInputError("give --Vx [m/s] or --kmh")
     pressures = args.P if args.P else [tyre.size.nominal_pressure]
-    table = sweep(tyre, args.kind, loads, speeds, pressures, gamma=np.deg2rad(args.gamma_deg),
+    table = sweep(tyre, args.kind, loads, speeds, pressures, gamma=math.radians(args.gamma_deg),
                   n_kappa=args.points, n_alpha=args.points)
     path = write_csv_atomic(table, args.output)
     print(f"wrote {len(table)} rows ({args.kind}) to {path}")
@@ -62,6 +64,8 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
 
 
 def _read_tables(paths: list[str]) -> pd.DataFrame:
+    import pandas as pd
+
     from mftire.iotools.tables import read_numeric_csv
 
     df = pd.concat([read_numeric_csv(str(p), ()) for p in paths], ignore_index=True)

@@ -15,7 +15,13 @@ Small pure functions in the spirit of pvlib's ``ivtools``:
 =================  ================================================================
 """
 
-from mftire.fitting.core import FitResult, StageResult, fit_tir
-from mftire.fitting.stages import STAGES, resolve_stages
+from mftire._lazy import lazy_names
+
+# imported on first use (see mftire._lazy)
+__getattr__, __dir__ = lazy_names(
+    __name__, {"FitResult": "mftire.fitting.core", "StageResult": "mftire.fitting.core",
+     "fit_tir": "mftire.fitting.core", "STAGES": "mftire.fitting.stages",
+     "resolve_stages": "mftire.fitting.stages"}
+)
 
 __all__ = ["FitResult", "StageResult", "fit_tir", "STAGES", "resolve_stages"]

@@ -11,6 +11,9 @@ problem solved with :func:`scipy.optimize.least_squares` (trust-region reflectiv
   residuals beyond 3σ (gross outliers) count linearly, not quadratically;
 * bounds from :mod:`mftire.fitting.stages` (widened to hold the template value) and
   parameter scales ``x_scale = max(|start|, typical magnitude)``;
+* exact Jacobians: algorithmic (reverse-mode) derivatives through the model pipeline
+  (:mod:`mftire.fitting.derivatives`), finite differences only for a stage that fits
+  an extension coefficient; BLAS held to one thread inside the solver (threadpoolctl);
 * two passes: first the nominal and load coefficients, then every identified
   coefficient;
 * the start values are the template's, replaced by data estimates
@@ -35,9 +38,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
+from threadpoolctl import threadpool_limits
 
 from mftire.errors import MftireInputError
-from mftire.fitting import initial
+from mftire.fitting import derivatives, initial
 from mftire.fitting.data import load_sweep_files, noise_std, parse_weights, prepare_table, row_weights
 from mftire.fitting.identify import DataLevels, data_levels, split_identified
 from mftire.fitting.model import Inputs, Model, fitting_mode, predict
@@ -199,27 +203,34 @@ def _progress_printer(progress: bool | Callable[[str], None] | None) -> Callable
 # ------------------------------------------------------------------------------------
 
 
-def _make_evaluator(
-    channel: str, p: dict, x: Inputs, mode: Mode, ext: ExtensionSet, fitted: Sequence[str] = ()
-) -> Callable[[dict], np.ndarray]:
-    """A function q -> channel at ``x`` through the model pipeline (:class:`Model`).
+class _Evaluator:
+    """``q -> channel`` at ``x`` through the model pipeline (:class:`Model`), with its Jacobian.
 
     Piece 1 (conditioning, eqs 4.E1–4.E8 inputs) runs once.  For the moments, the forces
-    are computed once when no coefficient of ``fitted`` changes them (aligning, overturning
-    and rolling coefficients only).
+    and the zero-camber lateral force of eq 4.E74 are computed once when no coefficient
+    of ``fitted`` changes them (aligning, overturning and rolling coefficients only).
+    :meth:`jacobian` differentiates algorithmically (:mod:`mftire.fitting.derivatives`);
+    not :attr:`exact` (finite differences instead) when an extension coefficient is fitted.
     """
-    model = Model(p, x, mode, ext)
-    if channel in ("Fx", "Fy"):
-        return lambda q: model.predict(q, channel)  # eqs 4.E9/4.E50, 4.E19/4.E58
-    force_free = all(k.startswith(("Q", "SSZ", "PPZ", "PPMX")) for k in fitted)
-    if not force_free:
-        return lambda q: model.predict(q, channel)
-    given = model.channels(p, ("Fx", "Fy"))
 
-    def f(q):
-        return np.real(getattr(model.channels(q, (channel,), given), channel))  # eqs 4.E71, 49, A48
+    def __init__(self, channel: str, p: dict, x: Inputs, mode: Mode, ext: ExtensionSet, fitted: Sequence[str] = ()):
+        self.model = Model(p, x, mode, ext)
+        self.channel = channel
+        self.n = len(x)
+        force_free = channel not in ("Fx", "Fy") and all(k.startswith(("Q", "SSZ", "PPZ", "PPMX")) for k in fitted)
+        self.given = self.model.channels(p, (channel,)) if force_free else None
+        self.exact = not set(fitted) & set(ext.coefficient_keys)
 
-    return f
+    def value(self, q: Mapping) -> np.ndarray:
+        """The channel (a :class:`~mftire.fitting.derivatives.Var` when ``q`` holds some)."""
+        return getattr(self.model.channels(q, (self.channel,), self.given), self.channel)  # eqs 4.E9 ... A48
+
+    def __call__(self, q: Mapping) -> np.ndarray:
+        return np.real(self.value(q))
+
+    def jacobian(self, q: Mapping, keys: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+        """The channel (n,) and its derivatives by ``q[keys]`` (n, k)."""
+        return derivatives.jacobian(self.value, q, keys, self.n)
 
 
 # ------------------------------------------------------------------------------------
@@ -252,11 +263,27 @@ def _robust_cost(r: np.ndarray) -> float:
 
 
 @dataclass
+class _Penalty:
+    """One-sided penalty ``w · max(model + margin, 0)`` on a channel (stage 1: free rolling)."""
+
+    evaluate: _Evaluator
+    w: np.ndarray
+    margin: np.ndarray
+
+    def __call__(self, q: dict) -> np.ndarray:
+        return self.w * np.maximum(self.evaluate(q) + self.margin, 0.0)
+
+    def jacobian(self, q: dict, keys: Sequence[str]) -> np.ndarray:
+        value, d = self.evaluate.jacobian(q, keys)
+        return (self.w * (value + self.margin > 0.0))[:, None] * d
+
+
+@dataclass
 class _Problem:
-    evaluate: Callable[[dict], np.ndarray]
+    evaluate: _Evaluator
     y: np.ndarray
     sw: np.ndarray  # sqrt(weight) / sigma
-    penalty: Callable[[dict], np.ndarray] | None = None
+    penalty: _Penalty | None = None
 
     def residuals(self, q: dict) -> np.ndarray:
         r = (self.evaluate(q) - self.y) * self.sw
@@ -265,8 +292,22 @@ class _Problem:
             r = np.concatenate([r, self.penalty(q)])
         return r
 
+    @property
+    def exact(self) -> bool:
+        """The Jacobian is computed (not finite differences)."""
+        return self.evaluate.exact and (self.penalty is None or self.penalty.evaluate.exact)
 
-def _solve(prob: _Problem, p: dict, coeffs: Sequence[Coefficient], max_nfev: int):
+    def jacobian(self, q: dict, keys: Sequence[str]) -> np.ndarray:
+        """d residuals / d q[keys] (rows of non-finite residuals: 0); only when :attr:`exact`."""
+        value, d = self.evaluate.jacobian(q, keys)
+        finite = np.isfinite((value - self.y) * self.sw)
+        jac = np.where(finite, self.sw, 0.0)[:, None] * d
+        if self.penalty is not None:
+            jac = np.concatenate([jac, self.penalty.jacobian(q, keys)])
+        return jac
+
+
+def _solve(prob: _Problem, p: dict, coeffs: Sequence[Coefficient], max_nfev: int, jacobian: str = "exact"):
     keys = [c.key for c in coeffs]
     x0 = np.array([p[k] for k in keys], dtype=float)
     lb, ub, xs = _bounds(coeffs, x0)
@@ -277,9 +318,15 @@ def _solve(prob: _Problem, p: dict, coeffs: Sequence[Coefficient], max_nfev: int
         q.update(zip(keys, x, strict=True))
         return prob.residuals(q)
 
-    with np.errstate(all="ignore"):
-        res = least_squares(fun, x0, bounds=(lb, ub), x_scale=xs, loss=LOSS, f_scale=F_SCALE,
-                            method="trf", max_nfev=max_nfev, ftol=1e-9, xtol=1e-9, gtol=1e-9)
+    def jac(x):
+        q.update(zip(keys, x, strict=True))
+        return prob.jacobian(q, keys)
+
+    exact = jacobian == "exact" and prob.exact
+    # one BLAS thread: least_squares' SVDs are small, and threads fight over the cores
+    with np.errstate(all="ignore"), threadpool_limits(limits=1, user_api="blas"):
+        res = least_squares(fun, x0, jac=jac if exact else "2-point", bounds=(lb, ub), x_scale=xs, loss=LOSS,
+                            f_scale=F_SCALE, method="trf", max_nfev=max_nfev, ftol=1e-9, xtol=1e-9, gtol=1e-9)
     out = dict(p)
     out.update(zip(keys, (float(v) for v in res.x), strict=True))
     return out, res
@@ -374,6 +421,7 @@ def _run_group(
     say: Callable[[str], None],
     refine: bool = False,
     ext: ExtensionSet | None = None,
+    jacobian: str = "exact",
 ) -> tuple[dict, StageResult]:
     ext = ext or _NO_EXTENSIONS
     res = StageResult(stage.number, stage.name, stage.title, channel)
@@ -418,23 +466,20 @@ def _run_group(
     xcol = {"Fx": "kappa", "Fy": "alpha", "Mz": "alpha"}.get(channel) if stage.number <= 3 else None
     sigma = _channel_sigma(y, rows, xcol)
     res.noise = sigma
-    evaluate = _make_evaluator(channel, p, x, mode, ext, [c.key for c in ident])
+    evaluate = _Evaluator(channel, p, x, mode, ext, [c.key for c in ident])
     prob = _Problem(evaluate, y, sqrt_w[sel] / sigma)
 
     if stage.number == 1:
         targets = _free_rolling_targets(rows, ext.external_variables)
         neg = targets[targets["measured"] < 0]
         if len(neg):
-            free_model = Model(p, _condition_inputs(neg, ext), mode, ext)
+            free_model = _Evaluator("Fx", p, _condition_inputs(neg, ext), mode, ext, [c.key for c in ident])
             wfr = 10.0 * np.sqrt(neg["n"].to_numpy(float)) / sigma
             # keep a small margin below zero so that the constraint holds strictly
             margin = np.minimum(0.05 * sigma, 0.5 * np.abs(neg["measured"].to_numpy(float)))
 
-            def penalty(q):
-                fx = free_model.predict(q, "Fx")
-                return wfr * np.maximum(fx + margin, 0.0)  # one-sided: model Fx(kappa=0) must not be > 0
-
-            prob.penalty = penalty
+            # one-sided: model Fx(kappa=0) must not be > 0
+            prob.penalty = _Penalty(free_model, wfr, margin)
         free_rolling.append(targets)
 
     def rms(q):
@@ -470,7 +515,7 @@ def _run_group(
         say(f"stage {stage.number} {stage.name} [{channel}]: pass {i + 1}/{len(passes)}, "
             f"{len(group)} coefficients, {len(rows)} points")
         budget = 30 * len(group) if i < len(passes) - 1 else min(60 * len(group), 600)
-        q, sol = _solve(prob, q, group, max_nfev=budget)
+        q, sol = _solve(prob, q, group, max_nfev=budget, jacobian=jacobian)
         nfev += int(sol.nfev)
         ok = bool(sol.success)
         msg = str(sol.message)
@@ -559,6 +604,7 @@ def fit_tir(
     alpha_star: bool = False,
     progress: bool | Callable[[str], None] | None = None,
     fixed: Sequence[str] = (),
+    jacobian: str = "exact",
 ) -> FitResult:
     """Fit Magic Formula 6.1/6.2 coefficients to slip sweeps, stage by stage.
 
@@ -584,12 +630,19 @@ def fit_tir(
     fixed : sequence of str, optional
         Coefficients held at their template values (e.g. the pressure terms, to fit a
         model without them); reported as not identified, "fixed by the user".
+    jacobian : {"exact", "2-point"}
+        ``"exact"`` (default): algorithmic (reverse-mode) derivatives through the model
+        (:mod:`mftire.fitting.derivatives`; finite differences for a stage that fits an
+        extension coefficient); ``"2-point"``: forward finite differences everywhere
+        (slower; the reference the exact derivatives are tested against).
 
     Returns
     -------
     FitResult
     """
     t_start = time.perf_counter()
+    if jacobian not in ("exact", "2-point"):
+        raise ValueError(f"jacobian must be 'exact' or '2-point', not {jacobian!r}")
     say = _progress_printer(progress)
     tmpl = _as_template(template)
     if tmpl.fittyp not in (61, 62):
@@ -635,13 +688,14 @@ def fit_tir(
             coeffs = tuple(coeffs) + _extension_coefficients(ext, stage.number, channel)
             held = [c.key for c in coeffs if c.key in fixed_keys]
             coeffs = tuple(c for c in coeffs if c.key not in fixed_keys)
-            p, r = _run_group(stage, channel, coeffs, p, table, sqrt_w, mode, free_rolling, say, ext=ext)
+            p, r = _run_group(stage, channel, coeffs, p, table, sqrt_w, mode, free_rolling, say, ext=ext,
+                              jacobian=jacobian)
             r.not_identified.update({k: "fixed by the user" for k in held})
             results.append(r)
             if stage.number == 5 and r.status == "fitted":
                 # Mz at kappa = 0 holds s·Fx (eq 4.E71) with the SSZ and combined Fx just fitted:
                 # polish the aligning coefficients together with SSZ on all Mz rows.
-                p, r2 = _refine_mz(p, results, table, sqrt_w, mode, say, ext)
+                p, r2 = _refine_mz(p, results, table, sqrt_w, mode, say, ext, jacobian)
                 if r2 is not None:
                     results.append(r2)
             if r.status != "fitted":
@@ -683,7 +737,7 @@ def fit_tir(
     )
 
 
-def _refine_mz(p, results, table, sqrt_w, mode, say, ext):
+def _refine_mz(p, results, table, sqrt_w, mode, say, ext, jacobian="exact"):
     keys = [k for r in results if r.number in (3, 5) and r.status == "fitted" for k in r.identified]
     if not any(r.number == 3 and r.status == "fitted" for r in results):
         return p, None
@@ -692,7 +746,7 @@ def _refine_mz(p, results, table, sqrt_w, mode, say, ext):
     coeffs = tuple(by_key[k] for k in dict.fromkeys(keys))
     stage = Stage(5, "combined_mz", ("Mz",), ("pure_lateral", "free_rolling", "combined"), (coeffs,),
                   "aligning moment refinement on pure and combined sweeps")
-    p, r = _run_group(stage, "Mz", coeffs, p, table, sqrt_w, mode, [], say, refine=True, ext=ext)
+    p, r = _run_group(stage, "Mz", coeffs, p, table, sqrt_w, mode, [], say, refine=True, ext=ext, jacobian=jacobian)
     r.name = "combined_mz_refine"
     r.not_identified = {}
     return p, (r if r.status == "fitted" else None)

@@ -49,6 +49,8 @@ class DataLevels:
         Distinct non-zero |κ| levels (0.01 bins) / |α| levels (0.5° bins).
     kappa_range, alpha_range : float
         Spread (2–98 %) of κ [-] and α [rad].
+    load_min, load_max : float
+        Lowest and highest load set point [N].
     """
 
     n_points: int
@@ -68,6 +70,8 @@ class DataLevels:
     alpha_levels: int
     kappa_range: float
     alpha_range: float
+    load_min: float = 0.0
+    load_max: float = 0.0
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -114,6 +118,8 @@ def data_levels(df: pd.DataFrame) -> DataLevels:
         alpha_levels=len(a_lv),
         kappa_range=spread(kappa),
         alpha_range=spread(alpha),
+        load_min=float(np.nanmin(df["Fz_set"].to_numpy(float))),
+        load_max=float(np.nanmax(df["Fz_set"].to_numpy(float))),
     )
 
 
@@ -122,6 +128,25 @@ Rule = Callable[[DataLevels, Mapping[str, float]], "str | None"]
 
 def _need(ok: bool, reason: str) -> str | None:
     return None if ok else reason
+
+
+#: Least change [rad] of atan((QSX6·Fz/Fz0)²) over the data's loads for QSX5, QSX6 to count.
+MX_LOAD_SPREAD = 0.05
+
+
+def _mx_load_factor(lv: DataLevels, p: Mapping[str, float]) -> str | None:
+    """The load factor cos(QSX5·atan((QSX6·Fz/Fz0)²)) of Mx (draft eq 49) must vary over the loads.
+
+    When the arctangent saturates (|QSX6·Fz/Fz0| >> 1 at every load, or QSX6 ≈ 0) the factor
+    is a constant that QSX4 already holds: QSX5 and QSX6 only move along a flat valley.
+    """
+    fz0, b = float(p.get("FNOMIN", 0.0)), float(p.get("QSX6", 0.0))
+    if fz0 <= 0.0:
+        return "FNOMIN <= 0"
+    lo, hi = (math.atan((b * f / fz0) ** 2) for f in (lv.load_min, lv.load_max))
+    return _need(abs(hi - lo) >= MX_LOAD_SPREAD,
+                 f"atan((QSX6*Fz/Fz0)^2) varies by {abs(hi - lo):.3f} rad over the data's loads "
+                 f"(< {MX_LOAD_SPREAD}): the Mx load factor is a constant, held by QSX4")
 
 
 #: Identifiability rules: name -> function(levels, template) giving None when the rule
@@ -175,6 +200,7 @@ RULES: dict[str, Rule] = {
     "mx_nonlinear": lambda lv, p: _need(
         float(p.get("QSX4", 0.0)) != 0.0, "nonlinear Mx term switched off in the template (QSX4 = 0)"
     ),
+    "mx_load_factor": _mx_load_factor,
 }
 
 

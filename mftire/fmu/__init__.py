@@ -4,6 +4,11 @@
 >>> export_fmu("tyre.tir", "tyre.fmu")            # doctest: +SKIP
 """
 
-from mftire.fmu.export import FMUExportError, export_fmu
+from mftire._lazy import lazy_names
+
+# imported on first use (see mftire._lazy)
+__getattr__, __dir__ = lazy_names(
+    __name__, {"FMUExportError": "mftire.fmu.export", "export_fmu": "mftire.fmu.export"}
+)
 
 __all__ = ["FMUExportError", "export_fmu"]

@@ -629,10 +629,10 @@ def _split_runs(
     run = np.zeros(n, dtype=int)
     r = 0
 
-    def out_of_level(x: np.ndarray, i: int, ref: float, tol: float) -> bool:
-        window = x[i : i + patience]
-        return bool(np.all(np.abs(window - ref) > tol))
+    def out_of_level(x: list[float], i: int, ref: float, tol: float) -> bool:
+        return all(abs(v - ref) > tol for v in x[i : i + patience])
 
+    kappa, alpha = kappa.tolist(), alpha.tolist()  # row by row: Python floats are faster than numpy scalars
     k_sum, a_sum, count = kappa[0], alpha[0], 1
     held = "both"
     for i in range(1, n):

@@ -159,6 +159,18 @@ def mz0(p: dict, mode: Mode, c: Conditions, b: Basic, a: AligningTerms) -> tuple
     return -t0 * lat0.Fy0 + Mzr0, t0, Mzr0  # eqs 4.E32, 4.E31
 
 
+def zero_camber_lateral(p: dict, mode: Mode, c: Conditions, b: Basic, lat: PureLateral | None) -> PureLateral:
+    """Pure lateral force at zero camber (and zero spin weighting) for the trail term of
+    eq 4.E74; ``lat`` (at the actual inclination) itself when every inclination is zero.
+
+    It depends on the lateral-force coefficients only: a fitter of aligning coefficients
+    computes it once (:attr:`mftire.mf.solver.Channels.lat0`).
+    """
+    if lat is not None and not np.any(b.gamma_star):
+        return lat
+    return fy0(p, mode, c, b, np.zeros_like(c.Fz), turn_slip=mode.turn_slip)
+
+
 def mz_combined(
     p: dict,
     mode: Mode,
@@ -170,11 +182,13 @@ def mz_combined(
     Fy: np.ndarray,
     Gyk: np.ndarray,
     lat: PureLateral | None = None,
+    lat0: PureLateral | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Combined-slip aligning moment (eqs 4.E71–4.E78; Besselink 2010 A54–A56).
 
     ``lat``, the pure lateral force at the actual inclination, is reused for the
-    zero-camber force when every inclination is zero.
+    zero-camber force when every inclination is zero.  ``lat0``, the zero-camber force
+    (:func:`zero_camber_lateral`), is computed when not given.
 
     Returns ``(Mz [N·m], t [m], Mzr [N·m])``.
     """
@@ -187,11 +201,8 @@ def mz_combined(
     s = R0 * (p["SSZ1"] + p["SSZ2"] * (Fy / p["FNOMIN"]) + (p["SSZ3"] + p["SSZ4"] * b.dfz) * c.gamma) * p["LS"]  # A56
     Mzr = a.Dr * np.cos(a.Cr * np.arctan(a.Br * alphar_eq))  # eq 4.E75
 
-    # Fy at zero camber (and zero spin weighting) for the trail term, eq 4.E74.
-    if lat is not None and not np.any(b.gamma_star):
-        lat0 = lat
-    else:
-        lat0 = fy0(p, mode, c, b, np.zeros_like(c.Fz), turn_slip=mode.turn_slip)
+    if lat0 is None:
+        lat0 = zero_camber_lateral(p, mode, c, b, lat)
     Fy_prime = Gyk * lat0.Fy0  # eq 4.E74; Gyk does not depend on muy or zeta2
     # MFeval departure: t is multiplied by LFZO, as TNO's solver does (not in PAC2002).
     lfzo = 1.0 if is_pac2002(p) else p["LFZO"]

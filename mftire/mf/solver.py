@@ -25,7 +25,7 @@ import numpy as np
 
 from mftire.errors import MftireError, MftireInputError
 from mftire.mf import pac2002, turnslip
-from mftire.mf.aligning import aligning_terms, mz0, mz_combined
+from mftire.mf.aligning import aligning_terms, mz0, mz_combined, zero_camber_lateral
 from mftire.mf.basic import basic
 from mftire.mf.extensions import ExtensionSet, builtin_variables, parse_section
 from mftire.mf.family import PAC2002_CODE, is_pac2002
@@ -193,6 +193,7 @@ class Channels:
     lat: object = None  #: :class:`mftire.mf.lateral.PureLateral`
     Fy: np.ndarray | None = None
     Gyk: np.ndarray | None = None
+    lat0: object = None  #: pure lateral force at zero camber for the trail term (eq 4.E74)
     Mz: np.ndarray | None = None
     t: np.ndarray | None = None
     Mzr: np.ndarray | None = None
@@ -214,7 +215,8 @@ def channels(
     """Piece 3: the channels ``want`` (and what they need) for effective parameters ``q``.
 
     ``given`` holds terms computed before with the same ``q`` for the force equations
-    (a fitter that varies only aligning coefficients passes the forces once computed).
+    (a fitter that varies only aligning coefficients passes the forces, and the
+    zero-camber lateral force of eq 4.E74, once computed).
     """
     todo: set[str] = set()
     for w in want:
@@ -248,7 +250,11 @@ def channels(
         if "Mz" in todo:
             terms = aligning_terms(q, m, c, b, out.lat, out.Gyk)  # eqs 4.E33-4.E47
             if m.combined:
-                out.Mz, out.t, out.Mzr = mz_combined(q, m, c, b, terms, out.Kxk, out.Fx, out.Fy, out.Gyk, out.lat)
+                if out.lat0 is None:  # kept in ``given`` by a fitter of aligning coefficients
+                    out.lat0 = zero_camber_lateral(q, m, c, b, out.lat)
+                out.Mz, out.t, out.Mzr = mz_combined(
+                    q, m, c, b, terms, out.Kxk, out.Fx, out.Fy, out.Gyk, out.lat, out.lat0
+                )
             else:
                 if is_pac2002(q):  # PAC2002: pure-slip Mz0 with Fy0 at the actual camber (docs/pac2002.md)
                     out.Mz, out.t, out.Mzr = pac2002.mz0(q, m, c, b, terms, out.lat)

@@ -1,0 +1,253 @@
+"""Exact derivatives of a model channel with respect to its coefficients (algorithmic, reverse mode).
+
+:func:`jacobian` runs the one model pipeline (:mod:`mftire.mf.solver`) once with the
+fitted coefficients replaced by :class:`Var` objects.  A ``Var`` behaves like a numpy
+value: every numpy ufunc and ``np.where`` applied to it goes through
+``__array_ufunc__`` / ``__array_function__``, computes the value as numpy would, and
+records the local derivative of the operation (the chain rule of each elementary
+function: d sin x = cos x dx, d atan x = dx / (1 + x²) ...).  A backward sweep then
+accumulates the adjoints from the channel back to the coefficients.
+
+Each of the ``n`` outputs depends on its own operating point only (the equations are
+elementwise), so an adjoint is an array of ``n`` values, not summed over the points,
+and one backward sweep gives every column of the Jacobian: the cost is a few model
+evaluations whatever the number of coefficients, against one evaluation per
+coefficient for finite differences.  There is no second copy of the equations.
+
+Not differentiable operations (``sign``, comparisons, ``isfinite``) act on the values
+and carry no derivative, as the piecewise-constant functions they are; ``abs`` has
+derivative ``sign``; ``maximum``/``minimum``/``where`` pass the derivative of the
+branch taken.  The extension forms are not all differentiable (table lookups), so
+stages that fit an extension coefficient use finite differences
+(see :mod:`mftire.fitting.core`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+
+__all__ = ["Var", "jacobian"]
+
+
+class Var:
+    """A value in the computation graph: ``v`` and the ``(parent, local derivative)`` edges."""
+
+    __slots__ = ("v", "edges")
+    __array_priority__ = 1000.0
+
+    def __init__(self, v, edges: tuple = ()):
+        self.v = v
+        self.edges = edges
+
+    # Python operators go through the numpy ufuncs (and so through __array_ufunc__)
+    def __add__(self, o):
+        return np.add(self, o)
+
+    def __radd__(self, o):
+        return np.add(o, self)
+
+    def __sub__(self, o):
+        return np.subtract(self, o)
+
+    def __rsub__(self, o):
+        return np.subtract(o, self)
+
+    def __mul__(self, o):
+        return np.multiply(self, o)
+
+    def __rmul__(self, o):
+        return np.multiply(o, self)
+
+    def __truediv__(self, o):
+        return np.true_divide(self, o)
+
+    def __rtruediv__(self, o):
+        return np.true_divide(o, self)
+
+    def __pow__(self, o):
+        return np.power(self, o)
+
+    def __rpow__(self, o):
+        return np.power(o, self)
+
+    def __neg__(self):
+        return np.negative(self)
+
+    def __pos__(self):
+        return self
+
+    def __abs__(self):
+        return np.absolute(self)
+
+    def __lt__(self, o):
+        return np.less(self, o)
+
+    def __le__(self, o):
+        return np.less_equal(self, o)
+
+    def __gt__(self, o):
+        return np.greater(self, o)
+
+    def __ge__(self, o):
+        return np.greater_equal(self, o)
+
+    def __eq__(self, o):  # type: ignore[override]
+        return np.equal(self, o)
+
+    def __ne__(self, o):  # type: ignore[override]
+        return np.not_equal(self, o)
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __array_ufunc__(self, ufunc, method, *inputs, **kwargs):
+        if method != "__call__" or kwargs:
+            return NotImplemented
+        rule = _RULES.get(ufunc)
+        if rule is not None:
+            return rule(*inputs)
+        if ufunc in _NO_DERIVATIVE:
+            return ufunc(*(_value(x) for x in inputs))
+        return NotImplemented
+
+    def __array_function__(self, func, types, args, kwargs):
+        if func is np.where and len(args) == 3 and not kwargs:
+            cond, a, b = args
+            cond = np.asarray(_value(cond), dtype=bool)
+            return _node(np.where(cond, _value(a), _value(b)), (a, cond), (b, ~cond))
+        if func is np.real:  # the values are real
+            return args[0]
+        if func in (np.any, np.all, np.ndim, np.shape, np.iscomplexobj, np.isrealobj):
+            return func(*(_value(x) for x in args), **kwargs)
+        return NotImplemented
+
+
+def _value(x):
+    return x.v if isinstance(x, Var) else x
+
+
+def _node(v, *edges) -> Var | np.ndarray:
+    """A Var with the edges to Var parents (a plain value when none depends on a coefficient)."""
+    kept = tuple((x, d) for x, d in edges if isinstance(x, Var))
+    return Var(v, kept) if kept else v
+
+
+def _unary(f: Callable, df: Callable) -> Callable:
+    def rule(a: Var):
+        v = f(a.v)
+        return Var(v, ((a, df(a.v, v)),))
+
+    return rule
+
+
+def _add(a, b):
+    return _node(_value(a) + _value(b), (a, 1.0), (b, 1.0))
+
+
+def _sub(a, b):
+    return _node(_value(a) - _value(b), (a, 1.0), (b, -1.0))
+
+
+def _mul(a, b):
+    av, bv = _value(a), _value(b)
+    return _node(av * bv, (a, bv), (b, av))
+
+
+def _div(a, b):
+    av, bv = _value(a), _value(b)
+    v = av / bv
+    inv = 1.0 / bv
+    return _node(v, (a, inv), (b, -v * inv) if isinstance(b, Var) else (b, 0.0))
+
+
+def _pow(a, b):
+    av, bv = _value(a), _value(b)
+    v = av**bv
+    da = bv * av ** (bv - 1.0) if isinstance(a, Var) else 0.0
+    with np.errstate(all="ignore"):
+        db = v * np.log(av) if isinstance(b, Var) else 0.0
+    return _node(v, (a, da), (b, db))
+
+
+def _extreme(pick: Callable) -> Callable:
+    def rule(a, b):
+        first = np.asarray(pick(_value(a), _value(b)), dtype=bool)
+        return _node(np.where(first, _value(a), _value(b)), (a, first), (b, ~first))
+
+    return rule
+
+
+_RULES: dict = {
+    np.add: _add,
+    np.subtract: _sub,
+    np.multiply: _mul,
+    np.true_divide: _div,
+    np.power: _pow,
+    np.maximum: _extreme(np.greater_equal),
+    np.minimum: _extreme(np.less_equal),
+    np.negative: lambda a: Var(-a.v, ((a, -1.0),)),
+    np.positive: lambda a: a,
+    np.sin: _unary(np.sin, lambda x, v: np.cos(x)),
+    np.cos: _unary(np.cos, lambda x, v: -np.sin(x)),
+    np.tan: _unary(np.tan, lambda x, v: 1.0 + v * v),
+    np.arctan: _unary(np.arctan, lambda x, v: 1.0 / (1.0 + x * x)),
+    np.arccos: _unary(np.arccos, lambda x, v: -1.0 / np.sqrt(1.0 - x * x)),
+    np.sqrt: _unary(np.sqrt, lambda x, v: 0.5 / v),
+    np.exp: _unary(np.exp, lambda x, v: v),
+    np.log: _unary(np.log, lambda x, v: 1.0 / x),
+    np.square: _unary(np.square, lambda x, v: 2.0 * x),
+    np.absolute: _unary(np.absolute, lambda x, v: np.sign(x)),
+}
+_NO_DERIVATIVE = {np.sign, np.less, np.less_equal, np.greater, np.greater_equal, np.equal, np.not_equal,
+                  np.isfinite, np.isnan, np.isinf, np.floor, np.ceil, np.round}  # fmt: skip
+
+
+def jacobian(
+    f: Callable[[Mapping[str, object]], object], q: Mapping[str, float], keys: Sequence[str], n: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """``f(q)`` (shape ``(n,)``) and its Jacobian ``d f(q) / d q[keys]`` (shape ``(n, len(keys))``).
+
+    ``f`` maps a parameter dictionary to a channel at ``n`` operating points through
+    elementwise numpy operations.  Derivatives that are not finite are returned as 0.
+    """
+    leaves = [Var(float(q[k])) for k in keys]
+    qv = dict(q)
+    qv.update(zip(keys, leaves, strict=True))
+    with np.errstate(all="ignore"):
+        out = f(qv)
+        jac = np.zeros((n, len(keys)))
+        if not isinstance(out, Var):
+            return np.broadcast_to(np.asarray(out, dtype=float), (n,)).copy(), jac
+        # topological order (parents before children), iteratively
+        order: list[Var] = []
+        seen: set[int] = set()
+        stack: list[tuple[Var, bool]] = [(out, False)]
+        while stack:
+            node, expanded = stack.pop()
+            if expanded:
+                order.append(node)
+                continue
+            if id(node) in seen:
+                continue
+            seen.add(id(node))
+            stack.append((node, True))
+            stack.extend((parent, False) for parent, _ in node.edges if id(parent) not in seen)
+        adjoint: dict[int, object] = {id(out): 1.0}
+        for node in reversed(order):
+            if not node.edges:  # a coefficient: its adjoint is its Jacobian column
+                continue
+            a = adjoint.pop(id(node), None)
+            if a is None:
+                continue
+            for parent, local in node.edges:
+                if isinstance(local, float) and local in (1.0, -1.0):
+                    contribution = a if local == 1.0 else -a
+                else:
+                    contribution = a * local
+                pid = id(parent)
+                adjoint[pid] = contribution if pid not in adjoint else adjoint[pid] + contribution
+        for j, leaf in enumerate(leaves):
+            jac[:, j] = np.broadcast_to(adjoint.get(id(leaf), 0.0), (n,))
+        value = np.broadcast_to(np.asarray(out.v, dtype=float), (n,)).copy()
+    return value, np.where(np.isfinite(jac), jac, 0.0)

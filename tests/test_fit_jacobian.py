@@ -1,0 +1,101 @@
+"""Exact Jacobians of the fitting stages (mftire.fitting.derivatives) against finite differences,
+and the fit with them against the finite-difference fit."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from conftest import REFERENCE_TYRES
+
+from mftire.fitting import core, fit_tir
+from mftire.fitting.model import Inputs, fitting_mode, predict
+from mftire.fitting.stages import FITTED_KEYS, STAGES
+from mftire.fitting.synthetic import synthetic_sweeps
+from mftire.iotools.sweeps import group_sweeps
+from mftire.iotools.tir import read_tir
+from mftire.mf.extensions import ExtensionSet
+from mftire.parameters import with_defaults
+
+
+@pytest.fixture(scope="module")
+def case():
+    true = read_tir(REFERENCE_TYRES["MF61"])
+    pt = with_defaults(true)
+    F0, Pn = pt["FNOMIN"], pt["NOMPRES"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        data = synthetic_sweeps(true, [0.5 * F0, F0, 1.5 * F0], np.radians([-2.0, 0.0, 4.0]), [Pn, 1.15 * Pn],
+                                n_kappa=21, n_alpha=21, n_combined=11, noise=0.01, outliers=0.01, seed=5)
+    rng = np.random.default_rng(7)
+    template = true.copy()
+    for key in sorted(FITTED_KEYS):
+        if pt.get(key, 0.0):
+            template.set(key, float(pt[key] * (1.0 + rng.uniform(-0.3, 0.3))))
+    return data, template
+
+
+GROUPS = [(s, ch, g) for s in STAGES for ch, g in zip(core._stage_channels(s), s.groups, strict=True)]
+
+
+@pytest.mark.parametrize("stage,channel,coeffs", GROUPS, ids=[f"{s.number}-{ch}" for s, ch, _ in GROUPS])
+def test_jacobian_matches_finite_differences(case, stage, channel, coeffs):
+    data, template = case
+    table = core._classify_rows(group_sweeps(data))
+    rows = table[table["kind"].isin(stage.kinds)] if stage.kinds else table
+    p = with_defaults(template)
+    keys = [c.key for c in coeffs]
+    ev = core._Evaluator(channel, p, Inputs.from_frame(rows), fitting_mode(), ExtensionSet(()), keys)
+    value, jac = ev.jacobian(p, keys)
+    np.testing.assert_allclose(value, ev(p), rtol=1e-14, atol=1e-9)
+    for j, (key, c) in enumerate(zip(keys, coeffs, strict=True)):
+        h = 1e-6 * max(abs(p[key]), c.scale)  # central differences: error ~ h^2
+        up, down = dict(p), dict(p)
+        up[key] += h
+        down[key] -= h
+        fd = (ev(up) - ev(down)) / (2 * h)
+        scale = max(np.linalg.norm(fd), 1e-9 * np.linalg.norm(jac))
+        assert np.linalg.norm(jac[:, j] - fd) / scale < 1e-6, key
+
+
+def test_residual_jacobian_with_free_rolling_penalty(case):
+    data, template = case
+    table = core._classify_rows(group_sweeps(data))
+    rows = table[table["kind"].isin(STAGES[0].kinds)]
+    p = with_defaults(template)
+    keys = [c.key for c in STAGES[0].coefficients]
+    mode, ext = fitting_mode(), ExtensionSet(())
+    free = core._Evaluator("Fx", p, core._condition_inputs(core._free_rolling_targets(rows), ext), mode, ext, keys)
+    fx = free(p)
+    margin = -np.median(fx) * np.ones_like(fx)  # about half of the conditions active
+    prob = core._Problem(core._Evaluator("Fx", p, Inputs.from_frame(rows), mode, ext, keys),
+                         rows["Fx"].to_numpy(float), np.full(len(rows), 0.01), core._Penalty(free, 3.0, margin))
+    assert prob.exact
+    jac = prob.jacobian(p, keys)
+    pen = jac[len(rows):]
+    assert 0 < np.count_nonzero(np.any(pen != 0, axis=1)) < len(fx)
+    for j, key in enumerate(keys):
+        h = 1e-6 * max(abs(p[key]), 1e-2)
+        up, down = dict(p), dict(p)
+        up[key] += h
+        down[key] -= h
+        fd = (prob.residuals(up) - prob.residuals(down)) / (2 * h)
+        assert np.linalg.norm(jac[:, j] - fd) / max(np.linalg.norm(fd), 1e-12) < 1e-6, key
+
+
+def test_exact_fit_matches_finite_difference_fit(case):
+    data, template = case
+    fits = {j: fit_tir(data, template, stages="1,2,3", progress=False, jacobian=j) for j in ("exact", "2-point")}
+    x = Inputs.from_frame(data)
+    for channel in ("Fx", "Fy", "Mz"):
+        y = data[channel].to_numpy(float)
+        model = {j: predict(f.flat, x, channel, fitting_mode()) for j, f in fits.items()}
+        rms = {j: float(np.sqrt(np.mean((m - y) ** 2))) for j, m in model.items()}
+        diff = float(np.sqrt(np.mean((model["exact"] - model["2-point"]) ** 2)))
+        print(f"{channel}: rms exact {rms['exact']:.4g}, FD {rms['2-point']:.4g}, curves differ by {diff:.3g}")
+        # the same fit: the curves agree far inside the 1 % noise, the error to the data equally good
+        assert diff < 0.02 * np.sqrt(np.mean(y**2)) * 0.01
+        assert rms["exact"] <= 1.001 * rms["2-point"]
+    assert fits["exact"].identified == fits["2-point"].identified
+    assert all(s.success for s in fits["exact"].stages)
