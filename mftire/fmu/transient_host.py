@@ -20,36 +20,7 @@ from functools import partial
 import numpy as np
 
 from mftire.errors import MftireError
-
-
-def make_callbacks(messages: list | None = None):
-    """FMI 2.0 callbacks whose logger appends ``(status, category, message)`` to ``messages``.
-
-    The logger is a plain ctypes callback, not fmpy's logger proxy: the proxy keeps *one*
-    process-wide pointer to the last Python logger registered, which dangles once that
-    logger is garbage collected.  The transient FMU passes its messages pre-formatted, so
-    no proxy is needed.  Keep the returned object alive as long as the instances.
-    """
-    from fmpy.fmi2 import (
-        calloc,
-        fmi2CallbackAllocateMemoryTYPE,
-        fmi2CallbackFreeMemoryTYPE,
-        fmi2CallbackFunctions,
-        fmi2CallbackLoggerTYPE,
-        free,
-    )
-
-    store = messages if messages is not None else []
-
-    def log(env, instance, status, category, message):
-        store.append((int(status), (category or b"").decode(), (message or b"").decode().replace("%%", "%")))
-
-    cb = fmi2CallbackFunctions()
-    cb.logger = fmi2CallbackLoggerTYPE(log)
-    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-    cb._mftire_keep = (log, store)
-    return cb
+from mftire.fmu.host import make_callbacks
 
 
 class TransientFMUs:
