@@ -301,6 +301,9 @@ def simulate_stop_and_hold(tyres, veh: Vehicle = Vehicle(), sc: StopAndHold = St
     n = int(round(sc.t_end / sc.dt))
     L = veh.a + veh.b
     J, dt, m, g, h_cg, b = sc.wheel_inertia, sc.dt, veh.m, veh.g, veh.h, veh.b
+    tilt, tilt_time, grade_end, brake, launch, ramp = sc.tilt, sc.tilt_time, sc.grade, sc.brake, sc.launch, sc.ramp
+    drive_torque, brake_front, brake_rear = sc.drive_torque, sc.brake_front, sc.brake_rear
+    atan, cos, sin, copysign = math.atan, math.cos, math.sin, math.copysign
     V, X = 0.0, 0.0
     om0 = om1 = om2 = om3 = 0.0
     Fx_sum = 0.0
@@ -309,11 +312,11 @@ def simulate_stop_and_hold(tyres, veh: Vehicle = Vehicle(), sc: StopAndHold = St
     rec, Y = [], []  # (t, V, X, grade, Fz_f, Fz_r, omega x 4) and the 20 tyre outputs of every step
     for i in range(n + 1):
         t = i * dt
-        s = (t - sc.tilt) / sc.tilt_time
-        grade = sc.grade * (0.0 if s <= 0.0 else (1.0 if s >= 1.0 else s))
+        s = (t - tilt) / tilt_time
+        grade = grade_end * (0.0 if s <= 0.0 else (1.0 if s >= 1.0 else s))
         if grade != grade_last:
-            th = math.atan(grade)
-            cos_t, sin_t, grade_last = math.cos(th), math.sin(th), grade
+            th = atan(grade)
+            cos_t, sin_t, grade_last = cos(th), sin(th), grade
         # quasi-static pitch load transfer from the previous step's total tyre force
         Fz_f = (m * g * cos_t * b - h_cg * Fx_sum) / L / 2.0
         Fz_r = m * g * cos_t / 2.0 - Fz_f
@@ -326,19 +329,19 @@ def simulate_stop_and_hold(tyres, veh: Vehicle = Vehicle(), sc: StopAndHold = St
         Fx2, My2, Re2 = y[10], y[13], y[14]
         Fx3, My3, Re3 = y[15], y[18], y[19]
         Fx_sum = Fx0 + Fx1 + Fx2 + Fx3
-        s = (t - sc.brake) / sc.ramp
+        s = (t - brake) / ramp
         bk = 0.0 if s <= 0.0 else (1.0 if s >= 1.0 else s)  # brakes ramp on as the drive ramps off
-        s = (t - sc.launch) / sc.ramp
-        Td = sc.drive_torque * (0.0 if s <= 0.0 else (1.0 if s >= 1.0 else s)) * (1.0 - bk)  # rear wheels
+        s = (t - launch) / ramp
+        Td = drive_torque * (0.0 if s <= 0.0 else (1.0 if s >= 1.0 else s)) * (1.0 - bk)  # rear wheels
         # wheel spin without the brake, then the brake with stiction (held at 0 if it can stop the wheel)
-        free, lim = om0 + dt * (My0 - Re0 * Fx0) / J, dt * bk * sc.brake_front / J
-        om0 = 0.0 if abs(free) <= lim else free - math.copysign(lim, free)
+        free, lim = om0 + dt * (My0 - Re0 * Fx0) / J, dt * bk * brake_front / J
+        om0 = 0.0 if abs(free) <= lim else free - copysign(lim, free)
         free = om1 + dt * (My1 - Re1 * Fx1) / J
-        om1 = 0.0 if abs(free) <= lim else free - math.copysign(lim, free)
-        free, lim = om2 + dt * (Td - Re2 * Fx2 + My2) / J, dt * bk * sc.brake_rear / J
-        om2 = 0.0 if abs(free) <= lim else free - math.copysign(lim, free)
+        om1 = 0.0 if abs(free) <= lim else free - copysign(lim, free)
+        free, lim = om2 + dt * (Td - Re2 * Fx2 + My2) / J, dt * bk * brake_rear / J
+        om2 = 0.0 if abs(free) <= lim else free - copysign(lim, free)
         free = om3 + dt * (Td - Re3 * Fx3 + My3) / J
-        om3 = 0.0 if abs(free) <= lim else free - math.copysign(lim, free)
+        om3 = 0.0 if abs(free) <= lim else free - copysign(lim, free)
         V += dt * (Fx_sum / m - g * sin_t)
         X += dt * V
     R = np.array(rec)
