@@ -107,7 +107,7 @@ def tyre_only_seconds(fmu: Path, steps: int = 10_000, empty: bool = False) -> fl
     with TransientFMUs(fmu, inputs=("Fz", "Vx", "Vy", "omega"), outputs=("Fx", "Fy", "Mz", "My")) as tyres:
         values = [_inputs(i) for i in range(35)]  # the inputs repeat every 35 steps
         # empty: GetReal of no variable, on the same function objects and instances
-        calls = [(e, e, e) for e in (partial(g.func, *g.args[:2], ctypes.c_size_t(0), g.args[3])
+        calls = [(e, e, e) for e in (partial(g.func, *g.args[:2], ctypes.c_size_t.from_param(0), g.args[3])
                                      for _, _, g in tyres._calls)]  # fmt: skip
         t0 = time.perf_counter()
         if empty:

@@ -97,24 +97,43 @@ class TransientFMUs:
         self.y = np.ctypeslib.as_array(self._ybuf).reshape(n, m)  #: outputs (n x m), the C buffer itself
         # flat formats of the two buffers for struct.pack_into / unpack_from (step_values)
         self._ufmt, self._yfmt = f"={n * k}d", f"={n * m}d"
-        # fresh function objects on fmpy's library (dll[name] makes a new one each time)
+        # fresh function objects on fmpy's library (dll[name] makes a new one each time); every argument is
+        # prepared once as a ctypes parameter object (from_param of a value, byref of a buffer), which
+        # ctypes passes on without converting anything per call; only DoStep's time is set per step
         dll = self.slaves[0].dll
-        set_real, do_step, get_real = dll["fmi2SetReal"], dll["fmi2DoStep"], dll["fmi2GetReal"]
-        for f in (set_real, do_step, get_real):
+        set_real, self._do_step, get_real = dll["fmi2SetReal"], dll["fmi2DoStep"], dll["fmi2GetReal"]
+        for f in (set_real, self._do_step, get_real):
             f.restype = ctypes.c_int
-        self._t, self._h = ctypes.c_double(0.0), ctypes.c_double(0.0)  # DoStep's time and step, set per step
-        vin, vout = (ctypes.c_uint * k)(*self.in_vr), (ctypes.c_uint * m)(*self.out_vr)
-        nk, nm, yes = ctypes.c_size_t(k), ctypes.c_size_t(m), ctypes.c_int(1)
+        self._vr_arrays = (ctypes.c_uint * k)(*self.in_vr), (ctypes.c_uint * m)(*self.out_vr)
+        vin, vout = (ctypes.byref(a) for a in self._vr_arrays)
+        nk, nm = ctypes.c_size_t.from_param(k), ctypes.c_size_t.from_param(m)
+        self._yes = ctypes.c_int.from_param(1)
+        self._t = ctypes.c_double(0.0)
         size = ctypes.sizeof(ctypes.c_double)
-        self._calls = []  # per instance: (SetReal, DoStep, GetReal) with every argument bound
+        self._set_get = []  # per instance: (SetReal, the component, GetReal) with every argument bound
         for i, s in enumerate(self.slaves):
-            comp = ctypes.c_void_p(s.component)
-            self._calls.append((
+            comp = ctypes.c_void_p.from_param(s.component)
+            self._set_get.append((
                 partial(set_real, comp, vin, nk, ctypes.byref(self._ubuf, i * k * size)),
-                partial(do_step, comp, self._t, self._h, yes),
+                comp,
                 partial(get_real, comp, vout, nm, ctypes.byref(self._ybuf, i * m * size)),
             ))  # fmt: skip
-        self._keep = (vin, vout, nk, nm, yes)
+        self._bind(1e-3)
+
+    def _bind(self, h: float) -> None:
+        """Bind the step size ``h`` into the DoStep calls: ``_calls`` per instance (SetReal, DoStep, GetReal)."""
+        self._h, step = h, ctypes.c_double.from_param(h)
+        do_step, t, yes = self._do_step, self._t, self._yes
+        self._calls = [(st, partial(do_step, comp, t, step, yes), gt) for st, comp, gt in self._set_get]
+
+    def _advance(self, t: float, h: float) -> None:
+        """The 3 FMI calls per instance: set the inputs from the buffer, step, read the outputs into the buffer."""
+        if h != self._h:
+            self._bind(h)
+        self._t.value = t
+        for set_real, do_step, get_real in self._calls:
+            if set_real() or do_step() or get_real():
+                raise MftireError(f"transient tyre FMU: a call failed at t = {t:g}")
 
     def step(self, t: float, h: float, u: np.ndarray | None = None) -> np.ndarray:
         """Set the inputs ``u`` (n x k; default: the buffer :attr:`u`), advance by ``h``, return outputs (n x m).
@@ -124,10 +143,7 @@ class TransientFMUs:
         if u is not None:
             self.u[...] = u
         if self.fast:
-            self._t.value, self._h.value = t, h
-            for set_real, do_step, get_real in self._calls:
-                if set_real() or do_step() or get_real():
-                    raise MftireError(f"transient tyre FMU: a call failed at t = {t:g}")
+            self._advance(t, h)
         else:
             for i, s in enumerate(self.slaves):
                 s.setReal(self.in_vr, self.u[i].tolist())
@@ -140,13 +156,10 @@ class TransientFMUs:
         instance); returns the n x m outputs the same way, as a tuple.  The lean path for a
         vehicle model written in scalar Python."""
         struct.pack_into(self._ufmt, self._ubuf, 0, *values)
-        if not self.fast:
+        if self.fast:
+            self._advance(t, h)
+        else:
             self.step(t, h)
-            return struct.unpack_from(self._yfmt, self._ybuf)
-        self._t.value, self._h.value = t, h
-        for set_real, do_step, get_real in self._calls:
-            if set_real() or do_step() or get_real():
-                raise MftireError(f"transient tyre FMU: a call failed at t = {t:g}")
         return struct.unpack_from(self._yfmt, self._ybuf)
 
     def get(self, names: Sequence[str]) -> np.ndarray:
@@ -158,7 +171,7 @@ class TransientFMUs:
             s.terminate()
             s.freeInstance()
         self.slaves = []
-        self._calls = []
+        self._calls = self._set_get = []
         shutil.rmtree(self.unzipdir, ignore_errors=True)
 
     def __enter__(self) -> TransientFMUs:
