@@ -309,7 +309,8 @@ def simulate_stop_and_hold(tyres, veh: Vehicle = Vehicle(), sc: StopAndHold = St
     Fx_sum = 0.0
     grade_last, cos_t, sin_t = 0.0, 1.0, 0.0
     step = tyres.step_values
-    rec, Y = [], []  # (t, V, X, grade, Fz_f, Fz_r, omega x 4) and the 20 tyre outputs of every step
+    rec = []  # flat: V, X, Fz_f, Fz_r, omega x 4, Fx x 4, Re x 4 of every step (16 values)
+    keep = rec.extend
     for i in range(n + 1):
         t = i * dt
         s = (t - tilt) / tilt_time
@@ -321,13 +322,12 @@ def simulate_stop_and_hold(tyres, veh: Vehicle = Vehicle(), sc: StopAndHold = St
         Fz_f = (m * g * cos_t * b - h_cg * Fx_sum) / L / 2.0
         Fz_r = m * g * cos_t / 2.0 - Fz_f
         y = step(t, dt, (Fz_f, V, om0, Fz_f, V, om1, Fz_r, V, om2, Fz_r, V, om3))
-        rec.append((t, V, X, grade, Fz_f, Fz_r, om0, om1, om2, om3))
-        Y.append(y)
         # per tyre: Fx, Fy, Mz, My, Re (STOP_OUTPUTS)
         Fx0, My0, Re0 = y[0], y[3], y[4]
         Fx1, My1, Re1 = y[5], y[8], y[9]
         Fx2, My2, Re2 = y[10], y[13], y[14]
         Fx3, My3, Re3 = y[15], y[18], y[19]
+        keep((V, X, Fz_f, Fz_r, om0, om1, om2, om3, Fx0, Fx1, Fx2, Fx3, Re0, Re1, Re2, Re3))
         Fx_sum = Fx0 + Fx1 + Fx2 + Fx3
         s = (t - brake) / ramp
         bk = 0.0 if s <= 0.0 else (1.0 if s >= 1.0 else s)  # brakes ramp on as the drive ramps off
@@ -344,10 +344,12 @@ def simulate_stop_and_hold(tyres, veh: Vehicle = Vehicle(), sc: StopAndHold = St
         om3 = 0.0 if abs(free) <= lim else free - copysign(lim, free)
         V += dt * (Fx_sum / m - g * sin_t)
         X += dt * V
-    R = np.array(rec)
-    Y = np.array(Y).reshape(n + 1, 4, len(STOP_OUTPUTS))
-    return {"t": R[:, 0], "V": R[:, 1], "X": R[:, 2], "grade": R[:, 3], "Fx": Y[:, :, 0],
-            "Fz": R[:, [4, 4, 5, 5]], "omega": R[:, 6:10], "Re": Y[:, :, 4]}  # fmt: skip
+    R = np.fromiter(rec, float, len(rec)).reshape(n + 1, 16)
+    t = np.arange(n + 1) * dt
+    s = (t - tilt) / tilt_time
+    grade = grade_end * np.where(s <= 0.0, 0.0, np.where(s >= 1.0, 1.0, s))  # as in the loop
+    return {"t": t, "V": R[:, 0], "X": R[:, 1], "grade": grade, "Fx": R[:, 8:12], "Fz": R[:, [2, 2, 3, 3]],
+            "omega": R[:, 4:8], "Re": R[:, 12:16]}  # fmt: skip
 
 
 def run_transient(tir=DEFAULT_TIR, output: str | Path | None = "vehicle_example_transient.png",
