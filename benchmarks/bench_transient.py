@@ -84,7 +84,7 @@ def vehicle_only_seconds(t_end: float = 10.0) -> float:
 
     class Stub:
         inputs, outputs, n = ve.STOP_INPUTS, ve.STOP_OUTPUTS, 4
-        y = (0.0, 0.0, 0.0, 0.0, 0.3) * 4
+        y = (0.0, 0.0, 0.3) * 4  # Fx, My, Re
 
         def step_values(self, t, h, values):
             return self.y

@@ -277,9 +277,10 @@ class StopAndHold:
     dt: float = 1e-3  #: communication step [s]
 
 
-#: Tyre variables of the stop-and-hold manoeuvre (Vy stays at its default 0 in straight-line motion).
+#: Tyre variables of the stop-and-hold manoeuvre (Vy stays at its default 0 in straight-line motion;
+#: Fy and Mz are not needed).
 STOP_INPUTS = ("Fz", "Vx", "omega")
-STOP_OUTPUTS = ("Fx", "Fy", "Mz", "My", "Re")
+STOP_OUTPUTS = ("Fx", "My", "Re")
 
 
 def simulate_stop_and_hold(tyres, veh: Vehicle = Vehicle(), sc: StopAndHold = StopAndHold()) -> dict:
@@ -292,7 +293,7 @@ def simulate_stop_and_hold(tyres, veh: Vehicle = Vehicle(), sc: StopAndHold = St
     with stiction: a wheel whose free motion the brake torque can stop is held at zero spin.
 
     The step is scalar Python (no numpy inside the loop): one :meth:`TransientFMUs.step_values`
-    call per step carries the 4 x 3 inputs in and the 4 x 5 outputs out.
+    call per step carries the 4 x 3 inputs in and the 4 x 3 outputs out.
     """
     import math
 
@@ -322,11 +323,7 @@ def simulate_stop_and_hold(tyres, veh: Vehicle = Vehicle(), sc: StopAndHold = St
         Fz_f = (m * g * cos_t * b - h_cg * Fx_sum) / L / 2.0
         Fz_r = m * g * cos_t / 2.0 - Fz_f
         y = step(t, dt, (Fz_f, V, om0, Fz_f, V, om1, Fz_r, V, om2, Fz_r, V, om3))
-        # per tyre: Fx, Fy, Mz, My, Re (STOP_OUTPUTS)
-        Fx0, My0, Re0 = y[0], y[3], y[4]
-        Fx1, My1, Re1 = y[5], y[8], y[9]
-        Fx2, My2, Re2 = y[10], y[13], y[14]
-        Fx3, My3, Re3 = y[15], y[18], y[19]
+        Fx0, My0, Re0, Fx1, My1, Re1, Fx2, My2, Re2, Fx3, My3, Re3 = y  # STOP_OUTPUTS per tyre
         keep((V, X, Fz_f, Fz_r, om0, om1, om2, om3, Fx0, Fx1, Fx2, Fx3, Re0, Re1, Re2, Re3))
         Fx_sum = Fx0 + Fx1 + Fx2 + Fx3
         s = (t - brake) / ramp
