@@ -103,20 +103,10 @@ def c_loop(so: str, info: dict, n: int, tmp: Path) -> float:
 
 def ctypes_loop(so: str, info: dict, n: int) -> float:
     """Seconds per evaluation from a Python loop calling the binary through ctypes."""
-    from fmpy.fmi2 import (
-        calloc,
-        fmi2CallbackAllocateMemoryTYPE,
-        fmi2CallbackFreeMemoryTYPE,
-        fmi2CallbackFunctions,
-        fmi2CallbackLoggerTYPE,
-        free,
-    )
+    from mftire.fmu.host import make_callbacks
 
     lib = ctypes.CDLL(so)
-    cb = fmi2CallbackFunctions()
-    cb.logger = fmi2CallbackLoggerTYPE(lambda *a: None)
-    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    cb = make_callbacks()
     lib.fmi2Instantiate.restype = ctypes.c_void_p
     c = ctypes.c_void_p(lib.fmi2Instantiate(b"bench", 0, info["guid"].encode(), b"", ctypes.byref(cb), 0, 0))
     lib.fmi2EnterInitializationMode(c)

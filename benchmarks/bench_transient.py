@@ -1,6 +1,6 @@
 """Transient tyre speed: one Model Exchange derivative in C, and a 4-tyre vehicle manoeuvre through fmpy.
 
-Run: ``python benchmarks/bench_transient.py [--tir FILE] [--n 200000]``.
+Run: ``python benchmarks/bench_transient.py [--tir FILE] [--n 200000] [--repeat 5] [--workdir DIR]``.
 
 1. **ME derivative in C** -- the transient C model with a small harness
    (:func:`mftire.fmu.transient_export.build_probe_library`) loops, inside C, the work of
@@ -9,12 +9,17 @@ Run: ``python benchmarks/bench_transient.py [--tir FILE] [--n 200000]``.
 2. **Vehicle manoeuvre** -- the two-track car of ``validation/vehicle_example.py`` on
    four instances of the transient FMU in Co-Simulation at 1 kHz for 10 s (standstill,
    launch, stop, hold on a 20 % slope).  fmpy loads and instantiates the FMU; each step
-   calls ``fmi2SetReal``/``fmi2DoStep``/``fmi2GetReal`` of fmpy's loaded library
-   (:class:`mftire.fmu.transient_host.TransientFMUs`, direct ctypes calls, and through
-   fmpy's wrapper methods).  Target: >= 100x faster than real time.  The tyre calls
-   alone (no vehicle model) are timed too, and the same 4 x 10,000 tyre steps from a C
-   host that ``dlopen``s the FMU binary (the FMU's own cost, without the Python/ctypes
-   per-call overhead).
+   calls ``fmi2SetReal``/``fmi2DoStep``/``fmi2GetReal`` of fmpy's loaded library once per
+   tyre (:class:`mftire.fmu.transient_host.TransientFMUs`: prebound ctypes calls, or
+   fmpy's wrapper methods).  Target: >= 100x faster than real time.  Median (and best) of
+   ``--repeat`` runs.
+3. **Where a vehicle step goes** (medians of ``--repeat`` runs, 10,000 steps each): the
+   vehicle model alone (tyres replaced by a stub returning constants); the 4 x 3 tyre
+   calls alone from Python; the same calls with no work in C (``fmi2GetReal`` of no
+   variable: the ctypes cost of a call); and the same 4 x 10,000 tyre steps from a C host
+   that ``dlopen``s the FMU binary (the FMU's own cost).  With ``--workdir`` the FMU and
+   the C host are kept and the host's command line is printed, e.g. for
+   ``valgrind --tool=callgrind``.
 """
 
 from __future__ import annotations
@@ -22,10 +27,12 @@ from __future__ import annotations
 import argparse
 import ctypes
 import importlib.util
+import statistics
 import subprocess
 import sys
 import tempfile
 import time
+from functools import partial
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -51,13 +58,19 @@ def _vehicle_module():
     return mod
 
 
+def _median(fn, repeat: int) -> tuple[float, float]:
+    """(median, best) of ``repeat`` calls of ``fn()``, each returning seconds."""
+    times = [fn() for _ in range(repeat)]
+    return statistics.median(times), min(times)
+
+
 def manoeuvre_seconds(fmu: Path, fast: bool, t_end: float = 10.0) -> tuple[float, float]:
     """(wall seconds of the 10 s manoeuvre, largest |V| over its last second)."""
     from mftire.fmu.transient_host import TransientFMUs
 
     ve = _vehicle_module()
     sc = ve.StopAndHold(t_end=t_end, tilt=6.5, tilt_time=1.0)
-    with TransientFMUs(fmu, ve.WHEELS, outputs=("Fx", "Fy", "Mz", "My", "Re"), fast=fast) as tyres:
+    with TransientFMUs(fmu, ve.WHEELS, inputs=ve.STOP_INPUTS, outputs=ve.STOP_OUTPUTS, fast=fast) as tyres:
         t0 = time.perf_counter()
         res = ve.simulate_stop_and_hold(tyres, sc=sc)
         dt = time.perf_counter() - t0
@@ -65,15 +78,46 @@ def manoeuvre_seconds(fmu: Path, fast: bool, t_end: float = 10.0) -> tuple[float
     return dt, float(abs(res["V"][last]).max())
 
 
-def tyre_only_seconds(fmu: Path, steps: int = 10_000) -> float:
+def vehicle_only_seconds(t_end: float = 10.0) -> float:
+    """The manoeuvre's vehicle model with the tyres replaced by a stub returning constants."""
+    ve = _vehicle_module()
+
+    class Stub:
+        inputs, outputs, n = ve.STOP_INPUTS, ve.STOP_OUTPUTS, 4
+        y = (0.0, 0.0, 0.3) * 4  # Fx, My, Re
+
+        def step_values(self, t, h, values):
+            return self.y
+
+    t0 = time.perf_counter()
+    ve.simulate_stop_and_hold(Stub(), sc=ve.StopAndHold(t_end=t_end, tilt=6.5, tilt_time=1.0))
+    return time.perf_counter() - t0
+
+
+def _inputs(i: int) -> tuple[float, ...]:
+    """Tyre inputs (Fz, Vx, Vy, omega) x 4 of step i, as the C host sets them."""
+    return tuple(x for j in range(4) for x in (4000.0 + 10.0 * j, 10.0, 1e-3 * (i % 7), 26.0 + 1e-3 * (i % 5)))
+
+
+def tyre_only_seconds(fmu: Path, steps: int = 10_000, empty: bool = False) -> float:
+    """4 x ``steps`` SetReal/DoStep/GetReal from Python with new inputs every step (``empty``: the
+    same number of calls, all ``fmi2GetReal`` of no variable, so that C does no work)."""
     from mftire.fmu.transient_host import TransientFMUs
 
-    with TransientFMUs(fmu, outputs=("Fx", "Fy", "Mz", "My", "Re")) as tyres:
-        tyres.u[:, 0], tyres.u[:, 1], tyres.u[:, 3] = 4000.0, 10.0, 26.0
+    with TransientFMUs(fmu, inputs=("Fz", "Vx", "Vy", "omega"), outputs=("Fx", "Fy", "Mz", "My")) as tyres:
+        values = [_inputs(i) for i in range(35)]  # the inputs repeat every 35 steps
+        # empty: GetReal of no variable, on the same function objects and instances
+        calls = [(e, e, e) for e in (partial(g.func, *g.args[:2], ctypes.c_size_t.from_param(0), g.args[3])
+                                     for _, _, g in tyres._calls)]  # fmt: skip
         t0 = time.perf_counter()
-        for i in range(steps):
-            tyres.u[:, 2] = 1e-3 * (i % 7)  # new inputs every step
-            tyres.step(i * 1e-3, 1e-3)
+        if empty:
+            for _ in range(steps):
+                for a, b, c in calls:
+                    a() or b() or c()
+        else:
+            step = tyres.step_values
+            for i in range(steps):
+                step(i * 1e-3, 1e-3, values[i % 35])
         return time.perf_counter() - t0
 
 
@@ -136,8 +180,8 @@ int main(int argc, char **argv)
 """
 
 
-def c_host_seconds(fmu: Path, tmp: Path, steps: int = 10_000) -> float:
-    """Seconds for 4 x ``steps`` Co-Simulation steps (SetReal, DoStep, GetReal) from a C host."""
+def c_host_command(fmu: Path, tmp: Path, steps: int = 10_000) -> list[str]:
+    """Build the C host; its command line for 4 x ``steps`` Co-Simulation steps (SetReal, DoStep, GetReal)."""
     from fmpy import extract, read_model_description
 
     from mftire.fmu.export import find_compiler
@@ -151,8 +195,11 @@ def c_host_seconds(fmu: Path, tmp: Path, steps: int = 10_000) -> float:
                     str(tmp / "transient_host.c"), "-o", str(exe), "-ldl"], check=True)  # fmt: skip
     vr = {v.name: v.valueReference for v in md.modelVariables}
     args = [str(vr[k]) for k in ("Fz", "Vx", "Vy", "omega", "Fx", "Fy", "Mz", "My")]
-    res = subprocess.run([str(exe), str(so), md.guid, str(steps), *args], capture_output=True, text=True,
-                         check=True, env={"PATH": "/usr/bin:/bin"})  # fmt: skip
+    return [str(exe), str(so), md.guid, str(steps), *args]
+
+
+def c_host_seconds(cmd: list[str]) -> float:
+    res = subprocess.run(cmd, capture_output=True, text=True, check=True, env={"PATH": "/usr/bin:/bin"})
     return float(res.stdout.split()[0])
 
 
@@ -160,27 +207,46 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tir", default=str(DEFAULT_TIR))
     ap.add_argument("--n", type=int, default=200_000, help="derivative evaluations timed in C")
+    ap.add_argument("--repeat", type=int, default=5, help="runs of each timing (median and best reported)")
+    ap.add_argument("--workdir", help="keep the FMU and the C host here (default: a temporary folder)")
     args = ap.parse_args(argv)
     from mftire.fmu.export import export_fmu
 
+    r = max(args.repeat, 1)
     with tempfile.TemporaryDirectory(prefix="mftire-bench-") as tmp:
-        tmp = Path(tmp)
+        tmp = Path(args.workdir or tmp)
+        tmp.mkdir(parents=True, exist_ok=True)
         t_der = c_derivative_seconds(args.tir, tmp / "probe", args.n)
         print(f"ME derivative evaluation in C (kinematics + rates): {t_der * 1e6:.3f} µs   (target <= 2 µs)")
         fmu = export_fmu(args.tir, tmp / "tyre_transient.fmu", transient=True)
-        t_fast, drift = manoeuvre_seconds(fmu, fast=True)
-        t_wrap, _ = manoeuvre_seconds(fmu, fast=False)
-        t_tyres = tyre_only_seconds(fmu)
-        t_host = c_host_seconds(fmu, tmp)
-    print("10 s vehicle manoeuvre at 1 kHz, four transient tyre FMUs (Co-Simulation) through fmpy:")
-    print(f"  direct FMI calls on fmpy's library: {t_fast:.3f} s  -> {10.0 / t_fast:6.1f}x real time "
-          "(target >= 100x)")  # fmt: skip
-    print(f"  fmpy wrapper methods:               {t_wrap:.3f} s  -> {10.0 / t_wrap:6.1f}x real time")
-    print(f"  tyre calls only (4 x SetReal/DoStep/GetReal per step, no vehicle): {t_tyres:.3f} s  -> "
-          f"{10.0 / t_tyres:6.1f}x real time, {t_tyres / 40_000 * 1e6:.2f} µs per tyre step")  # fmt: skip
-    print(f"  the same 4 x 10,000 tyre steps from a C host (dlopen): {t_host:.4f} s  -> {10.0 / t_host:7.1f}x real "
-          f"time, {t_host / 40_000 * 1e6:.2f} µs per tyre step (the FMU's own cost)")  # fmt: skip
+        drift = manoeuvre_seconds(fmu, fast=True)[1]
+        t_fast = _median(lambda: manoeuvre_seconds(fmu, fast=True)[0], r)
+        t_wrap = _median(lambda: manoeuvre_seconds(fmu, fast=False)[0], r)
+        t_veh = _median(vehicle_only_seconds, r)
+        t_tyres = _median(lambda: tyre_only_seconds(fmu), r)
+        t_empty = _median(lambda: tyre_only_seconds(fmu, empty=True), r)
+        cmd = c_host_command(fmu, tmp)
+        t_host = _median(lambda: c_host_seconds(cmd), r)
+    print(f"10 s vehicle manoeuvre at 1 kHz, four transient tyre FMUs (Co-Simulation) through fmpy "
+          f"(median / best of {r}):")  # fmt: skip
+    print(f"  prebound FMI calls on fmpy's library: {t_fast[0]:.3f} / {t_fast[1]:.3f} s  -> {10.0 / t_fast[0]:5.1f}x"
+          f" / {10.0 / t_fast[1]:5.1f}x real time (target >= 100x)")  # fmt: skip
+    print(f"  fmpy wrapper methods:                 {t_wrap[0]:.3f} / {t_wrap[1]:.3f} s  -> {10.0 / t_wrap[0]:5.1f}x"
+          f" / {10.0 / t_wrap[1]:5.1f}x real time")  # fmt: skip
     print(f"  parked on the 20 % slope: largest speed over the last second {drift * 1e3:.2e} mm/s")
+    us = 1e6 / 10_000  # seconds per 10,000 steps -> µs per step
+    print("Where a vehicle step goes (medians; µs per step of 4 tyres):")
+    print(f"  vehicle model alone (stub tyres):                       {t_veh[0] * us:6.2f}")
+    print(f"  tyre calls alone from Python (4 x SetReal/DoStep/GetReal): {t_tyres[0] * us:6.2f}")
+    print(f"    of which the 12 ctypes calls with no C work:          {t_empty[0] * us:6.2f}  "
+          f"({t_empty[0] * us / 12:.2f} µs per call)")  # fmt: skip
+    print(f"  the same tyre steps from a C host (the FMU's own work): {t_host[0] * us:6.2f}  "
+          f"({t_host[0] * us / 4:.2f} µs per tyre step; C alone {10.0 / t_host[0]:.0f}x real time)")  # fmt: skip
+    floor = t_empty[0] + t_host[0]
+    print(f"  fmpy floor (12 calls + the FMU's work, no vehicle):     {floor * us:6.2f}  -> at most "
+          f"{10.0 / floor:.0f}x real time through ctypes")  # fmt: skip
+    if args.workdir:
+        print("C host kept: " + " ".join(cmd))
     return 0
 
 

@@ -29,8 +29,9 @@ model below ``VXLOW`` (see ``docs/transient.md``)::
     alpha_t = atan((v + w·tau_y·dv/dt) / sigma_alpha)
     w = (1 + cos(pi·min(|Vx|/VXLOW, 1)))/2              (1 at standstill, 0 at VXLOW)
 
-The Magic Formula is evaluated rolling forward at ``max(|Vx|, VXLOW)`` (no
-slip reduction: the relaxation model replaces MFeval's low-speed slip reduction);
+The Magic Formula is evaluated rolling forward at ``max(|Vx|, VXLOW⁺)``, VXLOW⁺ the
+next double above VXLOW (no slip reduction: the relaxation model replaces MFeval's
+low-speed slip reduction, whose factors are all 1 at VXLOW);
 the rolling offsets of Fx, Fy, Mz fade out with ``w`` (their zero-slip values are
 subtracted times ``w``), My changes sign smoothly with ``Vx``.  At standstill the
 tyre is therefore a damped spring: Fx = Cx·(u + tau_x·du/dt) in the linear range.
@@ -191,25 +192,22 @@ class TransientTyre:
     def _eval(self, kin_args: dict, kappa, alpha) -> dict:
         a = kin_args
         keys = ("Fz", "gamma", "phit", "Vx", "P", "omega")
-        with warnings.catch_warnings():
-            # the evaluation speed is max(|Vx|, VXLOW): MFeval's low-speed slip reduction is replaced
-            warnings.filterwarnings("ignore", message="Speed input Vx below the limit")
-            mu = np.asarray(a["mu"], dtype=float)
-            if mu.ndim == 0 or np.all(mu == mu.flat[0]):
-                p = self._params(float(mu.flat[0]) if mu.size else 1.0)
-                return evaluate_arrays(p, a["Fz"], kappa, alpha, *(a[k] for k in keys[1:]), self.mode)
-            # friction varying over the points: one evaluation per distinct value
-            keys = tuple(k for k in keys if a[k] is not None)  # omega None: free rolling (estimated)
-            arrs = np.broadcast_arrays(mu, kappa, alpha, *(a[k] for k in keys))
-            res: dict[str, np.ndarray] = {}
-            for m in np.unique(arrs[0]):
-                sel = arrs[0] == m
-                rest = dict(zip(keys[1:], (x[sel] for x in arrs[4:]), strict=True))
-                o = evaluate_arrays(self._params(float(m)), arrs[3][sel], arrs[1][sel], arrs[2][sel], rest["gamma"],
-                                    rest["phit"], rest["Vx"], rest["P"], rest.get("omega"), self.mode)  # fmt: skip
-                for k, val in o.items():
-                    res.setdefault(k, np.zeros(arrs[0].shape))[sel] = val
-            return res
+        mu = np.asarray(a["mu"], dtype=float)
+        if mu.ndim == 0 or np.all(mu == mu.flat[0]):
+            p = self._params(float(mu.flat[0]) if mu.size else 1.0)
+            return evaluate_arrays(p, a["Fz"], kappa, alpha, *(a[k] for k in keys[1:]), self.mode)
+        # friction varying over the points: one evaluation per distinct value
+        keys = tuple(k for k in keys if a[k] is not None)  # omega None: free rolling (estimated)
+        arrs = np.broadcast_arrays(mu, kappa, alpha, *(a[k] for k in keys))
+        res: dict[str, np.ndarray] = {}
+        for m in np.unique(arrs[0]):
+            sel = arrs[0] == m
+            rest = dict(zip(keys[1:], (x[sel] for x in arrs[4:]), strict=True))
+            o = evaluate_arrays(self._params(float(m)), arrs[3][sel], arrs[1][sel], arrs[2][sel], rest["gamma"],
+                                rest["phit"], rest["Vx"], rest["P"], rest.get("omega"), self.mode)  # fmt: skip
+            for k, val in o.items():
+                res.setdefault(k, np.zeros(arrs[0].shape))[sel] = val
+        return res
 
     def kinematics(
         self,
@@ -236,7 +234,9 @@ class TransientTyre:
         mu, yawRate = _clean(muRoad, 1.0), _clean(yawRate, 0.0)
         vxlow = p["VXLOW"]
         absVx = np.abs(Vx)
-        Vev = np.maximum(absVx, vxlow)  # evaluation speed: forward, never below VXLOW
+        # evaluation speed: forward, never below VXLOW; the floor is the next double above VXLOW so that the
+        # Magic Formula stays out of its low-speed mode (|Vx| <= VXLOW, whose factors are all 1 at VXLOW)
+        Vev = np.maximum(absVx, np.nextafter(vxlow, np.inf))
         phit = -yawRate / np.sqrt(Vev**2 + Vy**2)  # turn slip phi_t = -psi_dot/V (Pacejka 2012 eq 4.75)
         omega_ev = None if free_rolling else np.where(omega == 0.0, 1e-300, omega)  # a true 0: not "estimate"
         args = dict(Fz=Fz, gamma=gamma, phit=phit, Vx=Vev, P=P, omega=omega_ev, mu=mu)

@@ -277,54 +277,76 @@ class StopAndHold:
     dt: float = 1e-3  #: communication step [s]
 
 
+#: Tyre variables of the stop-and-hold manoeuvre (Vy stays at its default 0 in straight-line motion;
+#: Fy and Mz are not needed).
+STOP_INPUTS = ("Fz", "Vx", "omega")
+STOP_OUTPUTS = ("Fx", "My", "Re")
+
+
 def simulate_stop_and_hold(tyres, veh: Vehicle = Vehicle(), sc: StopAndHold = StopAndHold()) -> dict:
-    """Straight-line two-track car on the transient tyres ``tyres`` (a :class:`TransientFMUs`).
+    """Straight-line two-track car on the transient tyres ``tyres`` (a :class:`TransientFMUs` with
+    the variables :data:`STOP_INPUTS` and :data:`STOP_OUTPUTS`).
 
     Explicit co-simulation at ``sc.dt``: the tyres see the wheel kinematics at the start
     of a step and return their forces at its end; the car (speed along the road, four
     wheel spins) advances with semi-implicit Euler.  The brakes are Coulomb friction
     with stiction: a wheel whose free motion the brake torque can stop is held at zero spin.
+
+    The step is scalar Python (no numpy inside the loop): one :meth:`TransientFMUs.step_values`
+    call per step carries the 4 x 3 inputs in and the 4 x 3 outputs out.
     """
     import math
 
+    if tuple(tyres.inputs) != STOP_INPUTS or tuple(tyres.outputs) != STOP_OUTPUTS or tyres.n != 4:
+        raise ValueError(f"simulate_stop_and_hold needs 4 tyres with inputs {STOP_INPUTS} and outputs {STOP_OUTPUTS}")
     n = int(round(sc.t_end / sc.dt))
     L = veh.a + veh.b
-    J, dt, m, g = sc.wheel_inertia, sc.dt, veh.m, veh.g
-    V, X, om = 0.0, 0.0, [0.0, 0.0, 0.0, 0.0]
+    J, dt, m, g, h_cg, b = sc.wheel_inertia, sc.dt, veh.m, veh.g, veh.h, veh.b
+    tilt, tilt_time, grade_end, brake, launch, ramp = sc.tilt, sc.tilt_time, sc.grade, sc.brake, sc.launch, sc.ramp
+    drive_torque, brake_front, brake_rear = sc.drive_torque, sc.brake_front, sc.brake_rear
+    atan, cos, sin, copysign = math.atan, math.cos, math.sin, math.copysign
+    V, X = 0.0, 0.0
+    om0 = om1 = om2 = om3 = 0.0
     Fx_sum = 0.0
-    rec = np.zeros((n + 1, 4))  # t, V, X, grade
-    Y = np.zeros((n + 1, 4, tyres.m))  # tyre outputs
-    W = np.zeros((n + 1, 4, 2))  # Fz, omega
-    u = tyres.u
-    Tb_max = (sc.brake_front, sc.brake_front, sc.brake_rear, sc.brake_rear)
+    grade_last, cos_t, sin_t = 0.0, 1.0, 0.0
+    step = tyres.step_values
+    rec = []  # flat: V, X, Fz_f, Fz_r, omega x 4, Fx x 4, Re x 4 of every step (16 values)
+    keep = rec.extend
     for i in range(n + 1):
         t = i * dt
-        grade = sc.grade * min(max((t - sc.tilt) / sc.tilt_time, 0.0), 1.0)
-        th = math.atan(grade)
-        cos_t, sin_t = math.cos(th), math.sin(th)
+        s = (t - tilt) / tilt_time
+        grade = grade_end * (0.0 if s <= 0.0 else (1.0 if s >= 1.0 else s))
+        if grade != grade_last:
+            th = atan(grade)
+            cos_t, sin_t, grade_last = cos(th), sin(th), grade
         # quasi-static pitch load transfer from the previous step's total tyre force
-        Fz_f = (m * g * cos_t * veh.b - veh.h * Fx_sum) / L / 2.0
+        Fz_f = (m * g * cos_t * b - h_cg * Fx_sum) / L / 2.0
         Fz_r = m * g * cos_t / 2.0 - Fz_f
-        u[:, 0] = (Fz_f, Fz_f, Fz_r, Fz_r)
-        u[:, 1] = V
-        u[:, 3] = om
-        y = tyres.step(t, dt)  # Fx, Fy, Mz, My, Re (Vy stays 0)
-        rec[i] = (t, V, X, grade)
-        Y[i] = y
-        W[i, :, 0], W[i, :, 1] = (Fz_f, Fz_f, Fz_r, Fz_r), om
-        Fx, _, _, My, Re = y.T.tolist()
-        Fx_sum = Fx[0] + Fx[1] + Fx[2] + Fx[3]
-        bk = min(max((t - sc.brake) / sc.ramp, 0.0), 1.0)  # brakes ramp on as the drive ramps off
-        drive = sc.drive_torque * min(max((t - sc.launch) / sc.ramp, 0.0), 1.0) * (1.0 - bk)
-        for j in range(4):
-            Td = drive if j >= 2 else 0.0
-            free = om[j] + dt * (Td - Re[j] * Fx[j] + My[j]) / J  # wheel spin without the brake
-            lim = dt * bk * Tb_max[j] / J
-            om[j] = 0.0 if abs(free) <= lim else free - math.copysign(lim, free)  # brake with stiction
+        y = step(t, dt, (Fz_f, V, om0, Fz_f, V, om1, Fz_r, V, om2, Fz_r, V, om3))
+        Fx0, My0, Re0, Fx1, My1, Re1, Fx2, My2, Re2, Fx3, My3, Re3 = y  # STOP_OUTPUTS per tyre
+        keep((V, X, Fz_f, Fz_r, om0, om1, om2, om3, Fx0, Fx1, Fx2, Fx3, Re0, Re1, Re2, Re3))
+        Fx_sum = Fx0 + Fx1 + Fx2 + Fx3
+        s = (t - brake) / ramp
+        bk = 0.0 if s <= 0.0 else (1.0 if s >= 1.0 else s)  # brakes ramp on as the drive ramps off
+        s = (t - launch) / ramp
+        Td = drive_torque * (0.0 if s <= 0.0 else (1.0 if s >= 1.0 else s)) * (1.0 - bk)  # rear wheels
+        # wheel spin without the brake, then the brake with stiction (held at 0 if it can stop the wheel)
+        free, lim = om0 + dt * (My0 - Re0 * Fx0) / J, dt * bk * brake_front / J
+        om0 = 0.0 if abs(free) <= lim else free - copysign(lim, free)
+        free = om1 + dt * (My1 - Re1 * Fx1) / J
+        om1 = 0.0 if abs(free) <= lim else free - copysign(lim, free)
+        free, lim = om2 + dt * (Td - Re2 * Fx2 + My2) / J, dt * bk * brake_rear / J
+        om2 = 0.0 if abs(free) <= lim else free - copysign(lim, free)
+        free = om3 + dt * (Td - Re3 * Fx3 + My3) / J
+        om3 = 0.0 if abs(free) <= lim else free - copysign(lim, free)
         V += dt * (Fx_sum / m - g * sin_t)
         X += dt * V
-    return {"t": rec[:, 0], "V": rec[:, 1], "X": rec[:, 2], "grade": rec[:, 3], "Fx": Y[:, :, 0],
-            "Fz": W[:, :, 0], "omega": W[:, :, 1], "Re": Y[:, :, 4]}  # fmt: skip
+    R = np.fromiter(rec, float, len(rec)).reshape(n + 1, 16)
+    t = np.arange(n + 1) * dt
+    s = (t - tilt) / tilt_time
+    grade = grade_end * np.where(s <= 0.0, 0.0, np.where(s >= 1.0, 1.0, s))  # as in the loop
+    return {"t": t, "V": R[:, 0], "X": R[:, 1], "grade": grade, "Fx": R[:, 8:12], "Fz": R[:, [2, 2, 3, 3]],
+            "omega": R[:, 4:8], "Re": R[:, 12:16]}  # fmt: skip
 
 
 def run_transient(tir=DEFAULT_TIR, output: str | Path | None = "vehicle_example_transient.png",
@@ -341,7 +363,7 @@ def run_transient(tir=DEFAULT_TIR, output: str | Path | None = "vehicle_example_
         if fmu_path is None:
             fmu_path = export_fmu(tir, Path(tmp) / "tyre_transient.fmu", transient=True)
         t0 = time.perf_counter()
-        with TransientFMUs(fmu_path, WHEELS, outputs=("Fx", "Fy", "Mz", "My", "Re")) as tyres:
+        with TransientFMUs(fmu_path, WHEELS, inputs=STOP_INPUTS, outputs=STOP_OUTPUTS) as tyres:
             res = simulate_stop_and_hold(tyres, sc=sc)
         res["seconds"] = time.perf_counter() - t0
     last = res["t"] > sc.t_end - 1.0

@@ -26,6 +26,9 @@ CSOURCE = Path(__file__).parent / "csource"
 #: Hand-written C sources shipped in every FMU (besides the wrapper and generated headers).
 CORE_SOURCES = ("mf_eval.c", "mf_eval.h", "mf_model.c", "mf_model.h")
 
+#: The FMI 2.0 functions shared by the steady-state and the transient wrappers (fmi2_model.c, fmi2_transient.c).
+FMI2_COMMON_SOURCES = ("fmi2_common.c", "fmi2_common.h")
+
 #: FMI headers taken from fmpy's ``c-code`` directory.
 FMI_HEADERS = {
     2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),

@@ -23,6 +23,7 @@ from mftire.fmu import variables as vt
 from mftire.fmu.build import (  # noqa: F401 (re-exported)
     CORE_SOURCES,
     CSOURCE,
+    FMI2_COMMON_SOURCES,
     FMI_HEADERS,
     FMUExportError,
     _fmpy_c_code,
@@ -53,7 +54,7 @@ def generate_sources(
     except MftireError as exc:
         raise FMUExportError(f"the model extensions cannot be exported: {exc}") from None
     files: dict[str, str] = {}
-    for name in CORE_SOURCES:
+    for name in CORE_SOURCES + (FMI2_COMMON_SOURCES if fmi_version == 2 else ()):
         files[name] = (CSOURCE / name).read_text(encoding="utf-8")
     wrapper = f"fmi{fmi_version}_model.c"
     files[wrapper] = (CSOURCE / wrapper).read_text(encoding="utf-8")

@@ -17,6 +17,40 @@ from pathlib import Path
 INPUT_NAMES = ("Fz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "omega", "muRoad")
 
 
+def make_callbacks(messages: list | None = None, logger: Callable[[int, str, str], None] | None = None):
+    """FMI 2.0 callbacks whose logger calls ``logger(status, category, message)`` -- by default it
+    appends ``(status, category, message)`` to ``messages``.
+
+    The logger is a plain ctypes callback owned by the returned object, not fmpy's logger
+    proxy (``fmpy.logging.addLoggerProxy``): the proxy keeps *one* process-wide pointer to
+    the last Python logger registered, so with several hosts every message goes to the
+    newest one, and the pointer dangles once that host is garbage collected.  mftire's FMUs
+    pass their messages pre-formatted (every '%' doubled, no variadic arguments), so no
+    proxy is needed.  Keep the returned object alive as long as the instances.
+    """
+    from fmpy.fmi2 import (
+        calloc,
+        fmi2CallbackAllocateMemoryTYPE,
+        fmi2CallbackFreeMemoryTYPE,
+        fmi2CallbackFunctions,
+        fmi2CallbackLoggerTYPE,
+        free,
+    )
+
+    store = messages if messages is not None else []
+    sink = logger or (lambda status, category, message: store.append((status, category, message)))
+
+    def log(env, instance, status, category, message):
+        sink(int(status), (category or b"").decode(), (message or b"").decode().replace("%%", "%"))
+
+    cb = fmi2CallbackFunctions()
+    cb.logger = fmi2CallbackLoggerTYPE(log)
+    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    cb._mftire_keep = (log, sink, store)
+    return cb
+
+
 class FMUTyre:
     """One instance of a tyre FMU.
 
@@ -70,33 +104,13 @@ class FMUTyre:
     def _instantiate(self, md, name: str) -> None:
         kw = dict(unzipDirectory=self.unzipdir, instanceName=name)
         if self.fmi_version == 2:
-            from ctypes import byref
-
-            from fmpy.fmi2 import (
-                FMU2Model,
-                FMU2Slave,
-                calloc,
-                fmi2CallbackAllocateMemoryTYPE,
-                fmi2CallbackFreeMemoryTYPE,
-                fmi2CallbackFunctions,
-                fmi2CallbackLoggerTYPE,
-                free,
-            )
-            from fmpy.logging import addLoggerProxy
+            from fmpy.fmi2 import FMU2Model, FMU2Slave
 
             ident = (md.modelExchange if self.interface == "ME" else md.coSimulation).modelIdentifier
             cls = FMU2Model if self.interface == "ME" else FMU2Slave
             self.fmu = cls(guid=md.guid, modelIdentifier=ident, **kw)
-
-            def log(env, instance, status, category, message):
-                self._logger(int(status), category.decode(), message.decode())
-
-            cb = fmi2CallbackFunctions()
-            cb.logger = fmi2CallbackLoggerTYPE(log)
-            cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-            cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-            addLoggerProxy(byref(cb))
-            self._callbacks = cb
+            # a logger of this instance's own, kept alive by it (not fmpy's process-wide proxy)
+            self._callbacks = cb = make_callbacks(logger=self._logger)
             self.fmu.instantiate(callbacks=cb)
             self.fmu.setupExperiment(startTime=0.0)
             self.fmu.enterInitializationMode()

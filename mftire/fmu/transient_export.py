@@ -8,7 +8,7 @@ from :mod:`mftire.transient` and the steady-state table of
 (``mf_params.h`` with the transient constants ``TR_*`` as tunable parameters, and
 ``mt_model_gen.h``).  The C model is ``csource/mf_transient.c`` (the equations of
 ``mftire/transient.py``) on top of the steady-state evaluator ``mf_eval.c``, wrapped
-by ``csource/fmi2_transient.c``.
+by ``csource/fmi2_transient.c`` (and ``csource/fmi2_common.c``, shared with the steady-state FMU).
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ from mftire.fmu import variables as vt
 from mftire.fmu.build import (
     CFLAGS,
     CSOURCE,
+    FMI2_COMMON_SOURCES,
     FMI_HEADERS,
     LIBS,
     FMUExportError,
@@ -48,7 +49,8 @@ def output_names() -> list[str]:
 
 
 #: Hand-written C sources of the transient FMU.
-TRANSIENT_SOURCES = ("mf_eval.c", "mf_eval.h", "mf_transient.c", "mf_transient.h", "fmi2_transient.c")
+TRANSIENT_SOURCES = ("mf_eval.c", "mf_eval.h", "mf_transient.c", "mf_transient.h", "fmi2_transient.c",
+                     *FMI2_COMMON_SOURCES)
 
 #: Unit names of :data:`mftire.transient.CONSTANTS` -> FMI units.
 _CONST_UNIT = {"s": "s", "m": "m", "-": None}
@@ -365,7 +367,7 @@ def build_probe_library(tir, directory: str | os.PathLike, compiler: str | None 
     src = directory / "probe_src"
     src.mkdir(parents=True, exist_ok=True)
     for fname, text in files.items():
-        if fname != "fmi2_transient.c":
+        if not fname.startswith("fmi2_"):  # the model and the harness only, no FMI functions
             (src / fname).write_text(text, encoding="utf-8")
     (src / "mt_probe.c").write_text(_PROBE_C, encoding="utf-8")
     lib = directory / "libmt_probe.so"

@@ -13,41 +13,14 @@ from __future__ import annotations
 import ctypes
 import os
 import shutil
+import struct
 from collections.abc import Mapping, Sequence
+from functools import partial
 
 import numpy as np
 
 from mftire.errors import MftireError
-
-
-def make_callbacks(messages: list | None = None):
-    """FMI 2.0 callbacks whose logger appends ``(status, category, message)`` to ``messages``.
-
-    The logger is a plain ctypes callback, not fmpy's logger proxy: the proxy keeps *one*
-    process-wide pointer to the last Python logger registered, which dangles once that
-    logger is garbage collected.  The transient FMU passes its messages pre-formatted, so
-    no proxy is needed.  Keep the returned object alive as long as the instances.
-    """
-    from fmpy.fmi2 import (
-        calloc,
-        fmi2CallbackAllocateMemoryTYPE,
-        fmi2CallbackFreeMemoryTYPE,
-        fmi2CallbackFunctions,
-        fmi2CallbackLoggerTYPE,
-        free,
-    )
-
-    store = messages if messages is not None else []
-
-    def log(env, instance, status, category, message):
-        store.append((int(status), (category or b"").decode(), (message or b"").decode().replace("%%", "%")))
-
-    cb = fmi2CallbackFunctions()
-    cb.logger = fmi2CallbackLoggerTYPE(log)
-    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-    cb._mftire_keep = (log, store)
-    return cb
+from mftire.fmu.host import make_callbacks
 
 
 class TransientFMUs:
@@ -65,6 +38,13 @@ class TransientFMUs:
         Parameters (e.g. ``TR_CS_STEP``) or inputs set before initialisation, for all instances.
     fast : bool
         Call the FMI functions directly through ctypes (default) or through fmpy's methods.
+
+    The inputs and outputs of all instances live in two contiguous C buffers, seen from
+    Python as the arrays :attr:`u` (n x k) and :attr:`y` (n x m).  With ``fast=True`` a
+    step makes exactly three foreign calls per instance (``fmi2SetReal`` of all its inputs,
+    ``fmi2DoStep``, ``fmi2GetReal`` of all its outputs) with every argument prepared once:
+    the calls go to fresh function objects of the library fmpy loaded (fmpy's own
+    wrappers are left as they are), without ctypes argument conversion.
     """
 
     def __init__(
@@ -80,45 +60,80 @@ class TransientFMUs:
         from fmpy.fmi2 import FMU2Slave
 
         self.unzipdir = extract(str(fmu))
-        md = read_model_description(self.unzipdir)
-        if md.coSimulation is None or not any(v.name == "der(u)" for v in md.modelVariables):
-            raise MftireError(f"{fmu}: not a transient tyre FMU (export it with --transient)")
-        vr = {v.name: v.valueReference for v in md.modelVariables}
-        missing = [n for n in (*inputs, *outputs, *(start_values or {})) if n not in vr]
-        if missing:
-            raise MftireError(f"{fmu}: no variable(s) {', '.join(missing)}")
-        self.vr = vr
-        self.fast = fast
-        self.messages: list[tuple[int, str, str]] = []  #: (status, category, message) logged by the FMU
-        self._callbacks = make_callbacks(self.messages)
         self.slaves = []
-        for name in names:
-            s = FMU2Slave(guid=md.guid, unzipDirectory=self.unzipdir,
-                          modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)  # fmt: skip
-            s.instantiate(callbacks=self._callbacks)
-            s.setupExperiment(startTime=0.0)
-            s.enterInitializationMode()
-            if start_values:
-                s.setReal([vr[k] for k in start_values], [float(v) for v in start_values.values()])
-            s.exitInitializationMode()
-            self.slaves.append(s)
+        try:
+            md = read_model_description(self.unzipdir)
+            if md.coSimulation is None or not any(v.name == "der(u)" for v in md.modelVariables):
+                raise MftireError(f"{fmu}: not a transient tyre FMU (export it with --transient)")
+            vr = {v.name: v.valueReference for v in md.modelVariables}
+            missing = [n for n in (*inputs, *outputs, *(start_values or {})) if n not in vr]
+            if missing:
+                raise MftireError(f"{fmu}: no variable(s) {', '.join(missing)}")
+            self.vr = vr
+            self.fast = fast
+            self.inputs, self.outputs = tuple(inputs), tuple(outputs)
+            self.messages: list[tuple[int, str, str]] = []  #: (status, category, message) logged by the FMU
+            self._callbacks = make_callbacks(self.messages)
+            for name in names:
+                s = FMU2Slave(guid=md.guid, unzipDirectory=self.unzipdir,
+                              modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)  # fmt: skip
+                s.instantiate(callbacks=self._callbacks)
+                self.slaves.append(s)
+                s.setupExperiment(startTime=0.0)
+                s.enterInitializationMode()
+                if start_values:
+                    s.setReal([vr[k] for k in start_values], [float(v) for v in start_values.values()])
+                s.exitInitializationMode()
+        except BaseException:
+            self.close()
+            raise
         self.n, self.k, self.m = len(names), len(inputs), len(outputs)
         self.in_vr = [vr[k] for k in inputs]
         self.out_vr = [vr[k] for k in outputs]
-        self.u = np.zeros((self.n, self.k))
-        self.y = np.zeros((self.n, self.m))
+        n, k, m = self.n, self.k, self.m
+        self._ubuf = (ctypes.c_double * (n * k))()
+        self._ybuf = (ctypes.c_double * (n * m))()
+        self.u = np.ctypeslib.as_array(self._ubuf).reshape(n, k)  #: inputs (n x k), the C buffer itself
+        self.y = np.ctypeslib.as_array(self._ybuf).reshape(n, m)  #: outputs (n x m), the C buffer itself
+        # flat formats of the two buffers for struct.pack_into / unpack_from (step_values)
+        self._ufmt, self._yfmt = f"={n * k}d", f"={n * m}d"
+        # fresh function objects on fmpy's library (dll[name] makes a new one each time); every argument is
+        # prepared once as a ctypes parameter object (from_param of a value, byref of a buffer), which
+        # ctypes passes on without converting anything per call; only DoStep's time is set per step
         dll = self.slaves[0].dll
-        D, U = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_uint)
-        self._set, self._do, self._get = dll.fmi2SetReal, dll.fmi2DoStep, dll.fmi2GetReal
-        for f in (self._set, self._get):
-            f.argtypes, f.restype = [ctypes.c_void_p, U, ctypes.c_size_t, D], ctypes.c_int
-        self._do.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_int]
-        self._do.restype = ctypes.c_int
-        self._vin = (ctypes.c_uint * self.k)(*self.in_vr)
-        self._vout = (ctypes.c_uint * self.m)(*self.out_vr)
-        self._pin = [self.u[i].ctypes.data_as(D) for i in range(self.n)]
-        self._pout = [self.y[i].ctypes.data_as(D) for i in range(self.n)]
-        self._comp = [s.component for s in self.slaves]
+        set_real, self._do_step, get_real = dll["fmi2SetReal"], dll["fmi2DoStep"], dll["fmi2GetReal"]
+        for f in (set_real, self._do_step, get_real):
+            f.restype = ctypes.c_int
+        self._vr_arrays = (ctypes.c_uint * k)(*self.in_vr), (ctypes.c_uint * m)(*self.out_vr)
+        vin, vout = (ctypes.byref(a) for a in self._vr_arrays)
+        nk, nm = ctypes.c_size_t.from_param(k), ctypes.c_size_t.from_param(m)
+        self._yes = ctypes.c_int.from_param(1)
+        self._t = ctypes.c_double(0.0)
+        size = ctypes.sizeof(ctypes.c_double)
+        self._set_get = []  # per instance: (SetReal, the component, GetReal) with every argument bound
+        for i, s in enumerate(self.slaves):
+            comp = ctypes.c_void_p.from_param(s.component)
+            self._set_get.append((
+                partial(set_real, comp, vin, nk, ctypes.byref(self._ubuf, i * k * size)),
+                comp,
+                partial(get_real, comp, vout, nm, ctypes.byref(self._ybuf, i * m * size)),
+            ))  # fmt: skip
+        self._bind(1e-3)
+
+    def _bind(self, h: float) -> None:
+        """Bind the step size ``h`` into the DoStep calls: ``_calls`` per instance (SetReal, DoStep, GetReal)."""
+        self._h, step = h, ctypes.c_double.from_param(h)
+        do_step, t, yes = self._do_step, self._t, self._yes
+        self._calls = [(st, partial(do_step, comp, t, step, yes), gt) for st, comp, gt in self._set_get]
+
+    def _advance(self, t: float, h: float) -> None:
+        """The 3 FMI calls per instance: set the inputs from the buffer, step, read the outputs into the buffer."""
+        if h != self._h:
+            self._bind(h)
+        self._t.value = t
+        for set_real, do_step, get_real in self._calls:
+            if set_real() or do_step() or get_real():
+                raise MftireError(f"transient tyre FMU: a call failed at t = {t:g}")
 
     def step(self, t: float, h: float, u: np.ndarray | None = None) -> np.ndarray:
         """Set the inputs ``u`` (n x k; default: the buffer :attr:`u`), advance by ``h``, return outputs (n x m).
@@ -128,16 +143,24 @@ class TransientFMUs:
         if u is not None:
             self.u[...] = u
         if self.fast:
-            st, do, gt, vin, vout, k, m = self._set, self._do, self._get, self._vin, self._vout, self.k, self.m
-            for c, pin, pout in zip(self._comp, self._pin, self._pout, strict=True):
-                if st(c, vin, k, pin) or do(c, t, h, 1) or gt(c, vout, m, pout):
-                    raise MftireError(f"transient tyre FMU: a call failed at t = {t:g}")
+            self._advance(t, h)
         else:
             for i, s in enumerate(self.slaves):
-                s.setReal(self.in_vr, list(self.u[i]))
+                s.setReal(self.in_vr, self.u[i].tolist())
                 s.doStep(t, h)
                 self.y[i] = s.getReal(self.out_vr)
         return self.y
+
+    def step_values(self, t: float, h: float, values: Sequence[float]) -> tuple[float, ...]:
+        """:meth:`step` on plain floats: ``values`` are the n x k inputs row by row (instance by
+        instance); returns the n x m outputs the same way, as a tuple.  The lean path for a
+        vehicle model written in scalar Python."""
+        struct.pack_into(self._ufmt, self._ubuf, 0, *values)
+        if self.fast:
+            self._advance(t, h)
+        else:
+            self.step(t, h)
+        return struct.unpack_from(self._yfmt, self._ybuf)
 
     def get(self, names: Sequence[str]) -> np.ndarray:
         """Read variables (n x len(names)) through fmpy."""
@@ -148,6 +171,7 @@ class TransientFMUs:
             s.terminate()
             s.freeInstance()
         self.slaves = []
+        self._calls = self._set_get = []
         shutil.rmtree(self.unzipdir, ignore_errors=True)
 
     def __enter__(self) -> TransientFMUs:

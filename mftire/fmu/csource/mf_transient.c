@@ -13,9 +13,12 @@ int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, MTKin *k,
     const double PI = 3.14159265358979323846;
     double Fz = nan_to(in->Fz, 0.0), Vx = nan_to(in->Vx, 0.0), Vy = nan_to(in->Vy, 0.0);
     double omega = nan_to(in->omega, 0.0), yaw = nan_to(in->yawRate, 0.0);
-    double vxlow = p->VXLOW, absVx = fabs(Vx), Vev, r, q;
+    double vxlow = p->VXLOW, absVx = fabs(Vx), vfloor, Vev, r, q;
     int rc, i;
-    Vev = absVx > vxlow ? absVx : vxlow; /* evaluation speed: forward, never below VXLOW */
+    /* evaluation speed: forward, never below VXLOW; the floor is the next double above VXLOW so that the
+     * Magic Formula stays out of its low-speed mode (|Vx| <= VXLOW, whose factors are all 1 at VXLOW) */
+    vfloor = nextafter(vxlow, INFINITY);
+    Vev = absVx > vfloor ? absVx : vfloor;
     k->ev.Fz = Fz;
     k->ev.kappa = 0.0;
     k->ev.alpha = 0.0;
