@@ -306,10 +306,13 @@ static double re_deflection(const MFParams *p, double Fz, double Cz)
  * is estimated from omega = (1 + kappa)*Vx/Re (eq 2.5) by fixed-point iteration on
  * Re, started at 0.965*R0 as the reference evaluator does.
  * MFeval departure: the reference stops a batch as soon as one point has converged;
- * for the single point evaluated here that is ordinary convergence to |dRe| <= 1e-9 m.
+ * for a single point that is ordinary convergence to |dRe| <= 1e-9 m.  At most *kmax
+ * updates are made and *kmax returns how many were (the array kernel, mf_kernel.c, finds
+ * the batch's count with a first pass and then makes exactly that many for every point).
  */
 static void effective_rolling_radius(const MFParams *p, const Cond *c, double dpi, int omega_given,
-                                     double omega_in, double *Re_out, double *Romega_out, double *omega_out)
+                                     double omega_in, int *kmax, double *Re_out, double *Romega_out,
+                                     double *omega_out)
 {
     double Cz = p->VERTICAL_STIFFNESS * (1.0 + p->PFZ1 * dpi); /* Besselink 2010 eq 5 */
     double Fz = c->uFz, Vx = c->Vx, kappa = c->ukappa;
@@ -328,13 +331,14 @@ static void effective_rolling_radius(const MFParams *p, const Cond *c, double dp
     Re_old = R0;
     omega = 0.0;
     Romega = R0;
-    for (i = 0; i < 100; i++) {
+    for (i = 0; i < *kmax; i++) {
         if (!(fabs(Re_old - Re) > 1e-9)) break;
         Re_old = Re;
         omega = (kappa * Vx + Vx) / Re; /* eq 2.5 */
         Romega = free_radius(p, omega);
         Re = Romega - defl;
     }
+    *kmax = i; /* the number of updates made */
     *Re_out = Re;
     *Romega_out = Romega;
     *omega_out = omega;
@@ -914,7 +918,18 @@ static void relaxation(const MFParams *p, const Cond *c, double Kxk, double Kya,
 
 #include "mf_ext_gen.h"
 
-#if MF_N_TERMS > 0
+/* The term table: MF_TERMS of mf_ext_gen.h in an FMU; data given at run time in the array
+ * kernel (mf_kernel.c, whose mf_ext_gen.h defines MF_EXT_RUNTIME and the MFTerm layout). */
+typedef struct {
+#if MF_N_TERMS > 0 || defined(MF_EXT_RUNTIME)
+    const MFTerm *terms;
+#else
+    const void *terms;
+#endif
+    int n;
+} ExtTable;
+
+#if MF_N_TERMS > 0 || defined(MF_EXT_RUNTIME)
 /* The value of the table form: c holds the n levels, then the n values; nearest level wins
  * (numpy argmin: the first of equal distances). */
 static double mf_ext_table(double u, const double *c, int n)
@@ -925,16 +940,19 @@ static double mf_ext_table(double u, const double *c, int n)
     return c[n + best];
 }
 
-/* q = p with the targeted scaling factors multiplied by f; off[0], off[1] the FX/FY offset sums. */
-static void apply_extensions(const MFParams *p, const Cond *c, const double *data, MFParams *q, double *off)
+/* q = p with the targeted scaling factors multiplied by f; off[0], off[1] the FX/FY offset sums.
+ * The term fields are read as doubles from p's storage at the indices of the table (in the
+ * array kernel the storage runs on past MFParams with the numbers of the terms). */
+static void apply_extensions(const ExtTable *ext, const MFParams *p, const Cond *c, const double *data, MFParams *q,
+                             double *off)
 {
     const double *P = (const double *)p;
     double *Q = (double *)q;
     int i, k;
     *q = *p;
     off[0] = off[1] = 0.0;
-    for (i = 0; i < MF_N_TERMS; i++) {
-        const MFTerm *t = &MF_TERMS[i];
+    for (i = 0; i < ext->n; i++) {
+        const MFTerm *t = &ext->terms[i];
         double u = clip(mf_ext_var(t->var, p, c, data), P[t->min], P[t->max]);
         double z = (u - P[t->ref]) / P[t->scale], z2 = 0.0, f;
         if (t->var2 >= 0) {
@@ -964,88 +982,143 @@ static double clean(Ctx *m, int kind, const char *name, double x, double fill)
     return x;
 }
 
+/* Decode a checked useMode into the context. */
+static void decode_mode(Ctx *m, int use_mode)
+{
+    m->limits = use_mode / 100 == 1;
+    m->alpha_star = (use_mode / 10) % 10 == 2;
+    m->turn_slip = use_mode % 10 == 2;
+    m->combined = use_mode % 10 != 0;
+}
+
+/*
+ * Piece 1 of solver.py without the wheel spin: NaN inputs replaced by 0 (pressure: INFLPRES)
+ * with a warning, then the input stage (condition_inputs).  data receives the cleaned data
+ * variables.  Returns dpi (eq 4.E2b).
+ */
+static double prepare_point(const MFParams *p, Ctx *m, const MFInputs *in, double *data, Cond *c)
+{
+    double Fz, kappa, alpha, gamma, phit, Vx, P;
+    int k;
+#if MF_N_DATA > 0
+    static const char *const data_names[MF_N_DATA] = MF_DATA_NAMES;
+    for (k = 0; k < MF_N_DATA; k++) data[k] = clean(m, MF_W_NAN_DATA0 + k, data_names[k], in->data[k], 0.0);
+#endif
+    (void)k;
+    (void)data;
+    Fz = clean(m, MF_W_NAN_FZ, "Fz", in->Fz, 0.0);
+    kappa = clean(m, MF_W_NAN_KAPPA, "kappa", in->kappa, 0.0);
+    alpha = clean(m, MF_W_NAN_ALPHA, "alpha", in->alpha, 0.0);
+    gamma = clean(m, MF_W_NAN_GAMMA, "gamma", in->gamma, 0.0);
+    phit = clean(m, MF_W_NAN_PHIT, "phit", in->phit, 0.0);
+    Vx = clean(m, MF_W_NAN_VX, "Vx", in->Vx, 0.0);
+    P = in->P;
+    if (isnan(P) || P <= 0.0) P = p->INFLPRES;
+    condition_inputs(p, m, Fz, kappa, alpha, gamma, phit, Vx, P, c);
+    return (c->P - p->NOMPRES) / p->NOMPRES; /* eq 4.E2b */
+}
+
+/* What mf_channels computes (bits of want), as mftire.mf.solver.channels and outputs. */
+#define MF_WANT_FX 1u    /* Fx, mux, Kxk */
+#define MF_WANT_FY 2u    /* Fy, muy, Kya */
+#define MF_WANT_MZ 4u    /* Mz, t, Mzr (needs FX, FY) */
+#define MF_WANT_MX 8u    /* Mx (needs FY) */
+#define MF_WANT_MY 16u   /* My (needs FX) */
+#define MF_WANT_RAD 32u  /* rho, Rl, Cz (needs FX, FY) */
+#define MF_WANT_PATCH 64u /* 2a, 2b */
+#define MF_WANT_RELAX 128u /* Cx, Cy, sigmax, sigmay (needs FX, FY) */
+#define MF_WANT_ALL 255u
+
+/*
+ * Pieces 2 and 3 of solver.py for one conditioned point c (c->omega filled): the model
+ * extensions, turn slip, the channels of want (what they need is computed too) and the
+ * outputs that depend on them.  Fields of out that are not wanted are left untouched.
+ */
+static void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c, double dpi, double Romega,
+                        const double *data, double muRoad, unsigned want, MFOutputs *out)
+{
+    Basic b;
+    PureLat lat;
+    AlignTerms at;
+    double z1, Fx0, mux = 0.0, Kxk = 0.0, Fy_comb, Gyk = 0.0, Fx = 0.0, Fy = 0.0;
+    double off[2] = {0.0, 0.0}; /* force offsets of the model extensions, as factors of Fz */
+    int need_fx = (want & (MF_WANT_FX | MF_WANT_MZ | MF_WANT_MY | MF_WANT_RAD | MF_WANT_RELAX)) != 0;
+    int need_fy = (want & (MF_WANT_FY | MF_WANT_MZ | MF_WANT_MX | MF_WANT_RAD | MF_WANT_RELAX)) != 0;
+#if MF_N_TERMS > 0 || defined(MF_EXT_RUNTIME)
+    MFParams q; /* p with the extension terms applied to its scaling factors */
+    if (ext->n > 0) {
+        apply_extensions(ext, p, c, data, &q, off);
+        p = &q;
+    }
+#endif
+    (void)ext;
+    (void)data;
+    if (m->turn_slip) turn_slip_spin(p, c);
+    basic(p, m, c, muRoad, &b);
+    lat.Kya = 0.0;
+
+    if (need_fx) {
+        z1 = m->turn_slip ? zeta1(p, b.dfz, c->kappa, c->phi) : 1.0;
+        fx0(p, m, c, &b, z1, &Fx0, &mux, &Kxk);
+        Fx = (m->combined ? fx_combined(p, m, c, &b, Fx0) : Fx0) + c->Fz * off[0];
+        out->Fx = Fx; out->mux = mux; out->Kxk = Kxk;
+    }
+    if (need_fy) {
+        fy0(p, m, c, &b, b.gamma_star, m->turn_slip, &lat);
+        Fy_comb = fy_combined(p, m, c, &b, lat.Fy0, lat.muy, lat.zeta2, &Gyk);
+        Fy = (m->combined ? Fy_comb : lat.Fy0) + c->Fz * off[1];
+        out->Fy = Fy; out->muy = m->limits ? fabs(lat.muy) : lat.muy; out->Kya = lat.Kya;
+    }
+    if (want & MF_WANT_MZ) {
+        aligning_terms(p, m, c, &b, &lat, Gyk, &at);
+        if (m->combined)
+            mz_combined(p, m, c, &b, &at, Kxk, Fx, Fy, Gyk, &lat, &out->Mz, &out->t, &out->Mzr);
+        else
+            mz0(p, m, c, &b, &at, &out->Mz, &out->t, &out->Mzr);
+    }
+    if (want & MF_WANT_MX) out->Mx = mx(p, c, dpi, Fy);
+    if (want & MF_WANT_MY) out->My = my(p, c, Fx);
+    if (want & MF_WANT_RAD) {
+        if (p->FITTYP == 61.0 || is_pac2002(p)) /* PAC2002: the MF 6.2 equation reduces to 6.1 */
+            loaded_radius_61(p, c, dpi, c->omega, Romega, Fx, Fy, &out->rho, &out->Rl, &out->Cz);
+        else
+            loaded_radius_62(p, c, dpi, c->omega, Romega, Fx, Fy, &out->rho, &out->Rl, &out->Cz);
+    }
+    if (want & MF_WANT_PATCH) {
+        double a, bw;
+        contact_patch(p, c, dpi, &a, &bw);
+        out->a2 = 2.0 * a;
+        out->b2 = 2.0 * bw;
+    }
+    if (want & MF_WANT_RELAX) relaxation(p, c, Kxk, lat.Kya, &out->Cx, &out->Cy, &out->sigmax, &out->sigmay);
+}
+
 int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *out, mf_warning_fn warn, void *ctx)
 {
     char msg[256];
     Ctx m;
     Cond c;
-    Basic b;
-    PureLat lat;
-    AlignTerms at;
-    double Fz, kappa, alpha, gamma, phit, Vx, P, omega_in, dpi, Re, Romega, omega, z1, Fx0, mux, Kxk, Fy_comb, Gyk;
-    double Fx, Fy, Mz, t, Mzr, Mx, My, muy, rho, Rl, Cz, a, bw, Cx, Cy, sigmax, sigmay;
-    double off[2] = {0.0, 0.0}; /* force offsets of the model extensions, as factors of Fz */
+    double dpi, Re, Romega, omega, omega_in;
     double data[MF_MAX_DATA] = {0.0};
-    int omega_given, k;
+    int omega_given, k, kmax = 100;
 #if MF_N_TERMS > 0
-    MFParams q; /* p with the extension terms applied to its scaling factors */
-#endif
-#if MF_N_DATA > 0
-    static const char *const data_names[MF_N_DATA] = MF_DATA_NAMES;
+    ExtTable ext = {MF_TERMS, MF_N_TERMS};
+#else
+    ExtTable ext = {NULL, 0};
 #endif
 
     if (mf_check_mode(use_mode, msg, sizeof msg) != MF_OK) return MF_BAD_MODE;
     if (mf_check_fittyp(p, msg, sizeof msg) != MF_OK) return MF_BAD_FITTYP;
     m.warnings = 0; /* m.detail[k] is written only when bit k is set */
-    m.limits = use_mode / 100 == 1;
-    m.alpha_star = (use_mode / 10) % 10 == 2;
-    m.turn_slip = use_mode % 10 == 2;
-    m.combined = use_mode % 10 != 0;
-
-    /* NaN inputs are replaced by 0 (pressure: INFLPRES) with a warning. */
-    Fz = clean(&m, MF_W_NAN_FZ, "Fz", in->Fz, 0.0);
-    kappa = clean(&m, MF_W_NAN_KAPPA, "kappa", in->kappa, 0.0);
-    alpha = clean(&m, MF_W_NAN_ALPHA, "alpha", in->alpha, 0.0);
-    gamma = clean(&m, MF_W_NAN_GAMMA, "gamma", in->gamma, 0.0);
-    phit = clean(&m, MF_W_NAN_PHIT, "phit", in->phit, 0.0);
-    Vx = clean(&m, MF_W_NAN_VX, "Vx", in->Vx, 0.0);
-    P = in->P;
-    if (isnan(P) || P <= 0.0) P = p->INFLPRES;
+    decode_mode(&m, use_mode);
+    dpi = prepare_point(p, &m, in, data, &c);
     /* omega = 0 means "not given" (estimated); NaN is cleaned to a given 0 as in Python */
     omega_given = in->omega != 0.0;
     omega_in = omega_given ? clean(&m, MF_W_NAN_OMEGA, "omega", in->omega, 0.0) : 0.0;
-#if MF_N_DATA > 0
-    for (k = 0; k < MF_N_DATA; k++) data[k] = clean(&m, MF_W_NAN_DATA0 + k, data_names[k], in->data[k], 0.0);
-#endif
-
-    condition_inputs(p, &m, Fz, kappa, alpha, gamma, phit, Vx, P, &c);
-    dpi = (c.P - p->NOMPRES) / p->NOMPRES; /* eq 4.E2b */
-    effective_rolling_radius(p, &c, dpi, omega_given, omega_in, &Re, &Romega, &omega);
+    effective_rolling_radius(p, &c, dpi, omega_given, omega_in, &kmax, &Re, &Romega, &omega);
     c.omega = omega;
-#if MF_N_TERMS > 0
-    apply_extensions(p, &c, data, &q, off);
-    p = &q;
-#endif
-    (void)data;
-    if (m.turn_slip) turn_slip_spin(p, &c);
-    basic(p, &m, &c, in->muRoad, &b);
-
-    z1 = m.turn_slip ? zeta1(p, b.dfz, c.kappa, c.phi) : 1.0;
-    fx0(p, &m, &c, &b, z1, &Fx0, &mux, &Kxk);
-    fy0(p, &m, &c, &b, b.gamma_star, m.turn_slip, &lat);
-    Fy_comb = fy_combined(p, &m, &c, &b, lat.Fy0, lat.muy, lat.zeta2, &Gyk);
-    aligning_terms(p, &m, &c, &b, &lat, Gyk, &at);
-    Fx = (m.combined ? fx_combined(p, &m, &c, &b, Fx0) : Fx0) + c.Fz * off[0];
-    Fy = (m.combined ? Fy_comb : lat.Fy0) + c.Fz * off[1];
-    if (m.combined)
-        mz_combined(p, &m, &c, &b, &at, Kxk, Fx, Fy, Gyk, &lat, &Mz, &t, &Mzr);
-    else
-        mz0(p, &m, &c, &b, &at, &Mz, &t, &Mzr);
-    Mx = mx(p, &c, dpi, Fy);
-    My = my(p, &c, Fx);
-    muy = m.limits ? fabs(lat.muy) : lat.muy;
-
-    if (p->FITTYP == 61.0 || is_pac2002(p)) /* PAC2002: the MF 6.2 equation reduces to 6.1 */
-        loaded_radius_61(p, &c, dpi, c.omega, Romega, Fx, Fy, &rho, &Rl, &Cz);
-    else
-        loaded_radius_62(p, &c, dpi, c.omega, Romega, Fx, Fy, &rho, &Rl, &Cz);
-    contact_patch(p, &c, dpi, &a, &bw);
-    relaxation(p, &c, Kxk, lat.Kya, &Cx, &Cy, &sigmax, &sigmay);
-
-    out->Fx = Fx; out->Fy = Fy; out->Fz = c.uFz; out->Mx = Mx; out->My = My; out->Mz = Mz;
-    out->Re = Re; out->Rl = Rl; out->rho = rho; out->a2 = 2.0 * a; out->b2 = 2.0 * bw; out->t = t;
-    out->Mzr = Mzr; out->mux = mux; out->muy = muy; out->Kxk = Kxk; out->Kya = lat.Kya;
-    out->sigmax = sigmax; out->sigmay = sigmay; out->omega = c.omega; out->Cx = Cx; out->Cy = Cy; out->Cz = Cz;
+    mf_channels(p, &m, &ext, &c, dpi, Romega, data, in->muRoad, MF_WANT_ALL, out);
+    out->Fz = c.uFz; out->Re = Re; out->omega = c.omega;
 
     if (warn && m.warnings)
         for (k = 0; k < MF_W_COUNT; k++)
