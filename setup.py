@@ -10,6 +10,7 @@ import importlib.util
 from pathlib import Path
 
 from setuptools import Extension, setup
+from setuptools.command.build_ext import build_ext
 
 ROOT = Path(__file__).resolve().parent
 _spec = importlib.util.spec_from_file_location("_kernel_build", ROOT / "mftire" / "mf" / "_kernel_build.py")
@@ -27,4 +28,18 @@ kernel = Extension(
     optional=True,
 )
 
-setup(ext_modules=[kernel])
+
+
+class BuildKernel(build_ext):
+    """The kernel is a plain shared library (no PyInit): a file name that is not a module's
+    (build.LIBRARY_SUFFIX instead of the interpreter's extension suffix), so that nothing
+    tries to import it."""
+
+    def get_ext_filename(self, fullname):
+        name = super().get_ext_filename(fullname)
+        if fullname.split(".")[-1] == build.MODULE.split(".")[-1]:
+            name = name[: name.rindex(fullname.split(".")[-1])] + build.LIBRARY
+        return name
+
+
+setup(ext_modules=[kernel], cmdclass={"build_ext": BuildKernel})

@@ -625,3 +625,34 @@ __all__ = [
     "params_header",
     "variable_table",
 ]
+
+
+def kernel_headers(write: bool = False) -> dict[str, str]:
+    """The generated headers of the array kernel (:mod:`mftire.mf.kernel`, ``csource/kernel/``):
+    ``mf_params.h`` with the numeric standard parameters (``kernel.PARAM_KEYS``) and four
+    data slots, and the run-time ``mf_ext_gen.h`` (term table given at each call).
+
+    ``write``: also write them (after a change of the parameter table or the extensions;
+    ``tests/test_kernel.py`` checks that the files are current).
+    """
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    from mftire.mf.kernel import PARAM_KEYS
+    from mftire.parameters import with_defaults
+
+    flat = {k: v for k, v in with_defaults({"FITTYP": 61}).items() if k in PARAM_KEYS}
+    table = variable_table(flat, DEFAULT_USE_MODE, None)
+    if tuple(v.field for v in table if v.kind == "param") != PARAM_KEYS:
+        raise AssertionError("the kernel's MFParams fields are not the standard parameters in table order")
+    slots = SimpleNamespace(external_variables=[f"data{k}" for k in range(MAX_DATA_INPUTS)])
+    out = {
+        "mf_params.h": params_header(table, slots),  # type: ignore[arg-type]
+        "mf_ext_gen.h": extension_header(table, None, runtime=True),
+    }
+    if write:
+        d = Path(__file__).parent / "csource" / "kernel"
+        d.mkdir(exist_ok=True)
+        for name, text in out.items():
+            (d / name).write_text(text, encoding="utf-8")
+    return out

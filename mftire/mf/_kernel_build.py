@@ -19,8 +19,10 @@ from pathlib import Path
 CSOURCE = Path("mftire") / "fmu" / "csource"
 #: The translation unit (it includes mf_eval.c) and every file it reads.
 SOURCES = ("mf_kernel.c", "mf_eval.c", "mf_eval.h", "kernel/mf_params.h", "kernel/mf_ext_gen.h")
-#: Module name of the built library (a setuptools Extension loaded with ctypes, no Python C API).
+#: Name of the setuptools Extension that builds the kernel (loaded with ctypes: no Python C API) ...
 MODULE = "mftire.mf._mfkernel"
+#: ... and its file name in mftire/mf/: not a module's suffix, so that nothing imports it.
+LIBRARY = "_mfkernel.so.1"
 #: Optimisation without changing IEEE results: no errno from libm (lets calls inline and
 #: vectorise), no trapping; no -ffast-math (it would reorder the arithmetic and drop NaN
 #: checks, and the kernel must agree with numpy to 1e-12).

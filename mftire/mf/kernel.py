@@ -31,7 +31,6 @@ what the kernel reports, with the texts of the numpy path.
 from __future__ import annotations
 
 import ctypes
-import importlib.machinery
 import os
 import sys
 import warnings
@@ -86,14 +85,13 @@ class KernelUnavailableError(RuntimeError):
 def _candidates() -> list[Path]:
     """Where a built library may be: next to this module (installed or built in place),
     then in the installed distribution (a source checkout that shadows the installation)."""
-    here = Path(__file__).resolve().parent
-    found = [here / ("_mfkernel" + s) for s in importlib.machinery.EXTENSION_SUFFIXES]
+    found = [Path(__file__).resolve().parent / build.LIBRARY]
     try:
         from importlib.metadata import PackageNotFoundError, distribution
 
         dist = distribution("mftire")
         for f in dist.files or ():
-            if f.parent.as_posix() == "mftire/mf" and f.name.startswith("_mfkernel"):
+            if f.as_posix() == "mftire/mf/" + build.LIBRARY:
                 found.append(Path(dist.locate_file(f)).resolve())
     except (ImportError, PackageNotFoundError, OSError):  # pragma: no cover - no distribution metadata
         pass
@@ -383,49 +381,17 @@ def _issue_warnings(p, nan, mask: int, external: Sequence[str], omega_given: boo
             warn(f"{name} over limit (>1), eq {eq}; clipped to 1.")
 
 
-# ----------------------------------------------------------------------------- generated headers
-
-
-def headers() -> dict[str, str]:
-    """The generated headers of the kernel (``csource/kernel/``): ``mf_params.h`` with the
-    numeric standard parameters (:data:`PARAM_KEYS`) and four data slots, and the run-time
-    ``mf_ext_gen.h`` (:func:`mftire.fmu.variables.extension_header`)."""
-    from types import SimpleNamespace
-
-    from mftire.fmu import variables as vt
-    from mftire.parameters import with_defaults
-
-    flat = {k: v for k, v in with_defaults({"FITTYP": 61}).items() if k in _PARAM_INDEX}
-    table = vt.variable_table(flat, vt.DEFAULT_USE_MODE, None)
-    assert tuple(v.field for v in table if v.kind == "param") == PARAM_KEYS
-    slots = SimpleNamespace(external_variables=[f"data{k}" for k in range(_MAX_DATA)])
-    return {
-        "mf_params.h": vt.params_header(table, slots),  # type: ignore[arg-type]
-        "mf_ext_gen.h": vt.extension_header(table, None, runtime=True),
-    }
-
-
-def write_headers() -> None:
-    """Regenerate ``csource/kernel/*.h`` (after a change of the parameter table or the extensions)."""
-    d = _ROOT / build.CSOURCE / "kernel"
-    d.mkdir(exist_ok=True)
-    for name, text in headers().items():
-        (d / name).write_text(text, encoding="utf-8")
-
-
 def build_in_place() -> Path:
     """Compile the kernel next to this module (a source checkout; ``pip install`` does it otherwise)."""
     global _lib
-    out = Path(__file__).resolve().parent / ("_mfkernel" + importlib.machinery.EXTENSION_SUFFIXES[0])
+    out = Path(__file__).resolve().parent / build.LIBRARY
     build.compile_library(_ROOT, out)
     _lib = None
     return out
 
 
 if __name__ == "__main__":  # pragma: no cover - developer command
-    if sys.argv[1:] == ["headers"]:
-        write_headers()
-    elif sys.argv[1:] == ["build"]:
+    if sys.argv[1:] == ["build"]:
         print(build_in_place())
     else:
         print(status())
