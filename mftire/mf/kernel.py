@@ -314,9 +314,7 @@ def evaluate(
         n *= s
     omega_given = Om is not None and bool(np.any(Om))
     ins = [*arrs[:6], np.float64(p["INFLPRES"]) if Pa is None else Pa, Om if omega_given else np.float64(0.0)]
-    slots = [None] * (_N_IN - 8)
-    for k, name in enumerate(external):
-        slots[k] = arrs[6 + k]
+    slots = [*arrs[6:], *([None] * (_N_IN - 8 - len(external)))]
     keep = []
     ptrs = (ctypes.c_void_p * _N_IN)()
     steps = (ctypes.c_long * _N_IN)()
@@ -353,7 +351,7 @@ def evaluate(
     if any(nan) or mask.value:
         _issue_warnings(p, nan, mask.value, external, omega_given)
     if shape == ():
-        return dict(zip(want, block[: len(want), 0]))
+        return dict(zip(want, block[: len(want), 0], strict=True))
     return {name: block[r].reshape(shape) for r, name in enumerate(want)}
 
 
