@@ -40,6 +40,10 @@ static double sign_nonzero(double x) { return sgn(x) + (x == 0.0 ? 1.0 : 0.0); }
 
 static double sq(double x) { return x * x; }
 
+/* cos(atan(x)) in its exact algebraic form 1/sqrt(1 + x^2) (one square root instead of two
+ * transcendental calls; agrees with numpy's cos(arctan(x)) to rounding). */
+static double cos_atan(double x) { return 1.0 / sqrt(1.0 + x * x); }
+
 /* ------------------------------------------------------------------ family.py (PAC2002) */
 
 /* Internal model code of a PAC2002 file (no FITTYP in the file), mftire.mf.family. */
@@ -140,6 +144,14 @@ typedef struct {
     double eps_gamma; /* camber reduction factor epsilon_gamma (eq 4.90) */
 } Cond;
 
+/* The pressure clipped to [PRESMIN, PRESMAX] with a warning (limit mode). */
+static double limit_pressure(const MFParams *p, Ctx *m, double P)
+{
+    if (P < p->PRESMIN) flag_limit(m, MF_W_P_LOW, "Pressure", "PRESMIN", p->PRESMIN);
+    if (P > p->PRESMAX) flag_limit(m, MF_W_P_HIGH, "Pressure", "PRESMAX", p->PRESMAX);
+    return P < p->PRESMIN ? p->PRESMIN : (P > p->PRESMAX ? p->PRESMAX : P);
+}
+
 static void condition_inputs(const MFParams *p, Ctx *m, double Fz, double kappa, double alpha, double gamma,
                              double phit, double Vx, double P, Cond *c)
 {
@@ -183,9 +195,7 @@ static void condition_inputs(const MFParams *p, Ctx *m, double Fz, double kappa,
         }
         if (Fz < p->FZMIN) flag_limit(m, MF_W_FZ_LOW, "Vertical load", "FZMIN", p->FZMIN);
         Fz_low = Fz < p->FZMIN ? p->FZMIN : Fz;
-        if (P < p->PRESMIN) flag_limit(m, MF_W_P_LOW, "Pressure", "PRESMIN", p->PRESMIN);
-        if (P > p->PRESMAX) flag_limit(m, MF_W_P_HIGH, "Pressure", "PRESMAX", p->PRESMAX);
-        P = P < p->PRESMIN ? p->PRESMIN : (P > p->PRESMAX ? p->PRESMAX : P);
+        P = limit_pressure(p, m, P);
         if (kappa < p->KPUMIN) flag_limit(m, MF_W_KAPPA_LOW, "Slip ratio", "KPUMIN", p->KPUMIN);
         if (kappa > p->KPUMAX) flag_limit(m, MF_W_KAPPA_HIGH, "Slip ratio", "KPUMAX", p->KPUMAX);
         kappa = kappa < p->KPUMIN ? p->KPUMIN : (kappa > p->KPUMAX ? p->KPUMAX : kappa);
@@ -349,25 +359,25 @@ static void effective_rolling_radius(const MFParams *p, const Cond *c, double dp
 /* Fx peak reduction zeta1 (eqs 4.105, 4.106). */
 static double zeta1(const MFParams *p, double dfz, double kappa, double phi)
 {
-    double Bxp = p->PDXP1 * (1.0 + p->PDXP2 * dfz) * cos(atan(p->PDXP3 * kappa)); /* eq 4.106 */
-    return cos(atan(Bxp * p->UNLOADED_RADIUS * phi));                           /* eq 4.105 */
+    double Bxp = p->PDXP1 * (1.0 + p->PDXP2 * dfz) * cos_atan(p->PDXP3 * kappa); /* eq 4.106 */
+    return cos_atan(Bxp * p->UNLOADED_RADIUS * phi);                           /* eq 4.105 */
 }
 
 /* Fy peak reduction zeta2 and cornering-stiffness reduction zeta3 (eqs 4.77-4.79). */
 static void zeta2_zeta3(const MFParams *p, double dfz, double alpha, double phi, double *z2, double *z3)
 {
     double R0 = p->UNLOADED_RADIUS, Byp, aphi;
-    *z3 = cos(atan(p->PKYP1 * sq(R0) * sq(phi)));                                     /* eq 4.79 */
-    Byp = p->PDYP1 * (1.0 + p->PDYP2 * dfz) * cos(atan(p->PDYP3 * tan(alpha)));        /* eq 4.78 */
+    *z3 = cos_atan(p->PKYP1 * sq(R0) * sq(phi));                                     /* eq 4.79 */
+    Byp = p->PDYP1 * (1.0 + p->PDYP2 * dfz) * cos_atan(p->PDYP3 * tan(alpha));        /* eq 4.78 */
     aphi = fabs(phi);
-    *z2 = cos(atan(Byp * (R0 * aphi + p->PDYP4 * sqrt(R0 * aphi))));                  /* eq 4.77 */
+    *z2 = cos_atan(Byp * (R0 * aphi + p->PDYP4 * sqrt(R0 * aphi)));                  /* eq 4.77 */
 }
 
 /* Pneumatic-trail reduction zeta5 (eq 4.91). */
-static double zeta5(const MFParams *p, double phi) { return cos(atan(p->QDTP1 * p->UNLOADED_RADIUS * phi)); }
+static double zeta5(const MFParams *p, double phi) { return cos_atan(p->QDTP1 * p->UNLOADED_RADIUS * phi); }
 
 /* Residual-torque slope reduction zeta6 (eq 4.102). */
-static double zeta6(const MFParams *p, double phi) { return cos(atan(p->QBRP1 * p->UNLOADED_RADIUS * phi)); }
+static double zeta6(const MFParams *p, double phi) { return cos_atan(p->QBRP1 * p->UNLOADED_RADIUS * phi); }
 
 /* ------------------------------------------------------------------ longitudinal.py */
 
@@ -416,7 +426,7 @@ static double fx_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic 
     double Cxa = p->RCX1; /* eq 4.E55 */
     double Exa = clip_curvature(m, p->REX1 + p->REX2 * b->dfz, MF_W_EXA, "Exa", "4.E56"); /* eq 4.E56 */
     double SHxa = p->RHX1; /* eq 4.E57 */
-    double Bxa = (p->RBX1 + p->RBX3 * sq(b->gamma_star)) * cos(atan(p->RBX2 * c->kappa)) * p->LXAL; /* 4.E54 */
+    double Bxa = (p->RBX1 + p->RBX3 * sq(b->gamma_star)) * cos_atan(p->RBX2 * c->kappa) * p->LXAL; /* 4.E54 */
     double alphas = b->alpha_star + SHxa; /* eq 4.E53 */
     double Bs = Bxa * SHxa;
     double Gxa0 = cos(Cxa * atan(Bs - Exa * (Bs - atan(Bs)))); /* eq 4.E52 */
@@ -515,13 +525,13 @@ static double fy_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic 
 {
     double dfz = b->dfz, alpha_star = b->alpha_star, gamma_star = b->gamma_star;
     double DVyk, SVyk, SHyk, Eyk, Cyk, Byk, kappas, Bs, Gyk0, Bk, Gyk;
-    DVyk = muy * c->Fz * (p->RVY1 + p->RVY2 * dfz + p->RVY3 * gamma_star) * cos(atan(p->RVY4 * alpha_star)) *
+    DVyk = muy * c->Fz * (p->RVY1 + p->RVY2 * dfz + p->RVY3 * gamma_star) * cos_atan(p->RVY4 * alpha_star) *
            zeta2; /* eq 4.E67 */
     SVyk = DVyk * sin(p->RVY5 * atan(p->RVY6 * c->kappa)) * p->LVYKA; /* eq 4.E66 */
     SHyk = p->RHY1 + p->RHY2 * dfz; /* eq 4.E65 */
     Eyk = clip_curvature(m, p->REY1 + p->REY2 * dfz, MF_W_EYK, "Eyk", "4.E64"); /* eq 4.E64 */
     Cyk = p->RCY1; /* eq 4.E63 */
-    Byk = (p->RBY1 + p->RBY4 * sq(gamma_star)) * cos(atan(p->RBY2 * (alpha_star - p->RBY3))) * p->LYKA; /* 4.E62 */
+    Byk = (p->RBY1 + p->RBY4 * sq(gamma_star)) * cos_atan(p->RBY2 * (alpha_star - p->RBY3)) * p->LYKA; /* 4.E62 */
     kappas = c->kappa + SHyk; /* eq 4.E61 */
     Bs = Byk * SHyk;
     Gyk0 = cos(Cyk * atan(Bs - Eyk * (Bs - atan(Bs)))); /* eq 4.E60 */
@@ -691,7 +701,7 @@ static void mz_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b
         /* MF 5.2 (TNO equation manual): kappa-induced side force excluded from the trail term. */
         double dfz = b->dfz, gamma_star = b->gamma_star, DVyk, SVyk;
         DVyk = lat0.muy * c->Fz * (p->RVY1 + p->RVY2 * dfz + p->RVY3 * gamma_star) *
-               cos(atan(p->RVY4 * b->alpha_star)); /* eq 4.E67 at zeta2 = 1 */
+               cos_atan(p->RVY4 * b->alpha_star); /* eq 4.E67 at zeta2 = 1 */
         SVyk = DVyk * sin(p->RVY5 * atan(p->RVY6 * c->kappa)) * p->LVYKA * c->smooth; /* eq 4.E66 */
         Mz = -t * (Fy - SVyk) + Mzr + s * Fx;
     } else {

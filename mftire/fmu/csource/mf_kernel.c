@@ -116,8 +116,15 @@ MF_KERNEL_API int mf_kernel_evaluate(const double *params, const int *terms, int
      * point needs, as mftire.mf.vertical.effective_rolling_radius stops). */
     if (!omega_given)
         for (i = 0; i < n && kmax > 0; i++) {
-            load_point(&pt, in, step, i);
-            dpi = prepare_point(p, &m, &pt, data, &c);
+            /* what the iteration reads, as prepare_point makes it: load, slip and speed as given
+             * (NaN: 0, negative load: 0), the pressure conditioned */
+            double Fz = in[0][i * step[0]], P = in[6][i * step[6]];
+            c.uFz = isnan(Fz) || Fz < 0.0 ? 0.0 : Fz;
+            c.ukappa = isnan(in[1][i * step[1]]) ? 0.0 : in[1][i * step[1]];
+            c.Vx = isnan(in[5][i * step[5]]) ? 0.0 : in[5][i * step[5]];
+            if (isnan(P) || P <= 0.0) P = p->INFLPRES;
+            if (m.limits) P = limit_pressure(p, &m, P);
+            dpi = (P - p->NOMPRES) / p->NOMPRES; /* eq 4.E2b */
             kk = kmax;
             effective_rolling_radius(p, &c, dpi, 0, 0.0, &kk, &Re, &Romega, &omega);
             if (kk < kmax) kmax = kk;
