@@ -207,6 +207,14 @@ def test_scalars_and_tiny_batches():
     assert all(isinstance(v, np.float64) for v in b.values())
     _agree(a, b, tyre.flat)
     assert a["instKya"] == b["instKya"] == 0.0
+    for kw in (dict(omega=30.0, P=2.1e5, Vx=12.0, phit=0.1), dict(Vx=float("nan"), omega=0.0, P=-1.0),
+               dict(Fz=-5.0, Vx=0.0, gamma=0.5), dict(kappa=float("nan"), Vx=0.2)):  # fmt: skip
+        for mode in (111, 212, 110):
+            a, wa, b, wb = _both(tyre, **{"Fz": 4500.0, "kappa": -0.07, "alpha": 0.03, **kw}, mode=mode)
+            assert wa == wb
+            _agree(a, b, tyre.flat)
+            a, _, b, _ = _both(tyre, **{"Fz": 4500.0, "kappa": -0.07, "alpha": 0.03, **kw}, channels=("Mz", "instKya"))
+            _agree(a, b, tyre.flat)
     for n in (0, 1, 2):
         a, _, b, _ = _both(tyre, Fz=np.full(n, 4000.0), kappa=np.linspace(0, 0.1, n), alpha=0.02)
         _agree(a, b, tyre.flat)

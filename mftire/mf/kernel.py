@@ -128,9 +128,11 @@ def load(path: str | os.PathLike | None = None):
             tried.append(f"{cand}: unexpected layout {tuple(sizes)}")
             continue
         f = lib.mf_kernel_evaluate
-        vp = ctypes.c_void_p
-        f.argtypes = (vp, vp, ctypes.c_int, ctypes.c_int, ctypes.c_long, vp, vp, ctypes.c_int, vp, vp, vp)
-        f.restype = ctypes.c_int
+        vp, ci = ctypes.c_void_p, ctypes.c_int
+        f.argtypes = (vp, vp, ci, ci, ctypes.c_long, vp, vp, ci, vp, vp, vp)
+        f.restype = ci
+        lib.mf_kernel_point.argtypes = (vp, vp, ci, ci, ci, ctypes.c_ulong, vp)
+        lib.mf_kernel_point.restype = ci
         _lib, _why = lib, ""
         return lib
     _lib = False
@@ -170,12 +172,14 @@ def use_kernel(backend: str | None) -> bool:
 # ----------------------------------------------------------------------------- parameters
 
 
-def _pack(p: Mapping[str, float], ext) -> tuple[np.ndarray, np.ndarray | None, int]:
-    """``(params, terms, n_terms)``: MFParams followed by the numbers of the extension terms,
-    and the run-time term table (MFTerm records of mf_ext_gen.h) pointing into it."""
+def _pack(p: Mapping[str, float], ext) -> tuple:
+    """``(keep, params address, terms address or None, n_terms)``: MFParams followed by the
+    numbers of the extension terms, and the run-time term table (MFTerm records of
+    mf_ext_gen.h) pointing into it; ``keep`` holds the arrays at those addresses."""
     base = [float(p[k]) for k in PARAM_KEYS]
     if not ext:
-        return np.array(base), None, 0
+        params = np.array(base)
+        return params, params.ctypes.data, None, 0
     from mftire.mf.extensions import BUILTIN_VARIABLES, OFFSET_TARGETS
 
     builtin = list(BUILTIN_VARIABLES)
@@ -205,7 +209,8 @@ def _pack(p: Mapping[str, float], ext) -> tuple[np.ndarray, np.ndarray | None, i
         row = [list(FORMS).index(t.form.name), len(tg), *tg, *([0] * (_N_TARGETS - len(tg)))]
         row += [var(t.variable), var(t.variable2) if two else -1, *f1, *f2, first, t.n_levels]
         rows.append(row)
-    return np.array(base + numbers), np.array(rows, dtype=np.intc), len(rows)
+    params, terms = np.array(base + numbers), np.array(rows, dtype=np.intc)
+    return (params, terms), params.ctypes.data, terms.ctypes.data, len(rows)
 
 
 class FlatParameters(dict):
@@ -291,6 +296,19 @@ def evaluate(
     lib = load()
     if lib is None:
         return None
+    if (
+        not variables
+        and isinstance(Fz, _SCALAR)
+        and isinstance(kappa, _SCALAR)
+        and isinstance(alpha, _SCALAR)
+        and isinstance(gamma, _SCALAR)
+        and isinstance(phit, _SCALAR)
+        and isinstance(Vx, _NONE_OR_SCALAR)
+        and isinstance(P, _NONE_OR_SCALAR)
+        and isinstance(omega, _NONE_OR_SCALAR)
+        and not (ext and ext.external_variables)
+    ):
+        return _point(lib, p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, ext, channels)
     names = list(variables or {})
     external = ext.external_variables if ext else []
     if any(k not in external for k in names) or any(k not in names for k in external):
@@ -339,13 +357,11 @@ def evaluate(
     base = block.ctypes.data
     for r, name in enumerate(rows):
         outp[_OUT_INDEX[name]] = base + r * n * 8
-    params, terms, n_terms = _packed(p, ext)
+    packed = _packed(p, ext)
     nan = (ctypes.c_long * _N_IN)()
     mask = ctypes.c_ulong(0)
-    rc = lib.mf_kernel_evaluate(
-        params.ctypes.data, None if terms is None else terms.ctypes.data, n_terms, int(mode), n, ptrs, steps,
-        int(omega_given), outp, nan, ctypes.byref(mask),
-    )  # fmt: skip
+    rc = lib.mf_kernel_evaluate(packed[1], packed[2], packed[3], int(mode), n, ptrs, steps, int(omega_given), outp, nan,
+                                ctypes.byref(mask))  # fmt: skip
     if rc != 0:  # bad mode or FITTYP: the numpy path raises its own error
         return None
     if any(nan) or mask.value:
@@ -353,6 +369,35 @@ def evaluate(
     if shape == ():
         return dict(zip(want, block[: len(want), 0], strict=True))
     return {name: block[r].reshape(shape) for r, name in enumerate(want)}
+
+
+_SCALAR = (float, int)
+_NONE_OR_SCALAR = (float, int, type(None))
+_IO = _N_IN * 2 + len(OUTPUTS) + 1  # mf_kernel_point's buffer
+_c_double_io = ctypes.c_double * _IO
+_ALL = (1 << len(OUTPUTS)) - 1
+
+
+def _point(lib, p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, ext, channels):
+    """One operating point given as Python numbers: one C call on one buffer (call latency)."""
+    packed = _packed(p, ext)  # held until the call returns
+    omega_given = omega is not None and omega != 0.0
+    io = _c_double_io(
+        Fz, kappa, alpha, gamma, phit, p["LONGVL"] if Vx is None else Vx, p["INFLPRES"] if P is None else P,
+        omega if omega_given else 0.0,
+    )  # fmt: skip
+    everything = channels is None or channels == OUTPUTS
+    mask = _ALL if everything else sum(1 << _OUT_INDEX[k] for k in channels)
+    rc = lib.mf_kernel_point(packed[1], packed[2], packed[3], int(mode), omega_given, mask, io)
+    if rc != 0:
+        return None
+    flags = io[_N_IN + len(OUTPUTS) :]
+    if any(flags):
+        _issue_warnings(p, [int(v) for v in flags[:_N_IN]], int(flags[_N_IN]), [], omega_given)
+    values = np.frombuffer(io, count=len(OUTPUTS), offset=_N_IN * 8)
+    if everything:
+        return dict(zip(OUTPUTS, values, strict=True))
+    return {k: values[_OUT_INDEX[k]] for k in channels}
 
 
 def _issue_warnings(p, nan, mask: int, external: Sequence[str], omega_given: bool) -> None:

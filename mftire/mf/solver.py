@@ -393,7 +393,9 @@ def evaluate_arrays(
     names = output_names(channels)
     if not isinstance(mode, Mode) and kernel.use_kernel(backend):
         check_fittyp(p)
-        Mode.from_code(mode)
+        if mode not in _CHECKED_MODES:
+            Mode.from_code(mode)  # raises for a bad mode, as prepare()
+            _CHECKED_MODES.add(mode)
         out = kernel.evaluate(p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, ext, variables, names)
         if out is not None:
             return out
@@ -404,3 +406,4 @@ def evaluate_arrays(
 
 
 _channels = channels
+_CHECKED_MODES: set = set()  # useMode codes Mode.from_code accepted
