@@ -19,7 +19,8 @@ Fallback
 
 Choosing the path
     ``backend="numpy"`` (argument of ``Tyre.evaluate`` / ``evaluate_arrays``) or the
-    environment variable ``MFTIRE_BACKEND=numpy`` forces the numpy reference;
+    environment variable ``MFTIRE_BACKEND=numpy`` (read at the first evaluation of the
+    process) forces the numpy reference;
     ``backend="kernel"`` requires the kernel (an error when it is not available).  The
     default ``"auto"`` takes the kernel when it is available.
 
@@ -33,6 +34,7 @@ from __future__ import annotations
 import ctypes
 import os
 import sys
+import threading
 import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -154,10 +156,20 @@ def status() -> str:
     return f"compiled kernel {lib._name}" if lib is not None else f"numpy path: {_why}"
 
 
+_env: str | None = None  # MFTIRE_BACKEND, read at the first evaluation
+
+
 def use_kernel(backend: str | None) -> bool:
-    """Whether a call with ``backend`` ("auto", "kernel", "numpy"; None: "auto") runs the kernel."""
-    if backend in (None, "auto"):
-        if os.environ.get("MFTIRE_BACKEND", "auto") == "numpy":
+    """Whether a call with ``backend`` ("auto", "kernel", "numpy"; None: "auto") runs the kernel.
+
+    The environment variable ``MFTIRE_BACKEND`` (``numpy`` forces the reference path) is read
+    once, at the first evaluation of the process.
+    """
+    global _env
+    if backend is None or backend == "auto":
+        if _env is None:
+            _env = os.environ.get("MFTIRE_BACKEND", "auto")
+        if _env == "numpy":
             return False
         return available()
     if backend == "numpy":
@@ -373,38 +385,49 @@ def evaluate(
 
 _SCALAR = (float, int)
 _NONE_OR_SCALAR = (float, int, type(None))
-_IO = _N_IN * 2 + len(OUTPUTS) + 1  # mf_kernel_point's buffer
+_IO = _N_IN * 2 + len(OUTPUTS) + 2  # mf_kernel_point's buffer
 _c_double_io = ctypes.c_double * _IO
 _ALL = (1 << len(OUTPUTS)) - 1
+_local = threading.local()  # one mf_kernel_point buffer per thread
 
 
 def _point(lib, p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, ext, channels):
     """One operating point given as Python numbers: one C call on one buffer (call latency)."""
     packed = _packed(p, ext)  # held until the call returns
     omega_given = omega is not None and omega != 0.0
-    io = _c_double_io(
-        Fz, kappa, alpha, gamma, phit, p["LONGVL"] if Vx is None else Vx, p["INFLPRES"] if P is None else P,
-        omega if omega_given else 0.0,
-    )  # fmt: skip
+    io = getattr(_local, "io", None)
+    if io is None:
+        io = _local.io = _c_double_io()
+    io[0] = Fz
+    io[1] = kappa
+    io[2] = alpha
+    io[3] = gamma
+    io[4] = phit
+    io[5] = p["LONGVL"] if Vx is None else Vx
+    io[6] = p["INFLPRES"] if P is None else P
+    io[7] = omega if omega_given else 0.0
     everything = channels is None or channels == OUTPUTS
     mask = _ALL if everything else sum(1 << _OUT_INDEX[k] for k in channels)
     rc = lib.mf_kernel_point(packed[1], packed[2], packed[3], int(mode), omega_given, mask, io)
     if rc != 0:
         return None
-    flags = io[_N_IN + len(OUTPUTS) :]
-    if any(flags):
-        _issue_warnings(p, [int(v) for v in flags[:_N_IN]], int(flags[_N_IN]), [], omega_given)
     values = np.frombuffer(io, count=len(OUTPUTS), offset=_N_IN * 8)
     if everything:
-        return dict(zip(OUTPUTS, values, strict=True))
-    return {k: values[_OUT_INDEX[k]] for k in channels}
+        out = dict(zip(OUTPUTS, values, strict=True))
+    else:
+        out = {k: values[_OUT_INDEX[k]] for k in channels}
+    if io[_IO - 1]:  # after the values are taken: a warning handler may evaluate again
+        flags = io[_N_IN + len(OUTPUTS) : _IO - 1]
+        _issue_warnings(p, [int(v) for v in flags[:_N_IN]], int(flags[_N_IN]), [], omega_given, depth=7)
+    return out
 
 
-def _issue_warnings(p, nan, mask: int, external: Sequence[str], omega_given: bool) -> None:
-    """The warnings of the numpy path (:mod:`mftire.mf.solver`, :mod:`mftire.mf.inputs`), in its order."""
+def _issue_warnings(p, nan, mask: int, external: Sequence[str], omega_given: bool, depth: int = 6) -> None:
+    """The warnings of the numpy path (:mod:`mftire.mf.solver`, :mod:`mftire.mf.inputs`), in its order;
+    ``depth``: frames up to the caller of ``Tyre.evaluate``."""
 
     def warn(msg: str) -> None:
-        warnings.warn(msg, MFLimitWarning, stacklevel=5)
+        warnings.warn(msg, MFLimitWarning, stacklevel=depth)
 
     for k, name in enumerate(external):
         if nan[8 + k]:

@@ -195,8 +195,8 @@ MF_KERNEL_API int mf_kernel_evaluate(const double *params, const int *terms, int
 
 /*
  * One point, for the latency of scalar calls: io holds the MF_N_IN inputs, then room for the
- * MF_N_OUT outputs (those with their bit set in channels), then MF_N_IN NaN flags and the
- * warning mask (as doubles).
+ * MF_N_OUT outputs (those with their bit set in channels), then MF_N_IN NaN flags, the
+ * warning mask and 1 when any of them is set, else 0 (as doubles).
  */
 MF_KERNEL_API int mf_kernel_point(const double *params, const int *terms, int n_terms, int use_mode,
                                   int omega_given, unsigned long channels, double *io)
@@ -213,7 +213,11 @@ MF_KERNEL_API int mf_kernel_point(const double *params, const int *terms, int n_
     for (k = 0; k < MF_N_OUT; k++) out[k] = (channels >> k & 1UL) ? io + MF_N_IN + k : NULL;
     if (out[O_INSTKYA] && !out[O_FY]) out[O_FY] = io + MF_N_IN + O_FY; /* instKya reads Fy */
     rc = mf_kernel_evaluate(params, terms, n_terms, use_mode, 1, in, step, omega_given, out, nan, &warnings);
-    for (k = 0; k < MF_N_IN; k++) io[MF_N_IN + MF_N_OUT + k] = (double)nan[k];
+    io[2 * MF_N_IN + MF_N_OUT + 1] = warnings != 0;
+    for (k = 0; k < MF_N_IN; k++) {
+        io[MF_N_IN + MF_N_OUT + k] = (double)nan[k];
+        if (nan[k]) io[2 * MF_N_IN + MF_N_OUT + 1] = 1.0;
+    }
     io[2 * MF_N_IN + MF_N_OUT] = (double)warnings;
     return rc;
 }
