@@ -27,7 +27,7 @@ from mftire.iotools.tir_checks import TirCheckError
 #: Thresholds of the unit warnings: |alpha| in rad, Fz as a fraction of FNOMIN.
 UNIT_LIMITS = {"alpha": 1.5, "Fz": 0.05}
 #: The keyword arguments of :meth:`mftire.Tyre.evaluate` besides the extension variables.
-EVALUATE_ARGUMENTS = ("Fz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "omega", "mode")
+EVALUATE_ARGUMENTS = ("Fz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "omega", "mode", "channels", "backend")
 
 
 def warn_units(tyre: Any, Fz, alpha) -> None:
