@@ -326,3 +326,17 @@ def test_errors_are_the_numpy_ones():
             first = (type(e.value), str(e.value), type(e2.value), str(e2.value))
     assert first == (type(e.value), str(e.value), type(e2.value), str(e2.value))
     assert set(OUTPUT_NAMES) == set(kernel.OUTPUTS) and OUTPUT_NAMES == kernel.OUTPUTS
+
+
+def test_per_point_parameters_take_the_numpy_path():
+    """A scaling factor given per point (an array in ``Tyre.flat``, as validation/make_rig_file.py
+    does) is evaluated by the numpy path, which broadcasts parameters."""
+    tyre = load(FILES["MF61"])
+    x = _inputs(tyre, 60, 4)
+    tyre.flat["LMUX"] = np.linspace(0.5, 1.5, 60)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        a, b = tyre.evaluate(**x), tyre.evaluate(**x, backend="numpy")
+    for k in b:
+        np.testing.assert_array_equal(a[k], b[k], err_msg=k)
+    assert np.ptp(a["mux"][30:]) > 0.1

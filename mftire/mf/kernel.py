@@ -187,8 +187,12 @@ def use_kernel(backend: str | None) -> bool:
 def _pack(p: Mapping[str, float], ext) -> tuple:
     """``(keep, params address, terms address or None, n_terms)``: MFParams followed by the
     numbers of the extension terms, and the run-time term table (MFTerm records of
-    mf_ext_gen.h) pointing into it; ``keep`` holds the arrays at those addresses."""
-    base = [float(p[k]) for k in PARAM_KEYS]
+    mf_ext_gen.h) pointing into it; ``keep`` holds the arrays at those addresses.  None when a
+    parameter is not one number (the numpy path evaluates per-point parameter arrays)."""
+    values = [p[k] for k in PARAM_KEYS]
+    if not all(type(v) is float or np.ndim(v) == 0 for v in values):
+        return None
+    base = [float(v) for v in values]
     if not ext:
         params = np.array(base)
         return params, params.ctypes.data, None, 0
@@ -199,8 +203,8 @@ def _pack(p: Mapping[str, float], ext) -> tuple:
     numbers: list[float] = []
     rows = []
 
-    def put(value: float) -> int:
-        numbers.append(float(value))
+    def put(value) -> int:
+        numbers.append(value)
         return len(base) + len(numbers) - 1
 
     def var(name: str) -> int:
@@ -221,6 +225,8 @@ def _pack(p: Mapping[str, float], ext) -> tuple:
         row = [list(FORMS).index(t.form.name), len(tg), *tg, *([0] * (_N_TARGETS - len(tg)))]
         row += [var(t.variable), var(t.variable2) if two else -1, *f1, *f2, first, t.n_levels]
         rows.append(row)
+    if not all(np.ndim(v) == 0 for v in numbers):
+        return None
     params, terms = np.array(base + numbers), np.array(rows, dtype=np.intc)
     return (params, terms), params.ctypes.data, terms.ctypes.data, len(rows)
 
@@ -370,6 +376,8 @@ def evaluate(
     for r, name in enumerate(rows):
         outp[_OUT_INDEX[name]] = base + r * n * 8
     packed = _packed(p, ext)
+    if packed is None:
+        return None
     nan = (ctypes.c_long * _N_IN)()
     mask = ctypes.c_ulong(0)
     rc = lib.mf_kernel_evaluate(packed[1], packed[2], packed[3], int(mode), n, ptrs, steps, int(omega_given), outp, nan,
@@ -394,6 +402,8 @@ _local = threading.local()  # one mf_kernel_point buffer per thread
 def _point(lib, p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, ext, channels):
     """One operating point given as Python numbers: one C call on one buffer (call latency)."""
     packed = _packed(p, ext)  # held until the call returns
+    if packed is None:
+        return None
     omega_given = omega is not None and omega != 0.0
     io = getattr(_local, "io", None)
     if io is None:
