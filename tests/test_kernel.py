@@ -197,6 +197,11 @@ def test_batch_rolling_radius_iteration_is_the_numpy_one():
     a, _, b, _ = _both(tyre, Fz=4000.0, kappa=0.2, alpha=0.0, Vx=Vx)
     assert a["Re"][1] == pytest.approx(b["Re"][1], rel=1e-14)
     assert abs(b["Re"][1] - single) > 1e-7  # the batch effect is real
+    # the point that sets the batch's count comes last (the kernel's first pass kept the radii of
+    # the points from there on only): same values
+    a2, _, b2, _ = _both(tyre, Fz=4000.0, kappa=0.2, alpha=0.0, Vx=Vx[::-1], channels=("Re", "omega", "Rl", "Fx"))
+    assert a2["Re"][0] == pytest.approx(b2["Re"][0], rel=1e-14) and b2["Re"][0] == pytest.approx(b["Re"][1], rel=1e-14)
+    _agree(a2, b2, tyre.flat)
 
 
 def test_scalars_and_tiny_batches():

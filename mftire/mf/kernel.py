@@ -131,7 +131,7 @@ def load(path: str | os.PathLike | None = None):
             continue
         f = lib.mf_kernel_evaluate
         vp, ci = ctypes.c_void_p, ctypes.c_int
-        f.argtypes = (vp, vp, ci, ci, ctypes.c_long, vp, vp, ci, vp, vp, vp)
+        f.argtypes = (vp, vp, ci, ci, ctypes.c_long, vp, vp, ci, vp, vp, vp, vp)
         f.restype = ci
         lib.mf_kernel_point.argtypes = (vp, vp, ci, ci, ci, ctypes.c_ulong, vp)
         lib.mf_kernel_point.restype = ci
@@ -380,8 +380,11 @@ def evaluate(
         return None
     nan = (ctypes.c_long * _N_IN)()
     mask = ctypes.c_ulong(0)
-    rc = lib.mf_kernel_evaluate(packed[1], packed[2], packed[3], int(mode), n, ptrs, steps, int(omega_given), outp, nan,
-                                ctypes.byref(mask))  # fmt: skip
+    scratch = None
+    if not omega_given and n > 1:  # the first pass's radii, for the second (mf_kernel.c)
+        scratch = np.empty((1 + ("Re" not in rows) + ("omega" not in rows)) * n)
+    rc = lib.mf_kernel_evaluate(packed[1], packed[2], packed[3], int(mode), n, ptrs, steps, int(omega_given), outp,
+                                None if scratch is None else scratch.ctypes.data, nan, ctypes.byref(mask))  # fmt: skip
     if rc != 0:  # bad mode or FITTYP: the numpy path raises its own error
         return None
     if any(nan) or mask.value:

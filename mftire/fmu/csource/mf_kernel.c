@@ -81,13 +81,16 @@ static void load_point(MFInputs *pt, const double *const *in, const long *step, 
  *           for every point) or 1
  *   omega_given  1: in[7] is the wheel spin (NaN cleaned to 0); 0: estimated
  *   out     MF_N_OUT output arrays of n doubles, NULL for a channel not wanted
+ *   scratch NULL, or n doubles for Romega plus n for each of Re and omega that is not wanted:
+ *           the first pass's rolling radii are kept there (and in the Re, omega outputs), so
+ *           that the second pass does not iterate again
  *   nan     MF_N_IN counters: NaN values replaced per input
  *   warnings  bit k set when warning kind k (mf_eval.h) fired
  * Returns MF_OK, MF_BAD_MODE or MF_BAD_FITTYP.
  */
 MF_KERNEL_API int mf_kernel_evaluate(const double *params, const int *terms, int n_terms, int use_mode, long n,
                                      const double *const *in, const long *step, int omega_given,
-                                     double *const *out, long *nan, unsigned long *warnings)
+                                     double *const *out, double *scratch, long *nan, unsigned long *warnings)
 {
     const MFParams *p = (const MFParams *)params;
     ExtTable ext;
@@ -99,7 +102,8 @@ MF_KERNEL_API int mf_kernel_evaluate(const double *params, const int *terms, int
     double data[MF_MAX_DATA] = {0.0}, dpi, Re, Romega, omega, omega_in = 0.0;
     unsigned want = 0;
     int kmax = 100, k, kk;
-    long i;
+    long i, first_kept = 0, end_kept = 0;
+    double *kRe = NULL, *kRw = NULL, *kOm = NULL; /* pass-1 Re, Romega, omega per point */
 
     if (mf_check_mode(use_mode, msg, sizeof msg) != MF_OK) return MF_BAD_MODE;
     if (mf_check_fittyp(p, msg, sizeof msg) != MF_OK) return MF_BAD_FITTYP;
@@ -113,7 +117,14 @@ MF_KERNEL_API int mf_kernel_evaluate(const double *params, const int *terms, int
     memset(&o, 0, sizeof o);
 
     /* Pass 1: the number of updates of the batch's rolling-radius iteration (the fewest any
-     * point needs, as mftire.mf.vertical.effective_rolling_radius stops). */
+     * point needs, as mftire.mf.vertical.effective_rolling_radius stops).  The results are kept:
+     * from the point that set the final count on, every point was iterated exactly that often. */
+    if (!omega_given && n > 1 && scratch) {
+        /* Re and omega in their output arrays when wanted, the rest in the caller's scratch */
+        kRe = out[O_RE] ? out[O_RE] : scratch;
+        kOm = out[O_OMEGA] ? out[O_OMEGA] : scratch + (out[O_RE] ? 0 : n);
+        kRw = scratch + (out[O_RE] ? 0 : n) + (out[O_OMEGA] ? 0 : n);
+    }
     if (!omega_given)
         for (i = 0; i < n && kmax > 0; i++) {
             /* what the iteration reads, as prepare_point makes it: load, slip and speed as given
@@ -127,7 +138,16 @@ MF_KERNEL_API int mf_kernel_evaluate(const double *params, const int *terms, int
             dpi = (P - p->NOMPRES) / p->NOMPRES; /* eq 4.E2b */
             kk = kmax;
             effective_rolling_radius(p, &c, dpi, 0, 0.0, &kk, &Re, &Romega, &omega);
-            if (kk < kmax) kmax = kk;
+            if (kk < kmax) {
+                kmax = kk;
+                first_kept = i;
+            }
+            if (kRw) {
+                kRe[i] = Re;
+                kRw[i] = Romega;
+                kOm[i] = omega;
+            }
+            end_kept = i + 1;
         }
 
     /* Pass 2: every point with exactly kmax updates. */
@@ -142,8 +162,14 @@ MF_KERNEL_API int mf_kernel_evaluate(const double *params, const int *terms, int
             if (isnan(pt.omega)) nan[7]++;
             omega_in = isnan(pt.omega) ? 0.0 : pt.omega;
         }
-        kk = kmax;
-        effective_rolling_radius(p, &c, dpi, omega_given, omega_in, &kk, &Re, &Romega, &omega);
+        if (kRw && i >= first_kept && i < end_kept) {
+            Re = kRe[i];
+            Romega = kRw[i];
+            omega = kOm[i];
+        } else {
+            kk = kmax;
+            effective_rolling_radius(p, &c, dpi, omega_given, omega_in, &kk, &Re, &Romega, &omega);
+        }
         c.omega = omega;
         mf_channels(p, &m, &ext, &c, dpi, Romega, data, 1.0, want, &o);
         if (out[O_FX]) out[O_FX][i] = o.Fx;
@@ -212,7 +238,8 @@ MF_KERNEL_API int mf_kernel_point(const double *params, const int *terms, int n_
     }
     for (k = 0; k < MF_N_OUT; k++) out[k] = (channels >> k & 1UL) ? io + MF_N_IN + k : NULL;
     if (out[O_INSTKYA] && !out[O_FY]) out[O_FY] = io + MF_N_IN + O_FY; /* instKya reads Fy */
-    rc = mf_kernel_evaluate(params, terms, n_terms, use_mode, 1, in, step, omega_given, out, nan, &warnings);
+    rc = mf_kernel_evaluate(params, terms, n_terms, use_mode, 1, in, step, omega_given, out, NULL, nan,
+                            &warnings);
     io[2 * MF_N_IN + MF_N_OUT + 1] = warnings != 0;
     for (k = 0; k < MF_N_IN; k++) {
         io[MF_N_IN + MF_N_OUT + k] = (double)nan[k];
