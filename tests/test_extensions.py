@@ -281,3 +281,35 @@ def test_entry_points_accept_path_parameters_or_tyre(tmp_path):
         assert np.isfinite(curves["Fx"]).all()
     with pytest.raises(TypeError):
         as_tyre(3.0)
+
+
+def test_fitting_model_clips_curvature_as_the_fitted_file_evaluates():
+    """A fit may reach curvature factors above 1 at some loads (eqs 4.E14, 4.E24); the file it writes is
+    evaluated in mode 111, which clips them to 1.  The fitter's model clips them too (without clipping the
+    inputs), so its prediction is what the written file gives."""
+    import warnings
+
+    from mftire.fitting.model import fitting_mode
+    from mftire.mf.inputs import MFLimitWarning
+
+    params = read_tir(REFERENCE_TYRES["MF61"])
+    params.set("PEX1", 0.9)
+    params.set("PEX2", 0.6)  # Ex > 1 above FNOMIN
+    params.set("PEY1", 0.95)
+    params.set("PEY2", -0.5)  # Ey > 1 below FNOMIN
+    tyre = Tyre(params)
+    n = 120
+    rng = np.random.default_rng(3)
+    x = Inputs(rng.uniform(1500, 8000, n), rng.uniform(-0.3, 0.3, n), rng.uniform(-0.2, 0.2, n), np.zeros(n),
+               np.full(n, 16.7), np.full(n, 2.2e5))  # fmt: skip
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        ref = tyre.evaluate(x.Fz, x.kappa, x.alpha, x.gamma, 0.0, x.Vx, x.P, mode=111)
+        assert any(issubclass(w.category, MFLimitWarning) for w in seen)  # the clip is active here
+        seen.clear()
+        unclipped = tyre.evaluate(x.Fz, x.kappa, x.alpha, x.gamma, 0.0, x.Vx, x.P, mode=211)
+        for ch in ("Fx", "Fy", "Mz"):
+            got = predict(tyre.flat, x, ch, fitting_mode())
+            np.testing.assert_array_equal(got, ref[ch], err_msg=ch)
+            assert np.max(np.abs(got - unclipped[ch])) > 10.0, ch  # and it matters
+        assert not any(issubclass(w.category, MFLimitWarning) for w in seen)  # silent while fitting

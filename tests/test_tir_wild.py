@@ -18,6 +18,7 @@ import pytest
 from conftest import DATA, TIR
 
 from mftire.cli import main
+from mftire.errors import MftireTirWarning
 from mftire.iotools.tir import MalformedLineError, NonNumericValueError, TirError, TirWarning, read_tir
 from mftire.mf.solver import UnsupportedModelError
 from mftire.mf.usedkeys import evaluator_keys
@@ -108,6 +109,13 @@ def test_evaluator_keys_come_from_the_code():
 
 
 # ------------------------------------------------------------------ the wild collection
+#: Files of the collection that are refused by name (MF_05 / MF-Tyre 5.0, not evaluated).
+MF05 = {"chrono_335_65R22_5_G275MSA_60psi.tir"} | {f"chrono_feda_335_65R22_5_G275MSA_{p}psi.tir" for p in (40, 70, 95)}
+#: Files that evaluate but have no longitudinal characteristic (PCX1 = PDX1 = 0): MFeval's deliberately
+#: broken example, which also has VERTICAL_STIFFNESS = 0.  The loader warns about both.
+NO_FX = {"mfeval_Model_Unstable.tir"}
+
+
 def _collection(tmp_path: Path) -> list[Path]:
     shipped = sorted(TIR.rglob("*.tir")) + sorted(WILD.glob("*.tir"))
     quirky = [
@@ -124,7 +132,9 @@ def _plausibility(tyre) -> dict[str, float]:
     lat = tyre.evaluate(Fz, 0.0, alpha)
     lon = tyre.evaluate(Fz, kappa, 0.0)
     small = tyre.evaluate(Fz, np.array([0.05, -0.05, 0.0]), np.array([0.0, 0.0, np.radians(3.0)]))
+    finite = all(np.isfinite(out[k]).all() for out in (lat, lon, small) for k in ("Fx", "Fy", "Mz", "Mx", "My"))
     return {
+        "finite": float(finite),
         "muy": float(np.abs(lat["Fy"]).max() / Fz),
         "mux": float(np.abs(lon["Fx"]).max() / Fz),
         "Fx_drive": float(small["Fx"][0]),
@@ -135,29 +145,58 @@ def _plausibility(tyre) -> dict[str, float]:
     }
 
 
+def _plausible(tyre, q: dict[str, float]) -> bool:
+    """Peak friction at nominal load (road tyres 0.7..1.3, FSAE slicks up to 3) and the ISO-W signs:
+    driving/braking force, side force against the slip angle, restoring Mz, rolling resistance My < 0."""
+    return (
+        0.5 <= q["muy"] <= 3.2
+        and 0.5 <= q["mux"] <= 3.2
+        and q["Fx_drive"] > 0.0 > q["Fx_brake"]
+        and q["Fy"] < 0.0 < q["Mz"]
+        and (q["My"] < 0.0 or tyre.flat["QSY1"] == 0.0)
+    )
+
+
 def test_wild_collection_evaluates_with_plausible_signs_and_magnitudes(tmp_path):
     files = _collection(tmp_path)
-    evaluated, refused, rows = 0, [], []
+    refused, no_fx, plausible, formats = set(), set(), set(), set()
     for path in files:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
             tyre = load(path)
             try:
                 q = _plausibility(tyre)
             except UnsupportedModelError as exc:
                 assert tyre.format == "MF_05" and "MF_05 / MF-Tyre 5.0" in str(exc)
-                refused.append(path.name)
+                refused.add(path.name)
                 continue
-        evaluated += 1
-        rows.append((path.name, tyre.format, q))
-        # peak friction at nominal load: road tyres 0.7..1.3, the FSAE (racing slick) defaults up to 3
-        assert 0.5 <= q["muy"] <= 3.2 and 0.5 <= q["mux"] <= 3.2, (path.name, q)
-        # ISO-W signs: driving/braking force, side force against the slip angle, restoring Mz, My < 0
-        assert q["Fx_drive"] > 0.0 > q["Fx_brake"], (path.name, q)
-        assert q["Fy"] < 0.0 < q["Mz"], (path.name, q)
-        assert q["My"] < 0.0 or tyre.flat["QSY1"] == 0.0, (path.name, q)
-    formats = {fmt for _, fmt, _ in rows}
+        formats.add(tyre.format)
+        # no NaN/inf force or moment from any file that evaluates, broken ones included
+        assert q["finite"] == 1.0, (path.name, q)
+        if _plausible(tyre, q):
+            plausible.add(path.name)
+        elif q["mux"] == 0.0:
+            # the loader said why: the file has no longitudinal characteristic
+            assert any("Fx is identically zero" in str(w.message) for w in caught), path.name
+            no_fx.add(path.name)
+        else:
+            raise AssertionError(f"implausible: {path.name} {q}")
     assert {"PAC2002", "FITTYP 6", "FITTYP 61", "FITTYP 62"} <= formats
-    assert sorted(refused) == ["chrono_335_65R22_5_G275MSA_60psi.tir", "chrono_feda_335_65R22_5_G275MSA_40psi.tir"]
-    assert evaluated == len(files) - 2 and len(files) == 19
-    print(f"\nwild collection: {evaluated} of {len(files)} evaluate; refused by name (MF_05): {len(refused)}")
+    assert refused == MF05 and no_fx == NO_FX
+    assert len(files) == 25 and len(plausible) == 20 == len(files) - len(MF05) - len(NO_FX)
+    print(f"\nwild collection: {len(plausible)} of {len(files)} plausible; refused by name (MF_05): "
+          f"{len(refused)}; no longitudinal characteristic: {len(no_fx)}")
+
+
+def test_zero_vertical_stiffness_and_zero_peak_factors_warn(tmp_path):
+    with pytest.warns(MftireTirWarning) as caught:
+        tyre = load(WILD / "mfeval_Model_Unstable.tir")
+    text = " ".join(str(w.message) for w in caught)
+    assert "VERTICAL_STIFFNESS = 0 N/m" in text and "PCX1 = PDX1 = 0: Fx is identically zero" in text
+    assert "Fy is identically zero" not in text
+    out = tyre.evaluate(5260.0, np.array([-0.1, 0.1]), 0.05)
+    np.testing.assert_array_equal(out["Fx"], 0.0)
+    assert np.isnan(out["Re"]).all()  # divides by the zero vertical stiffness, as the warning says
+    path = _quirky(MF61, tmp_path / "lat0.tir", {"PDY1": " 0"})
+    with pytest.warns(MftireTirWarning, match=r"PDY1 = 0: Fy is identically zero \(the file has no lateral"):
+        load(path)

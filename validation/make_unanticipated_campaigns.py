@@ -31,9 +31,12 @@ Written per case (``validation/data/unanticipated/<case>/``, and a smaller copy 
   plain fit and of the truth (outlier rows excluded): the best cut any diagnosis can reach.
 
 Cases (:data:`CASES`): ``stiffness_only``, ``curvature_shape``, ``interaction``,
-``fade_blocked_load`` (FE), ``temperature_friction``, ``zero_channel_with_effect`` (FE),
+``fade_blocked_load``, ``temperature_friction``, ``zero_channel_with_effect``,
 ``null_drifting_column``, ``null_plain``, ``null_fe`` (FE: no effect, but the MF fit's own model
-error).  Everything is reproducible (fixed seeds).
+error), and two FE-made effects whose MF form error dominates what any MF law can cut on the held-out
+condition (``fade_blocked_load_fe``, ``sliding_speed_fe``; their ``oracle.ceiling_cut`` is the cut of
+a refit with the generating law, which is the most an MF extension can reach).
+Everything is reproducible (fixed seeds).
 Run from the repository root::
 
     python validation/make_unanticipated_campaigns.py [NAME ...] [--reduced]
@@ -71,7 +74,8 @@ OUT = ROOT / "validation" / "data" / "unanticipated"
 OUT_REDUCED = ROOT / "validation" / "data" / "unanticipated_reduced"
 
 CASES = ("stiffness_only", "curvature_shape", "interaction", "fade_blocked_load", "temperature_friction",
-         "zero_channel_with_effect", "null_drifting_column", "null_plain", "null_fe")  # fmt: skip
+         "zero_channel_with_effect", "null_drifting_column", "null_plain", "null_fe", "fade_blocked_load_fe",
+         "sliding_speed_fe")  # fmt: skip
 CHANNELS = ("Fx", "Fy", "Mz", "Mx", "My")
 NOISE = 0.006  #: noise sigma, fraction of the channel's peak over the campaign [-]
 OUTLIER_FRACTION = 0.01  #: rows with a spike on one channel [-]
@@ -309,29 +313,33 @@ def make_case(name: str, reduced: bool = False) -> Case:
         return Case(name, "grip loss on wet runs only, growing with speed: LMUX, LMUY x (1 - 0.05·wet - "
                     "0.08·wet·Vx/(10 m/s)); dry and wet runs interleaved at 10..30 m/s", runs, "mf", ext,
                     "wet", ["LMUX", "LMUY"], "Vx", [25.0])  # fmt: skip
-    if name == "fade_blocked_load":
+    if name in ("fade_blocked_load", "fade_blocked_load_fe"):
         tyre = load_tyre(None)
-        li = tyre.load_index_load
+        fe = name.endswith("_fe")
+        unit = tyre.load_index_load if fe else _fnomin()
         fr = (0.4, 0.7, 1.0, 1.3)
         first = [(b, f) for b, f in enumerate(fr)]  # pass 1: loads ascending, two braking+cornering pairs each
         # pass 2: the 0.7 and 1.3 blocks repeated (time and load correlate, r = 0.77 over the runs)
         second = [(len(fr) + i, f) for i, f in enumerate((fr[1], fr[3]))]
-        runs = [Run(k, f * li, 60 / 3.6, b) for b, f in first for _ in range(2) for k in ("braking", "cornering")]
-        runs += [Run(k, f * li, 60 / 3.6, b) for b, f in second for k in ("braking", "cornering")]
-        n_hold = 2
-        holdout = list(range(len(runs) - n_hold, len(runs)))
-        case = Case(name, "FE surrogate; friction level (friction.scale) fades with elapsed time: "
-                    "1 - 0.15·(1 - exp(-t/tau)), tau = a third of the programme; loads tested in ascending "
-                    "blocks (time correlates with load), then the 0.7 and 1.3 x LI blocks repeated", runs, "fe",
-                    None, "time", ["LMUX", "LMUY"], "run", [float(i) for i in holdout], fe_tyre=tyre)  # fmt: skip
+        Vx = 60 / 3.6
+        runs = [Run(k, f * unit, Vx, b) for b, f in first for _ in range(2) for k in ("braking", "cornering")]
+        runs += [Run(k, f * unit, Vx, b) for b, f in second for k in ("braking", "cornering")]
+        holdout = list(range(len(runs) - 4, len(runs) - 2))  # the repeated 0.7 block: far later than its first
+        source = "FE surrogate; friction level (friction.scale)" if fe else "MF 6.1; friction LMUX, LMUY"
+        case = Case(name, f"{source} fades with elapsed time: 1 - 0.15·(1 - exp(-t/tau)), tau = a third of the "
+                    "programme; loads tested in ascending blocks (time correlates with load), then the 0.7 and "
+                    "1.3 x FNOMIN blocks repeated; the repeated 0.7 block is held out", runs, "fe" if fe else "mf",
+                    None, "time", ["LMUX", "LMUY"], "run", [float(i) for i in holdout],
+                    fe_tyre=tyre if fe else None)  # fmt: skip
         # the times do not depend on the random numbers
-        times = programme_table(case, reduced, tyre.size.nominal_pressure, np.random.default_rng(0))
+        times = programme_table(case, reduced, 2e5, np.random.default_rng(0))
         mid = times.groupby("run").time.mean().to_numpy()
         tau = float(times.time.max()) / 3.0
-        case.fe_level = lambda run: 1.0 - 0.15 * (1.0 - np.exp(-mid[run] / tau))
         case.extension = {"EXT1_TARGET": "LMUX LMUY", "EXT1_FORM": "saturating", "EXT1_VARIABLE": "time",
-                          "EXT1_REF": 0.0, "EXT1_SCALE": float(tau), "EXT1_C1": -0.15, "EXT1_C2": 1.0,
-                          "note": "FE friction.scale, constant over a run at the run's mean time"}  # fmt: skip
+                          "EXT1_REF": 0.0, "EXT1_SCALE": float(tau), "EXT1_C1": -0.15, "EXT1_C2": 1.0}  # fmt: skip
+        if fe:
+            case.fe_level = lambda run: 1.0 - 0.15 * (1.0 - np.exp(-mid[run] / tau))
+            case.extension["note"] = "FE friction.scale, constant over a run at the run's mean time"
         return case
     if name == "temperature_friction":
         speeds = (12.0, 20.0, 28.0)
@@ -352,24 +360,31 @@ def make_case(name: str, reduced: bool = False) -> Case:
                     ["LMUX", "LMUY"], "run", [])  # fmt: skip
         case.derived = {"tread_temp": lambda table, clean: thermal_tread_temp(table, sliding_power(table, clean))}
         return case
-    if name == "zero_channel_with_effect":
-        tyre = slip_speed_tyre(load_tyre(None))
-        li = tyre.load_index_load
+    if name in ("zero_channel_with_effect", "sliding_speed_fe"):
+        fe = name.endswith("_fe")
+        tyre = slip_speed_tyre(load_tyre(None)) if fe else None
+        unit = tyre.load_index_load if fe else _fnomin()
         speeds = (8.0, 14.0, 20.0, 26.0, 32.0)
         fr = (0.4, 0.7, 1.0, 1.3)  # (free rolling of the FE tyre fails to converge at 1.45 x LI, 14 m/s)
 
         def block(b, f, rng):
-            out = [Run("braking", f * li, float(v), b) for v in rng.permutation(speeds)]
-            out += [Run("cornering", f * li, float(v), b) for v in rng.permutation(speeds[1::2])]
+            out = [Run("braking", f * unit, float(v), b) for v in rng.permutation(speeds)]
+            out += [Run("cornering", f * unit, float(v), b) for v in rng.permutation(speeds[1::2])]
             return out
 
         runs = _blocked(fr, block, rng)
-        return Case(name, "FE surrogate with friction depending on the local sliding speed (Savkoor law, "
-                    "fixed Vmax = 1 m/s); braking at 8..32 m/s, cornering at 14 and 26 m/s; the Mx channel "
-                    "was not measured and is stored as zeros", runs, "fe",
-                    {"EXT1_TARGET": "LMUX LMUY", "EXT1_FORM": "decay", "EXT1_VARIABLE": "Vs",
-                     "note": "FE sliding-speed friction law; the MF term that best describes it"},
-                    "Vs", ["LMUX", "LMUY"], "Vx", [20.0], zero_channels=("Mx",), fe_tyre=tyre)  # fmt: skip
+        if fe:
+            return Case(name, "FE surrogate with friction depending on the local sliding speed (Savkoor law, "
+                        "fixed Vmax = 1 m/s); braking at 8..32 m/s, cornering at 14 and 26 m/s", runs, "fe",
+                        {"EXT1_TARGET": "LMUX LMUY", "EXT1_FORM": "decay", "EXT1_VARIABLE": "Vs",
+                         "note": "FE sliding-speed friction law; the MF term that best describes it"},
+                        "Vs", ["LMUX", "LMUY"], "Vx", [20.0], fe_tyre=tyre)  # fmt: skip
+        ext = {"EXT1_TARGET": "LMUX LMUY", "EXT1_FORM": "decay", "EXT1_VARIABLE": "Vs", "EXT1_REF": 0.0,
+               "EXT1_SCALE": 16.6, "EXT1_C1": 0.3}  # fmt: skip
+        return Case(name, "MF 6.1 with friction decaying with the slip speed (LMUX, LMUY / (1 + 0.3·Vs/16.6 m/s), "
+                    "the form of Pacejka 2012 eq 4.E7); braking at 8..32 m/s, cornering at 14 and 26 m/s; the "
+                    "Mx channel was not measured and is stored as zeros", runs, "mf", ext, "Vs",
+                    ["LMUX", "LMUY"], "Vx", [32.0], zero_channels=("Mx",))  # fmt: skip
     if name in ("null_drifting_column", "null_plain"):
         speeds = (16.6,) if name == "null_plain" else (12.0, 22.0)
 
@@ -463,6 +478,23 @@ def _rms_fx_fy(data: pd.DataFrame, model: pd.DataFrame) -> float:
     return float(np.sqrt(np.mean(r * r)))
 
 
+#: Start values of a generating law whose coefficients the FE case does not define.
+_LAW_START = {"EXT1_REF": 0.0, "EXT1_SCALE": 16.6, "EXT1_C1": 0.1}
+
+
+def ceiling_rms(case: Case, train: pd.DataFrame, fitted: TirParameters, held: pd.DataFrame) -> float:
+    """Held-out Fx+Fy RMS of a refit of the training rows with the generating law (its form,
+    variable and targets; coefficients fitted from the truth, or from :data:`_LAW_START`):
+    the most an MF extension of that form can reach (the FE cases also carry MF form error)."""
+    params = fitted.copy()
+    for k, v in {**_LAW_START, **{k: v for k, v in case.extension.items() if k.startswith("EXT")}}.items():
+        params.set(k, v, section=SECTION)
+    tyre = Tyre(fit_tir(train, params, progress=False).parameters)
+    names = [v for k, v in case.extension.items() if k.endswith(("_VARIABLE", "_VARIABLE2"))]
+    out = tyre.evaluate_frame(held[[c for c in held.columns if c not in CHANNELS or c in names]])
+    return _rms_fx_fy(held, out)
+
+
 def make(name: str, reduced: bool) -> dict:
     case = make_case(name, reduced)
     data, outlier, sigma = simulate(case, reduced)
@@ -478,6 +510,7 @@ def make(name: str, reduced: bool) -> dict:
                             0.0, held.Vx.to_numpy(), held.P.to_numpy(), mode=111)  # fmt: skip
     plain = pd.DataFrame({"Fx": plain["Fx"], "Fy": plain["Fy"]}, index=held.index)
     rms_fit, rms_true = _rms_fx_fy(held, plain), _rms_fx_fy(held, truth(case, held))
+    rms_ceiling = ceiling_rms(case, train, fit.parameters, held) if case.extension else rms_true
     expected = {
         "case": name,
         "description": case.description,
@@ -496,8 +529,11 @@ def make(name: str, reduced: bool) -> dict:
         "rows_heldout": int(hold.sum()),
         "oracle": {"holdout_rms_FxFy_fitted": round(rms_fit, 2), "holdout_rms_FxFy_truth": round(rms_true, 2),
                    "best_cut": round(1.0 - rms_true / rms_fit, 3),
+                   "holdout_rms_FxFy_ceiling": round(rms_ceiling, 2),
+                   "ceiling_cut": round(1.0 - rms_ceiling / rms_fit, 3),
                    "note": "RMS over the held-out Fx and Fy rows, outlier rows excluded; truth = the "
-                           "generating model; fitted = fitted.tir"},
+                           "generating model; fitted = fitted.tir; ceiling = a refit of the training rows "
+                           "with the generating law (the most an MF extension of its form reaches)"},
     }  # fmt: skip
     folder = (OUT_REDUCED if reduced else OUT) / name
     folder.mkdir(parents=True, exist_ok=True)
@@ -507,7 +543,8 @@ def make(name: str, reduced: bool) -> dict:
     write_text_atomic(folder / "expected.json", json.dumps(expected, indent=2) + "\n")
     print(
         f"{name}{' (reduced)' if reduced else ''}: {len(data)} rows, held out {hold.sum()}; held-out Fx+Fy "
-        f"RMS fitted {rms_fit:.1f} N, truth {rms_true:.1f} N (best cut {1 - rms_true / rms_fit:.0%}) -> {folder}"
+        f"RMS fitted {rms_fit:.1f} N, truth {rms_true:.1f} N (best cut {1 - rms_true / rms_fit:.0%}), refit with "
+        f"the generating law {rms_ceiling:.1f} N (ceiling cut {1 - rms_ceiling / rms_fit:.0%}) -> {folder}"
     )
     return expected
 

@@ -32,15 +32,17 @@ from mftire.diagnosis.candidates import Candidate, candidates, time_column, with
 from mftire.diagnosis.effects import (
     FIT_CHANNELS,
     HISTORY_CANDIDATES,
+    MAX_RESIDUAL_VS_CONTROL,
     EffectFit,
     choose_effect,
     drop_outliers,
     effects_for,
     make_problem,
     primary_rows,
+    refine_effect,
 )
 from mftire.diagnosis.holdout import default_holdout, holdout_mask, levels
-from mftire.diagnosis.profile import Profiles, profile_factors
+from mftire.diagnosis.profile import CONFOUND_R, Profiles, profile_factors
 from mftire.diagnosis.ranking import (
     CandidateScore,
     baseline_features,
@@ -142,20 +144,95 @@ def channel_noise(df: pd.DataFrame, channel: str) -> float:
     return noise_std(df[channel].to_numpy(float), x, df["sweep_id"].to_numpy())
 
 
-def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4) -> np.ndarray | None:
+#: Operating-condition set points of the MF inputs (the blocks of a confounded candidate).
+SET_POINTS = ("Fz_set", "Vx_set", "P_set", "gamma_set")
+
+
+def confounding_blocks(df: pd.DataFrame, v: np.ndarray, threshold: float = CONFOUND_R) -> np.ndarray | None:
+    """Blocks of rows at one MF operating condition (the levels of every set point whose sweep means
+    correlate with the candidate's, |r| > ``threshold``), or None when the candidate is not
+    confounded with an MF input.  A candidate confounded with the load, say a drift in time with
+    the loads tested in blocks, can only be told from it inside those blocks."""
+    sweeps = df["sweep_id"].to_numpy()
+    vm = pd.Series(np.asarray(v, float)).groupby(sweeps).mean()
+    keys = []
+    for sp in SET_POINTS:
+        if sp not in df.columns:
+            continue
+        sm = df[sp].astype(float).groupby(sweeps).mean().reindex(vm.index)
+        if sm.nunique() < 2 or vm.nunique() < 2:
+            continue
+        if abs(float(np.corrcoef(vm.to_numpy(), sm.to_numpy())[0, 1])) > threshold:
+            keys.append(sp)
+    if not keys:
+        return None
+    return df[keys].astype(float).round(6).apply(tuple, axis=1).factorize()[0]
+
+
+def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4,
+                blocks: np.ndarray | None = None) -> np.ndarray | None:
     """Held-out folds along the candidate: its levels (a sweep-level variable with 3 to 6 levels: one
     level out at a time), else ``k`` contiguous ranges of the sweeps' mean value, so that every fold is
-    a range of the variable between or beyond the trained ones, as the held-out condition is."""
+    a range of the variable between or beyond the trained ones, as the held-out condition is.
+
+    With ``blocks`` (:func:`confounding_blocks`) the ranges are taken inside each block, so that every
+    fold keeps every operating condition in training and tests the candidate by its variation within
+    the blocks; a block of a single sweep is never held out (label -1)."""
     v = np.asarray(v, float)
     lv = np.unique(np.round(v[np.isfinite(v)], 6))
-    if sweep_level and 3 <= len(lv) <= 6:
-        return np.round(v, 6)
-    means = pd.Series(v).groupby(sweeps).mean()
-    if means.nunique() < k:
+    if sweep_level and 3 <= len(lv) <= 6 and blocks is None:
+        return np.unique(np.round(v, 6), return_inverse=True)[1]
+    frame = pd.DataFrame({"v": v, "s": sweeps, "b": np.zeros(len(v), int) if blocks is None else blocks})
+    means = frame.groupby("s").agg(v=("v", "mean"), b=("b", "first"))
+    if means["v"].nunique() < k:
         return None
-    rank = means.rank(method="first").to_numpy()
-    label = dict(zip(means.index, np.minimum((rank - 1) * k // len(means), k - 1), strict=True))
-    return np.array([label[s] for s in sweeps])
+    label: dict = {}
+    for _, g in means.groupby("b"):
+        if len(g) < 2:
+            label.update(dict.fromkeys(g.index, -1))
+            continue
+        kk = min(k, len(g))
+        rank = g["v"].rank(method="first").to_numpy()
+        label.update(zip(g.index, np.minimum((rank - 1) * kk // len(g), kk - 1).astype(int), strict=True))
+    out = np.array([label[s] for s in sweeps])
+    return out if np.unique(out[out >= 0]).size >= 2 else None
+
+
+def confounding_notes(df: pd.DataFrame, variable: str, values: np.ndarray, within_block_ratio: float | None,
+                      threshold: float = CONFOUND_R) -> list[str]:
+    """What ``variable`` is confounded with across sweeps (MF set points, test order; |r| > ``threshold``)
+    and what the variation inside the blocks supports, in words.  ``within_block_ratio`` is the held-out
+    error of the chosen law relative to the control on sweeps held out inside blocks of the confounded set
+    points (None when the folds were not taken inside blocks)."""
+    sweeps = df["sweep_id"].to_numpy()
+    vm = pd.Series(np.asarray(values, float)).groupby(sweeps).mean()
+    if vm.nunique() < 2:
+        return []
+    others = {sp: df[sp].astype(float).groupby(sweeps).mean().reindex(vm.index) for sp in SET_POINTS
+              if sp in df.columns and sp != f"{variable}_set"}  # fmt: skip
+    first_row = pd.Series(np.arange(len(df))).groupby(sweeps).min().reindex(vm.index)
+    others["test order"] = first_row.astype(float)
+    out = []
+    for name, c in others.items():
+        if c.nunique() < 2:
+            continue
+        r = float(np.corrcoef(vm.to_numpy(), c.to_numpy())[0, 1])
+        if abs(r) <= threshold:
+            continue
+        head = f"{variable} correlates with {name} across sweeps (r = {r:+.2f})"
+        if name == "test order":
+            out.append(head + f": {variable} drifts along the programme, so any other drift (wear, temperature, "
+                       "conditioning) is an equal explanation; a reference condition repeated at the start, middle "
+                       "and end of the programme separates them")  # fmt: skip
+        elif within_block_ratio is not None and within_block_ratio <= MAX_RESIDUAL_VS_CONTROL:
+            out.append(head + f"; inside blocks of constant {name} the law in {variable} predicts held-out sweeps "
+                       f"with {100 * within_block_ratio:.0f} % of the error of refitting without it: the variation "
+                       f"within the blocks supports {variable} over {name}")  # fmt: skip
+        else:
+            out.append(head + f"; the variation within blocks of constant {name} does not separate them: both "
+                       f"explanations remain; test the {name} levels in an interleaved (randomised) order so that "
+                       f"{variable} varies within each level")  # fmt: skip
+    return out
 
 
 #: Pseudo-channel of candidates found by the scaling-factor profiles (their entry names the factor).
@@ -305,6 +382,7 @@ def diagnose(
     group += [e for e in significant if e.channel in PROFILE_CHANNELS and e not in group][:2]
     n_pressures = len(levels(df[train], "P"))
     found: list[tuple[EffectFit, CandidateScore]] = []
+    context: dict[int, tuple] = {}  #: id(chosen fit) -> what refine_effect needs
     tried: list[EffectFit] = []
     control: EffectFit | None = None  # the refit without any effect, shared by the candidates
     dtrain = df[train].reset_index(drop=True)
@@ -332,7 +410,8 @@ def diagnose(
         eff_ch = [ch for ch, sc in e.channel_scores.items() if sc >= max(0.05, 0.25 * e.score)] or [e.channel]
         # held-out folds: the levels of a sweep-level candidate (a level never seen in training, as the
         # held-out condition), else groups of sweeps
-        folds = level_folds(v, prob.df["sweep_id"].to_numpy(), c.sweep_level)
+        blocks = confounding_blocks(prob.df, v)
+        folds = level_folds(v, prob.df["sweep_id"].to_numpy(), c.sweep_level, blocks=blocks)
         n_levels = int(np.unique(np.round(v[np.isfinite(v)], 9)).size)
         laws = [(var, law, v if var == variable else None)
                 for var, law in effects_for(variable, derived, monotone, n_levels, families, chans, second)]
@@ -344,6 +423,12 @@ def diagnose(
         if note:
             chosen.messages.insert(0, note)
         found.append((chosen, e))
+        by_law = {law.name: (law, val) for _, law, val in laws}
+        ranked = sorted((f for f in fits[1:] if np.isfinite(f.heldout) and f.heldout < 1.0 and f.name in by_law),
+                        key=lambda f: f.heldout)  # fmt: skip
+        ranked = [chosen] + [f for f in ranked if f is not chosen]
+        context[id(chosen)] = (prob, dtr, [(f, *by_law[f.name]) for f in ranked if f.name in by_law], eff_ch, folds,
+                               blocks is not None)
     # the lowest held-out error wins; a better-ranked candidate within 10 % of it is preferred
     lowest = min((f.heldout for f, _ in found), default=np.inf)
     best = next(((f, e) for f, e in found if f.heldout <= 1.1 * lowest), None)
@@ -354,13 +439,29 @@ def diagnose(
                                tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
                                profiles=profiles)  # fmt: skip
     effect, cause = best
+    # the chosen candidate's best laws and the control, refitted with every MF coefficient
+    _progress(f"refitting every coefficient with the laws of {effect.variable}", progress)
+    prob, dtr, law_fits, eff_ch, folds, in_blocks = context[id(effect)]
+    refined, extended, notes = refine_effect(prob, dtr, law_fits, n_pressures, eff_ch, folds)
+    if refined is None:
+        msg = ("no significant effect: the best laws did not beat the control once every coefficient was "
+               "refitted (" + "; ".join(notes) + ")")
+        return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
+                               tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
+                               profiles=profiles)  # fmt: skip
+    effect = refined
     named = [e for e in ranking if e.variable == effect.variable and e.significant]
     if named and effect.variable != cause.variable:  # e.g. a slip-speed law chosen for Vx: the cause is Vs
         cause = named[0]
     ranking.remove(cause)
     ranking.insert(0, cause)
 
-    extended = effect.apply(tyre)  # its variables are columns of the data (closed variables)
+    # extended: the refined tyre; its variables are columns of the data (closed variables)
+    cvals = df[effect.variable].to_numpy(float) if effect.variable in df.columns else by_name[cause.variable].values
+    confounding = list(dict.fromkeys(
+        confounding_notes(df[train].reset_index(drop=True), effect.variable, cvals[train],
+                          effect.heldout if in_blocks else None)
+        + profiles.confounding(effect.variable)))  # fmt: skip
     dtest = df[test].reset_index(drop=True)
     errors = channel_errors(dtest, _model(tyre, dtest), _model(extended, dtest), chans)
     full_after = _model(extended, df)
@@ -368,5 +469,5 @@ def diagnose(
         df[f"residual_after_{ch}"] = df[ch].to_numpy(float) - full_after[ch]
     return DiagnosisResult(True, ranking, effect, {"column": column, "values": values, "n_rows": int(test.sum())},
                            errors, extended, tried, data=df, train=train, not_measured=not_measured,
-                           profiles=profiles, confounding=profiles.confounding(effect.variable))  # fmt: skip
+                           profiles=profiles, confounding=confounding)  # fmt: skip
 

@@ -28,6 +28,7 @@ import pandas as pd
 from scipy.optimize import least_squares
 
 from mftire.fitting.model import Inputs, Model
+from mftire.fitting.stages import STAGES
 from mftire.mf.extensions import (
     BUILTIN_VARIABLES,
     MAX_LEVELS,
@@ -52,6 +53,8 @@ class Law:
 
 
 _FRICTION = ("LMUX", "LMUY")
+#: The fitter's coefficients (bounds and typical magnitudes), by key.
+_COEFFICIENTS = {c.key: c for st in STAGES for c in st.coefficients}
 #: Targets of each family of scaling factors, by channel (:mod:`mftire.diagnosis.profile`).
 FAMILY_TARGETS = {
     "friction": {"Fx": ("LMUX",), "Fy": ("LMUY",)},
@@ -109,6 +112,23 @@ REFIT_KEYS = {
     "Fy": ("PCY1", "PDY1", "PDY2", "PEY1", "PEY2", "PKY1", "PKY2"),
     "Mz": ("QDZ1", "QDZ2", "QEZ1"),
 }
+
+
+def refit_bounds(key: str, value: float) -> tuple[float, float]:
+    """Bounds of a refitted main coefficient: the fitter's physical bounds (:mod:`mftire.fitting.stages`),
+    within a trust region of max(|value|, 3 × its typical magnitude) around the base fit's value, on the
+    value's side of zero for the peak and stiffness factors.  A base fit made on data with the effect may
+    have moved a load-sensitivity coefficient far (a drift in time with blocked loads doubles PDX2): the
+    region must reach back to the value without the effect."""
+    c = _COEFFICIENTS.get(key)
+    lower, upper, scale, keep = (c.lower, c.upper, c.scale, c.keep_sign) if c else (-np.inf, np.inf, 0.1, False)
+    width = max(abs(value), 3.0 * scale)
+    lo, hi = max(lower, value - width), min(upper, value + width)
+    if keep and value > 0:
+        lo = max(lo, 1e-6 * max(abs(value), 1.0))
+    elif keep and value < 0:
+        hi = min(hi, -1e-6 * max(abs(value), 1.0))
+    return (min(lo, value), max(hi, value)) if lo < hi else (value - 1e-3, value + 1e-3)
 
 
 @dataclass
@@ -361,12 +381,14 @@ def fit_effect(
     refit_base: bool = True,
     warm: Mapping[str, float] | None = None,
     pressure_channels: Sequence[str] | None = None,
+    extra_keys: Sequence[str] = (),
 ) -> EffectFit:
     """Fit one law on the training problem, with the main pure-slip coefficients
     of the measured channels (:data:`REFIT_KEYS`) refitted alongside when
     ``refit_base``; :data:`CONTROL` is the control refit.  ``warm`` gives start values of
     refitted coefficients (the control refit's), so that an effect starts from the
-    control's optimum with its own terms neutral."""
+    control's optimum with its own terms neutral.  ``extra_keys``: coefficients of the
+    tyre's own extension terms refitted too (a law already in the model)."""
     tyre = prob.tyre
     base = tyre.extension_set
     base_section = dict(tyre.extensions or {})
@@ -398,10 +420,14 @@ def fit_effect(
     model = _model(prob, ext, variables)
     refit = [k for ch in covered_channels(prob) for k in REFIT_KEYS.get(ch, ()) if k not in keys]
     refit = list(dict.fromkeys(refit)) if refit_base else []
-    lo = [b[0] for b in bounds] + [tyre[k] - 0.5 * abs(tyre[k]) - 1e-3 for k in refit]
-    hi = [b[1] for b in bounds] + [tyre[k] + 0.5 * abs(tyre[k]) + 1e-3 for k in refit]
+    own = {k: t for t in base.terms for k in t.coefficient_keys}
+    refit += [k for k in extra_keys if k in own and k not in refit]
+    base_q = {**tyre.flat, **{k: own[k].value(k.split("_", 1)[1]) for k in own}}
+    box = [own[k].bounds(k) if k in own else refit_bounds(k, tyre[k]) for k in refit]
+    lo = [b[0] for b in bounds] + [b[0] for b in box]
+    hi = [b[1] for b in bounds] + [b[1] for b in box]
     warm = warm or {}
-    start = np.clip(np.array(list(x0) + [warm.get(k, tyre[k]) for k in refit], float), lo, hi)
+    start = np.clip(np.array(list(x0) + [warm.get(k, base_q[k]) for k in refit], float), lo, hi)
 
     def build(x):
         standard: dict[str, float] = {k: float(v) for k, v in zip(refit, x[len(keys):], strict=True)}
@@ -416,8 +442,8 @@ def fit_effect(
         return standard, section
 
     def fun(x):
-        q = {**tyre.flat, **dict(zip(refit, x[len(keys):], strict=True)), **dict(zip(keys, x[: len(keys)],
-                                                                                      strict=True))}  # fmt: skip
+        q = {**base_q, **dict(zip(refit, x[len(keys):], strict=True)), **dict(zip(keys, x[: len(keys)],
+                                                                                   strict=True))}  # fmt: skip
         return _residuals(prob, model, q)
 
     messages = []
@@ -477,20 +503,22 @@ PARSIMONY = 0.1
 def heldout_error(
     prob: _Problem, law: Law, variable: str, values: np.ndarray | None, n_pressures: int,
     warm: Mapping[str, float] | None, pressure_channels: Sequence[str] | None, folds: np.ndarray | None = None,
+    extra_keys: Sequence[str] = (),
 ) -> float:
     """Sum of squared weighted residuals on held-out rows: each label of ``folds`` held out in
-    turn (default ``CV_FOLDS`` groups of whole sweeps)."""
+    turn (default ``CV_FOLDS`` groups of whole sweeps; rows labelled -1 are never held out)."""
     from mftire.diagnosis.ranking import fold_of_groups
 
     if folds is None:
         folds = fold_of_groups(prob.df["sweep_id"].to_numpy(), CV_FOLDS, seed=1)
     total = 0.0
-    for f in np.unique(folds):
+    for f in np.unique(folds[folds >= 0]):
         test = folds == f
         tr, te = take(prob, ~test), take(prob, test)
         v_tr = None if values is None else np.asarray(values)[~test]
         v_te = None if values is None else np.asarray(values)[test]
-        fit = fit_effect(tr, law, variable, v_tr, n_pressures, warm=warm, pressure_channels=pressure_channels)
+        fit = fit_effect(tr, law, variable, v_tr, n_pressures, warm=warm, pressure_channels=pressure_channels,
+                         extra_keys=extra_keys)
         r = fit_residuals(te, fit, v_te)
         total += float(r @ r)
     return total
@@ -545,3 +573,69 @@ def choose_effect(
     # parsimony: among the laws within PARSIMONY of the lowest held-out error, the fewest coefficients
     near = [(f.n_params, cv, f) for cv, f in scored if cv <= (1.0 + PARSIMONY) * lowest]
     return min(near, key=lambda t: (t[0], t[1]))[2], all_fits
+
+
+#: Laws refined by a full refit (:func:`refine_effect`): the best of the local comparison.
+REFINE_LAWS = 3
+
+
+def _full_refit(data: pd.DataFrame, tyre: Tyre) -> Tyre:
+    """The staged fit of every coefficient (:func:`mftire.fitting.fit_tir`) of the training rows, started
+    from ``tyre`` (its extension terms included): a global refit, with the fitter's own start values."""
+    import warnings
+
+    from mftire.fitting.core import fit_tir
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = fit_tir(data, tyre.parameters, progress=False)
+    return Tyre(res.parameters, name=tyre.name)
+
+
+def refine_effect(
+    prob: _Problem, data: pd.DataFrame, fits: Sequence[tuple[EffectFit, Law, np.ndarray | None]], n_pressures: int,
+    effect_channels: Sequence[str] | None, folds: np.ndarray | None,
+) -> tuple[EffectFit | None, Tyre | None, list[str]]:
+    """Refit the best laws and the control with every MF coefficient (the staged fitter), then choose
+    among them by held-out-sweep error, each model's law and main coefficients refitted on each fold.
+
+    The local fits of :func:`choose_effect` start at the base fit, which has absorbed part of the
+    effect into coefficients it does not refit (a drift in time with blocked loads moves the load
+    sensitivity, the stiffness and the shifts together); the staged fitter restarts every coefficient
+    from the data.  Returns ``(chosen, extended tyre, messages)``; chosen is None when no refined law
+    beats the refined control by :data:`MAX_RESIDUAL_VS_CONTROL` on held-out sweeps.
+    """
+    base = prob.tyre
+    cols = [c for c in data.columns if not str(c).startswith(("residual_", "_"))]
+    train = data[cols]
+    control_tyre = _full_refit(train, base)
+    cv_control = heldout_error(replace_tyre(prob, control_tyre), CONTROL, "", None, n_pressures, None,
+                               effect_channels, folds)  # fmt: skip
+    messages = [f"full refit without an effect: held-out-sweep error {cv_control:.4g}"]
+    best: tuple[float, EffectFit, Tyre] | None = None
+    for fit, _law, values in list(fits)[:REFINE_LAWS]:
+        tyre = _full_refit(train, fit.apply(base))
+        new = [t for t in tyre.extension_set.terms if t.index not in {u.index for u in base.extension_set.terms}]
+        keys = [k for t in new for k in t.coefficient_keys]
+        p = replace_tyre(prob, tyre)
+        if values is not None and fit.variable not in BUILTIN_VARIABLES:
+            p.variables = {**p.variables, fit.variable: np.asarray(values)}
+        cv = heldout_error(p, CONTROL, "", None, n_pressures, None, effect_channels, folds, extra_keys=keys)
+        messages.append(f"full refit with {fit.name} in {fit.variable}: held-out-sweep error {cv:.4g}")
+        if best is None or cv < best[0]:
+            best = (cv, fit, tyre)
+    if best is None or best[0] > MAX_RESIDUAL_VS_CONTROL * cv_control:
+        return None, None, messages
+    cv, fit, tyre = best
+    section = {k: v for k, v in (tyre.extensions or {}).items() if k not in (base.extensions or {})}
+    standard = {k: float(v) for k, v in tyre.flat.items() if k in base.flat and v != base.flat[k]}
+    refined = EffectFit(fit.name, fit.variable, fit.physical,
+                        {k: float(v) for k, v in section.items() if isinstance(v, float) and "_C" in k}, section,
+                        standard, fit.ss_before, fit.ss_after, fit.bic, fit.n_params, [*fit.messages, *messages],
+                        cv / cv_control if cv_control > 0 else np.inf, fit.targets)  # fmt: skip
+    return refined, tyre, messages
+
+
+def replace_tyre(prob: _Problem, tyre: Tyre) -> _Problem:
+    """The problem with another base tyre."""
+    return _Problem(tyre, prob.df, prob.channels, prob.scale, dict(prob.variables), prob.weights)

@@ -12,6 +12,7 @@ ALPMAX ...) would otherwise clip measured operating points.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -50,8 +51,9 @@ class Inputs:
 
 
 def fitting_mode(alpha_star: bool = False) -> Mode:
-    """Mode used while fitting: no limits, combined slip, no turn slip (``211`` or ``221``)."""
-    return Mode.from_code(221 if alpha_star else 211)
+    """Mode used while fitting: combined slip, no turn slip, no input clipping (``211`` or ``221``),
+    but curvature factors clipped to 1 as a fitted file evaluates in mode 1xx (eq 4.E14 ff.)."""
+    return dataclasses.replace(Mode.from_code(221 if alpha_star else 211), curvature_limit=True)
 
 
 class Model:

@@ -37,7 +37,9 @@ Physical checks
   every numeric value finite (a ``nan``/``inf`` coefficient);
 * warnings: ``FNOMIN`` within :data:`PLAUSIBLE` ``["FNOMIN"]``, ``UNLOADED_RADIUS``,
   ``NOMPRES`` and ``INFLPRES`` within their plausible ranges, ``RIM_RADIUS`` below
-  ``UNLOADED_RADIUS``, ``FZMIN`` < ``FZMAX``.  When a value is out of range and the
+  ``UNLOADED_RADIUS``, ``FZMIN`` < ``FZMAX``, ``VERTICAL_STIFFNESS`` > 0 (radii, contact patch
+  and relaxation lengths divide by it), non-zero ``PCX1``/``PDX1`` and ``PCY1``/``PDY1`` (a zero
+  makes Fx or Fy vanish: a file fitted for USE_MODE 2 or 1, or a broken one).  When a value is out of range and the
   file declares non-SI ``[UNITS]``, or a power-of-ten factor would make it
   plausible, the message says so (e.g. ``LENGTH = 'inch'`` with metre values).
 """
@@ -77,6 +79,9 @@ PLAUSIBLE = {
     "NOMPRES": (2e4, 5e6),  # Pa (0.2 .. 50 bar)
     "INFLPRES": (2e4, 5e6),  # Pa
 }
+#: Shape and peak factors whose zero makes a pure-slip force vanish (Fx0 = Dx·sin(Cx·…), eqs 4.E9–4.E11;
+#: Fy0 likewise, eqs 4.E19–4.E22): force, keys, what is missing, the USE_MODE that omits it.
+ZERO_PEAK = {"Fx": ("Fx", ("PCX1", "PDX1"), "longitudinal", 2), "Fy": ("Fy", ("PCY1", "PDY1"), "lateral", 1)}
 _UNITS = {"FNOMIN": "N", "UNLOADED_RADIUS": "m", "NOMPRES": "Pa", "INFLPRES": "Pa"}
 _QUANTITY = {"FNOMIN": ("FORCE",), "UNLOADED_RADIUS": ("LENGTH",), "NOMPRES": ("PRESSURE", "FORCE", "LENGTH"),
              "INFLPRES": ("PRESSURE", "FORCE", "LENGTH")}
@@ -242,6 +247,16 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
     fzmin, fzmax = flat.get("FZMIN"), flat.get("FZMAX")
     if _number(fzmin) and _number(fzmax) and fzmin >= fzmax:
         rep.warnings.append(f"FZMIN = {fzmin:g} N is not below FZMAX = {fzmax:g} N")
+    kz = flat.get("VERTICAL_STIFFNESS")
+    if _number(kz) and math.isfinite(float(kz)) and kz <= 0:
+        rep.warnings.append(f"VERTICAL_STIFFNESS = {kz:g} N/m: the deflection, the loaded and effective rolling "
+                            "radii, the contact patch and the relaxation lengths divide by it and come out "
+                            "NaN or infinite")
+    for force, keys, kind, mode in (ZERO_PEAK["Fx"], ZERO_PEAK["Fy"]):
+        zero = [k for k in keys if _number(flat.get(k)) and flat[k] == 0]
+        if zero:
+            rep.warnings.append(f"{' = '.join(zero)} = 0: {force} is identically zero (the file has no {kind} "
+                                f"characteristic, as a fit for USE_MODE {mode} has)")
     return rep
 
 

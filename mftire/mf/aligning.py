@@ -6,6 +6,7 @@ instead of the book, so do we; each such place is marked.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -151,7 +152,7 @@ def mz0(p: dict, mode: Mode, c: Conditions, b: Basic, a: AligningTerms) -> tuple
     Returns ``(Mz0 [N·m], t0 [m], Mzr0 [N·m])``; the trail and residual torque carry
     the low-speed reduction like the combined-slip ones.
     """
-    no_ts = Mode(mode.limits, mode.alpha_star, False, mode.combined, mode.code)
+    no_ts = dataclasses.replace(mode, turn_slip=False)
     lat0 = fy0(p, no_ts, c, b, np.zeros_like(c.Fz), turn_slip=False)  # Fy0 at gamma = phi = 0
     t0 = _trail_mf(a.Dt, a.Ct, a.Bt, a.Et, a.alphat, b.alpha_prime) * c.smooth  # eq 4.E33
     Mzr0 = np.real(a.Dr * np.cos(a.Cr * np.arctan(a.Br * a.alphar)) * np.cos(b.alpha_prime)) * c.smooth  # 4.E36

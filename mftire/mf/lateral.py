@@ -83,7 +83,7 @@ def fy0(
         CHyp = p["PHYP1"]  # eq 4.85
         DHyp = (p["PHYP2"] + p["PHYP3"] * dfz) * np.sign(c.Vx)  # eq 4.86
         EHyp = p["PHYP4"]  # eq 4.87
-        if mode.limits and EHyp > 1.0:
+        if mode.clips_curvature and EHyp > 1.0:
             EHyp = 1.0
         KyRp0 = Kyg0 / (1.0 - c.eps_gamma)  # eq 4.89
         BHyp = KyRp0 / (CHyp * DHyp * Kya0_prime)  # eq 4.88

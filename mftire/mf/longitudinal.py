@@ -17,9 +17,10 @@ def _sign_nonzero(x: np.ndarray) -> np.ndarray:
 
 
 def _clip_curvature(E: np.ndarray, name: str, eq: str, mode: Mode) -> np.ndarray:
-    """Curvature factors must not exceed 1; clipped with a warning in limit mode."""
-    if mode.limits and np.any(E > 1.0):
-        warnings.warn(f"{name} over limit (>1), eq {eq}; clipped to 1.", MFLimitWarning, stacklevel=3)
+    """Curvature factors must not exceed 1; clipped (with a warning in limit mode)."""
+    if mode.clips_curvature and np.any(E > 1.0):
+        if mode.limits:
+            warnings.warn(f"{name} over limit (>1), eq {eq}; clipped to 1.", MFLimitWarning, stacklevel=3)
         return np.where(E > 1.0, 1.0, E)
     return E
 

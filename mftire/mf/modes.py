@@ -29,6 +29,15 @@ class Mode:
     turn_slip: bool
     combined: bool
     code: int
+    #: Clip the curvature factors E to 1 (eqs 4.E14, 4.E24, 4.E44, 4.E56, 4.E64). None: as
+    #: ``limits`` (MFeval). The fitter sets True with ``limits`` False, so that the model it
+    #: fits is the one a fitted file evaluates to in mode 1xx, without clipping the inputs.
+    curvature_limit: bool | None = None
+
+    @property
+    def clips_curvature(self) -> bool:
+        """Whether curvature factors above 1 are clipped to 1."""
+        return self.limits if self.curvature_limit is None else self.curvature_limit
 
     @classmethod
     def from_code(cls, code: int) -> Mode:
