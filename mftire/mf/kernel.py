@@ -67,7 +67,7 @@ _TERM_INTS = 2 + _N_TARGETS + 2 + 8 + 2
 _W_ALPHA_LOW, _W_ALPHA_HIGH, _W_GAMMA_LOW, _W_GAMMA_HIGH = 7, 8, 9, 10
 _W_FZ_HIGH, _W_FZ_LOW, _W_P_LOW, _W_P_HIGH, _W_KAPPA_LOW, _W_KAPPA_HIGH, _W_LOW_SPEED = 11, 12, 13, 14, 15, 16, 17
 _W_CURVATURE = ((18, "Ex", "4.E14"), (20, "Exa", "4.E56"), (19, "Ey", "4.E24"), (21, "Eyk", "4.E64"),
-                (22, "Et", "4.E44"))  # fmt: skip
+                (22, "Et", "4.E44"), (27, "Ey", "4.E24"))  # fmt: skip  # 27: Ey of the zero-camber Fy0 in Mz
 _LIMITS = (
     (_W_ALPHA_LOW, "Slip angle", "below", "ALPMIN"), (_W_ALPHA_HIGH, "Slip angle", "above", "ALPMAX"),
     (_W_GAMMA_LOW, "Inclination angle", "below", "CAMMIN"), (_W_GAMMA_HIGH, "Inclination angle", "above", "CAMMAX"),
@@ -126,7 +126,7 @@ def load(path: str | os.PathLike | None = None):
             continue
         sizes = (ctypes.c_long * 5)()
         lib.mf_kernel_sizes(sizes)
-        if tuple(sizes) != (len(PARAM_KEYS), _N_IN, len(OUTPUTS), 27, _TERM_INTS):
+        if tuple(sizes) != (len(PARAM_KEYS), _N_IN, len(OUTPUTS), 28, _TERM_INTS):
             tried.append(f"{cand}: unexpected layout {tuple(sizes)}")
             continue
         f = lib.mf_kernel_evaluate

@@ -65,6 +65,10 @@ static double clip(double v, double lo, double hi)
 /* Evaluation context: decoded mode, warning mask. */
 typedef struct {
     int limits, alpha_star, turn_slip, combined;
+    /* The zero-camber Fy0 of the combined-slip aligning moment reuses the Fy0 already computed
+     * where there is no camber: -1 decides per point (one point: the FMU), 0 / 1 for a whole
+     * batch without / with camber somewhere (the array kernel; numpy decides per batch). */
+    int batch_camber;
     unsigned long warnings;
     char detail[MF_W_COUNT][160];
 } Ctx;
@@ -152,6 +156,12 @@ static double limit_pressure(const MFParams *p, Ctx *m, double P)
     return P < p->PRESMIN ? p->PRESMIN : (P > p->PRESMAX ? p->PRESMAX : P);
 }
 
+/* The inclination angle clipped to [CAMMIN, CAMMAX] (limit mode; the warnings are condition_inputs'). */
+static double limit_camber(const MFParams *p, double gamma)
+{
+    return gamma < p->CAMMIN ? p->CAMMIN : (gamma > p->CAMMAX ? p->CAMMAX : gamma);
+}
+
 static void condition_inputs(const MFParams *p, Ctx *m, double Fz, double kappa, double alpha, double gamma,
                              double phit, double Vx, double P, Cond *c)
 {
@@ -187,7 +197,7 @@ static void condition_inputs(const MFParams *p, Ctx *m, double Fz, double kappa,
         alpha = alpha < p->ALPMIN ? p->ALPMIN : (alpha > p->ALPMAX ? p->ALPMAX : alpha);
         if (gamma < p->CAMMIN) flag_limit(m, MF_W_GAMMA_LOW, "Inclination angle", "CAMMIN", p->CAMMIN);
         if (gamma > p->CAMMAX) flag_limit(m, MF_W_GAMMA_HIGH, "Inclination angle", "CAMMAX", p->CAMMAX);
-        gamma = gamma < p->CAMMIN ? p->CAMMIN : (gamma > p->CAMMAX ? p->CAMMAX : gamma);
+        gamma = limit_camber(p, gamma);
 
         if (Fz > p->FZMAX) {
             flag_limit(m, MF_W_FZ_HIGH, "Vertical load", "FZMAX", p->FZMAX);
@@ -451,7 +461,7 @@ static double kya(const MFParams *p, double Fz, double Fz0p, double dpi, double 
 
 /* Pure lateral force at inclination gamma_star (eqs 4.E19-4.E30). */
 static void fy0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double gamma_star, int turn_slip,
-                PureLat *lat)
+                int ey_kind, PureLat *lat)
 {
     double Fz = c->Fz, dfz = b->dfz, dpi = b->dpi, Fz0p = b->Fz0p;
     double zeta2 = 1.0, zeta3 = 1.0, zeta0, zeta4, Kya, SVyg, Kyg0, sKya, SHy, SVy, alphay, Cy, muy, Dy, Ey, By, Ba,
@@ -509,7 +519,7 @@ static void fy0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double
     Dy = muy * Fz * zeta2; /* eq 4.E22 */
     Ey = (p->PEY1 + p->PEY2 * dfz) *
          (1.0 + p->PEY5 * sq(gamma_star) - (p->PEY3 + p->PEY4 * gamma_star) * sign_nonzero(alphay)) * p->LEY;
-    Ey = clip_curvature(m, Ey, MF_W_EY, "Ey", "4.E24"); /* eq 4.E24 */
+    Ey = clip_curvature(m, Ey, ey_kind, "Ey", "4.E24"); /* eq 4.E24 */
     By = Kya / (Cy * Dy + MF_EPSILON * sign_nonzero(Dy)); /* eq 4.E26 */
     Ba = By * alphay;
     Fy0 = Dy * sin(Cy * atan(Ba - Ey * (Ba - atan(Ba)))) + SVy; /* eq 4.E19 */
@@ -655,11 +665,11 @@ static void mz0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, const 
     PureLat lat0;
     double t0, Mzr0;
     if (is_pac2002(p)) { /* PAC2002: Fy0 at the actual camber (mz0_pac2002) */
-        fy0(p, m, c, b, b->gamma_star, m->turn_slip, &lat0);
+        fy0(p, m, c, b, b->gamma_star, m->turn_slip, MF_W_EY, &lat0);
         mz0_pac2002(c, b, a, &lat0, Mz, t_out, Mzr_out);
         return;
     }
-    fy0(p, m, c, b, 0.0, 0, &lat0); /* Fy0 at gamma = phi = 0 */
+    fy0(p, m, c, b, 0.0, 0, MF_W_EY0, &lat0); /* Fy0 at gamma = phi = 0 */
     t0 = trail_mf(a->Dt, a->Ct, a->Bt, a->Et, a->alphat, b->alpha_prime) * c->smooth; /* eq 4.E33 */
     Mzr0 = residual(a->Dr, a->Cr, atan(a->Br * a->alphar), cos(b->alpha_prime)) * c->smooth; /* 4.E36 */
     *Mz = -t0 * lat0.Fy0 + Mzr0; /* eqs 4.E32, 4.E31 */
@@ -684,10 +694,10 @@ static void mz_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b
 
     /* Fy at zero camber (and zero spin weighting) for the trail term, eq 4.E74; the pure
        lateral force at the actual inclination is that force when the inclination is zero. */
-    if (lat != NULL && b->gamma_star == 0.0) {
+    if (lat != NULL && (m->batch_camber < 0 ? b->gamma_star == 0.0 : m->batch_camber == 0)) {
         lat0 = *lat;
     } else {
-        fy0(p, m, c, b, 0.0, m->turn_slip, &lat0);
+        fy0(p, m, c, b, 0.0, m->turn_slip, MF_W_EY0, &lat0);
     }
     Fy_prime = Gyk * lat0.Fy0; /* eq 4.E74; Gyk does not depend on muy or zeta2 */
     /* MFeval departure: t is multiplied by LFZO, as TNO's solver does (not in PAC2002). */
@@ -1074,7 +1084,7 @@ static void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c,
         out->Fx = Fx; out->mux = mux; out->Kxk = Kxk;
     }
     if (need_fy) {
-        fy0(p, m, c, &b, b.gamma_star, m->turn_slip, &lat);
+        fy0(p, m, c, &b, b.gamma_star, m->turn_slip, MF_W_EY, &lat);
         Fy_comb = fy_combined(p, m, c, &b, lat.Fy0, lat.muy, lat.zeta2, &Gyk);
         Fy = (m->combined ? Fy_comb : lat.Fy0) + c->Fz * off[1];
         out->Fy = Fy; out->muy = m->limits ? fabs(lat.muy) : lat.muy; out->Kya = lat.Kya;
@@ -1120,6 +1130,7 @@ int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *
     if (mf_check_mode(use_mode, msg, sizeof msg) != MF_OK) return MF_BAD_MODE;
     if (mf_check_fittyp(p, msg, sizeof msg) != MF_OK) return MF_BAD_FITTYP;
     m.warnings = 0; /* m.detail[k] is written only when bit k is set */
+    m.batch_camber = -1;
     decode_mode(&m, use_mode);
     dpi = prepare_point(p, &m, in, data, &c);
     /* omega = 0 means "not given" (estimated); NaN is cleaned to a given 0 as in Python */

@@ -111,6 +111,14 @@ MF_KERNEL_API int mf_kernel_evaluate(const double *params, const int *terms, int
     ext.n = n_terms;
     m.warnings = 0;
     decode_mode(&m, use_mode);
+    /* camber anywhere in the batch (gamma_star != 0: the conditioned inclination is not 0) */
+    m.batch_camber = 0;
+    for (i = 0; i < n && !m.batch_camber; i++) {
+        double g = in[3][i * step[3]];
+        g = isnan(g) ? 0.0 : g;
+        if (m.limits) g = limit_camber(p, g);
+        m.batch_camber = g != 0.0;
+    }
     for (k = 0; k < MF_N_OUT; k++)
         if (out[k]) want |= WANT_OF[k];
     for (k = 0; k < MF_N_IN; k++) nan[k] = 0;
