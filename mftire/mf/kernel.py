@@ -51,7 +51,8 @@ _ROOT = Path(__file__).resolve().parents[2]
 PARAM_KEYS: tuple[str, ...] = tuple(p.key for p in PARAMETERS if p.unit != "str")
 _PARAM_INDEX = {k: i for i, k in enumerate(PARAM_KEYS)}
 
-#: The output channels, as :data:`mftire.mf.solver.OUTPUT_NAMES` (the order of mf_kernel.c).
+#: The 30 outputs in the order and with the meaning of MFeval's output matrix, the order of
+#: mf_kernel.c's outputs; public as :data:`mftire.mf.solver.OUTPUT_NAMES`.
 OUTPUTS: tuple[str, ...] = (
     "Fx", "Fy", "Fz", "Mx", "My", "Mz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "Re", "rho",
     "2a", "t", "mux", "muy", "omega", "Rl", "2b", "Mzr", "Cx", "Cy", "Cz", "Kya", "sigmax", "sigmay",

@@ -38,12 +38,9 @@ from mftire.mf.relaxation import relaxation
 from mftire.mf.rolling import my
 from mftire.mf.vertical import contact_patch, effective_rolling_radius, loaded_radius_61, loaded_radius_62
 
-#: The 30 outputs, in the order and with the meaning of MFeval's output matrix.
-OUTPUT_NAMES: tuple[str, ...] = (
-    "Fx", "Fy", "Fz", "Mx", "My", "Mz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "Re", "rho",
-    "2a", "t", "mux", "muy", "omega", "Rl", "2b", "Mzr", "Cx", "Cy", "Cz", "Kya", "sigmax", "sigmay",
-    "instKya", "Kxk",
-)  # fmt: skip
+#: The 30 outputs, in the order and with the meaning of MFeval's output matrix (defined with the
+#: compiled kernel, whose C writes them in this order).
+OUTPUT_NAMES: tuple[str, ...] = kernel.OUTPUTS
 
 #: Units of the outputs.
 OUTPUT_UNITS: dict[str, str] = {
