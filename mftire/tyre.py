@@ -9,15 +9,17 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, Union
 
 import numpy as np
 
+from mftire.input_checks import check_keywords, warn_units
 from mftire.iotools.tir import TirParameters, as_parameters, read_tir
 from mftire.mf import pac2002
 from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
 from mftire.mf.family import PAC2002_CODE
+from mftire.mf.kernel import FlatParameters
 from mftire.mf.solver import OUTPUT_NAMES, OUTPUT_UNITS, UnsupportedModelError, evaluate_arrays, unsupported_message
 from mftire.parameters import with_defaults
 
@@ -67,6 +69,7 @@ class Tyre:
         from mftire.input_checks import check_constants
 
         check_constants(self.flat, getattr(params, "path", None))
+        self.flat = FlatParameters(self.flat)  # a dict that counts its changes (the kernel's cache)
         ext = self.parameters.sections.get(SECTION)
         #: The ``[MFTIRE_EXTENSIONS]`` section (model extensions), or None.
         self.extensions: dict[str, Any] | None = dict(ext) if ext else None
@@ -132,6 +135,8 @@ class Tyre:
         P=None,
         omega=None,
         mode: int = 111,
+        channels: str | Sequence[str] | None = None,
+        backend: str | None = None,
         **variables,
     ) -> MFResult:
         """Steady-state forces and moments.
@@ -156,6 +161,12 @@ class Tyre:
             Wheel spin [rad/s]; estimated when not given.
         mode : int, default 111
             MFeval ``useMode`` (see :mod:`mftire.mf.modes`).
+        channels : str or sequence of str, optional
+            Only these outputs (names of :data:`mftire.mf.solver.OUTPUT_NAMES`), computing
+            only what they need; default all 30.
+        backend : {"auto", "kernel", "numpy"}, optional
+            The compiled array kernel or the numpy reference (see :mod:`mftire.mf.kernel`);
+            default: the kernel when it is built, unless ``MFTIRE_BACKEND=numpy``.
         **variables : array_like
             Extra inputs for the model extensions of the file's ``[MFTIRE_EXTENSIONS]``
             section (e.g. ``temperature=...``); a variable an extension needs but
@@ -164,19 +175,19 @@ class Tyre:
         Returns
         -------
         MFResult
-            The 30 channels of :data:`mftire.mf.solver.OUTPUT_NAMES`.
+            The channels asked for (default the 30 of :data:`mftire.mf.solver.OUTPUT_NAMES`),
+            arrays of the broadcast input shape (numpy scalars for scalar inputs).
         """
         if self.flat.get("FITTYP") in (None, 0, 0.0, 5, 5.0):
             why = unsupported_message(5 if self.format == "MF_05" else self.fittyp)
             raise UnsupportedModelError(f"{self.name} ({self.format}): {why}")
-        from mftire.input_checks import check_keywords, warn_units
-
         if variables:
             check_keywords(variables, self.required_variables)
         warn_units(self, Fz, alpha)
         out = evaluate_arrays(
-            self.flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, self.extension_set, variables or None
-        )
+            self.flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, self.extension_set, variables or None,
+            channels, backend,
+        )  # fmt: skip
         return MFResult(out)
 
 

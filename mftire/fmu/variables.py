@@ -41,6 +41,7 @@ from mftire.mf.extensions import (
     MAX_EXTERNAL,
     OFFSET_TARGETS,
     SECTION,
+    TARGETS,
     Extension,
     ExtensionSet,
     parse_section,
@@ -305,13 +306,16 @@ def c_string(text: str) -> str:
     return '"' + "".join(body) + '"'
 
 
-def extension_header(variables: list[Variable], extensions: ExtensionSet | None = None) -> str:
+def extension_header(variables: list[Variable], extensions: ExtensionSet | None = None, runtime: bool = False) -> str:
     """``mf_ext_gen.h``: the model-extension terms for ``mf_eval.c``.
 
     Generated from :mod:`mftire.mf.extensions`: the term table (targets as indices of the
     scaling factors in ``MFParams``, form, variables, the indices of the term's numeric
     fields), ``mf_ext_var`` (the C expression of each builtin variable, then the external
     inputs) and ``mf_ext_form`` (the C expression of each form).
+
+    ``runtime``: the header of the array kernel (:mod:`mftire.mf.kernel`): no table (the
+    terms are data of each call, ``MF_EXT_RUNTIME``), room for every target in ``MFTerm``.
     """
     terms = extensions.terms if extensions else ()
     lines = [
@@ -321,12 +325,14 @@ def extension_header(variables: list[Variable], extensions: ExtensionSet | None 
         "",
         f"#define MF_N_TERMS {len(terms)}",
     ]
-    if not terms:
+    if runtime:
+        lines.append("#define MF_EXT_RUNTIME 1 /* the term table is given at run time (mf_kernel.c) */")
+    elif not terms:
         return "\n".join([*lines, "", "#endif /* MF_EXT_GEN_H */", ""])
     builtin = list(BUILTIN_VARIABLES)
-    external = extensions.external_variables
+    external = extensions.external_variables if extensions else ()
     forms = list(FORMS)
-    n_targets = max(len(t.targets) for t in terms)
+    n_targets = len(TARGETS) if runtime else max(len(t.targets) for t in terms)
 
     def var_index(name: str) -> int:
         return builtin.index(name) if name in builtin else len(builtin) + external.index(name)
@@ -347,8 +353,9 @@ def extension_header(variables: list[Variable], extensions: ExtensionSet | None 
         "    int c0, n;     /* first level (table) or coefficient, and the number of levels (table) */",
         "} MFTerm;",
         "",
-        "static const MFTerm MF_TERMS[MF_N_TERMS] = {",
     ]
+    if not runtime:
+        lines.append("static const MFTerm MF_TERMS[MF_N_TERMS] = {")
     for t in terms:
         tg = ", ".join("MF_TARGET_" + x if x in OFFSET_TARGETS else idx(x) for x in t.targets)
         two = t.variable2 is not None
@@ -360,9 +367,9 @@ def extension_header(variables: list[Variable], extensions: ExtensionSet | None 
             f"{', '.join(idx(t.key(n)) for n in ('REF', 'SCALE', 'MIN', 'MAX'))}, {', '.join(f2)}, "
             f"{idx(first)}, {t.n_levels}}}, /* EXT{t.index}: {_c_comment(t.describe())} */"
         )
+    if not runtime:
+        lines += ["};", ""]
     lines += [
-        "};",
-        "",
         "/* The variables a term reads: mftire.mf.extensions.BUILTIN_VARIABLES, then the external inputs. */",
         "static double mf_ext_var(int k, const MFParams *p, const Cond *c, const double *data)",
         "{",
@@ -618,3 +625,34 @@ __all__ = [
     "params_header",
     "variable_table",
 ]
+
+
+def kernel_headers(write: bool = False) -> dict[str, str]:
+    """The generated headers of the array kernel (:mod:`mftire.mf.kernel`, ``csource/kernel/``):
+    ``mf_params.h`` with the numeric standard parameters (``kernel.PARAM_KEYS``) and four
+    data slots, and the run-time ``mf_ext_gen.h`` (term table given at each call).
+
+    ``write``: also write them (after a change of the parameter table or the extensions;
+    ``tests/test_kernel.py`` checks that the files are current).
+    """
+    from pathlib import Path
+    from types import SimpleNamespace
+
+    from mftire.mf.kernel import PARAM_KEYS
+    from mftire.parameters import with_defaults
+
+    flat = {k: v for k, v in with_defaults({"FITTYP": 61}).items() if k in PARAM_KEYS}
+    table = variable_table(flat, DEFAULT_USE_MODE, None)
+    if tuple(v.field for v in table if v.kind == "param") != PARAM_KEYS:
+        raise AssertionError("the kernel's MFParams fields are not the standard parameters in table order")
+    slots = SimpleNamespace(external_variables=[f"data{k}" for k in range(MAX_DATA_INPUTS)])
+    out = {
+        "mf_params.h": params_header(table, slots),  # type: ignore[arg-type]
+        "mf_ext_gen.h": extension_header(table, None, runtime=True),
+    }
+    if write:
+        d = Path(__file__).parent / "csource" / "kernel"
+        d.mkdir(exist_ok=True)
+        for name, text in out.items():
+            (d / name).write_text(text, encoding="utf-8")
+    return out

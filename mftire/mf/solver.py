@@ -18,13 +18,13 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from mftire.errors import MftireError, MftireInputError
-from mftire.mf import pac2002, turnslip
+from mftire.mf import kernel, pac2002, turnslip
 from mftire.mf.aligning import aligning_terms, mz0, mz_combined, zero_camber_lateral
 from mftire.mf.basic import basic
 from mftire.mf.extensions import ExtensionSet, builtin_variables, parse_section
@@ -38,12 +38,9 @@ from mftire.mf.relaxation import relaxation
 from mftire.mf.rolling import my
 from mftire.mf.vertical import contact_patch, effective_rolling_radius, loaded_radius_61, loaded_radius_62
 
-#: The 30 outputs, in the order and with the meaning of MFeval's output matrix.
-OUTPUT_NAMES: tuple[str, ...] = (
-    "Fx", "Fy", "Fz", "Mx", "My", "Mz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "Re", "rho",
-    "2a", "t", "mux", "muy", "omega", "Rl", "2b", "Mzr", "Cx", "Cy", "Cz", "Kya", "sigmax", "sigmay",
-    "instKya", "Kxk",
-)  # fmt: skip
+#: The 30 outputs, in the order and with the meaning of MFeval's output matrix (defined with the
+#: compiled kernel, whose C writes them in this order).
+OUTPUT_NAMES: tuple[str, ...] = kernel.OUTPUTS
 
 #: Units of the outputs.
 OUTPUT_UNITS: dict[str, str] = {
@@ -267,32 +264,67 @@ def channels(
     return out
 
 
-def outputs(q: Mapping[str, float], pre: Prepared, ch: Channels) -> dict[str, np.ndarray]:
-    """MFeval's 30 channels (:data:`OUTPUT_NAMES`) from a full :class:`Channels`."""
+#: The :func:`channels` each output needs (outputs not listed are conditioned inputs, Re and omega).
+CHANNEL_NEEDS: dict[str, tuple[str, ...]] = {
+    "Fx": ("Fx",), "mux": ("Fx",), "Kxk": ("Fx",), "Fy": ("Fy",), "muy": ("Fy",), "Kya": ("Fy",),
+    "instKya": ("Fy",), "Mz": ("Mz",), "t": ("Mz",), "Mzr": ("Mz",), "Mx": ("Mx",), "My": ("My",),
+    "rho": ("Fx", "Fy"), "Rl": ("Fx", "Fy"), "Cz": ("Fx", "Fy"), "Cx": ("Fx", "Fy"), "Cy": ("Fx", "Fy"),
+    "sigmax": ("Fx", "Fy"), "sigmay": ("Fx", "Fy"),
+}  # fmt: skip
+
+
+def output_names(channels: str | Sequence[str] | None) -> tuple[str, ...]:
+    """The outputs asked for by ``channels`` of :func:`evaluate_arrays` (None: all 30), checked."""
+    if channels is None:
+        return OUTPUT_NAMES
+    names = (channels,) if isinstance(channels, str) else tuple(channels)
+    bad = [k for k in names if k not in OUTPUT_UNITS]
+    if bad:
+        raise ValueError(f"unknown output channel(s) {', '.join(map(repr, bad))}; the channels are "
+                         f"{', '.join(OUTPUT_NAMES)}")  # fmt: skip
+    return tuple(dict.fromkeys(names))
+
+
+def outputs(
+    q: Mapping[str, float], pre: Prepared, ch: Channels, names: tuple[str, ...] = OUTPUT_NAMES
+) -> dict[str, np.ndarray]:
+    """MFeval's channels ``names`` (default all of :data:`OUTPUT_NAMES`) from a :class:`Channels`
+    holding what they need (:data:`CHANNEL_NEEDS`)."""
     c, m, dpi = ch.c, pre.mode, pre.dpi
+    shape = pre.shape
+    want = set(names)
+    rho = Rl = Cz = a = bw = Cx = Cy = sigmax = sigmay = instKya = muy = None
     with np.errstate(all="ignore"):
-        muy = np.abs(ch.lat.muy) if m.limits else ch.lat.muy
-        if q["FITTYP"] == 61:
-            rho, Rl, Cz = loaded_radius_61(q, c, dpi, c.omega, pre.Romega, ch.Fx, ch.Fy)
-        else:
-            rho, Rl, Cz = loaded_radius_62(q, c, dpi, c.omega, pre.Romega, ch.Fx, ch.Fy)
-        a, bw = contact_patch(q, c, dpi)
-        Cx, Cy, sigmax, sigmay = relaxation(q, c, ch.Kxk, ch.lat.Kya)
-        shape = pre.shape
-        fy_flat, al_flat = ch.Fy.ravel(), c.alpha.ravel()
-        if fy_flat.size > 1:
-            d = np.diff(fy_flat) / np.diff(al_flat)
-            instKya = np.append(d, d[-1]).reshape(shape)
-        else:
-            instKya = np.zeros(shape)
+        if "muy" in want:
+            muy = np.abs(ch.lat.muy) if m.limits else ch.lat.muy
+        if want & {"rho", "Rl", "Cz"}:
+            if q["FITTYP"] == 61:
+                rho, Rl, Cz = loaded_radius_61(q, c, dpi, c.omega, pre.Romega, ch.Fx, ch.Fy)
+            else:
+                rho, Rl, Cz = loaded_radius_62(q, c, dpi, c.omega, pre.Romega, ch.Fx, ch.Fy)
+        if want & {"2a", "2b"}:
+            a, bw = contact_patch(q, c, dpi)
+            a, bw = 2.0 * a, 2.0 * bw
+        if want & {"Cx", "Cy", "sigmax", "sigmay"}:
+            Cx, Cy, sigmax, sigmay = relaxation(q, c, ch.Kxk, ch.lat.Kya)
+        if "instKya" in want:
+            fy_flat, al_flat = np.broadcast_to(ch.Fy, shape).ravel(), c.alpha.ravel()
+            if fy_flat.size > 1:
+                d = np.diff(fy_flat) / np.diff(al_flat)
+                instKya = np.append(d, d[-1]).reshape(shape)
+            else:
+                instKya = np.zeros(shape)
+    lat = ch.lat
     out = {
         "Fx": ch.Fx, "Fy": ch.Fy, "Fz": c.uFz, "Mx": ch.Mx, "My": ch.My, "Mz": ch.Mz, "kappa": c.ukappa_low,
         "alpha": c.ualpha, "gamma": c.ugamma, "phit": c.phit, "Vx": c.Vx, "P": c.P, "Re": pre.Re, "rho": rho,
-        "2a": 2.0 * a, "t": ch.t, "mux": ch.mux, "muy": muy, "omega": c.omega, "Rl": Rl, "2b": 2.0 * bw,
-        "Mzr": ch.Mzr, "Cx": Cx, "Cy": Cy, "Cz": Cz, "Kya": ch.lat.Kya, "sigmax": sigmax, "sigmay": sigmay,
-        "instKya": instKya, "Kxk": ch.Kxk,
+        "2a": a, "t": ch.t, "mux": ch.mux, "muy": muy, "omega": c.omega, "Rl": Rl, "2b": bw,
+        "Mzr": ch.Mzr, "Cx": Cx, "Cy": Cy, "Cz": Cz, "Kya": lat.Kya if lat is not None else None,
+        "sigmax": sigmax, "sigmay": sigmay, "instKya": instKya, "Kxk": ch.Kxk,
     }  # fmt: skip
-    return {k: np.broadcast_to(np.real(out[k]), shape).astype(float, copy=False) for k in OUTPUT_NAMES}
+    if shape == ():  # scalar inputs: numpy scalars (as the kernel path)
+        return {k: np.float64(np.real(out[k])) for k in names}
+    return {k: np.broadcast_to(np.real(out[k]), shape).astype(float, copy=False) for k in names}
 
 
 def evaluate_arrays(
@@ -308,8 +340,13 @@ def evaluate_arrays(
     mode: int = 111,
     extensions: Mapping[str, object] | ExtensionSet | None = None,
     variables: Mapping[str, object] | None = None,
+    channels: str | Sequence[str] | None = None,
+    backend: str | None = None,
 ) -> dict[str, np.ndarray]:
     """Steady-state Magic Formula outputs for broadcast inputs (the three pieces chained).
+
+    The compiled array kernel (:mod:`mftire.mf.kernel`) evaluates when it is available;
+    this numpy pipeline is the reference it agrees with to 1e-12 and the fallback.
 
     Parameters
     ----------
@@ -339,15 +376,37 @@ def evaluate_arrays(
         The ``[MFTIRE_EXTENSIONS]`` terms (see :mod:`mftire.mf.extensions`).
     variables : dict, optional
         External input arrays the extensions read, by name (e.g. ``temperature``).
+    channels : str or sequence of str, optional
+        The outputs to compute (names of :data:`OUTPUT_NAMES`); default all 30.  Only
+        what they need is computed.
+    backend : {"auto", "kernel", "numpy"}, optional
+        ``"numpy"`` forces this numpy pipeline, ``"kernel"`` the compiled kernel (an error
+        when it is not built); default ``"auto"``: the kernel when available, unless the
+        environment variable ``MFTIRE_BACKEND`` is ``numpy``.
 
     Returns
     -------
     dict
-        The 30 channels of :data:`OUTPUT_NAMES`, each an array of the broadcast shape.
+        The channels asked for (default the 30 of :data:`OUTPUT_NAMES`), each an array
+        of the broadcast shape (a numpy scalar for scalar inputs).
     """
-    if p.get("FITTYP") == PAC2002_CODE:
+    if p.get("FITTYP") == PAC2002_CODE and not isinstance(p, kernel.FlatParameters):
         p = pac2002.prepare(p)  # idempotent: a Tyre's flat parameters are prepared already
     ext = extensions if isinstance(extensions, ExtensionSet) else parse_section(extensions)
+    names = output_names(channels)
+    if not isinstance(mode, Mode) and kernel.use_kernel(backend):
+        check_fittyp(p)
+        if mode not in _CHECKED_MODES:
+            Mode.from_code(mode)  # raises for a bad mode, as prepare()
+            _CHECKED_MODES.add(mode)
+        out = kernel.evaluate(p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, ext, variables, names)
+        if out is not None:
+            return out
     pre = prepare(p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, variables)
     q, offsets = scaled(p, ext, pre)
-    return outputs(q, pre, channels(q, pre, offsets))
+    want = tuple(dict.fromkeys(w for k in names for w in CHANNEL_NEEDS.get(k, ())))
+    return outputs(q, pre, _channels(q, pre, offsets, want=want), names)
+
+
+_channels = channels
+_CHECKED_MODES: set = set()  # useMode codes Mode.from_code accepted

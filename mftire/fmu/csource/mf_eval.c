@@ -40,6 +40,10 @@ static double sign_nonzero(double x) { return sgn(x) + (x == 0.0 ? 1.0 : 0.0); }
 
 static double sq(double x) { return x * x; }
 
+/* cos(atan(x)) in its exact algebraic form 1/sqrt(1 + x^2) (one square root instead of two
+ * transcendental calls; agrees with numpy's cos(arctan(x)) to rounding). */
+static double cos_atan(double x) { return 1.0 / sqrt(1.0 + x * x); }
+
 /* ------------------------------------------------------------------ family.py (PAC2002) */
 
 /* Internal model code of a PAC2002 file (no FITTYP in the file), mftire.mf.family. */
@@ -61,6 +65,10 @@ static double clip(double v, double lo, double hi)
 /* Evaluation context: decoded mode, warning mask. */
 typedef struct {
     int limits, alpha_star, turn_slip, combined;
+    /* The zero-camber Fy0 of the combined-slip aligning moment reuses the Fy0 already computed
+     * where there is no camber: -1 decides per point (one point: the FMU), 0 / 1 for a whole
+     * batch without / with camber somewhere (the array kernel; numpy decides per batch). */
+    int batch_camber;
     unsigned long warnings;
     char detail[MF_W_COUNT][160];
 } Ctx;
@@ -140,6 +148,20 @@ typedef struct {
     double eps_gamma; /* camber reduction factor epsilon_gamma (eq 4.90) */
 } Cond;
 
+/* The pressure clipped to [PRESMIN, PRESMAX] with a warning (limit mode). */
+static double limit_pressure(const MFParams *p, Ctx *m, double P)
+{
+    if (P < p->PRESMIN) flag_limit(m, MF_W_P_LOW, "Pressure", "PRESMIN", p->PRESMIN);
+    if (P > p->PRESMAX) flag_limit(m, MF_W_P_HIGH, "Pressure", "PRESMAX", p->PRESMAX);
+    return P < p->PRESMIN ? p->PRESMIN : (P > p->PRESMAX ? p->PRESMAX : P);
+}
+
+/* The inclination angle clipped to [CAMMIN, CAMMAX] (limit mode; the warnings are condition_inputs'). */
+static double limit_camber(const MFParams *p, double gamma)
+{
+    return gamma < p->CAMMIN ? p->CAMMIN : (gamma > p->CAMMAX ? p->CAMMAX : gamma);
+}
+
 static void condition_inputs(const MFParams *p, Ctx *m, double Fz, double kappa, double alpha, double gamma,
                              double phit, double Vx, double P, Cond *c)
 {
@@ -175,7 +197,7 @@ static void condition_inputs(const MFParams *p, Ctx *m, double Fz, double kappa,
         alpha = alpha < p->ALPMIN ? p->ALPMIN : (alpha > p->ALPMAX ? p->ALPMAX : alpha);
         if (gamma < p->CAMMIN) flag_limit(m, MF_W_GAMMA_LOW, "Inclination angle", "CAMMIN", p->CAMMIN);
         if (gamma > p->CAMMAX) flag_limit(m, MF_W_GAMMA_HIGH, "Inclination angle", "CAMMAX", p->CAMMAX);
-        gamma = gamma < p->CAMMIN ? p->CAMMIN : (gamma > p->CAMMAX ? p->CAMMAX : gamma);
+        gamma = limit_camber(p, gamma);
 
         if (Fz > p->FZMAX) {
             flag_limit(m, MF_W_FZ_HIGH, "Vertical load", "FZMAX", p->FZMAX);
@@ -183,9 +205,7 @@ static void condition_inputs(const MFParams *p, Ctx *m, double Fz, double kappa,
         }
         if (Fz < p->FZMIN) flag_limit(m, MF_W_FZ_LOW, "Vertical load", "FZMIN", p->FZMIN);
         Fz_low = Fz < p->FZMIN ? p->FZMIN : Fz;
-        if (P < p->PRESMIN) flag_limit(m, MF_W_P_LOW, "Pressure", "PRESMIN", p->PRESMIN);
-        if (P > p->PRESMAX) flag_limit(m, MF_W_P_HIGH, "Pressure", "PRESMAX", p->PRESMAX);
-        P = P < p->PRESMIN ? p->PRESMIN : (P > p->PRESMAX ? p->PRESMAX : P);
+        P = limit_pressure(p, m, P);
         if (kappa < p->KPUMIN) flag_limit(m, MF_W_KAPPA_LOW, "Slip ratio", "KPUMIN", p->KPUMIN);
         if (kappa > p->KPUMAX) flag_limit(m, MF_W_KAPPA_HIGH, "Slip ratio", "KPUMAX", p->KPUMAX);
         kappa = kappa < p->KPUMIN ? p->KPUMIN : (kappa > p->KPUMAX ? p->KPUMAX : kappa);
@@ -306,10 +326,13 @@ static double re_deflection(const MFParams *p, double Fz, double Cz)
  * is estimated from omega = (1 + kappa)*Vx/Re (eq 2.5) by fixed-point iteration on
  * Re, started at 0.965*R0 as the reference evaluator does.
  * MFeval departure: the reference stops a batch as soon as one point has converged;
- * for the single point evaluated here that is ordinary convergence to |dRe| <= 1e-9 m.
+ * for a single point that is ordinary convergence to |dRe| <= 1e-9 m.  At most *kmax
+ * updates are made and *kmax returns how many were (the array kernel, mf_kernel.c, finds
+ * the batch's count with a first pass and then makes exactly that many for every point).
  */
 static void effective_rolling_radius(const MFParams *p, const Cond *c, double dpi, int omega_given,
-                                     double omega_in, double *Re_out, double *Romega_out, double *omega_out)
+                                     double omega_in, int *kmax, double *Re_out, double *Romega_out,
+                                     double *omega_out)
 {
     double Cz = p->VERTICAL_STIFFNESS * (1.0 + p->PFZ1 * dpi); /* Besselink 2010 eq 5 */
     double Fz = c->uFz, Vx = c->Vx, kappa = c->ukappa;
@@ -328,13 +351,14 @@ static void effective_rolling_radius(const MFParams *p, const Cond *c, double dp
     Re_old = R0;
     omega = 0.0;
     Romega = R0;
-    for (i = 0; i < 100; i++) {
+    for (i = 0; i < *kmax; i++) {
         if (!(fabs(Re_old - Re) > 1e-9)) break;
         Re_old = Re;
         omega = (kappa * Vx + Vx) / Re; /* eq 2.5 */
         Romega = free_radius(p, omega);
         Re = Romega - defl;
     }
+    *kmax = i; /* the number of updates made */
     *Re_out = Re;
     *Romega_out = Romega;
     *omega_out = omega;
@@ -345,25 +369,25 @@ static void effective_rolling_radius(const MFParams *p, const Cond *c, double dp
 /* Fx peak reduction zeta1 (eqs 4.105, 4.106). */
 static double zeta1(const MFParams *p, double dfz, double kappa, double phi)
 {
-    double Bxp = p->PDXP1 * (1.0 + p->PDXP2 * dfz) * cos(atan(p->PDXP3 * kappa)); /* eq 4.106 */
-    return cos(atan(Bxp * p->UNLOADED_RADIUS * phi));                           /* eq 4.105 */
+    double Bxp = p->PDXP1 * (1.0 + p->PDXP2 * dfz) * cos_atan(p->PDXP3 * kappa); /* eq 4.106 */
+    return cos_atan(Bxp * p->UNLOADED_RADIUS * phi);                           /* eq 4.105 */
 }
 
 /* Fy peak reduction zeta2 and cornering-stiffness reduction zeta3 (eqs 4.77-4.79). */
 static void zeta2_zeta3(const MFParams *p, double dfz, double alpha, double phi, double *z2, double *z3)
 {
     double R0 = p->UNLOADED_RADIUS, Byp, aphi;
-    *z3 = cos(atan(p->PKYP1 * sq(R0) * sq(phi)));                                     /* eq 4.79 */
-    Byp = p->PDYP1 * (1.0 + p->PDYP2 * dfz) * cos(atan(p->PDYP3 * tan(alpha)));        /* eq 4.78 */
+    *z3 = cos_atan(p->PKYP1 * sq(R0) * sq(phi));                                     /* eq 4.79 */
+    Byp = p->PDYP1 * (1.0 + p->PDYP2 * dfz) * cos_atan(p->PDYP3 * tan(alpha));        /* eq 4.78 */
     aphi = fabs(phi);
-    *z2 = cos(atan(Byp * (R0 * aphi + p->PDYP4 * sqrt(R0 * aphi))));                  /* eq 4.77 */
+    *z2 = cos_atan(Byp * (R0 * aphi + p->PDYP4 * sqrt(R0 * aphi)));                  /* eq 4.77 */
 }
 
 /* Pneumatic-trail reduction zeta5 (eq 4.91). */
-static double zeta5(const MFParams *p, double phi) { return cos(atan(p->QDTP1 * p->UNLOADED_RADIUS * phi)); }
+static double zeta5(const MFParams *p, double phi) { return cos_atan(p->QDTP1 * p->UNLOADED_RADIUS * phi); }
 
 /* Residual-torque slope reduction zeta6 (eq 4.102). */
-static double zeta6(const MFParams *p, double phi) { return cos(atan(p->QBRP1 * p->UNLOADED_RADIUS * phi)); }
+static double zeta6(const MFParams *p, double phi) { return cos_atan(p->QBRP1 * p->UNLOADED_RADIUS * phi); }
 
 /* ------------------------------------------------------------------ longitudinal.py */
 
@@ -412,7 +436,7 @@ static double fx_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic 
     double Cxa = p->RCX1; /* eq 4.E55 */
     double Exa = clip_curvature(m, p->REX1 + p->REX2 * b->dfz, MF_W_EXA, "Exa", "4.E56"); /* eq 4.E56 */
     double SHxa = p->RHX1; /* eq 4.E57 */
-    double Bxa = (p->RBX1 + p->RBX3 * sq(b->gamma_star)) * cos(atan(p->RBX2 * c->kappa)) * p->LXAL; /* 4.E54 */
+    double Bxa = (p->RBX1 + p->RBX3 * sq(b->gamma_star)) * cos_atan(p->RBX2 * c->kappa) * p->LXAL; /* 4.E54 */
     double alphas = b->alpha_star + SHxa; /* eq 4.E53 */
     double Bs = Bxa * SHxa;
     double Gxa0 = cos(Cxa * atan(Bs - Exa * (Bs - atan(Bs)))); /* eq 4.E52 */
@@ -437,7 +461,7 @@ static double kya(const MFParams *p, double Fz, double Fz0p, double dpi, double 
 
 /* Pure lateral force at inclination gamma_star (eqs 4.E19-4.E30). */
 static void fy0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double gamma_star, int turn_slip,
-                PureLat *lat)
+                int ey_kind, PureLat *lat)
 {
     double Fz = c->Fz, dfz = b->dfz, dpi = b->dpi, Fz0p = b->Fz0p;
     double zeta2 = 1.0, zeta3 = 1.0, zeta0, zeta4, Kya, SVyg, Kyg0, sKya, SHy, SVy, alphay, Cy, muy, Dy, Ey, By, Ba,
@@ -495,7 +519,7 @@ static void fy0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double
     Dy = muy * Fz * zeta2; /* eq 4.E22 */
     Ey = (p->PEY1 + p->PEY2 * dfz) *
          (1.0 + p->PEY5 * sq(gamma_star) - (p->PEY3 + p->PEY4 * gamma_star) * sign_nonzero(alphay)) * p->LEY;
-    Ey = clip_curvature(m, Ey, MF_W_EY, "Ey", "4.E24"); /* eq 4.E24 */
+    Ey = clip_curvature(m, Ey, ey_kind, "Ey", "4.E24"); /* eq 4.E24 */
     By = Kya / (Cy * Dy + MF_EPSILON * sign_nonzero(Dy)); /* eq 4.E26 */
     Ba = By * alphay;
     Fy0 = Dy * sin(Cy * atan(Ba - Ey * (Ba - atan(Ba)))) + SVy; /* eq 4.E19 */
@@ -511,13 +535,13 @@ static double fy_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic 
 {
     double dfz = b->dfz, alpha_star = b->alpha_star, gamma_star = b->gamma_star;
     double DVyk, SVyk, SHyk, Eyk, Cyk, Byk, kappas, Bs, Gyk0, Bk, Gyk;
-    DVyk = muy * c->Fz * (p->RVY1 + p->RVY2 * dfz + p->RVY3 * gamma_star) * cos(atan(p->RVY4 * alpha_star)) *
+    DVyk = muy * c->Fz * (p->RVY1 + p->RVY2 * dfz + p->RVY3 * gamma_star) * cos_atan(p->RVY4 * alpha_star) *
            zeta2; /* eq 4.E67 */
     SVyk = DVyk * sin(p->RVY5 * atan(p->RVY6 * c->kappa)) * p->LVYKA; /* eq 4.E66 */
     SHyk = p->RHY1 + p->RHY2 * dfz; /* eq 4.E65 */
     Eyk = clip_curvature(m, p->REY1 + p->REY2 * dfz, MF_W_EYK, "Eyk", "4.E64"); /* eq 4.E64 */
     Cyk = p->RCY1; /* eq 4.E63 */
-    Byk = (p->RBY1 + p->RBY4 * sq(gamma_star)) * cos(atan(p->RBY2 * (alpha_star - p->RBY3))) * p->LYKA; /* 4.E62 */
+    Byk = (p->RBY1 + p->RBY4 * sq(gamma_star)) * cos_atan(p->RBY2 * (alpha_star - p->RBY3)) * p->LYKA; /* 4.E62 */
     kappas = c->kappa + SHyk; /* eq 4.E61 */
     Bs = Byk * SHyk;
     Gyk0 = cos(Cyk * atan(Bs - Eyk * (Bs - atan(Bs)))); /* eq 4.E60 */
@@ -641,11 +665,11 @@ static void mz0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, const 
     PureLat lat0;
     double t0, Mzr0;
     if (is_pac2002(p)) { /* PAC2002: Fy0 at the actual camber (mz0_pac2002) */
-        fy0(p, m, c, b, b->gamma_star, m->turn_slip, &lat0);
+        fy0(p, m, c, b, b->gamma_star, m->turn_slip, MF_W_EY, &lat0);
         mz0_pac2002(c, b, a, &lat0, Mz, t_out, Mzr_out);
         return;
     }
-    fy0(p, m, c, b, 0.0, 0, &lat0); /* Fy0 at gamma = phi = 0 */
+    fy0(p, m, c, b, 0.0, 0, MF_W_EY0, &lat0); /* Fy0 at gamma = phi = 0 */
     t0 = trail_mf(a->Dt, a->Ct, a->Bt, a->Et, a->alphat, b->alpha_prime) * c->smooth; /* eq 4.E33 */
     Mzr0 = residual(a->Dr, a->Cr, atan(a->Br * a->alphar), cos(b->alpha_prime)) * c->smooth; /* 4.E36 */
     *Mz = -t0 * lat0.Fy0 + Mzr0; /* eqs 4.E32, 4.E31 */
@@ -670,10 +694,10 @@ static void mz_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b
 
     /* Fy at zero camber (and zero spin weighting) for the trail term, eq 4.E74; the pure
        lateral force at the actual inclination is that force when the inclination is zero. */
-    if (lat != NULL && b->gamma_star == 0.0) {
+    if (lat != NULL && (m->batch_camber < 0 ? b->gamma_star == 0.0 : m->batch_camber == 0)) {
         lat0 = *lat;
     } else {
-        fy0(p, m, c, b, 0.0, m->turn_slip, &lat0);
+        fy0(p, m, c, b, 0.0, m->turn_slip, MF_W_EY0, &lat0);
     }
     Fy_prime = Gyk * lat0.Fy0; /* eq 4.E74; Gyk does not depend on muy or zeta2 */
     /* MFeval departure: t is multiplied by LFZO, as TNO's solver does (not in PAC2002). */
@@ -687,7 +711,7 @@ static void mz_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b
         /* MF 5.2 (TNO equation manual): kappa-induced side force excluded from the trail term. */
         double dfz = b->dfz, gamma_star = b->gamma_star, DVyk, SVyk;
         DVyk = lat0.muy * c->Fz * (p->RVY1 + p->RVY2 * dfz + p->RVY3 * gamma_star) *
-               cos(atan(p->RVY4 * b->alpha_star)); /* eq 4.E67 at zeta2 = 1 */
+               cos_atan(p->RVY4 * b->alpha_star); /* eq 4.E67 at zeta2 = 1 */
         SVyk = DVyk * sin(p->RVY5 * atan(p->RVY6 * c->kappa)) * p->LVYKA * c->smooth; /* eq 4.E66 */
         Mz = -t * (Fy - SVyk) + Mzr + s * Fx;
     } else {
@@ -914,7 +938,18 @@ static void relaxation(const MFParams *p, const Cond *c, double Kxk, double Kya,
 
 #include "mf_ext_gen.h"
 
-#if MF_N_TERMS > 0
+/* The term table: MF_TERMS of mf_ext_gen.h in an FMU; data given at run time in the array
+ * kernel (mf_kernel.c, whose mf_ext_gen.h defines MF_EXT_RUNTIME and the MFTerm layout). */
+typedef struct {
+#if MF_N_TERMS > 0 || defined(MF_EXT_RUNTIME)
+    const MFTerm *terms;
+#else
+    const void *terms;
+#endif
+    int n;
+} ExtTable;
+
+#if MF_N_TERMS > 0 || defined(MF_EXT_RUNTIME)
 /* The value of the table form: c holds the n levels, then the n values; nearest level wins
  * (numpy argmin: the first of equal distances). */
 static double mf_ext_table(double u, const double *c, int n)
@@ -925,16 +960,19 @@ static double mf_ext_table(double u, const double *c, int n)
     return c[n + best];
 }
 
-/* q = p with the targeted scaling factors multiplied by f; off[0], off[1] the FX/FY offset sums. */
-static void apply_extensions(const MFParams *p, const Cond *c, const double *data, MFParams *q, double *off)
+/* q = p with the targeted scaling factors multiplied by f; off[0], off[1] the FX/FY offset sums.
+ * The term fields are read as doubles from p's storage at the indices of the table (in the
+ * array kernel the storage runs on past MFParams with the numbers of the terms). */
+static void apply_extensions(const ExtTable *ext, const MFParams *p, const Cond *c, const double *data, MFParams *q,
+                             double *off)
 {
     const double *P = (const double *)p;
     double *Q = (double *)q;
     int i, k;
     *q = *p;
     off[0] = off[1] = 0.0;
-    for (i = 0; i < MF_N_TERMS; i++) {
-        const MFTerm *t = &MF_TERMS[i];
+    for (i = 0; i < ext->n; i++) {
+        const MFTerm *t = &ext->terms[i];
         double u = clip(mf_ext_var(t->var, p, c, data), P[t->min], P[t->max]);
         double z = (u - P[t->ref]) / P[t->scale], z2 = 0.0, f;
         if (t->var2 >= 0) {
@@ -964,88 +1002,144 @@ static double clean(Ctx *m, int kind, const char *name, double x, double fill)
     return x;
 }
 
+/* Decode a checked useMode into the context. */
+static void decode_mode(Ctx *m, int use_mode)
+{
+    m->limits = use_mode / 100 == 1;
+    m->alpha_star = (use_mode / 10) % 10 == 2;
+    m->turn_slip = use_mode % 10 == 2;
+    m->combined = use_mode % 10 != 0;
+}
+
+/*
+ * Piece 1 of solver.py without the wheel spin: NaN inputs replaced by 0 (pressure: INFLPRES)
+ * with a warning, then the input stage (condition_inputs).  data receives the cleaned data
+ * variables.  Returns dpi (eq 4.E2b).
+ */
+static double prepare_point(const MFParams *p, Ctx *m, const MFInputs *in, double *data, Cond *c)
+{
+    double Fz, kappa, alpha, gamma, phit, Vx, P;
+    int k;
+#if MF_N_DATA > 0
+    static const char *const data_names[MF_N_DATA] = MF_DATA_NAMES;
+    for (k = 0; k < MF_N_DATA; k++) data[k] = clean(m, MF_W_NAN_DATA0 + k, data_names[k], in->data[k], 0.0);
+#endif
+    (void)k;
+    (void)data;
+    Fz = clean(m, MF_W_NAN_FZ, "Fz", in->Fz, 0.0);
+    kappa = clean(m, MF_W_NAN_KAPPA, "kappa", in->kappa, 0.0);
+    alpha = clean(m, MF_W_NAN_ALPHA, "alpha", in->alpha, 0.0);
+    gamma = clean(m, MF_W_NAN_GAMMA, "gamma", in->gamma, 0.0);
+    phit = clean(m, MF_W_NAN_PHIT, "phit", in->phit, 0.0);
+    Vx = clean(m, MF_W_NAN_VX, "Vx", in->Vx, 0.0);
+    P = in->P;
+    if (isnan(P) || P <= 0.0) P = p->INFLPRES;
+    condition_inputs(p, m, Fz, kappa, alpha, gamma, phit, Vx, P, c);
+    return (c->P - p->NOMPRES) / p->NOMPRES; /* eq 4.E2b */
+}
+
+/* What mf_channels computes (bits of want), as mftire.mf.solver.channels and outputs. */
+#define MF_WANT_FX 1u    /* Fx, mux, Kxk */
+#define MF_WANT_FY 2u    /* Fy, muy, Kya */
+#define MF_WANT_MZ 4u    /* Mz, t, Mzr (needs FX, FY) */
+#define MF_WANT_MX 8u    /* Mx (needs FY) */
+#define MF_WANT_MY 16u   /* My (needs FX) */
+#define MF_WANT_RAD 32u  /* rho, Rl, Cz (needs FX, FY) */
+#define MF_WANT_PATCH 64u /* 2a, 2b */
+#define MF_WANT_RELAX 128u /* Cx, Cy, sigmax, sigmay (needs FX, FY) */
+#define MF_WANT_ALL 255u
+
+/*
+ * Pieces 2 and 3 of solver.py for one conditioned point c (c->omega filled): the model
+ * extensions, turn slip, the channels of want (what they need is computed too) and the
+ * outputs that depend on them.  Fields of out that are not wanted are left untouched.
+ */
+static void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c, double dpi, double Romega,
+                        const double *data, double muRoad, unsigned want, MFOutputs *out)
+{
+    Basic b;
+    PureLat lat;
+    AlignTerms at;
+    double z1, Fx0, mux = 0.0, Kxk = 0.0, Fy_comb, Gyk = 0.0, Fx = 0.0, Fy = 0.0;
+    double off[2] = {0.0, 0.0}; /* force offsets of the model extensions, as factors of Fz */
+    int need_fx = (want & (MF_WANT_FX | MF_WANT_MZ | MF_WANT_MY | MF_WANT_RAD | MF_WANT_RELAX)) != 0;
+    int need_fy = (want & (MF_WANT_FY | MF_WANT_MZ | MF_WANT_MX | MF_WANT_RAD | MF_WANT_RELAX)) != 0;
+#if MF_N_TERMS > 0 || defined(MF_EXT_RUNTIME)
+    MFParams q; /* p with the extension terms applied to its scaling factors */
+    if (ext->n > 0) {
+        apply_extensions(ext, p, c, data, &q, off);
+        p = &q;
+    }
+#endif
+    (void)ext;
+    (void)data;
+    if (m->turn_slip) turn_slip_spin(p, c);
+    basic(p, m, c, muRoad, &b);
+    lat.Kya = 0.0;
+
+    if (need_fx) {
+        z1 = m->turn_slip ? zeta1(p, b.dfz, c->kappa, c->phi) : 1.0;
+        fx0(p, m, c, &b, z1, &Fx0, &mux, &Kxk);
+        Fx = (m->combined ? fx_combined(p, m, c, &b, Fx0) : Fx0) + c->Fz * off[0];
+        out->Fx = Fx; out->mux = mux; out->Kxk = Kxk;
+    }
+    if (need_fy) {
+        fy0(p, m, c, &b, b.gamma_star, m->turn_slip, MF_W_EY, &lat);
+        Fy_comb = fy_combined(p, m, c, &b, lat.Fy0, lat.muy, lat.zeta2, &Gyk);
+        Fy = (m->combined ? Fy_comb : lat.Fy0) + c->Fz * off[1];
+        out->Fy = Fy; out->muy = m->limits ? fabs(lat.muy) : lat.muy; out->Kya = lat.Kya;
+    }
+    if (want & MF_WANT_MZ) {
+        aligning_terms(p, m, c, &b, &lat, Gyk, &at);
+        if (m->combined)
+            mz_combined(p, m, c, &b, &at, Kxk, Fx, Fy, Gyk, &lat, &out->Mz, &out->t, &out->Mzr);
+        else
+            mz0(p, m, c, &b, &at, &out->Mz, &out->t, &out->Mzr);
+    }
+    if (want & MF_WANT_MX) out->Mx = mx(p, c, dpi, Fy);
+    if (want & MF_WANT_MY) out->My = my(p, c, Fx);
+    if (want & MF_WANT_RAD) {
+        if (p->FITTYP == 61.0 || is_pac2002(p)) /* PAC2002: the MF 6.2 equation reduces to 6.1 */
+            loaded_radius_61(p, c, dpi, c->omega, Romega, Fx, Fy, &out->rho, &out->Rl, &out->Cz);
+        else
+            loaded_radius_62(p, c, dpi, c->omega, Romega, Fx, Fy, &out->rho, &out->Rl, &out->Cz);
+    }
+    if (want & MF_WANT_PATCH) {
+        double a, bw;
+        contact_patch(p, c, dpi, &a, &bw);
+        out->a2 = 2.0 * a;
+        out->b2 = 2.0 * bw;
+    }
+    if (want & MF_WANT_RELAX) relaxation(p, c, Kxk, lat.Kya, &out->Cx, &out->Cy, &out->sigmax, &out->sigmay);
+}
+
 int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *out, mf_warning_fn warn, void *ctx)
 {
     char msg[256];
     Ctx m;
     Cond c;
-    Basic b;
-    PureLat lat;
-    AlignTerms at;
-    double Fz, kappa, alpha, gamma, phit, Vx, P, omega_in, dpi, Re, Romega, omega, z1, Fx0, mux, Kxk, Fy_comb, Gyk;
-    double Fx, Fy, Mz, t, Mzr, Mx, My, muy, rho, Rl, Cz, a, bw, Cx, Cy, sigmax, sigmay;
-    double off[2] = {0.0, 0.0}; /* force offsets of the model extensions, as factors of Fz */
+    double dpi, Re, Romega, omega, omega_in;
     double data[MF_MAX_DATA] = {0.0};
-    int omega_given, k;
+    int omega_given, k, kmax = 100;
 #if MF_N_TERMS > 0
-    MFParams q; /* p with the extension terms applied to its scaling factors */
-#endif
-#if MF_N_DATA > 0
-    static const char *const data_names[MF_N_DATA] = MF_DATA_NAMES;
+    ExtTable ext = {MF_TERMS, MF_N_TERMS};
+#else
+    ExtTable ext = {NULL, 0};
 #endif
 
     if (mf_check_mode(use_mode, msg, sizeof msg) != MF_OK) return MF_BAD_MODE;
     if (mf_check_fittyp(p, msg, sizeof msg) != MF_OK) return MF_BAD_FITTYP;
     m.warnings = 0; /* m.detail[k] is written only when bit k is set */
-    m.limits = use_mode / 100 == 1;
-    m.alpha_star = (use_mode / 10) % 10 == 2;
-    m.turn_slip = use_mode % 10 == 2;
-    m.combined = use_mode % 10 != 0;
-
-    /* NaN inputs are replaced by 0 (pressure: INFLPRES) with a warning. */
-    Fz = clean(&m, MF_W_NAN_FZ, "Fz", in->Fz, 0.0);
-    kappa = clean(&m, MF_W_NAN_KAPPA, "kappa", in->kappa, 0.0);
-    alpha = clean(&m, MF_W_NAN_ALPHA, "alpha", in->alpha, 0.0);
-    gamma = clean(&m, MF_W_NAN_GAMMA, "gamma", in->gamma, 0.0);
-    phit = clean(&m, MF_W_NAN_PHIT, "phit", in->phit, 0.0);
-    Vx = clean(&m, MF_W_NAN_VX, "Vx", in->Vx, 0.0);
-    P = in->P;
-    if (isnan(P) || P <= 0.0) P = p->INFLPRES;
+    m.batch_camber = -1;
+    decode_mode(&m, use_mode);
+    dpi = prepare_point(p, &m, in, data, &c);
     /* omega = 0 means "not given" (estimated); NaN is cleaned to a given 0 as in Python */
     omega_given = in->omega != 0.0;
     omega_in = omega_given ? clean(&m, MF_W_NAN_OMEGA, "omega", in->omega, 0.0) : 0.0;
-#if MF_N_DATA > 0
-    for (k = 0; k < MF_N_DATA; k++) data[k] = clean(&m, MF_W_NAN_DATA0 + k, data_names[k], in->data[k], 0.0);
-#endif
-
-    condition_inputs(p, &m, Fz, kappa, alpha, gamma, phit, Vx, P, &c);
-    dpi = (c.P - p->NOMPRES) / p->NOMPRES; /* eq 4.E2b */
-    effective_rolling_radius(p, &c, dpi, omega_given, omega_in, &Re, &Romega, &omega);
+    effective_rolling_radius(p, &c, dpi, omega_given, omega_in, &kmax, &Re, &Romega, &omega);
     c.omega = omega;
-#if MF_N_TERMS > 0
-    apply_extensions(p, &c, data, &q, off);
-    p = &q;
-#endif
-    (void)data;
-    if (m.turn_slip) turn_slip_spin(p, &c);
-    basic(p, &m, &c, in->muRoad, &b);
-
-    z1 = m.turn_slip ? zeta1(p, b.dfz, c.kappa, c.phi) : 1.0;
-    fx0(p, &m, &c, &b, z1, &Fx0, &mux, &Kxk);
-    fy0(p, &m, &c, &b, b.gamma_star, m.turn_slip, &lat);
-    Fy_comb = fy_combined(p, &m, &c, &b, lat.Fy0, lat.muy, lat.zeta2, &Gyk);
-    aligning_terms(p, &m, &c, &b, &lat, Gyk, &at);
-    Fx = (m.combined ? fx_combined(p, &m, &c, &b, Fx0) : Fx0) + c.Fz * off[0];
-    Fy = (m.combined ? Fy_comb : lat.Fy0) + c.Fz * off[1];
-    if (m.combined)
-        mz_combined(p, &m, &c, &b, &at, Kxk, Fx, Fy, Gyk, &lat, &Mz, &t, &Mzr);
-    else
-        mz0(p, &m, &c, &b, &at, &Mz, &t, &Mzr);
-    Mx = mx(p, &c, dpi, Fy);
-    My = my(p, &c, Fx);
-    muy = m.limits ? fabs(lat.muy) : lat.muy;
-
-    if (p->FITTYP == 61.0 || is_pac2002(p)) /* PAC2002: the MF 6.2 equation reduces to 6.1 */
-        loaded_radius_61(p, &c, dpi, c.omega, Romega, Fx, Fy, &rho, &Rl, &Cz);
-    else
-        loaded_radius_62(p, &c, dpi, c.omega, Romega, Fx, Fy, &rho, &Rl, &Cz);
-    contact_patch(p, &c, dpi, &a, &bw);
-    relaxation(p, &c, Kxk, lat.Kya, &Cx, &Cy, &sigmax, &sigmay);
-
-    out->Fx = Fx; out->Fy = Fy; out->Fz = c.uFz; out->Mx = Mx; out->My = My; out->Mz = Mz;
-    out->Re = Re; out->Rl = Rl; out->rho = rho; out->a2 = 2.0 * a; out->b2 = 2.0 * bw; out->t = t;
-    out->Mzr = Mzr; out->mux = mux; out->muy = muy; out->Kxk = Kxk; out->Kya = lat.Kya;
-    out->sigmax = sigmax; out->sigmay = sigmay; out->omega = c.omega; out->Cx = Cx; out->Cy = Cy; out->Cz = Cz;
+    mf_channels(p, &m, &ext, &c, dpi, Romega, data, in->muRoad, MF_WANT_ALL, out);
+    out->Fz = c.uFz; out->Re = Re; out->omega = c.omega;
 
     if (warn && m.warnings)
         for (k = 0; k < MF_W_COUNT; k++)

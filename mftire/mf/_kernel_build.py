@@ -1,0 +1,65 @@
+"""How the array kernel (``mf_kernel.c``) is compiled: sources, flags and the source hash.
+
+Standard library only: ``setup.py`` loads this file by path (the package's dependencies
+are not installed when the build runs), and :mod:`mftire.mf.kernel` uses it to check that
+a library was built from the C sources next to it and to compile one for development
+(``python -m mftire.mf.kernel build``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shlex
+import shutil
+import subprocess
+from pathlib import Path
+
+#: The C sources directory, relative to the repository / installed package root.
+CSOURCE = Path("mftire") / "fmu" / "csource"
+#: The translation unit (it includes mf_eval.c) and every file it reads.
+SOURCES = ("mf_kernel.c", "mf_eval.c", "mf_eval.h", "kernel/mf_params.h", "kernel/mf_ext_gen.h")
+#: Name of the setuptools Extension that builds the kernel (loaded with ctypes: no Python C API) ...
+MODULE = "mftire.mf._mfkernel"
+#: ... and its file name in mftire/mf/: not a module's suffix, so that nothing imports it.
+LIBRARY = "_mfkernel.so.1"
+#: Optimisation without changing IEEE results: no errno from libm (lets calls inline and
+#: vectorise), no trapping; no -ffast-math (it would reorder the arithmetic and drop NaN
+#: checks, and the kernel must agree with numpy to 1e-12).
+CFLAGS = ("-O3", "-std=c99", "-fno-math-errno", "-fno-trapping-math", "-fvisibility=hidden", "-Wall")
+
+
+def source_hash(root: str | os.PathLike) -> str:
+    """SHA-256 (first 16 hex digits) of the kernel's sources and flags under ``root``."""
+    h = hashlib.sha256(" ".join(CFLAGS).encode())
+    for name in SOURCES:
+        h.update(b"\0" + name.encode() + b"\0")
+        h.update((Path(root) / CSOURCE / name).read_bytes())
+    return h.hexdigest()[:16]
+
+
+def include_dirs(root: str | os.PathLike) -> list[str]:
+    """``kernel/`` (generated headers) first, then the C sources."""
+    src = Path(root) / CSOURCE
+    return [str(src / "kernel"), str(src)]
+
+
+def define_macros(root: str | os.PathLike) -> list[tuple[str, str]]:
+    return [("MF_KERNEL_HASH", '"' + source_hash(root) + '"')]
+
+
+def compile_library(root: str | os.PathLike, out: str | os.PathLike, cc: str | None = None) -> Path:
+    """Compile the kernel into the shared library ``out`` with the system C compiler
+    (``cc`` or ``$CC`` or cc/gcc/clang); raises ``RuntimeError`` when that fails."""
+    names = [cc] if cc else ([os.environ["CC"]] if os.environ.get("CC") else ["cc", "gcc", "clang"])
+    argv = next((shlex.split(n) for n in names if n and shutil.which(shlex.split(n)[0])), None)
+    if argv is None:
+        raise RuntimeError("no C compiler found (tried " + ", ".join(names) + ")")
+    src = Path(root) / CSOURCE / SOURCES[0]
+    defs = [f"-D{k}={v}" for k, v in define_macros(root)]
+    incs = [f"-I{d}" for d in include_dirs(root)]
+    cmd = [*argv, "-shared", "-fPIC", *CFLAGS, *defs, *incs, str(src), "-o", str(out), "-lm"]
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    if res.returncode != 0:
+        raise RuntimeError(f"compiling the kernel failed:\n{res.stderr[-2000:]}")
+    return Path(out)

@@ -1,0 +1,477 @@
+"""The compiled array kernel behind :meth:`mftire.Tyre.evaluate` (and :func:`mftire.mf.solver.evaluate_arrays`).
+
+One C call evaluates a whole batch with the FMU's C model (``mftire/fmu/csource``:
+``mf_kernel.c`` includes ``mf_eval.c``, the one C copy of the equations, and adds the
+loop over the arrays with the batch semantics of the numpy evaluator).  The numpy modules
+of :mod:`mftire.mf` stay the readable reference; ``tests/test_kernel.py`` proves that the
+two agree to 1e-12 in every mode, for every model family, with and without model
+extensions.
+
+Building
+    ``pip install`` compiles the kernel with the system C compiler (``setup.py``: a
+    setuptools extension loaded with :mod:`ctypes`, no Python C API, no new dependency).
+    In a source checkout, ``python -m mftire.mf.kernel build`` compiles it in place.
+
+Fallback
+    Without a compiler the installation still succeeds and the numpy path is used
+    (:func:`available` is False, :func:`status` says why).  A library built from other C
+    sources than those next to this module (a stale build) is refused the same way.
+
+Choosing the path
+    ``backend="numpy"`` (argument of ``Tyre.evaluate`` / ``evaluate_arrays``) or the
+    environment variable ``MFTIRE_BACKEND=numpy`` (read at the first evaluation of the
+    process) forces the numpy reference;
+    ``backend="kernel"`` requires the kernel (an error when it is not available).  The
+    default ``"auto"`` takes the kernel when it is available.
+
+The input checks of :mod:`mftire.input_checks`, the model check and the broadcasting stay
+in Python; warnings (NaN inputs, clipping, curvature factors) are issued in Python from
+what the kernel reports, with the texts of the numpy path.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import sys
+import threading
+import warnings
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from mftire.mf import _kernel_build as build
+from mftire.mf.inputs import MFLimitWarning
+from mftire.parameters import PARAMETERS
+
+#: Package root (the directory holding ``mftire/``).
+_ROOT = Path(__file__).resolve().parents[2]
+#: Fields of ``MFParams`` in the kernel's generated ``mf_params.h``: the numeric standard parameters.
+PARAM_KEYS: tuple[str, ...] = tuple(p.key for p in PARAMETERS if p.unit != "str")
+_PARAM_INDEX = {k: i for i, k in enumerate(PARAM_KEYS)}
+
+#: The 30 outputs in the order and with the meaning of MFeval's output matrix, the order of
+#: mf_kernel.c's outputs; public as :data:`mftire.mf.solver.OUTPUT_NAMES`.
+OUTPUTS: tuple[str, ...] = (
+    "Fx", "Fy", "Fz", "Mx", "My", "Mz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "Re", "rho",
+    "2a", "t", "mux", "muy", "omega", "Rl", "2b", "Mzr", "Cx", "Cy", "Cz", "Kya", "sigmax", "sigmay",
+    "instKya", "Kxk",
+)  # fmt: skip
+_OUT_INDEX = {k: i for i, k in enumerate(OUTPUTS)}
+_N_IN = 12  # Fz kappa alpha gamma phit Vx P omega data0..3 (mf_kernel.c MF_N_IN)
+_MAX_DATA = 4
+_N_TARGETS = 26  # len(mftire.mf.extensions.TARGETS): the room in the run-time MFTerm
+_TERM_INTS = 2 + _N_TARGETS + 2 + 8 + 2
+
+# Warning kinds of mf_eval.h, in the order the numpy path issues them.
+_W_ALPHA_LOW, _W_ALPHA_HIGH, _W_GAMMA_LOW, _W_GAMMA_HIGH = 7, 8, 9, 10
+_W_FZ_HIGH, _W_FZ_LOW, _W_P_LOW, _W_P_HIGH, _W_KAPPA_LOW, _W_KAPPA_HIGH, _W_LOW_SPEED = 11, 12, 13, 14, 15, 16, 17
+_W_CURVATURE = ((18, "Ex", "4.E14"), (20, "Exa", "4.E56"), (19, "Ey", "4.E24"), (21, "Eyk", "4.E64"),
+                (22, "Et", "4.E44"), (27, "Ey", "4.E24"))  # fmt: skip  # 27: Ey of the zero-camber Fy0 in Mz
+_LIMITS = (
+    (_W_ALPHA_LOW, "Slip angle", "below", "ALPMIN"), (_W_ALPHA_HIGH, "Slip angle", "above", "ALPMAX"),
+    (_W_GAMMA_LOW, "Inclination angle", "below", "CAMMIN"), (_W_GAMMA_HIGH, "Inclination angle", "above", "CAMMAX"),
+    (_W_FZ_HIGH, "Vertical load", "above", "FZMAX"), (_W_FZ_LOW, "Vertical load", "below", "FZMIN"),
+    (_W_P_LOW, "Pressure", "below", "PRESMIN"), (_W_P_HIGH, "Pressure", "above", "PRESMAX"),
+    (_W_KAPPA_LOW, "Slip ratio", "below", "KPUMIN"), (_W_KAPPA_HIGH, "Slip ratio", "above", "KPUMAX"),
+)  # fmt: skip
+
+_lib = None  # the loaded library, False when unavailable
+_why = ""  # why it is unavailable
+
+
+class KernelUnavailableError(RuntimeError):
+    """``backend="kernel"`` was asked for but the compiled kernel is not available."""
+
+
+def _candidates() -> list[Path]:
+    """Where a built library may be: next to this module (installed or built in place),
+    then in the installed distribution (a source checkout that shadows the installation)."""
+    found = [Path(__file__).resolve().parent / build.LIBRARY]
+    try:
+        from importlib.metadata import PackageNotFoundError, distribution
+
+        dist = distribution("mftire")
+        for f in dist.files or ():
+            if f.as_posix() == "mftire/mf/" + build.LIBRARY:
+                found.append(Path(dist.locate_file(f)).resolve())
+    except (ImportError, PackageNotFoundError, OSError):  # pragma: no cover - no distribution metadata
+        pass
+    return found
+
+
+def load(path: str | os.PathLike | None = None):
+    """The kernel library (``ctypes.CDLL``), or None with :func:`status` saying why.
+
+    ``path``: load this library instead of searching (it must have been built from the C
+    sources next to this module, e.g. by :func:`mftire.mf._kernel_build.compile_library`).
+    """
+    global _lib, _why
+    if path is None and _lib is not None:
+        return _lib or None
+    want = build.source_hash(_ROOT)
+    tried = []
+    for cand in [Path(path)] if path is not None else _candidates():
+        if not cand.is_file():
+            continue
+        try:
+            lib = ctypes.CDLL(str(cand))
+            lib.mf_kernel_hash.restype = ctypes.c_char_p
+            got = lib.mf_kernel_hash().decode()
+        except (OSError, AttributeError) as exc:
+            tried.append(f"{cand}: {exc}")
+            continue
+        if got != want:
+            tried.append(f"{cand}: built from other C sources (hash {got}, sources {want})")
+            continue
+        sizes = (ctypes.c_long * 5)()
+        lib.mf_kernel_sizes(sizes)
+        if tuple(sizes) != (len(PARAM_KEYS), _N_IN, len(OUTPUTS), 28, _TERM_INTS):
+            tried.append(f"{cand}: unexpected layout {tuple(sizes)}")
+            continue
+        f = lib.mf_kernel_evaluate
+        vp, ci = ctypes.c_void_p, ctypes.c_int
+        f.argtypes = (vp, vp, ci, ci, ctypes.c_long, vp, vp, ci, vp, vp, vp, vp)
+        f.restype = ci
+        lib.mf_kernel_point.argtypes = (vp, vp, ci, ci, ci, ctypes.c_ulong, vp)
+        lib.mf_kernel_point.restype = ci
+        _lib, _why = lib, ""
+        return lib
+    _lib = False
+    _why = "; ".join(tried) or (
+        "no compiled kernel found (installed without a C compiler, or a source checkout: build it with "
+        "`python -m mftire.mf.kernel build`)"
+    )
+    return None
+
+
+def available() -> bool:
+    """Whether the compiled kernel can be used."""
+    return load() is not None
+
+
+def status() -> str:
+    """One line: the kernel in use, or why the numpy path is used."""
+    lib = load()
+    return f"compiled kernel {lib._name}" if lib is not None else f"numpy path: {_why}"
+
+
+_env: str | None = None  # MFTIRE_BACKEND, read at the first evaluation
+
+
+def use_kernel(backend: str | None) -> bool:
+    """Whether a call with ``backend`` ("auto", "kernel", "numpy"; None: "auto") runs the kernel.
+
+    The environment variable ``MFTIRE_BACKEND`` (``numpy`` forces the reference path) is read
+    once, at the first evaluation of the process.
+    """
+    global _env
+    if backend is None or backend == "auto":
+        if _env is None:
+            _env = os.environ.get("MFTIRE_BACKEND", "auto")
+        if _env == "numpy":
+            return False
+        return available()
+    if backend == "numpy":
+        return False
+    if backend == "kernel":
+        if not available():
+            raise KernelUnavailableError(status())
+        return True
+    raise ValueError(f"backend must be 'auto', 'kernel' or 'numpy', not {backend!r}")
+
+
+# ----------------------------------------------------------------------------- parameters
+
+
+def _pack(p: Mapping[str, float], ext) -> tuple:
+    """``(keep, params address, terms address or None, n_terms)``: MFParams followed by the
+    numbers of the extension terms, and the run-time term table (MFTerm records of
+    mf_ext_gen.h) pointing into it; ``keep`` holds the arrays at those addresses.  None when a
+    parameter is not one number (the numpy path evaluates per-point parameter arrays)."""
+    values = [p[k] for k in PARAM_KEYS]
+    if not all(type(v) is float or np.ndim(v) == 0 for v in values):
+        return None
+    base = [float(v) for v in values]
+    if not ext:
+        params = np.array(base)
+        return params, params.ctypes.data, None, 0
+    from mftire.mf.extensions import BUILTIN_VARIABLES, OFFSET_TARGETS
+
+    builtin = list(BUILTIN_VARIABLES)
+    external = ext.external_variables
+    numbers: list[float] = []
+    rows = []
+
+    def put(value) -> int:
+        numbers.append(value)
+        return len(base) + len(numbers) - 1
+
+    def var(name: str) -> int:
+        return builtin.index(name) if name in builtin else len(builtin) + external.index(name)
+
+    for t in ext.terms:
+        two = t.variable2 is not None
+        f1 = [put(t.value(n, p)) for n in ("REF", "SCALE", "MIN", "MAX")]
+        f2 = [put(t.value(n, p)) for n in ("REF2", "SCALE2", "MIN2", "MAX2")] if two else [f1[0]] * 4
+        first = len(base) + len(numbers)
+        for k in t.level_keys:
+            put(t.numbers[k])
+        for k in t.coefficient_keys:
+            put(p[k] if k in p else t.numbers.get(k, 0.0))
+        tg = [(-1 if x == "FX_OFFSET" else -2) if x in OFFSET_TARGETS else _PARAM_INDEX[x] for x in t.targets]
+        from mftire.mf.extensions import FORMS
+
+        row = [list(FORMS).index(t.form.name), len(tg), *tg, *([0] * (_N_TARGETS - len(tg)))]
+        row += [var(t.variable), var(t.variable2) if two else -1, *f1, *f2, first, t.n_levels]
+        rows.append(row)
+    if not all(np.ndim(v) == 0 for v in numbers):
+        return None
+    params, terms = np.array(base + numbers), np.array(rows, dtype=np.intc)
+    return (params, terms), params.ctypes.data, terms.ctypes.data, len(rows)
+
+
+class FlatParameters(dict):
+    """The flat parameters of a :class:`mftire.Tyre` (``Tyre.flat``): a ``dict`` that counts
+    its changes, so the kernel packs them once and again only after a change.  Evaluated
+    as they are (a PAC2002 set is prepared already, :func:`mftire.mf.pac2002.prepare`)."""
+
+    version = 0
+
+    def _changed(self) -> None:
+        self.version = self.__dict__.get("version", 0) + 1
+
+    def __setitem__(self, key, value) -> None:
+        super().__setitem__(key, value)
+        self._changed()
+
+    def __delitem__(self, key) -> None:
+        super().__delitem__(key)
+        self._changed()
+
+    def __ior__(self, other):
+        self.update(other)
+        return self
+
+    def update(self, *args, **kw) -> None:
+        super().update(*args, **kw)
+        self._changed()
+
+    def setdefault(self, key, default=None):
+        self._changed()
+        return super().setdefault(key, default)
+
+    def pop(self, *args):
+        self._changed()
+        return super().pop(*args)
+
+    def popitem(self):
+        self._changed()
+        return super().popitem()
+
+    def clear(self) -> None:
+        super().clear()
+        self._changed()
+
+
+def _packed(p: Mapping[str, float], ext):
+    """:func:`_pack` of ``p``, cached on a :class:`FlatParameters` until it changes;
+    other mappings are packed at each call."""
+    if not isinstance(p, FlatParameters):
+        return _pack(p, ext)
+    key = (p.version, id(ext))
+    cache = p.__dict__.get("_kernel")
+    if cache is None or cache[0] != key:
+        cache = (key, _pack(p, ext), ext)  # ext kept alive: its id is part of the key
+        p.__dict__["_kernel"] = cache
+    return cache[1]
+
+
+# ----------------------------------------------------------------------------- evaluation
+
+_NULL12 = (ctypes.c_void_p * _N_IN)()
+
+
+def evaluate(
+    p: Mapping[str, float],
+    Fz,
+    kappa,
+    alpha,
+    gamma,
+    phit,
+    Vx,
+    P,
+    omega,
+    mode: int,
+    ext,
+    variables: Mapping[str, object] | None,
+    channels: Sequence[str] | None = None,
+) -> dict[str, np.ndarray] | None:
+    """The outputs ``channels`` (None: all 30) by the kernel; None when this call must take
+    the numpy path (inputs the kernel does not take as they are, such as unusual
+    broadcasting errors, complex values or variables the extensions do not read: the numpy
+    path then raises or evaluates exactly as without the kernel)."""
+    lib = load()
+    if lib is None:
+        return None
+    if (
+        not variables
+        and isinstance(Fz, _SCALAR)
+        and isinstance(kappa, _SCALAR)
+        and isinstance(alpha, _SCALAR)
+        and isinstance(gamma, _SCALAR)
+        and isinstance(phit, _SCALAR)
+        and isinstance(Vx, _NONE_OR_SCALAR)
+        and isinstance(P, _NONE_OR_SCALAR)
+        and isinstance(omega, _NONE_OR_SCALAR)
+        and not (ext and ext.external_variables)
+    ):
+        return _point(lib, p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, ext, channels)
+    names = list(variables or {})
+    external = ext.external_variables if ext else []
+    if any(k not in external for k in names) or any(k not in names for k in external):
+        return None
+    try:
+        if Vx is None:
+            Vx = p["LONGVL"]
+        arrs = [np.asarray(v, dtype=float) for v in (Fz, kappa, alpha, gamma, phit, Vx)]
+        arrs += [np.asarray(variables[k], dtype=float) for k in external]
+        shape = np.broadcast_shapes(*(a.shape for a in arrs))
+        Pa = None if P is None else np.asarray(P, dtype=float)
+        Om = None if omega is None else np.asarray(omega, dtype=float)
+        if (Pa is not None and np.broadcast_shapes(Pa.shape, shape) != shape) or (
+            Om is not None and np.broadcast_shapes(Om.shape, shape) != shape
+        ):
+            return None
+    except (ValueError, TypeError):
+        return None
+    n = 1
+    for s in shape:
+        n *= s
+    omega_given = Om is not None and bool(np.any(Om))
+    ins = [*arrs[:6], np.float64(p["INFLPRES"]) if Pa is None else Pa, Om if omega_given else np.float64(0.0)]
+    slots = [*arrs[6:], *([None] * (_N_IN - 8 - len(external)))]
+    keep = []
+    ptrs = (ctypes.c_void_p * _N_IN)()
+    steps = (ctypes.c_long * _N_IN)()
+    for k, a in enumerate(ins + slots):
+        if a is None:
+            continue
+        if a.size == 1:
+            a = np.ascontiguousarray(a, dtype=float).reshape(1)
+            steps[k] = 0
+        else:
+            if a.shape != shape or not a.flags.c_contiguous:
+                a = np.ascontiguousarray(np.broadcast_to(a, shape))
+            steps[k] = 1
+        keep.append(a)
+        ptrs[k] = a.ctypes.data
+    want = OUTPUTS if channels is None else channels
+    rows = list(want)
+    if "instKya" in rows and "Fy" not in rows:
+        rows.append("Fy")  # instKya is the difference of Fy
+    block = np.empty((len(rows), n))
+    outp = (ctypes.c_void_p * len(OUTPUTS))()
+    base = block.ctypes.data
+    for r, name in enumerate(rows):
+        outp[_OUT_INDEX[name]] = base + r * n * 8
+    packed = _packed(p, ext)
+    if packed is None:
+        return None
+    nan = (ctypes.c_long * _N_IN)()
+    mask = ctypes.c_ulong(0)
+    scratch = None
+    if not omega_given and n > 1:  # the first pass's radii, for the second (mf_kernel.c)
+        scratch = np.empty((1 + ("Re" not in rows) + ("omega" not in rows)) * n)
+    rc = lib.mf_kernel_evaluate(packed[1], packed[2], packed[3], int(mode), n, ptrs, steps, int(omega_given), outp,
+                                None if scratch is None else scratch.ctypes.data, nan, ctypes.byref(mask))  # fmt: skip
+    if rc != 0:  # bad mode or FITTYP: the numpy path raises its own error
+        return None
+    if any(nan) or mask.value:
+        _issue_warnings(p, nan, mask.value, external, omega_given)
+    if shape == ():
+        return dict(zip(want, block[: len(want), 0], strict=True))
+    return {name: block[r].reshape(shape) for r, name in enumerate(want)}
+
+
+_SCALAR = (float, int)
+_NONE_OR_SCALAR = (float, int, type(None))
+_IO = _N_IN * 2 + len(OUTPUTS) + 2  # mf_kernel_point's buffer
+_c_double_io = ctypes.c_double * _IO
+_ALL = (1 << len(OUTPUTS)) - 1
+_local = threading.local()  # one mf_kernel_point buffer per thread
+
+
+def _point(lib, p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, ext, channels):
+    """One operating point given as Python numbers: one C call on one buffer (call latency)."""
+    packed = _packed(p, ext)  # held until the call returns
+    if packed is None:
+        return None
+    omega_given = omega is not None and omega != 0.0
+    io = getattr(_local, "io", None)
+    if io is None:
+        io = _local.io = _c_double_io()
+    io[0] = Fz
+    io[1] = kappa
+    io[2] = alpha
+    io[3] = gamma
+    io[4] = phit
+    io[5] = p["LONGVL"] if Vx is None else Vx
+    io[6] = p["INFLPRES"] if P is None else P
+    io[7] = omega if omega_given else 0.0
+    everything = channels is None or channels == OUTPUTS
+    mask = _ALL if everything else sum(1 << _OUT_INDEX[k] for k in channels)
+    rc = lib.mf_kernel_point(packed[1], packed[2], packed[3], int(mode), omega_given, mask, io)
+    if rc != 0:
+        return None
+    values = np.frombuffer(io, count=len(OUTPUTS), offset=_N_IN * 8)
+    if everything:
+        out = dict(zip(OUTPUTS, values, strict=True))
+    else:
+        out = {k: values[_OUT_INDEX[k]] for k in channels}
+    if io[_IO - 1]:  # after the values are taken: a warning handler may evaluate again
+        flags = io[_N_IN + len(OUTPUTS) : _IO - 1]
+        _issue_warnings(p, [int(v) for v in flags[:_N_IN]], int(flags[_N_IN]), [], omega_given, depth=7)
+    return out
+
+
+def _issue_warnings(p, nan, mask: int, external: Sequence[str], omega_given: bool, depth: int = 6) -> None:
+    """The warnings of the numpy path (:mod:`mftire.mf.solver`, :mod:`mftire.mf.inputs`), in its order;
+    ``depth``: frames up to the caller of ``Tyre.evaluate``."""
+
+    def warn(msg: str) -> None:
+        warnings.warn(msg, MFLimitWarning, stacklevel=depth)
+
+    for k, name in enumerate(external):
+        if nan[8 + k]:
+            warn(f"{nan[8 + k]} NaN value(s) in input '{name}' replaced by 0.0.")
+    for k, name in enumerate(("Fz", "kappa", "alpha", "gamma", "phit", "Vx")):
+        if nan[k]:
+            warn(f"{nan[k]} NaN value(s) in input '{name}' replaced by 0.0.")
+    if omega_given and nan[7]:
+        warn(f"{nan[7]} NaN value(s) in input 'omega' replaced by 0.0.")
+    for kind, label, where, key in _LIMITS:
+        if mask >> kind & 1:
+            warn(f"{label} {where} the limit {key}={p[key]}. Values have been saturated.")
+    if mask >> _W_LOW_SPEED & 1:
+        warn(f"Speed input Vx below the limit VXLOW={p['VXLOW']}. Low speed mode activated.")
+    for kind, name, eq in _W_CURVATURE:
+        if mask >> kind & 1:
+            warn(f"{name} over limit (>1), eq {eq}; clipped to 1.")
+
+
+def build_in_place() -> Path:
+    """Compile the kernel next to this module (a source checkout; ``pip install`` does it otherwise)."""
+    global _lib
+    out = Path(__file__).resolve().parent / build.LIBRARY
+    build.compile_library(_ROOT, out)
+    _lib = None
+    return out
+
+
+if __name__ == "__main__":  # pragma: no cover - developer command
+    if sys.argv[1:] == ["build"]:
+        print(build_in_place())
+    else:
+        print(status())
