@@ -30,6 +30,7 @@ from mftire.fe import carcass as cc
 from mftire.fe.config import TyreConfig, check_operating_range
 from mftire.fe.solver import solve
 from mftire.iotools.atomic import write_text_atomic
+from mftire.parallel import Executor
 
 SWEEP_COLUMNS = ["Fz", "kappa", "alpha", "gamma", "Vx", "P", "Fx", "Fy", "Mz", "Mx", "My"]
 FREE_ROLLING_COLUMNS = ["Vx", "Fz", "load_fraction", "P", "omega", "re"]
@@ -72,6 +73,18 @@ def free_rolling(
     omega = newton(torque, w0 * (1.0 - 2e-3), x1=w0, tol=1e-9 * float(np.max(w0)), maxiter=50)
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
     return omega, V / omega
+
+
+@dataclass(frozen=True)
+class _SolveChunk:
+    """Forces of one chunk of slip points (a picklable task for :class:`~mftire.parallel.Executor`)."""
+
+    tyre: TyreConfig
+
+    def __call__(self, pts: np.ndarray) -> np.ndarray:
+        Fz, V, P, omega, alpha, gamma = pts
+        r = solve(self.tyre, Fz, V * np.cos(alpha), P, omega, alpha, gamma)  # Vx = V cos(alpha), eq 3.2
+        return np.column_stack([r.Fx, r.Fy, r.Mz, r.Mx, r.My])
 
 
 @dataclass(frozen=True)
@@ -119,11 +132,14 @@ def run_sweeps(
     combined_alphas_deg: Sequence[float] = COMBINED_ALPHAS_DEG,
     chunk: int = 2000,
     progress: bool | None = None,
+    executor: Executor | None = None,
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Run a list of (kind, condition) sweeps; returns (sweep table, free-rolling table).
 
-    All points of all sweeps are solved in vectorised batches of ``chunk`` points.  The
-    free-rolling speed of each distinct condition is found first (secant scheme).
+    The free-rolling speed of every distinct condition is found first, all conditions at once
+    (secant scheme).  The slip points of all sweeps are then solved in vectorised chunks of
+    ``chunk`` points, run by ``executor`` (default: in this process); the chunks and each
+    point's solution do not depend on the executor, so neither does the table (bit for bit).
     """
     if progress is None:
         progress = sys.stderr.isatty()
@@ -152,13 +168,12 @@ def run_sweeps(
     table = pd.concat(pieces, ignore_index=True)
     n = len(table)
     res = np.zeros((n, 5))
-    for start in range(0, n, chunk):
-        stop = min(start + chunk, n)
-        part = table.iloc[start:stop]
-        alpha = part["alpha"].to_numpy()
-        r = solve(tyre, part["Fz"].to_numpy(), part["Vx"].to_numpy() * np.cos(alpha), part["P"].to_numpy(),
-                  part["omega"].to_numpy(), alpha, part["gamma"].to_numpy())
-        res[start:stop] = np.column_stack([r.Fx, r.Fy, r.Mz, r.Mx, r.My])
+    pts = table[["Fz", "Vx", "P", "omega", "alpha", "gamma"]].to_numpy(dtype=float).T
+    bounds = [(start, min(start + chunk, n)) for start in range(0, n, chunk)]
+    chunks = (np.ascontiguousarray(pts[:, a:b]) for a, b in bounds)  # contiguous: same SIMD paths everywhere
+    results = (executor or Executor()).imap(_SolveChunk(tyre), chunks)
+    for (start, stop), r in zip(bounds, results, strict=True):
+        res[start:stop] = r
         report(f"solved {stop}/{n} slip points")
     if progress:
         print(file=sys.stderr)
@@ -215,13 +230,17 @@ def campaign_jobs(tyre: TyreConfig, quick: bool = False) -> list[tuple[str, Cond
 
 
 def campaign(
-    tyre: TyreConfig, quick: bool = False, progress: bool | None = None
+    tyre: TyreConfig, quick: bool = False, progress: bool | None = None, executor: Executor | None = None
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Run the full (or quick) campaign; returns (sweeps, free_rolling) tables."""
+    """Run the full (or quick) campaign; returns (sweeps, free_rolling) tables.
+
+    ``executor`` runs the chunks of slip points (default: in this process; see :func:`run_sweeps`).
+    """
     if quick:
         return run_sweeps(tyre, campaign_jobs(tyre, True), n_kappa=14, n_alpha=17,
-                          combined_alphas_deg=(0.0, -5.0, 5.0), progress=progress)
-    return run_sweeps(tyre, campaign_jobs(tyre, False), n_kappa=50, n_alpha=49, progress=progress)
+                          combined_alphas_deg=(0.0, -5.0, 5.0), progress=progress, executor=executor)
+    return run_sweeps(tyre, campaign_jobs(tyre, False), n_kappa=50, n_alpha=49, progress=progress,
+                      executor=executor)
 
 
 def write_csv_atomic(df: pd.DataFrame, path: str | os.PathLike[str]) -> Path:
