@@ -109,8 +109,11 @@ def _dask_imap(address: str, fn: Callable[[T], R], items: list[T]) -> Iterator[R
         from distributed import Client
     except ImportError as exc:
         raise MftireInputError("--scheduler needs Dask distributed: pip install 'mftire[dask]'") from exc
-    # set_as_default=False: connecting must not change the caller's global Dask configuration
-    with Client(address, set_as_default=False, timeout="20s") as client:
+    try:  # set_as_default=False: connecting must not change the caller's global Dask configuration
+        client = Client(address, set_as_default=False, timeout="20s")
+    except (OSError, ValueError) as exc:
+        raise MftireInputError(f"cannot use the Dask scheduler at {address!r}: {exc}") from exc
+    with client:
         futures = client.map(fn, items, pure=False)  # pure=False: no hashing of large arguments
         try:
             for fut in futures:
