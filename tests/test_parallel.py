@@ -10,6 +10,7 @@ from conftest import REFERENCE_TYRES
 
 from mftire.errors import MftireInputError
 from mftire.fe.config import load_tyre
+from mftire.fe.measured import Artefacts, measured_campaign
 from mftire.fe.sweeps import KMH, Condition, run_sweeps
 from mftire.fitting.bands import bootstrap_bands
 from mftire.fitting.core import fit_tir
@@ -84,6 +85,19 @@ def test_fe_chunks_on_process_pool_match_serial_bit_for_bit(fe_serial):
     assert len(table) == 14 + 13 and len(free) == 2
     assert table.equals(fe_serial[0]) and free.equals(fe_serial[1])
     assert np.abs(table["Fx"]).max() > 1000.0  # real forces, not zeros
+
+
+def test_measured_campaign_on_process_pool_matches_serial_bit_for_bit():
+    li, pn = FE_TYRE.load_index_load, FE_TYRE.size.nominal_pressure
+    jobs = [("braking", Condition(0.8 * li, 60 * KMH, pn)), ("cornering", Condition(0.8 * li, 60 * KMH, pn)),
+            ("braking", Condition(0.4 * li, 20 * KMH, pn))]
+
+    def run(ex):
+        return measured_campaign(FE_TYRE, jobs, Artefacts(noise=0.01), n_kappa=9, n_alpha=9, seed=3, executor=ex)
+
+    serial, pooled = run(Executor(jobs=1)), run(Executor(jobs=2))
+    assert len(serial) == 27 and serial.equals(pooled)
+    assert serial["run"].tolist() == [0] * 9 + [1] * 9 + [2] * 9
 
 
 def test_bootstrap_on_process_pool_matches_serial_bit_for_bit(fit, bands_serial):

@@ -28,7 +28,8 @@ import pandas as pd
 
 from mftire.fe.config import TyreConfig
 from mftire.fe.solver import solve
-from mftire.fe.sweeps import COMBINED_ALPHAS_DEG, Condition, _rows_for, free_rolling
+from mftire.fe.sweeps import COMBINED_ALPHAS_DEG, Condition, _rows_for, free_rolling, solve_points
+from mftire.parallel import Executor
 
 CHANNELS = ("Fx", "Fy", "Mz", "Mx", "My")
 
@@ -85,6 +86,7 @@ def measured_campaign(
     n_alpha: int = 41,
     combined_alphas_deg: Sequence[float] = COMBINED_ALPHAS_DEG,
     seed: int = 0,
+    executor: Executor | None = None,
 ) -> pd.DataFrame:
     """Run ``jobs`` in order as a measured test campaign (see the module docstring).
 
@@ -99,6 +101,9 @@ def measured_campaign(
         gives clean data.
     fade : callable, optional
         Friction level factor from (energy [J], time [s]) at the start of each run.
+    executor : Executor, optional
+        Runs the chunks of points when there is no fade (default: in this process); the
+        result does not depend on it.
     """
     art = artefacts or Artefacts()
     rng = np.random.default_rng(seed)
@@ -134,9 +139,9 @@ def measured_campaign(
         t = float(time[-1]) + art.pause
     if fade is None:  # no run depends on another: one vectorised solve of all points (each point's
         # solution is independent of the batch, so this equals run-by-run solves bit for bit)
-        allpts = tuple(np.concatenate([r[7][k] for r in runs]) for k in range(6))
+        allpts = np.array([np.concatenate([r[7][k] for r in runs]) for k in range(6)])
         split = np.cumsum([len(r[2]) for r in runs])[:-1]
-        per_run = [np.split(f, split) for f in _forces(tyre, allpts)]
+        per_run = [np.split(f, split) for f in solve_points(tyre, allpts, executor=executor).T]
         runs = [(*r[:8], [f[i] for f in per_run]) for i, r in enumerate(runs)]
 
     pieces = []

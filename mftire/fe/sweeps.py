@@ -77,14 +77,41 @@ def free_rolling(
 
 @dataclass(frozen=True)
 class _SolveChunk:
-    """Forces of one chunk of slip points (a picklable task for :class:`~mftire.parallel.Executor`)."""
+    """Forces of one chunk of points (a picklable task for :class:`~mftire.parallel.Executor`)."""
 
     tyre: TyreConfig
 
     def __call__(self, pts: np.ndarray) -> np.ndarray:
-        Fz, V, P, omega, alpha, gamma = pts
-        r = solve(self.tyre, Fz, V * np.cos(alpha), P, omega, alpha, gamma)  # Vx = V cos(alpha), eq 3.2
+        r = solve(self.tyre, *pts)
         return np.column_stack([r.Fx, r.Fy, r.Mz, r.Mx, r.My])
+
+
+def solve_points(
+    tyre: TyreConfig,
+    pts: np.ndarray,
+    *,
+    chunk: int = 2000,
+    executor: Executor | None = None,
+    report: Callable[[str], None] | None = None,
+) -> np.ndarray:
+    """Forces (n, 5) = (Fx, Fy, Mz, Mx, My) at the points ``pts``, rows (Fz, Vx, P, omega, alpha, gamma).
+
+    The points are solved in vectorised chunks of at most ``chunk`` points, at least one chunk per
+    worker of ``executor`` (default: in this process).  A point's solution depends on that point
+    alone (the carcass and return-map iterations stop per point and per element), so the result is
+    bit for bit the same for every chunk size and executor.
+    """
+    n = pts.shape[1]
+    workers = 1 if executor is None or executor.scheduler else executor.workers
+    size = max(1, min(chunk, -(-n // workers)))
+    bounds = [(start, min(start + size, n)) for start in range(0, n, size)]
+    chunks = (np.ascontiguousarray(pts[:, a:b]) for a, b in bounds)  # contiguous: the same SIMD paths everywhere
+    res = np.zeros((n, 5))
+    for (start, stop), r in zip(bounds, (executor or Executor()).imap(_SolveChunk(tyre), chunks), strict=True):
+        res[start:stop] = r
+        if report is not None:
+            report(f"solved {stop}/{n} slip points")
+    return res
 
 
 @dataclass(frozen=True)
@@ -166,15 +193,9 @@ def run_sweeps(
             "kind": kind,
         }))
     table = pd.concat(pieces, ignore_index=True)
-    n = len(table)
-    res = np.zeros((n, 5))
-    pts = table[["Fz", "Vx", "P", "omega", "alpha", "gamma"]].to_numpy(dtype=float).T
-    bounds = [(start, min(start + chunk, n)) for start in range(0, n, chunk)]
-    chunks = (np.ascontiguousarray(pts[:, a:b]) for a, b in bounds)  # contiguous: same SIMD paths everywhere
-    results = (executor or Executor()).imap(_SolveChunk(tyre), chunks)
-    for (start, stop), r in zip(bounds, results, strict=True):
-        res[start:stop] = r
-        report(f"solved {stop}/{n} slip points")
+    pts = np.array(table[["Fz", "Vx", "P", "omega", "alpha", "gamma"]].to_numpy(dtype=float).T, order="C")  # a copy
+    pts[1] *= np.cos(pts[4])  # Vx = V cos(alpha), eq 3.2
+    res = solve_points(tyre, pts, chunk=chunk, executor=executor, report=report)
     if progress:
         print(file=sys.stderr)
     table[["Fx", "Fy", "Mz", "Mx", "My"]] = res
