@@ -79,7 +79,8 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
         fe.to_csv(tmp, index=False)
 
     step("measured-like campaign (sliding-speed friction, rig artefacts)")
-    meas = programme("slip_speed", seed=1, scale=0.5 if quick else 1.0).data.assign(source="measured")
+    meas = programme("slip_speed", seed=1, scale=0.5 if quick else 1.0, executor=executor).data
+    meas = meas.assign(source="measured")
     with atomic_path(os.path.join(out, "measured_sweeps.csv")) as tmp:
         meas.to_csv(tmp, index=False)
 
