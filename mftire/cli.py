@@ -146,9 +146,10 @@ def _cmd_plot(args: argparse.Namespace) -> int:
 def _cmd_demo(args: argparse.Namespace) -> int:
     from mftire.demo import OUTPUT_NAMES, run_demo
     from mftire.iotools.output import OutputPlan
+    from mftire.parallel import Executor
 
     OutputPlan((), args.force).folder(args.output, OUTPUT_NAMES)
-    run_demo(args.output, quick=args.quick, progress=True)
+    run_demo(args.output, quick=args.quick, progress=True, executor=Executor.from_args(args))
     return 0
 
 
@@ -214,6 +215,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--output", default="demo_out", help="output directory (default demo_out)")
     p.add_argument("--quick", action="store_true", help="reduced grids (a test run)")
+    from mftire.parallel import add_parallel_options
+
+    add_parallel_options(p, "the FE campaign chunks and the bootstrap refits")
     add_force_option(p)
     p.set_defaults(func=_cmd_demo)
 

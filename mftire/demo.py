@@ -23,6 +23,7 @@ import pandas as pd
 
 from mftire.iotools.atomic import atomic_path
 from mftire.iotools.tir import write_tir
+from mftire.parallel import Executor
 
 
 class _Steps:
@@ -40,17 +41,20 @@ OUTPUT_NAMES = ("fe_sweeps.csv", "measured_sweeps.csv", "fitted.tir", "extended.
                 "report.json", "headline.png")
 
 
-def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progress: bool = True) -> dict:
+def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progress: bool = True,
+             executor: Executor | None = None) -> dict:
     """Run the demo; returns a summary dict (also in ``output/report.json``).
 
+    ``executor`` runs the FE campaign chunks and the bootstrap refits (default: in this process;
+    see :mod:`mftire.parallel`); the results do not depend on it.
     Warnings of the steps are silenced inside the run only (global filters are restored).
     """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return _run_demo(output, quick, progress)
+        return _run_demo(output, quick, progress, executor)
 
 
-def _run_demo(output: str | os.PathLike, quick: bool, progress: bool) -> dict:
+def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: Executor | None) -> dict:
     from mftire.compare.core import compare
     from mftire.diagnosis.diagnose import diagnose
     from mftire.diagnosis.report import write_report
@@ -69,13 +73,14 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool) -> dict:
 
     step("FE-surrogate campaign of the default tyre" + (" (quick grid)" if quick else ""))
     fe_tyre = load_tyre(None)
-    fe, free = campaign(fe_tyre, quick=quick, progress=False)
+    fe, free = campaign(fe_tyre, quick=quick, progress=False, executor=executor)
     fe = fe.assign(source="fe")
     with atomic_path(os.path.join(out, "fe_sweeps.csv")) as tmp:
         fe.to_csv(tmp, index=False)
 
     step("measured-like campaign (sliding-speed friction, rig artefacts)")
-    meas = programme("slip_speed", seed=1, scale=0.5 if quick else 1.0).data.assign(source="measured")
+    meas = programme("slip_speed", seed=1, scale=0.5 if quick else 1.0, executor=executor).data
+    meas = meas.assign(source="measured")
     with atomic_path(os.path.join(out, "measured_sweeps.csv")) as tmp:
         meas.to_csv(tmp, index=False)
 
@@ -107,7 +112,8 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool) -> dict:
 
     step("bootstrap bands over sweeps")
     heldout_rows = diag.data is not None and diag.train is not None
-    bands = bootstrap_bands(None, template, n=4 if quick else 12, fit=fit, stages="1,2,3", seed=0)
+    bands = bootstrap_bands(None, template, n=4 if quick else 12, fit=fit, stages="1,2,3", seed=0,
+                            executor=executor)
     coverage = None
     if heldout_rows:
         held = diag.data[~diag.train]
@@ -210,8 +216,8 @@ def _headline(comp, diag, path: str) -> None:
 
 
 def main(output: str = "demo_out", quick: bool = False) -> int:
-    """Entry used by the CLI."""
-    run_demo(output, quick=quick, progress=True)
+    """Entry for ``python -m mftire.demo [OUTPUT]`` (all cores)."""
+    run_demo(output, quick=quick, progress=True, executor=Executor(jobs=None))
     return 0
 
 

@@ -48,12 +48,13 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 def _cmd_campaign(args: argparse.Namespace) -> int:
     from mftire.fe.sweeps import campaign, write_csv_atomic
     from mftire.iotools.output import OutputPlan
+    from mftire.parallel import Executor
 
     OutputPlan([args.tyre], args.force).folder(args.output, ("sweeps.csv", "free_rolling.csv"))
     tyre = _tyre(args)
     out = Path(args.output)
     t0 = time.perf_counter()
-    table, free = campaign(tyre, quick=args.quick)
+    table, free = campaign(tyre, quick=args.quick, executor=Executor.from_args(args))
     write_csv_atomic(table, out / "sweeps.csv")
     write_csv_atomic(free, out / "free_rolling.csv")
     counts = table["kind"].value_counts().to_dict()
@@ -129,6 +130,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     c.add_argument("--tyre", default="default", help=tyre_help)
     c.add_argument("--output", required=True, help="output directory (sweeps.csv, free_rolling.csv)")
     c.add_argument("--quick", action="store_true", help="reduced grid (for tests)")
+    from mftire.parallel import add_parallel_options
+
+    add_parallel_options(c, "the chunks of slip points")
     add_force_option(c)
     c.set_defaults(func=_cmd_campaign)
 

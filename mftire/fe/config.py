@@ -150,7 +150,9 @@ class GridParams:
     carcass_tol: float = 1e-5  #: convergence tolerance on the carcass state [rad, m, -]
     carcass_maxiter: int = 60  #: maximum carcass iterations
     relaxation: float = 0.8  #: under-relaxation of the carcass update [-]
-    newton_iter: int = 8  #: local return-mapping iterations per element
+    newton_iter: int = 8  #: local return-mapping iterations per element (at most)
+    #: an element's return map stops once a Newton step is <= newton_tol max(s, gamma_crit); 0 runs all iterations
+    newton_tol: float = 1e-10
 
 
 @dataclass(frozen=True)
@@ -387,6 +389,7 @@ def validate(tyre: TyreConfig) -> None:
         raise MftireInputError("tyre parameters 'grid.nx' >= 8 and 'grid.ny' >= 5 are required")
     _positive("grid.carcass_tol", g.carcass_tol)
     _in_range("grid.relaxation", g.relaxation, 0.05, 1.0)
+    _nonneg("grid.newton_tol", g.newton_tol)
     if g.carcass_maxiter < 1 or g.newton_iter < 2:
         raise MftireInputError("tyre parameters 'grid.carcass_maxiter' >= 1 and 'grid.newton_iter' >= 2")
 

@@ -28,7 +28,8 @@ import pandas as pd
 
 from mftire.fe.config import TyreConfig
 from mftire.fe.solver import solve
-from mftire.fe.sweeps import COMBINED_ALPHAS_DEG, Condition, _rows_for, free_rolling
+from mftire.fe.sweeps import COMBINED_ALPHAS_DEG, Condition, _rows_for, free_rolling, solve_points
+from mftire.parallel import Executor
 
 CHANNELS = ("Fx", "Fy", "Mz", "Mx", "My")
 
@@ -69,6 +70,12 @@ def _smooth_noise(n: int, rng: np.random.Generator, corr_points: float = 8.0) ->
     return (x - x.mean()) / (x.std() or 1.0)
 
 
+def _forces(tyre: TyreConfig, pts: tuple[np.ndarray, ...]) -> list[np.ndarray]:
+    """(Fx, Fy, Mz, Mx, My) at the points (Fz, Vx, P, omega, alpha, gamma)."""
+    r = solve(tyre, *pts)
+    return [r.Fx, r.Fy, r.Mz, r.Mx, r.My]
+
+
 def measured_campaign(
     tyre: TyreConfig,
     jobs: Sequence[tuple[str, Condition]],
@@ -79,6 +86,7 @@ def measured_campaign(
     n_alpha: int = 41,
     combined_alphas_deg: Sequence[float] = COMBINED_ALPHAS_DEG,
     seed: int = 0,
+    executor: Executor | None = None,
 ) -> pd.DataFrame:
     """Run ``jobs`` in order as a measured test campaign (see the module docstring).
 
@@ -93,6 +101,9 @@ def measured_campaign(
         gives clean data.
     fade : callable, optional
         Friction level factor from (energy [J], time [s]) at the start of each run.
+    executor : Executor, optional
+        Runs the chunks of points when there is no fade (default: in this process); the
+        result does not depend on it.
     """
     art = artefacts or Artefacts()
     rng = np.random.default_rng(seed)
@@ -104,32 +115,47 @@ def measured_campaign(
     total_time = total_points * art.point_time + len(jobs) * art.pause
     drift_dir = {ch: rng.standard_normal() for ch in CHANNELS}
 
-    pieces = []
+    runs = []
     t, energy = 0.0, 0.0
-    for run, (kind, c) in enumerate(jobs):
+    for kind, c in jobs:
         kappa, alpha = _rows_for(kind, n_kappa, n_alpha, combined_alphas_deg)
         n = len(kappa)
         level = 1.0 if fade is None else float(fade(energy, t))
-        tyre_run = tyre if level == 1.0 else tyre.updated({"friction.scale": tyre.friction.scale * level})
         Fz = c.Fz * (1.0 + art.fz_wander * _smooth_noise(n, rng)) if art.fz_wander else np.full(n, c.Fz)
+        # the run's random draws (offset, then noise, per channel), made before its forces are known
+        z = {ch: (rng.standard_normal(), rng.standard_normal(n)) for ch in CHANNELS}
         omega = np.cos(alpha) * omega_free[(c.Fz, c.V, c.P, c.gamma)] * (1.0 + kappa)  # eqs 3.4, 5.15
-        r = solve(tyre_run, Fz, c.V * np.cos(alpha), c.P, omega, alpha, c.gamma)
         time = t + art.point_time * np.arange(n)
+        pts = (Fz, np.full(n, c.V) * np.cos(alpha), np.full(n, c.P), omega, alpha, np.full(n, c.gamma))
+        forces = None
+        if fade is not None:  # the friction level of the next run depends on this run's forces
+            tyre_run = tyre if level == 1.0 else tyre.updated({"friction.scale": tyre.friction.scale * level})
+            forces = _forces(tyre_run, pts)
+            # friction energy of this run: sliding power ~ |Fx Vsx| + |Fy Vsy| over the run time
+            Vsx = kappa * c.V
+            Vsy = np.tan(alpha) * c.V
+            energy += float(np.sum(np.abs(forces[0] * Vsx) + np.abs(forces[1] * Vsy)) * art.point_time)
+        runs.append((kind, c, kappa, alpha, Fz, time, z, pts, forces))
+        t = float(time[-1]) + art.pause
+    if fade is None:  # no run depends on another: one vectorised solve of all points (each point's
+        # solution is independent of the batch, so this equals run-by-run solves bit for bit)
+        allpts = np.array([np.concatenate([r[7][k] for r in runs]) for k in range(6)])
+        split = np.cumsum([len(r[2]) for r in runs])[:-1]
+        per_run = [np.split(f, split) for f in solve_points(tyre, allpts, executor=executor).T]
+        runs = [(*r[:8], [f[i] for f in per_run]) for i, r in enumerate(runs)]
+
+    pieces = []
+    for run, (kind, c, kappa, alpha, Fz, time, z, _, forces) in enumerate(runs):
         df = pd.DataFrame({
             "Fz": Fz, "kappa": kappa, "alpha": alpha, "gamma": c.gamma, "Vx": c.V, "P": c.P,
-            "Fx": r.Fx, "Fy": r.Fy, "Mz": r.Mz, "Mx": r.Mx, "My": r.My,
+            **dict(zip(CHANNELS, forces, strict=True)),
             "kind": kind, "load_fraction": c.Fz / tyre.load_index_load, "run": run, "time": time,
         })  # fmt: skip
-        # friction energy of this run: sliding power ~ |Fx Vsx| + |Fy Vsy| over the run time
-        Vsx = kappa * c.V
-        Vsy = np.tan(alpha) * c.V
-        energy += float(np.sum(np.abs(r.Fx * Vsx) + np.abs(r.Fy * Vsy)) * art.point_time)
         for ch in CHANNELS:
             y = df[ch].to_numpy(float)
-            off = art.offsets.get(ch, 0.0) * rng.standard_normal()
+            off = art.offsets.get(ch, 0.0) * z[ch][0]
             drift = art.drift * art.offsets.get(ch, 0.0) * drift_dir[ch] * (time / max(total_time, 1.0))
-            noise = art.noise * np.max(np.abs(y)) * rng.standard_normal(n)
+            noise = art.noise * np.max(np.abs(y)) * z[ch][1]
             df[ch] = y + off + drift + noise
         pieces.append(df)
-        t = float(time[-1]) + art.pause
     return pd.concat(pieces, ignore_index=True)

@@ -31,6 +31,7 @@ from mftire.fe.measured import Artefacts, measured_campaign, thermal_fade
 from mftire.fe.sweeps import KMH, Condition
 from mftire.fe.template import mf_template
 from mftire.iotools.tir import TirParameters
+from mftire.parallel import Executor
 
 PROGRAMMES = ("slip_speed", "fade", "pressure", "null")
 
@@ -69,8 +70,12 @@ def _loads(tyre: TyreConfig) -> list[float]:
     return [0.4 * li, 0.8 * li, 1.2 * li]
 
 
-def programme(name: str, seed: int = 0, scale: float = 1.0) -> Programme:
-    """Simulate one demonstration programme (``scale`` < 1 thins the slip grids for tests)."""
+def programme(name: str, seed: int = 0, scale: float = 1.0, executor: Executor | None = None) -> Programme:
+    """Simulate one demonstration programme (``scale`` < 1 thins the slip grids for tests).
+
+    ``executor`` runs the chunks of points of programmes without fade (default: in this process;
+    see :mod:`mftire.parallel`); the data do not depend on it.
+    """
     if name not in PROGRAMMES:
         raise ValueError(f"unknown programme {name!r}; choose from {', '.join(PROGRAMMES)}")
     base = load_tyre(None)
@@ -85,14 +90,15 @@ def programme(name: str, seed: int = 0, scale: float = 1.0) -> Programme:
             for v in (20.0, 40.0, 60.0, 80.0, 100.0):
                 jobs.append(("braking", Condition(f, v * KMH, pn)))
             jobs.append(("cornering", Condition(f, v60, pn)))
-        data = measured_campaign(tyre, jobs, art, n_kappa=nk, n_alpha=na, seed=seed)
+        data = measured_campaign(tyre, jobs, art, n_kappa=nk, n_alpha=na, seed=seed, executor=executor)
         return Programme(name, data, mf_template(tyre), pd.Series(True, index=data.index),
                          "friction depends on sliding speed (fixed Vmax); braking 20-100 km/h")  # fmt: skip
     if name == "fade":
         tyre = base
         one_pass = [(kind, Condition(f, v60, pn)) for f in _loads(tyre) for kind in ("braking", "cornering")]
         jobs = one_pass * 3
-        clean = measured_campaign(tyre, jobs, Artefacts(0.0, 0.0, {}, 0.0), n_kappa=nk, n_alpha=na, seed=seed)
+        clean = measured_campaign(tyre, jobs, Artefacts(0.0, 0.0, {}, 0.0), n_kappa=nk, n_alpha=na, seed=seed,
+                                  executor=executor)
         # friction energy of the whole programme, to set the fade's energy scale
         e_total = float(((clean.Fx * clean.kappa * clean.Vx).abs() + (clean.Fy * clean.Vx * clean.alpha.abs()).abs())
                         .sum() * art.point_time)  # fmt: skip
@@ -105,11 +111,11 @@ def programme(name: str, seed: int = 0, scale: float = 1.0) -> Programme:
         pressures = (pn, pn - 0.5e5, pn + 0.5e5, pn - 0.25e5, pn + 0.25e5)
         jobs = [(kind, Condition(f, v60, p)) for p in pressures for f in _loads(tyre)
                 for kind in ("braking", "cornering")]  # fmt: skip
-        data = measured_campaign(tyre, jobs, art, n_kappa=nk, n_alpha=na, seed=seed)
+        data = measured_campaign(tyre, jobs, art, n_kappa=nk, n_alpha=na, seed=seed, executor=executor)
         return Programme(name, data, mf_template(tyre, pressure_terms=False), pd.Series(True, index=data.index),
                          "three pressures; MF fitted without pressure terms", fixed=PRESSURE_KEYS_FITTED)  # fmt: skip
     tyre = base
     jobs = [(kind, Condition(f, v60, pn)) for f in _loads(tyre) for kind in ("braking", "cornering")]
-    data = measured_campaign(tyre, jobs, art, n_kappa=nk, n_alpha=na, seed=seed)
+    data = measured_campaign(tyre, jobs, art, n_kappa=nk, n_alpha=na, seed=seed, executor=executor)
     return Programme(name, data, mf_template(tyre), pd.Series(True, index=data.index),
                      "no effect MF 6.1 lacks: 60 km/h, nominal pressure")  # fmt: skip

@@ -114,54 +114,88 @@ def _prepare(tyre: TyreConfig, Fz, Vx, P, omega, alpha, gamma) -> _Batch:
     )
 
 
-def _return_map(tx, ty, Kx, Ky, pmu, mu_s, dmu, h2, v_max, g_c, s0, iters):
+def _return_map(tx, ty, Kx, Ky, pmu, mu_s, dmu, h2, v_max, g_c, s0, iters, tol=0.0):
     """Local sliding speed s >= 0 of a bristle tip, for all elements of one column.
 
     Solves |(tau_x/(Kx s + Q), tau_y/(Ky s + Q))| = 1 with Q(s) = mu_p p mu_v(s) min(s/g_c, 1)
     (regularised law, thesis eqs 2.47-2.49) by Newton steps safeguarded by bisection inside
     the bracket [0, |tau_tr|/min(K)]; dQ/ds uses the derivative of thesis appendix A (A.4, A.11).
-    Returns (s, Q, unit vector components ex, ey, mu_v).
+    An element stops once its error after an accepted Newton step is at most ``tol`` max(s, g_c):
+    the error is estimated from two successive Newton steps d1, d2 as d2^3/d1^2 (quadratic
+    convergence, e_k+1 ~ C e_k^2), or bounded by the step itself (``tol = 0``: every element
+    runs all ``iters`` iterations).  Elements still iterating are gathered into compact arrays,
+    so converged ones cost nothing more.  An element's iterates depend on its own data only,
+    never on the other elements of the batch.
+    Returns (s, Q, unit vector components ex, ey, mu_v), shaped like the broadcast inputs.
     """
+    shape = np.broadcast_shapes(*(np.shape(v) for v in (tx, ty, Kx, Ky, pmu, mu_s, g_c, s0)))
+    tx, ty, Kx, Ky, pmu, mu_s, dmu, h2, v_max, g_c, s0 = (
+        np.broadcast_to(v, shape).ravel() for v in (tx, ty, Kx, Ky, pmu, mu_s, dmu, h2, v_max, g_c, s0))
     tn = np.hypot(tx, ty)
     tn_safe = np.maximum(tn, 1e-9)
     ax, ay = tx / tn_safe, ty / tn_safe
     axx, ayy = ax * ax, ay * ay
-    def residual(s):
+
+    def residual(s, pmu, mu_s, dmu, h2, v_max, g_c, Kx, Ky, axx, ayy, tn_safe):
         muv, dmuv = velocity_factor_and_slope(s, mu_s, dmu, h2, v_max)
         stick = s < g_c
         m = np.where(stick, s / g_c, 1.0)
         Q = pmu * muv * m
         dQ = pmu * (dmuv * m + np.where(stick, muv / g_c, 0.0))
-        Dx, Dy = Kx * s + Q, Ky * s + Q
-        S = np.maximum(axx / (Dx * Dx) + ayy / (Dy * Dy), 1e-30)
-        return S**-0.5 - tn_safe, S**-1.5 * (axx * (Kx + dQ) / Dx**3 + ayy * (Ky + dQ) / Dy**3)
+        ix, iy = 1.0 / (Kx * s + Q), 1.0 / (Ky * s + Q)  # 1/D_x, 1/D_y
+        ix2, iy2 = ix * ix, iy * iy
+        r = 1.0 / np.sqrt(np.maximum(axx * ix2 + ayy * iy2, 1e-30))  # S^(-1/2)
+        return r - tn_safe, r * r * r * (axx * (Kx + dQ) * ix2 * ix + ayy * (Ky + dQ) * iy2 * iy)
 
     # the law has a kink at gamma_crit (eq 2.47): pick the smooth branch holding the root first
     hi = tn_safe / np.minimum(Kx, Ky)
-    g_cb = np.broadcast_to(g_c, tn.shape)
-    r_c, _ = residual(np.minimum(g_cb, hi))
+    work = (pmu, mu_s, dmu, h2, v_max, g_c, Kx, Ky, axx, ayy, tn_safe)
+    r_c, _ = residual(np.minimum(g_c, hi), *work)
     in_stick = r_c >= 0.0
-    lo = np.where(in_stick, 0.0, g_cb)
-    hi = np.where(in_stick, np.minimum(g_cb, hi), hi)
+    lo = np.where(in_stick, 0.0, g_c)
+    hi = np.where(in_stick, np.minimum(g_c, hi), hi)
     # isotropic closed-form start with mu frozen at the upstream sliding speed
     muv0, _ = velocity_factor_and_slope(s0, mu_s, dmu, h2, v_max)
     K = 0.5 * (Kx + Ky)
     q0 = pmu * muv0
     s = np.where(in_stick, tn / (K + q0 / g_c), (tn - q0) / K)
     s = np.where((s > lo) & (s < hi), s, 0.5 * (lo + hi))
+    out = s  # final iterates, written as elements converge
+    idx = np.arange(s.size)  # position in ``out`` of each working element
+    alive = np.ones(s.size, dtype=bool)  # working elements still iterating
+    d1 = np.full(s.size, np.inf)  # last Newton step (inf: the last step was a bisection)
     for _ in range(iters):
-        res, dres = residual(s)
+        res, dres = residual(s, *work)
         lo = np.where(res < 0.0, s, lo)
         hi = np.where(res > 0.0, s, hi)
         s_new = s - res / np.maximum(dres, 1e-30)
-        s = np.where((s_new >= lo) & (s_new <= hi), s_new, 0.5 * (lo + hi))
+        newton = (s_new >= lo) & (s_new <= hi)
+        s_next = np.where(newton, s_new, 0.5 * (lo + hi))
+        if tol > 0.0:
+            d2 = np.where(newton, np.abs(s_next - s), np.inf)
+            pair = newton & (d1 > 0.0) & (d1 < np.inf)  # two Newton steps in a row
+            err = np.where(pair, d2 * (d2 / np.where(pair, d1, 1.0)) ** 2, d2)  # quadratic: e ~ d2^3 / d1^2
+            err = np.minimum(err, d2)
+            done = alive & (err <= tol * np.maximum(s_next, work[5]))
+            out[idx[done]] = s_next[done]  # frozen at its converged iterate
+            alive &= ~done
+            d1 = d2
+        s = np.where(alive, s_next, s)
+        if tol > 0.0 and alive.sum() < 0.75 * alive.size:  # gather the elements still iterating
+            if not alive.any():
+                break
+            idx, s, lo, hi, d1 = idx[alive], s[alive], lo[alive], hi[alive], d1[alive]
+            work = tuple(a[alive] for a in work)
+            alive = alive[alive]
+    out[idx[alive]] = s[alive]
+    s = out
     muv, _ = velocity_factor_and_slope(s, mu_s, dmu, h2, v_max)
     Q = pmu * muv * np.minimum(s / g_c, 1.0)
     Dx, Dy = Kx * s + Q, Ky * s + Q
     ex, ey = tx / np.maximum(Dx, 1e-30), ty / np.maximum(Dy, 1e-30)
     norm = np.maximum(np.hypot(ex, ey), 1e-30)
     ex, ey = np.where(tn > 0, ex / norm, 0.0), np.where(tn > 0, ey / norm, 0.0)
-    return s, Q, ex, ey, muv
+    return tuple(v.reshape(shape) for v in (s, Q, ex, ey, muv))
 
 
 def _brush_pass(tyre: TyreConfig, B: _Batch, idx: np.ndarray, state: np.ndarray, want_maps: bool):
@@ -214,7 +248,8 @@ def _brush_pass(tyre: TyreConfig, B: _Batch, idx: np.ndarray, state: np.ndarray,
         mup = pressure_factor(p, f.p0, f.k, f.plimit)
         pmu = mup * p
         s, Q, ex, ey, muv = _return_map(tx, ty, Kx, Ky, pmu, mu_s, dmu, h2, v_max, g_c,
-                                       np.maximum(s_prev, 1e-6 * g_c), g.newton_iter)
+                                       np.maximum(s_prev, 1e-6 * g_c), g.newton_iter,
+                                       g.newton_tol)
         taux, tauy = Q * ex, Q * ey
         ux = ux_tr - dt * s * ex
         uy = uy_tr - dt * s * ey

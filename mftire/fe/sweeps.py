@@ -30,6 +30,7 @@ from mftire.fe import carcass as cc
 from mftire.fe.config import TyreConfig, check_operating_range
 from mftire.fe.solver import solve
 from mftire.iotools.atomic import write_text_atomic
+from mftire.parallel import Executor
 
 SWEEP_COLUMNS = ["Fz", "kappa", "alpha", "gamma", "Vx", "P", "Fx", "Fy", "Mz", "Mx", "My"]
 FREE_ROLLING_COLUMNS = ["Vx", "Fz", "load_fraction", "P", "omega", "re"]
@@ -72,6 +73,45 @@ def free_rolling(
     omega = newton(torque, w0 * (1.0 - 2e-3), x1=w0, tol=1e-9 * float(np.max(w0)), maxiter=50)
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
     return omega, V / omega
+
+
+@dataclass(frozen=True)
+class _SolveChunk:
+    """Forces of one chunk of points (a picklable task for :class:`~mftire.parallel.Executor`)."""
+
+    tyre: TyreConfig
+
+    def __call__(self, pts: np.ndarray) -> np.ndarray:
+        r = solve(self.tyre, *pts)
+        return np.column_stack([r.Fx, r.Fy, r.Mz, r.Mx, r.My])
+
+
+def solve_points(
+    tyre: TyreConfig,
+    pts: np.ndarray,
+    *,
+    chunk: int = 2000,
+    executor: Executor | None = None,
+    report: Callable[[str], None] | None = None,
+) -> np.ndarray:
+    """Forces (n, 5) = (Fx, Fy, Mz, Mx, My) at the points ``pts``, rows (Fz, Vx, P, omega, alpha, gamma).
+
+    The points are solved in vectorised chunks of at most ``chunk`` points, at least one chunk per
+    worker of ``executor`` (default: in this process).  A point's solution depends on that point
+    alone (the carcass and return-map iterations stop per point and per element), so the result is
+    bit for bit the same for every chunk size and executor.
+    """
+    n = pts.shape[1]
+    workers = 1 if executor is None or executor.scheduler else executor.workers
+    size = max(1, min(chunk, -(-n // workers)))
+    bounds = [(start, min(start + size, n)) for start in range(0, n, size)]
+    chunks = (np.ascontiguousarray(pts[:, a:b]) for a, b in bounds)  # contiguous: the same SIMD paths everywhere
+    res = np.zeros((n, 5))
+    for (start, stop), r in zip(bounds, (executor or Executor()).imap(_SolveChunk(tyre), chunks), strict=True):
+        res[start:stop] = r
+        if report is not None:
+            report(f"solved {stop}/{n} slip points")
+    return res
 
 
 @dataclass(frozen=True)
@@ -119,11 +159,14 @@ def run_sweeps(
     combined_alphas_deg: Sequence[float] = COMBINED_ALPHAS_DEG,
     chunk: int = 2000,
     progress: bool | None = None,
+    executor: Executor | None = None,
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Run a list of (kind, condition) sweeps; returns (sweep table, free-rolling table).
 
-    All points of all sweeps are solved in vectorised batches of ``chunk`` points.  The
-    free-rolling speed of each distinct condition is found first (secant scheme).
+    The free-rolling speed of every distinct condition is found first, all conditions at once
+    (secant scheme).  The slip points of all sweeps are then solved in vectorised chunks of
+    ``chunk`` points, run by ``executor`` (default: in this process); the chunks and each
+    point's solution do not depend on the executor, so neither does the table (bit for bit).
     """
     if progress is None:
         progress = sys.stderr.isatty()
@@ -150,16 +193,9 @@ def run_sweeps(
             "kind": kind,
         }))
     table = pd.concat(pieces, ignore_index=True)
-    n = len(table)
-    res = np.zeros((n, 5))
-    for start in range(0, n, chunk):
-        stop = min(start + chunk, n)
-        part = table.iloc[start:stop]
-        alpha = part["alpha"].to_numpy()
-        r = solve(tyre, part["Fz"].to_numpy(), part["Vx"].to_numpy() * np.cos(alpha), part["P"].to_numpy(),
-                  part["omega"].to_numpy(), alpha, part["gamma"].to_numpy())
-        res[start:stop] = np.column_stack([r.Fx, r.Fy, r.Mz, r.Mx, r.My])
-        report(f"solved {stop}/{n} slip points")
+    pts = np.array(table[["Fz", "Vx", "P", "omega", "alpha", "gamma"]].to_numpy(dtype=float).T, order="C")  # a copy
+    pts[1] *= np.cos(pts[4])  # Vx = V cos(alpha), eq 3.2
+    res = solve_points(tyre, pts, chunk=chunk, executor=executor, report=report)
     if progress:
         print(file=sys.stderr)
     table[["Fx", "Fy", "Mz", "Mx", "My"]] = res
@@ -215,13 +251,17 @@ def campaign_jobs(tyre: TyreConfig, quick: bool = False) -> list[tuple[str, Cond
 
 
 def campaign(
-    tyre: TyreConfig, quick: bool = False, progress: bool | None = None
+    tyre: TyreConfig, quick: bool = False, progress: bool | None = None, executor: Executor | None = None
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Run the full (or quick) campaign; returns (sweeps, free_rolling) tables."""
+    """Run the full (or quick) campaign; returns (sweeps, free_rolling) tables.
+
+    ``executor`` runs the chunks of slip points (default: in this process; see :func:`run_sweeps`).
+    """
     if quick:
         return run_sweeps(tyre, campaign_jobs(tyre, True), n_kappa=14, n_alpha=17,
-                          combined_alphas_deg=(0.0, -5.0, 5.0), progress=progress)
-    return run_sweeps(tyre, campaign_jobs(tyre, False), n_kappa=50, n_alpha=49, progress=progress)
+                          combined_alphas_deg=(0.0, -5.0, 5.0), progress=progress, executor=executor)
+    return run_sweeps(tyre, campaign_jobs(tyre, False), n_kappa=50, n_alpha=49, progress=progress,
+                      executor=executor)
 
 
 def write_csv_atomic(df: pd.DataFrame, path: str | os.PathLike[str]) -> Path:

@@ -58,6 +58,7 @@ from mftire.errors import MftireInputError
 from mftire.fitting.core import FitResult, fit_tir
 from mftire.iotools.jsonutil import jsonable
 from mftire.iotools.tir import TirParameters
+from mftire.parallel import Executor
 from mftire.tyre import Tyre
 
 __all__ = ["Bands", "bootstrap_bands", "band_coverage", "coverage_table", "resample_sweeps", "write_bands",
@@ -285,7 +286,7 @@ def bootstrap_bands(
     alpha_star: bool = False,
     seed: int | None = 0,
     strata: Sequence[str] = ("source", "kind"),
-    n_jobs: int = 1,
+    executor: Executor | None = None,
     progress: bool | Callable[[str], None] | None = None,
 ) -> Bands:
     """Bootstrap-over-sweeps bands of the fitted curves (see the module docstring).
@@ -317,9 +318,10 @@ def bootstrap_bands(
         Columns of the grouped data within which sweeps are resampled (default source
         and sweep kind; add ``"Fz_set"`` to keep every load in every replicate when each
         load has several sweeps of a kind).
-    n_jobs : int
-        Worker processes for the replicate fits (the replicates are drawn beforehand, so
-        the result does not depend on it).
+    executor : Executor, optional
+        Where the replicate fits run (default: in this process; see :mod:`mftire.parallel`).
+        The replicates are drawn beforehand from ``seed`` and collected in order, so the
+        bands are bit for bit the same whatever the executor.
     progress : bool or callable
         Progress messages (per replicate).
 
@@ -342,19 +344,11 @@ def bootstrap_bands(
     table = fit.data
     rng = np.random.default_rng(seed)
     samples = [resample_sweeps(table, rng, strata) for _ in range(n)]  # drawn up front: results do not
-    job = _ReplicateFit(fit.parameters, rep_stages, weights, alpha_star)  # depend on n_jobs
+    job = _ReplicateFit(fit.parameters, rep_stages, weights, alpha_star)  # depend on the executor
     reps: list[TirParameters] = []
     failed = 0
-    if n_jobs > 1:
-        from concurrent.futures import ProcessPoolExecutor
-
-        with ProcessPoolExecutor(max_workers=n_jobs) as pool:
-            results = pool.map(job, samples)
-            for b, r in enumerate(results):
-                failed += _collect(r, reps, b, n, say, t0)
-    else:
-        for b, sample in enumerate(samples):
-            failed += _collect(job(sample), reps, b, n, say, t0)
+    for b, r in enumerate((executor or Executor()).imap(job, samples)):
+        failed += _collect(r, reps, b, n, say, t0)
     keys = list(dict.fromkeys(fit.identified))
     bands = Bands(base=fit.parameters, replicates=reps, level=level, sigma=_residual_sigma(fit, BAND_CHANNELS),
                   mode=fit.mode + 100, keys=keys, n_requested=n, n_failed=failed, stages=stages_txt)

@@ -63,9 +63,11 @@ def _bands(args: argparse.Namespace, result) -> list[str]:
     import os
 
     from mftire.fitting.bands import bootstrap_bands, coverage_table, write_bands
+    from mftire.parallel import Executor
 
     bands = bootstrap_bands(None, args.template, n=args.bands, level=args.band_level, fit=result,
-                            weights=args.weights, alpha_star=args.alpha_star, seed=args.seed, n_jobs=args.jobs,
+                            weights=args.weights, alpha_star=args.alpha_star, seed=args.seed,
+                            executor=Executor.from_args(args),
                             progress=None if not sys.stderr.isatty() else
                             (lambda m: print(f"\rmftire fit: bands: {m}\x1b[K", end="", file=sys.stderr, flush=True)))
     cov = coverage_table(bands, args.heldout) if args.heldout else None
@@ -108,7 +110,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--heldout", nargs="+", metavar="DATA",
                    help="held-out measured sweeps: report the fraction of their points inside the bands")
     p.add_argument("--seed", type=int, default=0, help="random seed of the bootstrap (default 0)")
-    p.add_argument("--jobs", type=int, default=1, help="worker processes for the bootstrap refits (default 1)")
+    from mftire.parallel import add_parallel_options
+
+    add_parallel_options(p, "the bootstrap refits of --bands")
     p.add_argument("--fix", metavar="KEYS", help="coefficients held at their template values, "
                    "comma-separated (e.g. PPX1,PPX2,PPX3,PPX4 to fit without pressure terms)")
     from mftire.iotools.output import add_force_option

@@ -1,0 +1,132 @@
+"""One executor for embarrassingly parallel work: local processes, or a Dask cluster.
+
+Used for the bootstrap refits of the prediction bands (:func:`mftire.fitting.bands.bootstrap_bands`),
+the chunks of an FE campaign (:func:`mftire.fe.sweeps.run_sweeps`) and ``mftire demo``.
+
+* ``Executor(jobs=1)`` runs every task in this process, one after another (the library default).
+* ``Executor(jobs=N)`` runs them in ``N`` local worker processes
+  (:class:`concurrent.futures.ProcessPoolExecutor`); ``jobs=None`` or ``0`` uses every core
+  this process may run on (the command-line default, ``--jobs``).
+* ``Executor(scheduler="tcp://host:8786")`` sends them to a running Dask distributed scheduler
+  (``--scheduler ADDRESS``; the optional extra ``pip install 'mftire[dask]'``). The workers need
+  mftire installed. No scheduler of our own: Dask does the scheduling, retries and data transfer.
+
+**Determinism.** A task is a pure function of its argument: random draws are made before the tasks
+are submitted (or from a seed the task carries), and results come back in submission order, so the
+result is bit for bit the serial one whatever the executor, the number of workers or the order in
+which tasks finish. (Workers on a different machine may differ in the last bits through another
+BLAS or CPU instruction set; on one machine they do not.)
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
+from typing import Any, TypeVar
+
+from mftire.errors import MftireInputError
+
+__all__ = ["Executor", "available_cores", "add_parallel_options"]
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+def available_cores() -> int:
+    """Cores this process may run on (the CPU affinity mask where the platform has one)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # macOS, Windows
+        return max(1, os.cpu_count() or 1)
+
+
+@dataclass(frozen=True)
+class Executor:
+    """Where independent tasks run: this process, local worker processes or a Dask cluster.
+
+    Parameters
+    ----------
+    jobs : int or None
+        Local worker processes; ``1`` runs the tasks in this process (no pool), ``None`` or ``0``
+        uses :func:`available_cores`. Ignored when ``scheduler`` is given.
+    scheduler : str, optional
+        Address of a running Dask distributed scheduler, e.g. ``tcp://10.0.0.5:8786``.
+    """
+
+    jobs: int | None = 1
+    scheduler: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.jobs is not None and (not isinstance(self.jobs, int) or self.jobs < 0):
+            raise MftireInputError(f"--jobs must be a whole number >= 0 (0: all cores), got {self.jobs!r}")
+        if self.scheduler is not None and not str(self.scheduler).strip():
+            raise MftireInputError("--scheduler needs an address, e.g. tcp://host:8786")
+
+    @property
+    def workers(self) -> int:
+        """Local worker processes (1: this process)."""
+        return available_cores() if not self.jobs else self.jobs
+
+    def describe(self) -> str:
+        """One line for logs and reports."""
+        if self.scheduler:
+            return f"Dask scheduler {self.scheduler}"
+        return "this process" if self.workers == 1 else f"{self.workers} local processes"
+
+    def imap(self, fn: Callable[[T], R], items: Iterable[T]) -> Iterator[R]:
+        """Results of ``fn`` on each item, yielded in the order of ``items`` as they are ready.
+
+        ``fn`` and the items must be picklable (a module-level function or a dataclass
+        instance with ``__call__``) unless the tasks run in this process.
+        """
+        items = list(items)
+        if self.scheduler:
+            yield from _dask_imap(str(self.scheduler), fn, items)
+            return
+        n = min(self.workers, len(items))
+        if n <= 1:
+            for x in items:
+                yield fn(x)
+            return
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(max_workers=n) as pool:
+            yield from pool.map(fn, items)
+
+    def map(self, fn: Callable[[T], R], items: Iterable[T]) -> list[R]:
+        """``list(self.imap(fn, items))``: all results, in the order of ``items``."""
+        return list(self.imap(fn, items))
+
+    @classmethod
+    def from_args(cls, args: Any) -> Executor:
+        """From the ``--jobs``/``--scheduler`` options of :func:`add_parallel_options`."""
+        return cls(jobs=getattr(args, "jobs", None), scheduler=getattr(args, "scheduler", None))
+
+
+def _dask_imap(address: str, fn: Callable[[T], R], items: list[T]) -> Iterator[R]:
+    try:
+        from distributed import Client
+    except ImportError as exc:
+        raise MftireInputError("--scheduler needs Dask distributed: pip install 'mftire[dask]'") from exc
+    try:  # set_as_default=False: connecting must not change the caller's global Dask configuration
+        client = Client(address, set_as_default=False, timeout="20s")
+    except (OSError, ValueError) as exc:
+        raise MftireInputError(f"cannot use the Dask scheduler at {address!r}: {exc}") from exc
+    with client:
+        futures = client.map(fn, items, pure=False)  # pure=False: no hashing of large arguments
+        try:
+            for fut in futures:
+                yield fut.result()
+        finally:
+            client.cancel(futures)
+
+
+def add_parallel_options(parser: Any, what: str) -> None:
+    """Add ``--jobs N`` and ``--scheduler ADDRESS`` to an argparse parser (``what`` runs in parallel)."""
+    parser.add_argument("--jobs", type=int, default=0, metavar="N",
+                        help=f"local worker processes for {what} (default 0: all cores; 1: no pool); "
+                        "the result does not depend on it")  # fmt: skip
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help=f"run {what} on a Dask distributed cluster at ADDRESS (e.g. tcp://host:8786; "
+                        "needs pip install 'mftire[dask]' here and on the workers)")  # fmt: skip

@@ -1,0 +1,127 @@
+"""One executor (mftire.parallel): local processes and a Dask cluster give the serial result bit for bit."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from conftest import REFERENCE_TYRES
+
+from mftire.errors import MftireInputError
+from mftire.fe.config import load_tyre
+from mftire.fe.measured import Artefacts, measured_campaign
+from mftire.fe.sweeps import KMH, Condition, run_sweeps
+from mftire.fitting.bands import bootstrap_bands
+from mftire.fitting.core import fit_tir
+from mftire.fitting.synthetic import synthetic_sweeps
+from mftire.iotools.tir import read_tir
+from mftire.parallel import Executor, available_cores
+from mftire.parameters import with_defaults
+
+TIR = REFERENCE_TYRES["MF61"]
+FE_TYRE = load_tyre(None).updated({"grid.nx": 12, "grid.ny": 5})  # coarse: the test is about the executor
+
+
+def _fe(executor: Executor):
+    """A small FE campaign cut into 4 chunks of 7 points."""
+    li, pn = FE_TYRE.load_index_load, FE_TYRE.size.nominal_pressure
+    jobs = [("braking", Condition(0.8 * li, 60 * KMH, pn)), ("cornering", Condition(0.4 * li, 20 * KMH, pn + 0.5e5))]
+    return run_sweeps(FE_TYRE, jobs, n_kappa=14, n_alpha=13, chunk=7, progress=False, executor=executor)
+
+
+@pytest.fixture(scope="module")
+def fe_serial():
+    return _fe(Executor(jobs=1))
+
+
+@pytest.fixture(scope="module")
+def fit():
+    tyre = read_tir(TIR)
+    f0 = with_defaults(tyre)["FNOMIN"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        df = synthetic_sweeps(tyre, [0.5 * f0, f0], np.radians([0.0]), n_kappa=15, n_alpha=11, n_combined=5,
+                              noise=0.02, seed=4, channels=("Fx", "Fy"))
+        return fit_tir(df.assign(source="rig"), TIR, stages="1", progress=False)
+
+
+def _bands(fit, executor: Executor):
+    grid = fit.data[["Fz", "kappa", "alpha", "gamma", "Vx", "P"]].iloc[::4].reset_index(drop=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return bootstrap_bands(None, TIR, n=3, fit=fit, stages="1", seed=7, grid=grid, executor=executor)
+
+
+@pytest.fixture(scope="module")
+def bands_serial(fit):
+    return _bands(fit, Executor(jobs=1))
+
+
+def _same_bands(a, b) -> None:
+    assert len(a.replicates) == len(b.replicates) == 3
+    for ra, rb in zip(a.replicates, b.replicates, strict=True):
+        va = np.array([ra.get(k) for k in a.keys], dtype=float)
+        vb = np.array([rb.get(k) for k in b.keys], dtype=float)
+        assert va.tobytes() == vb.tobytes()  # bit for bit
+    assert a.grid.equals(b.grid)
+
+
+def test_executor_options_and_errors():
+    assert Executor().workers == 1 and Executor().describe() == "this process"
+    assert Executor(jobs=0).workers == available_cores() == Executor(jobs=None).workers
+    assert Executor(jobs=3).describe() == "3 local processes"
+    assert Executor(scheduler="tcp://h:1").describe() == "Dask scheduler tcp://h:1"
+    with pytest.raises(MftireInputError, match="--jobs"):
+        Executor(jobs=-1)
+    with pytest.raises(MftireInputError, match="--scheduler"):
+        Executor(scheduler=" ")
+    # results come back in the order of the items, whatever order the workers finish in
+    assert Executor(jobs=2).map(abs, [-3, 2, -1, 0]) == [3, 2, 1, 0]
+
+
+def test_fe_chunks_on_process_pool_match_serial_bit_for_bit(fe_serial):
+    table, free = _fe(Executor(jobs=2))
+    assert len(table) == 14 + 13 and len(free) == 2
+    assert table.equals(fe_serial[0]) and free.equals(fe_serial[1])
+    assert np.abs(table["Fx"]).max() > 1000.0  # real forces, not zeros
+
+
+def test_measured_campaign_on_process_pool_matches_serial_bit_for_bit():
+    li, pn = FE_TYRE.load_index_load, FE_TYRE.size.nominal_pressure
+    jobs = [("braking", Condition(0.8 * li, 60 * KMH, pn)), ("cornering", Condition(0.8 * li, 60 * KMH, pn)),
+            ("braking", Condition(0.4 * li, 20 * KMH, pn))]
+
+    def run(ex):
+        return measured_campaign(FE_TYRE, jobs, Artefacts(noise=0.01), n_kappa=9, n_alpha=9, seed=3, executor=ex)
+
+    serial, pooled = run(Executor(jobs=1)), run(Executor(jobs=2))
+    assert len(serial) == 27 and serial.equals(pooled)
+    assert serial["run"].tolist() == [0] * 9 + [1] * 9 + [2] * 9
+
+
+def test_bootstrap_on_process_pool_matches_serial_bit_for_bit(fit, bands_serial):
+    serial = bands_serial
+    _same_bands(serial, _bands(fit, Executor(jobs=2)))
+    # the replicates differ from each other (a resampling that did nothing would pass the above)
+    assert len({r.get(serial.keys[0]) for r in serial.replicates}) >= 2
+
+
+def test_dask_local_cluster_matches_serial_bit_for_bit(fe_serial, fit, bands_serial):
+    distributed = pytest.importorskip("distributed", reason="Dask distributed not installed (pip install "
+                                      "'mftire[dask]'); the Dask path of mftire.parallel is not tested")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the cluster's own start-up chatter
+        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                      dashboard_address=None) as cluster:
+            ex = Executor(scheduler=cluster.scheduler_address)
+            table, free = _fe(ex)
+            bands = _bands(fit, ex)
+    assert table.equals(fe_serial[0]) and free.equals(fe_serial[1])
+    _same_bands(bands_serial, bands)
+
+
+def test_bad_scheduler_address_is_a_clear_error():
+    pytest.importorskip("distributed", reason="Dask distributed not installed")
+    with pytest.raises(MftireInputError, match="Dask scheduler at 'nonsense://x'"):
+        Executor(scheduler="nonsense://x").map(abs, [1])
