@@ -323,6 +323,24 @@ def diagnose(
     channels : sequence of str, optional
         Channels to analyse (default: every measured channel present).
     """
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1, user_api="blas"):  # many small SVDs: threaded BLAS only fights over the cores
+        return _diagnose(data, tyre, holdout, channels=channels, n_perm=n_perm, seed=seed, progress=progress,
+                         ranking_kwargs=ranking_kwargs)
+
+
+def _diagnose(
+    data: pd.DataFrame,
+    tyre: TyreLike,
+    holdout: tuple[str, Sequence[float]] | None,
+    *,
+    channels: Sequence[str] | None,
+    n_perm: int,
+    seed: int,
+    progress: bool | None,
+    ranking_kwargs: Mapping | None,
+) -> DiagnosisResult:
     tyre = as_tyre(tyre)
     if progress is None:
         progress = sys.stderr.isatty()
@@ -448,7 +466,8 @@ def diagnose(
     # the chosen candidate's best laws and the control, refitted with every MF coefficient
     _progress(f"refitting every coefficient with the laws of {effect.variable}", progress)
     prob, law_fits, eff_ch, folds, in_blocks, control_cv = context[id(effect)]
-    refined, extended, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv)
+    refined, extended, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv,
+                                             cause.variable)
     if refined is None:
         msg = ("no significant effect: the best laws did not beat the control once every coefficient was "
                "refitted (" + "; ".join(notes) + ")")
