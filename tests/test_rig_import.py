@@ -17,6 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mftire.cli import main
+from mftire.data import rig_run
 from mftire.errors import MftireInputError
 from mftire.fitting.data import load_sweep_files
 from mftire.iotools.rig import (
@@ -32,7 +33,7 @@ from mftire.iotools.rig import (
 )
 
 ROOT = Path(__file__).resolve().parent.parent
-RAW = ROOT / "validation" / "data" / "rig" / "simulated_ttc_run.dat.gz"
+RAW = Path(rig_run())  # the shipped simulated run (mftire/data, made by validation/make_rig_file.py)
 FNOMIN = 6752.0  # tirfiles/MF61_255-55R20_mfeval-jl.tir
 
 

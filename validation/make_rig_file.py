@@ -1,4 +1,7 @@
-"""Generate the SIMULATED raw rig file ``validation/data/rig/simulated_ttc_run.dat.gz``.
+"""Generate the SIMULATED raw rig file ``mftire/data/simulated_ttc_run.dat.gz``.
+
+The file ships inside the package (:func:`mftire.data.rig_run`), as the third data source
+of ``mftire demo``; this generator is its only source and stays here.
 
 **The file is simulated, not measured.**  It imitates a flat-track run file in the
 TTC-style layout (tab-separated; title, channel and unit lines; channels ``ET V N SA IA
@@ -45,7 +48,8 @@ km/h; P 0.3 kPa; temperatures 0.3 K), and a 0.5 % crosstalk of FZ into FY.
 
 Run from the repository root:  ``python validation/make_rig_file.py [OUT]``.  The
 function :func:`simulate` returns the raw channels and the true (noise-free) state for
-tests; :func:`rig_stage` is the import -> fit -> diagnose step the demo can call.
+tests; :func:`template_for_fit` and :func:`heldout_rms` serve ``tests/test_rig_import.py``.
+The import -> fit -> diagnose step of the demo is :func:`mftire.demo.rig_stage`.
 """
 
 from __future__ import annotations
@@ -61,7 +65,7 @@ from scipy.signal import lfilter
 
 ROOT = Path(__file__).resolve().parent.parent
 TIR = ROOT / "tirfiles" / "MF61_255-55R20_mfeval-jl.tir"
-OUT = ROOT / "validation" / "data" / "rig" / "simulated_ttc_run.dat.gz"
+OUT = ROOT / "mftire" / "data" / "simulated_ttc_run.dat.gz"
 
 FS = 100.0  #: sample rate [Hz]
 V_KMH = 40.0  #: rig speed [km/h]
@@ -245,60 +249,6 @@ def make(path: str | os.PathLike = OUT, seed: int = 0) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     write_ttc(raw, path, units="metric", title=TITLE)
     return path
-
-
-def rig_stage(out_dir: str | os.PathLike, raw_file: str | os.PathLike = OUT, *, quick: bool = False,
-              holdout_load: float = 0.7) -> dict:  # fmt: skip
-    """The demo's third data source: import the simulated raw file, fit, diagnose, compare.
-
-    1. ``mftire import`` (TTC layout, SAE -> ISO, 10 points per sweep) to ``rig_sweeps.csv``;
-    2. MF 6.1 fit (template: :func:`template_for_fit`) on every load but
-       ``holdout_load`` x FNOMIN;
-    3. diagnosis of the residual (the temperature channels are candidates), with the same
-       load held out of the effect fit;
-    4. held-out RMS (% of peak) of Fx and Fy at the held-out load, before (MF fit) and
-       after (MF + the diagnosed effect).
-
-    Returns a summary dict (also written to ``out_dir/rig_summary.json``).
-    """
-    import json
-    import warnings
-
-    from mftire.diagnosis.diagnose import diagnose
-    from mftire.diagnosis.report import write_report
-    from mftire.fitting.core import fit_tir
-    from mftire.iotools.atomic import write_text_atomic
-    from mftire.iotools.rig import import_rig
-    from mftire.iotools.tir import read_tir, write_tir
-    from mftire.tyre import Tyre
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    if not Path(raw_file).exists():  # e.g. an installed package without validation/: simulate it (~5 s)
-        raw_file = make(out / "simulated_ttc_run.dat.gz")
-    sweeps, rep = import_rig(raw_file, "ttc", output=out / "rig_sweeps.csv", points_per_sweep=10)
-    template = read_tir(TIR)
-    fnomin = float(template["FNOMIN"])
-    held = np.isclose(sweeps["Fz_set"], holdout_load * fnomin, rtol=0.05)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        fit = fit_tir(sweeps[~held].assign(source="rig"), template_for_fit(), progress=False)
-    write_tir(fit.parameters, out / "rig_fitted.tir")
-    fitted = Tyre(fit.parameters, name="MF 6.1 fit to the rig file")
-    level = float(sweeps.loc[held, "Fz_set"].iloc[0])
-    diag = diagnose(sweeps.assign(source="rig"), fitted, ("Fz", [level]), progress=False, n_perm=49 if quick else 99)
-    write_report(diag, out / "rig_diagnosis")
-    summary = {"import": str(rep).splitlines()[0], "points": len(sweeps), "sweeps": rep.n_sweeps,
-               "dropped_rows": rep.dropped, "heldout_load_N": holdout_load * fnomin,
-               "heldout_rms_pct_before": heldout_rms(fitted, sweeps[held]),
-               "heldout_rms_pct_after": heldout_rms(diag.extended, sweeps[held], {
-                   v: sweeps.loc[held, v].to_numpy() for v in diag.extended.required_variables})
-               if diag.significant else None,
-               "diagnosis": diag.summary(),
-               "cause": diag.ranking[0].variable if diag.significant else None,
-               "diagnosis_heldout": [e.__dict__ for e in diag.errors]}  # fmt: skip
-    write_text_atomic(out / "rig_summary.json", json.dumps(summary, indent=1, default=float) + "\n")
-    return summary
 
 
 def template_for_fit(seed: int = 11, spread: float = 0.3):

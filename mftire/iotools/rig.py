@@ -976,7 +976,9 @@ def segment(
     rep.n_sweeps = int(first.size)
     rep.directions = {str(k): int(v) for k, v in first.value_counts().items()}
     rep.n_points = len(base)
-    base.attrs = {k: v for k, v in df.attrs.items()}
+    # no attrs on the table: pandas deep-copies them on every column access, which slows every
+    # later step (fit, diagnosis); the report holds what they held
+    base.attrs = {}
     return base, rep
 
 
