@@ -236,6 +236,28 @@ def test_time_going_backwards_names_line_and_column(tmp_path):
         read_ttc(p)
 
 
+def test_error_line_counts_blank_lines(tmp_path):
+    """Blank lines the reader skips still count in the line an error names (gzipped too)."""
+    rows = _rows(6)
+    rows[4][0] = 0.005  # data row 4 goes backwards
+    p = _tiny_ttc(tmp_path / "x.dat", rows)
+    lines = p.read_text().splitlines()
+    text = "\n".join(lines[:5] + ["", ""] + lines[5:]) + "\n"  # two blank lines after data row 1
+    p.write_text(text)
+    with pytest.raises(MftireInputError, match=r"x\.dat:10: column 'ET': time goes backwards"):
+        read_ttc(p)
+    g = tmp_path / "x.dat.gz"
+    with gzip.open(g, "wt") as fh:
+        fh.write(text)
+    with pytest.raises(MftireInputError, match=r"x\.dat\.gz:10: column 'ET'"):
+        read_ttc(g)
+    cells = lines[7].split("\t")  # data row 3, file line 10 once the blanks are in
+    cells[TTC_CHANNELS.index("FZ")] = ""
+    p.write_text("\n".join(lines[:5] + ["", ""] + lines[5:7] + ["\t".join(cells)] + lines[8:]) + "\n")
+    with pytest.raises(MftireInputError, match=r"x\.dat:10: column 'FZ': empty"):
+        read_ttc(p)
+
+
 def test_bad_cells_and_rows(tmp_path):
     p = _tiny_ttc(tmp_path / "x.dat", _rows())
     lines = p.read_text().splitlines()
