@@ -223,13 +223,13 @@ class RigStage:
     diagnosis_doc: dict
 
 
-def rig_stage(output: str | os.PathLike, quick: bool = False) -> RigStage:
+def rig_stage(output: str | os.PathLike, quick: bool = False, pair_step: int | None = None) -> RigStage:
     """The demo's third data source: raw rig data, SIMULATED.
 
     1. ``mftire import`` of the shipped run file (:func:`mftire.data.rig_run`: TTC-style
        layout, SAE axes, 100 Hz, 54,400 rows): SAE -> ISO, segmentation, 10 points per
-       sweep; the demo keeps every ``RIG_PAIR_STEP``-th pair of sweeps (written to
-       ``rig_sweeps.csv``) so that the stage stays short;
+       sweep; the demo keeps every ``RIG_PAIR_STEP``-th pair of sweeps (``pair_step``: another
+       step, 1 for the whole file), written to ``rig_sweeps.csv``, so that the stage stays short;
     2. MF 6.1 fit (template: the package's default ``.tir``, a 255/55 R20 parameter set
        other than the one that made the data) to every load but ``RIG_HOLDOUT_LOAD`` x
        FNOMIN, written to ``rig_fitted.tir``;
@@ -253,7 +253,7 @@ def rig_stage(output: str | os.PathLike, quick: bool = False) -> RigStage:
     path = rig_run()
     raw = read_ttc(path)
     table, imp = segment(raw, points_per_sweep=RIG_POINTS_PER_SWEEP, name=os.path.basename(path))
-    step = RIG_PAIR_STEP[1 if quick else 0]
+    step = pair_step or RIG_PAIR_STEP[1 if quick else 0]
     sweeps = table[(table["sweep_id"] // 2) % step == 0].reset_index(drop=True).assign(source="rig")
     write_sweeps(sweeps, os.path.join(out, "rig_sweeps.csv"))
     t_import = time.perf_counter() - t0

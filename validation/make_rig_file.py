@@ -46,7 +46,10 @@ Rig artefacts: the load wanders 1 % around its set point, Gaussian sensor noise 
 every channel (FX, FY 12 N; FZ 15 N; MX, MZ 1 N·m; SA, IA 0.02 deg; SR 0.001; V 0.05
 km/h; P 0.3 kPa; temperatures 0.3 K), and a 0.5 % crosstalk of FZ into FY.
 
-Run from the repository root:  ``python validation/make_rig_file.py [OUT]``.  The
+Run from the repository root:  ``python validation/make_rig_file.py [OUT]``;
+``python validation/make_rig_file.py --chain OUT_DIR [PAIR_STEP]`` runs the demo's
+import -> fit -> diagnose stage on the whole shipped file (or every PAIR_STEP-th pair of
+sweeps) and prints its summary.  The
 function :func:`simulate` returns the raw channels and the true (noise-free) state for
 tests; :func:`template_for_fit` and :func:`heldout_rms` serve ``tests/test_rig_import.py``.
 The import -> fit -> diagnose step of the demo is :func:`mftire.demo.rig_stage`.
@@ -287,6 +290,24 @@ def heldout_rms(tyre, data: pd.DataFrame, variables: dict | None = None) -> dict
     return res
 
 
+def chain(out_dir: str | os.PathLike, pair_step: int = 1) -> dict:
+    """The demo's rig stage (:func:`mftire.demo.rig_stage`) on every ``pair_step``-th pair of
+    sweeps of the shipped file (1: all 400 sweeps); returns its summary."""
+    import warnings
+
+    from mftire.demo import rig_stage
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return rig_stage(out_dir, pair_step=pair_step).summary
+
+
 if __name__ == "__main__":
-    target = make(sys.argv[1] if len(sys.argv) > 1 else OUT)
-    print(f"wrote {target} ({os.path.getsize(target) / 1e6:.2f} MB), SIMULATED data")
+    if len(sys.argv) > 1 and sys.argv[1] == "--chain":  # --chain OUT_DIR [PAIR_STEP]
+        import json
+
+        summary = chain(sys.argv[2], int(sys.argv[3]) if len(sys.argv) > 3 else 1)
+        print(json.dumps(summary, indent=1, default=float))
+    else:
+        target = make(sys.argv[1] if len(sys.argv) > 1 else OUT)
+        print(f"wrote {target} ({os.path.getsize(target) / 1e6:.2f} MB), SIMULATED data")
