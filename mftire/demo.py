@@ -145,13 +145,8 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
     summary = {
         "fe_points": len(fe), "measured_points": len(meas),
         "fitted_coefficients": len(dict.fromkeys(fit.identified)), "not_identified": len(fit.not_identified),
-        "diagnosis": diag.summary(),
-        "cause": diag.ranking[0].variable if diag.significant else None,
-        "effect": diag.effect.name if diag.effect is not None and diag.significant else None,
+        **_diagnosis_numbers(diag),
     }  # fmt: skip
-    for e in diag.errors:
-        summary[f"heldout_{e.channel}_rms_pct_before"] = e.rms_pct_before
-        summary[f"heldout_{e.channel}_rms_pct_after"] = e.rms_pct_after
     if coverage is not None and len(coverage):
         last = coverage.iloc[-1]
         summary["band_level"] = bands.level
@@ -201,6 +196,17 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
     if progress:
         print(f"done: {html}\n      {js}", flush=True)
     return summary
+
+
+def _diagnosis_numbers(diag) -> dict:
+    """Cause, effect and the held-out RMS (% of peak) before and after, and its cut, per channel."""
+    out = {"diagnosis": diag.summary(), "cause": diag.ranking[0].variable if diag.significant else None,
+           "effect": diag.effect.name if diag.effect is not None and diag.significant else None}  # fmt: skip
+    for e in diag.errors:
+        out[f"heldout_{e.channel}_rms_pct_before"] = e.rms_pct_before
+        out[f"heldout_{e.channel}_rms_pct_after"] = e.rms_pct_after
+        out[f"heldout_{e.channel}_cut"] = 1.0 - e.rms_after / e.rms_before if e.rms_before else None
+    return out
 
 
 #: The demo's rig run: 10 points per sweep, and every ``RIG_PAIR_STEP``-th pair of sweeps (one
@@ -275,14 +281,8 @@ def rig_stage(output: str | os.PathLike, quick: bool = False, pair_step: int | N
         "axes": f"{imp.convention.upper()} -> ISO W", "sweeps_imported": imp.n_sweeps, "points_imported": imp.n_points,
         "rows_dropped": int(sum(imp.dropped.values())), "sweeps_used": int(sweeps["sweep_id"].nunique()),
         "points_used": len(sweeps), "pair_step": step, "template": "default.tir (mftire.data.default_tir)",
-        "heldout_load_N": level, "diagnosis": diag.summary(),
-        "cause": diag.ranking[0].variable if diag.significant else None,
-        "effect": diag.effect.name if diag.effect is not None and diag.significant else None,
+        "heldout_load_N": level, **_diagnosis_numbers(diag),
     }  # fmt: skip
-    for e in diag.errors:
-        summary[f"heldout_{e.channel}_rms_pct_before"] = e.rms_pct_before
-        summary[f"heldout_{e.channel}_rms_pct_after"] = e.rms_pct_after
-        summary[f"heldout_{e.channel}_cut"] = 1.0 - e.rms_after / e.rms_before if e.rms_before else None
     summary["import_s"] = t_import
     summary["stage_s"] = time.perf_counter() - t0
 
