@@ -10,6 +10,10 @@
 5. The fitted and extended ``.tir`` files and an FMU of the extended model.
 6. Curve comparison (MF against FE against measured) with bootstrap bands, and one
    self-contained HTML report; every number of the report is also in a JSON file.
+7. A third source, raw rig data (:func:`rig_stage`): the shipped SIMULATED TTC-style run
+   file (``mftire/data/simulated_ttc_run.dat.gz``, 100 Hz, SAE axes, grip depending on
+   the tread temperature) imported, fitted, diagnosed, and the error before and after on
+   a held-out load.
 """
 
 from __future__ import annotations
@@ -18,6 +22,8 @@ import os
 import sys
 import time
 import warnings
+from dataclasses import dataclass
+from typing import Any
 
 import pandas as pd
 
@@ -38,7 +44,7 @@ class _Steps:
 
 #: Files and folders the demo writes into its output folder.
 OUTPUT_NAMES = ("fe_sweeps.csv", "measured_sweeps.csv", "fitted.tir", "extended.tir", "tyre.fmu", "report.html",
-                "report.json", "headline.png")
+                "report.json", "headline.png", "rig_sweeps.csv", "rig_fitted.tir", "rig_run.png")
 
 
 def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progress: bool = True,
@@ -69,7 +75,7 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
 
     out = os.fspath(output)
     os.makedirs(out, exist_ok=True)
-    step = _Steps(8, progress)
+    step = _Steps(9, progress)
 
     step("FE-surrogate campaign of the default tyre" + (" (quick grid)" if quick else ""))
     fe_tyre = load_tyre(None)
@@ -128,24 +134,25 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
     os.makedirs(fig_dir, exist_ok=True)
     plots = comp.plots(fig_dir)
 
+    step("third source: the simulated raw rig run imported, fitted, diagnosed" + (" (quick)" if quick else ""))
+    rig = rig_stage(out, quick=quick)
+
     step("HTML report")
     rep = HtmlReport("mftire demo: MF 6.1 from FE and measured sweeps, closed loop",
-                     "All data are simulated: FE surrogate and a measured-like campaign (see README)")  # fmt: skip
+                     "All data are simulated: FE surrogate, a measured-like campaign and a raw rig run "
+                     "(see README)")  # fmt: skip
     rep.add_heading("Summary")
     summary = {
         "fe_points": len(fe), "measured_points": len(meas),
         "fitted_coefficients": len(dict.fromkeys(fit.identified)), "not_identified": len(fit.not_identified),
-        "diagnosis": diag.summary(),
-        "cause": diag.ranking[0].variable if diag.significant else None,
-        "effect": diag.effect.name if diag.effect is not None and diag.significant else None,
+        **_diagnosis_numbers(diag),
     }  # fmt: skip
-    for e in diag.errors:
-        summary[f"heldout_{e.channel}_rms_pct_before"] = e.rms_pct_before
-        summary[f"heldout_{e.channel}_rms_pct_after"] = e.rms_pct_after
     if coverage is not None and len(coverage):
         last = coverage.iloc[-1]
         summary["band_level"] = bands.level
         summary["heldout_inside_prediction_band"] = float(last["inside_prediction"])
+    summary["rig"] = {k: rig.summary[k] for k in ("cause", "effect", "heldout_load_N")}
+    summary["rig"].update({k: v for k, v in rig.summary.items() if k.startswith("heldout_") and "rms" in k})
     rep.add_numbers("summary", summary)
     rep.add_heading("Fit")
     rep.add_table(pd.DataFrame([{"stage": s.number, "name": s.name, "channel": s.channel, "points": s.n_points,
@@ -178,14 +185,165 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
                  "prediction bands (replicate spread plus residual scatter).")  # fmt: skip
     if coverage is not None:
         rep.add_table(coverage, caption="held-out measured points inside the bands", key="band_coverage")
+    _rig_section(rep, rig, out)
     rep.add_heading("Outputs")
     rep.add_numbers("files", {"fitted_tir": "fitted.tir", "extended_tir": "extended.tir" if extended else None,
-                              "fmu": fmu_info, "diagnosis": "diagnosis/diagnosis.md"})  # fmt: skip
+                              "fmu": fmu_info, "diagnosis": "diagnosis/diagnosis.md",
+                              "rig_sweeps": "rig_sweeps.csv", "rig_fitted_tir": "rig_fitted.tir",
+                              "rig_diagnosis": "rig_diagnosis/diagnosis.md"})  # fmt: skip
     html, js = rep.write(os.path.join(out, "report.html"), os.path.join(out, "report.json"))
     _headline(comp, diag, os.path.join(out, "headline.png"))
     if progress:
         print(f"done: {html}\n      {js}", flush=True)
     return summary
+
+
+def _diagnosis_numbers(diag) -> dict:
+    """Cause, effect and the held-out RMS (% of peak) before and after, and its cut, per channel."""
+    out = {"diagnosis": diag.summary(), "cause": diag.ranking[0].variable if diag.significant else None,
+           "effect": diag.effect.name if diag.effect is not None and diag.significant else None}  # fmt: skip
+    for e in diag.errors:
+        out[f"heldout_{e.channel}_rms_pct_before"] = e.rms_pct_before
+        out[f"heldout_{e.channel}_rms_pct_after"] = e.rms_pct_after
+        out[f"heldout_{e.channel}_cut"] = 1.0 - e.rms_after / e.rms_before if e.rms_before else None
+    return out
+
+
+#: The demo's rig run: 10 points per sweep, and every ``RIG_PAIR_STEP``-th pair of sweeps (one
+#: up, one down) of the shipped file, (full, quick): 100 and 68 of its 400 sweeps.  The
+#: whole file takes 3-4 times as long to fit and diagnose (tests/test_rig_import.py does it).
+RIG_POINTS_PER_SWEEP = 10
+RIG_PAIR_STEP = (4, 6)
+#: The load held out of the rig fit and of the effect fit [x FNOMIN].
+RIG_HOLDOUT_LOAD = 0.7
+
+
+@dataclass
+class RigStage:
+    """What :func:`rig_stage` produced."""
+
+    summary: dict
+    import_report: Any  #: :class:`mftire.iotools.rig.RigReport` of the whole file
+    fit: Any  #: :class:`mftire.fitting.core.FitResult` of the rig sweeps
+    diagnosis: Any  #: :class:`mftire.diagnosis.diagnose.DiagnosisResult`
+    diagnosis_doc: dict
+
+
+def rig_stage(output: str | os.PathLike, quick: bool = False, pair_step: int | None = None) -> RigStage:
+    """The demo's third data source: raw rig data, SIMULATED.
+
+    1. ``mftire import`` of the shipped run file (:func:`mftire.data.rig_run`: TTC-style
+       layout, SAE axes, 100 Hz, 54,400 rows): SAE -> ISO, segmentation, 10 points per
+       sweep; the demo keeps every ``RIG_PAIR_STEP``-th pair of sweeps (``pair_step``: another
+       step, 1 for the whole file), written to ``rig_sweeps.csv``, so that the stage stays short;
+    2. MF 6.1 fit (template: the package's default ``.tir``, a 255/55 R20 parameter set
+       other than the one that made the data) to every load but ``RIG_HOLDOUT_LOAD`` x
+       FNOMIN, written to ``rig_fitted.tir``;
+    3. diagnosis of the residual with that load held out (the tread temperatures ``TSTI``,
+       ``TSTC``, ``TSTO`` are candidates like any other column), in ``rig_diagnosis/``;
+    4. held-out RMS error before (MF fit) and after (MF + the diagnosed effect).
+    """
+    import numpy as np
+
+    from mftire.data import default_tir, rig_run
+    from mftire.diagnosis.diagnose import diagnose
+    from mftire.diagnosis.report import write_report
+    from mftire.fitting.core import fit_tir
+    from mftire.iotools.rig import read_ttc, segment, write_sweeps
+    from mftire.iotools.tir import read_tir
+    from mftire.plotting import subplots
+    from mftire.tyre import Tyre
+
+    out = os.fspath(output)
+    t0 = time.perf_counter()
+    path = rig_run()
+    raw = read_ttc(path)
+    table, imp = segment(raw, points_per_sweep=RIG_POINTS_PER_SWEEP, name=os.path.basename(path))
+    step = pair_step or RIG_PAIR_STEP[1 if quick else 0]
+    sweeps = table[(table["sweep_id"] // 2) % step == 0].reset_index(drop=True).assign(source="rig")
+    write_sweeps(sweeps, os.path.join(out, "rig_sweeps.csv"))
+    t_import = time.perf_counter() - t0
+
+    template = read_tir(default_tir())
+    fnomin = float(template["FNOMIN"])
+    held = np.isclose(sweeps["Fz_set"], RIG_HOLDOUT_LOAD * fnomin, rtol=0.05)
+    fit = fit_tir(sweeps[~held], template, progress=False)
+    write_tir(fit.parameters, os.path.join(out, "rig_fitted.tir"))
+    fitted = Tyre(fit.parameters, name="MF 6.1 fit to the rig run")
+    level = float(sweeps.loc[held, "Fz_set"].iloc[0])
+    diag = diagnose(sweeps, fitted, ("Fz", [level]), progress=False, n_perm=49 if quick else 99)
+    doc = write_report(diag, os.path.join(out, "rig_diagnosis"))
+
+    summary: dict = {
+        "data": "SIMULATED raw rig run (not measured): mftire/data/simulated_ttc_run.dat.gz, made by "
+                "validation/make_rig_file.py",
+        "raw_rows": imp.n_rows, "duration_s": imp.duration_s, "sample_rate_hz": imp.sample_rate_hz,
+        "axes": f"{imp.convention.upper()} -> ISO W", "sweeps_imported": imp.n_sweeps, "points_imported": imp.n_points,
+        "rows_dropped": int(sum(imp.dropped.values())), "sweeps_used": int(sweeps["sweep_id"].nunique()),
+        "points_used": len(sweeps), "pair_step": step, "template": "default.tir (mftire.data.default_tir)",
+        "heldout_load_N": level, **_diagnosis_numbers(diag),
+    }  # fmt: skip
+    summary["import_s"] = t_import
+    summary["stage_s"] = time.perf_counter() - t0
+
+    # the raw run: load, slip and tread temperature against time, the sweeps used marked
+    r = raw
+    fig, axs = subplots(3, 1, figsize=(8.0, 6.0), sharex=True, constrained_layout=True)
+    axs[0].plot(r["ET"], r["Fz"] / 1e3, lw=0.5)
+    axs[0].set_ylabel("Fz [kN]")
+    axs[1].plot(r["ET"], np.degrees(r["alpha"]), lw=0.3, label="α [deg]")
+    axs[1].plot(r["ET"], 100 * r["kappa"], lw=0.3, label="κ [%]")
+    axs[1].legend(loc="upper right", fontsize=8)
+    for c in ("TSTI", "TSTC", "TSTO"):
+        axs[2].plot(r["ET"], r[c], lw=0.5, label=c)
+    axs[2].set_ylabel("tread surface [°C]")
+    axs[2].set_xlabel("ET [s]")
+    axs[2].legend(loc="upper right", fontsize=8)
+    spans = sweeps.assign(held=held).groupby("sweep_id").agg(lo=("ET", "min"), hi=("ET", "max"), held=("held", "first"))
+    for a in axs:
+        for lo, hi, h in spans.itertuples(index=False):
+            a.axvspan(lo, hi, color="#f4b6b6" if h else "0.85", lw=0)
+        a.grid(alpha=0.3)
+    axs[0].set_title("SIMULATED raw rig run (ISO W axes); shaded: sweeps used, red: the held-out load", fontsize=10)
+    with atomic_path(os.path.join(out, "rig_run.png")) as tmp:
+        fig.savefig(tmp, format="png", dpi=100)
+    return RigStage(summary, imp, fit, diag, doc)
+
+
+def _rig_section(rep, rig: RigStage, out: str) -> None:
+    """The report section of the rig stage."""
+    import numpy as np
+
+    s, imp, diag = rig.summary, rig.import_report, rig.diagnosis
+    rep.add_heading("Third source: raw rig time series (SIMULATED)")
+    rep.add_text("Simulated, not measured: a flat-track run file in the TTC-style layout (tab-separated, metric "
+                 "units, SAE axes, 100 Hz) made by validation/make_rig_file.py from an MF 6.1 tyre whose grip "
+                 "depends on the tread temperature (first-order thermal model driven by friction power), with "
+                 "sensor noise, load wander and FZ crosstalk into FY. mftire import converts it to ISO W axes, "
+                 "drops warm-up, ramps and dwells and cuts it into sweeps; MF 6.1 is fitted with one load held "
+                 "out, and the diagnosis looks for the cause of the residual among every column.")  # fmt: skip
+    rep.add_numbers("rig", s)
+    rep.add_figure(os.path.join(out, "rig_run.png"), caption="raw run: load, slip and tread temperatures")
+    rep.add_table(pd.DataFrame([{"reason": k, "rows": v, "share": v / max(imp.n_rows, 1)}
+                                for k, v in sorted(imp.dropped.items(), key=lambda kv: -kv[1])]),
+                  caption=f"import: {imp.n_rows} rows, {imp.rows_kept} kept in {imp.n_sweeps} sweeps; rows dropped",
+                  key="rig_import_dropped")  # fmt: skip
+    rep.add_table(pd.DataFrame([{"stage": st.number, "name": st.name, "channel": st.channel, "points": st.n_points,
+                                 "status": st.status, "rms": st.rms} for st in rig.fit.stages]),
+                  caption="staged fit of the rig sweeps", key="rig_fit_stages")  # fmt: skip
+    rep.add_text(diag.summary())
+    rep.add_table(pd.DataFrame(rig.diagnosis_doc["ranking"]).head(10), caption="candidate ranking (first 10)",
+                  key="rig_diagnosis_ranking")  # fmt: skip
+    if diag.errors:
+        err = pd.DataFrame([vars(e) for e in diag.errors])
+        err["cut"] = 1.0 - err["rms_after"] / err["rms_before"].replace(0.0, np.nan)
+        rep.add_table(err, caption=f"held-out load {s['heldout_load_N']:.0f} N: before (MF fit) and after "
+                                   "(MF + the diagnosed effect)", key="rig_heldout")  # fmt: skip
+    folder = os.path.join(out, "rig_diagnosis")
+    for png in ("curves_before_after.png", *sorted(f for f in os.listdir(folder) if f.startswith("profile_"))):
+        p = os.path.join(folder, png)
+        if os.path.exists(p):
+            rep.add_figure(p, caption="rig: " + png[:-4].replace("_", " "))
 
 
 def _headline(comp, diag, path: str) -> None:

@@ -14,9 +14,10 @@ def test_reduced_demo_runs_the_whole_loop(tmp_path, capsys):
     out = tmp_path / "demo"
     assert main(["demo", "--output", str(out), "--quick"]) == 0
     printed = capsys.readouterr().out
-    assert "[8/8" in printed  # progress shown step by step
+    assert "[9/9" in printed  # progress shown step by step
     for name in ("fitted.tir", "extended.tir", "tyre.fmu", "report.html", "report.json", "headline.png",
-                 "fe_sweeps.csv", "measured_sweeps.csv", "diagnosis/diagnosis.json"):
+                 "fe_sweeps.csv", "measured_sweeps.csv", "diagnosis/diagnosis.json", "rig_sweeps.csv",
+                 "rig_fitted.tir", "rig_run.png", "rig_diagnosis/diagnosis.json", "rig_diagnosis/extended.tir"):
         assert (out / name).exists(), name
     html = (out / "report.html").read_text()
     images = re.findall(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"', html)
@@ -31,5 +32,16 @@ def test_reduced_demo_runs_the_whole_loop(tmp_path, capsys):
     assert 0.8 <= s["heldout_inside_prediction_band"] <= 1.0
     # every table of the page is in the JSON
     assert {"fit_stages", "diagnosis_ranking", "band_coverage"} <= set(doc["tables"])
+    # the third source: the simulated raw rig run, imported, fitted and diagnosed (issue 12)
+    assert "Third source: raw rig time series (SIMULATED)" in html
+    rig = doc["numbers"]["rig"]
+    assert rig["data"].startswith("SIMULATED") and rig["raw_rows"] == 54400 and rig["sweeps_imported"] == 400
+    assert rig["cause"] in ("TSTI", "TSTC", "TSTO")  # a tread surface temperature
+    assert rig["effect"].startswith("friction_")
+    for ch in ("Fx", "Fy"):  # held-out load: at least half the error removed, under 1 % of peak after
+        assert rig[f"heldout_{ch}_cut"] >= 0.5, (ch, rig)
+        assert rig[f"heldout_{ch}_rms_pct_after"] < 1.0 < rig[f"heldout_{ch}_rms_pct_before"], (ch, rig)
+    assert s["rig"]["cause"] == rig["cause"]
+    assert {"rig_import_dropped", "rig_fit_stages", "rig_diagnosis_ranking", "rig_heldout"} <= set(doc["tables"])
     ext = load(out / "extended.tir")
     assert ext.extensions and ext.required_variables == []

@@ -17,6 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mftire.cli import main
+from mftire.data import rig_run
 from mftire.errors import MftireInputError
 from mftire.fitting.data import load_sweep_files
 from mftire.iotools.rig import (
@@ -32,7 +33,7 @@ from mftire.iotools.rig import (
 )
 
 ROOT = Path(__file__).resolve().parent.parent
-RAW = ROOT / "validation" / "data" / "rig" / "simulated_ttc_run.dat.gz"
+RAW = Path(rig_run())  # the shipped simulated run (mftire/data, made by validation/make_rig_file.py)
 FNOMIN = 6752.0  # tirfiles/MF61_255-55R20_mfeval-jl.tir
 
 
@@ -232,6 +233,28 @@ def test_time_going_backwards_names_line_and_column(tmp_path):
     rows[4][0] = 0.005  # ET of data row 4 (file line 8) before row 3
     p = _tiny_ttc(tmp_path / "x.dat", rows)
     with pytest.raises(MftireInputError, match=r"x\.dat:8: column 'ET': time goes backwards"):
+        read_ttc(p)
+
+
+def test_error_line_counts_blank_lines(tmp_path):
+    """Blank lines the reader skips still count in the line an error names (gzipped too)."""
+    rows = _rows(6)
+    rows[4][0] = 0.005  # data row 4 goes backwards
+    p = _tiny_ttc(tmp_path / "x.dat", rows)
+    lines = p.read_text().splitlines()
+    text = "\n".join(lines[:5] + ["", ""] + lines[5:]) + "\n"  # two blank lines after data row 1
+    p.write_text(text)
+    with pytest.raises(MftireInputError, match=r"x\.dat:10: column 'ET': time goes backwards"):
+        read_ttc(p)
+    g = tmp_path / "x.dat.gz"
+    with gzip.open(g, "wt") as fh:
+        fh.write(text)
+    with pytest.raises(MftireInputError, match=r"x\.dat\.gz:10: column 'ET'"):
+        read_ttc(g)
+    cells = lines[7].split("\t")  # data row 3, file line 10 once the blanks are in
+    cells[TTC_CHANNELS.index("FZ")] = ""
+    p.write_text("\n".join(lines[:5] + ["", ""] + lines[5:7] + ["\t".join(cells)] + lines[8:]) + "\n")
+    with pytest.raises(MftireInputError, match=r"x\.dat:10: column 'FZ': empty"):
         read_ttc(p)
 
 

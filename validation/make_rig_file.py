@@ -1,4 +1,7 @@
-"""Generate the SIMULATED raw rig file ``validation/data/rig/simulated_ttc_run.dat.gz``.
+"""Generate the SIMULATED raw rig file ``mftire/data/simulated_ttc_run.dat.gz``.
+
+The file ships inside the package (:func:`mftire.data.rig_run`), as the third data source
+of ``mftire demo``; this generator is its only source and stays here.
 
 **The file is simulated, not measured.**  It imitates a flat-track run file in the
 TTC-style layout (tab-separated; title, channel and unit lines; channels ``ET V N SA IA
@@ -43,9 +46,13 @@ Rig artefacts: the load wanders 1 % around its set point, Gaussian sensor noise 
 every channel (FX, FY 12 N; FZ 15 N; MX, MZ 1 N·m; SA, IA 0.02 deg; SR 0.001; V 0.05
 km/h; P 0.3 kPa; temperatures 0.3 K), and a 0.5 % crosstalk of FZ into FY.
 
-Run from the repository root:  ``python validation/make_rig_file.py [OUT]``.  The
+Run from the repository root:  ``python validation/make_rig_file.py [OUT]``;
+``python validation/make_rig_file.py --chain OUT_DIR [PAIR_STEP]`` runs the demo's
+import -> fit -> diagnose stage on the whole shipped file (or every PAIR_STEP-th pair of
+sweeps) and prints its summary.  The
 function :func:`simulate` returns the raw channels and the true (noise-free) state for
-tests; :func:`rig_stage` is the import -> fit -> diagnose step the demo can call.
+tests; :func:`template_for_fit` and :func:`heldout_rms` serve ``tests/test_rig_import.py``.
+The import -> fit -> diagnose step of the demo is :func:`mftire.demo.rig_stage`.
 """
 
 from __future__ import annotations
@@ -61,7 +68,7 @@ from scipy.signal import lfilter
 
 ROOT = Path(__file__).resolve().parent.parent
 TIR = ROOT / "tirfiles" / "MF61_255-55R20_mfeval-jl.tir"
-OUT = ROOT / "validation" / "data" / "rig" / "simulated_ttc_run.dat.gz"
+OUT = ROOT / "mftire" / "data" / "simulated_ttc_run.dat.gz"
 
 FS = 100.0  #: sample rate [Hz]
 V_KMH = 40.0  #: rig speed [km/h]
@@ -247,60 +254,6 @@ def make(path: str | os.PathLike = OUT, seed: int = 0) -> Path:
     return path
 
 
-def rig_stage(out_dir: str | os.PathLike, raw_file: str | os.PathLike = OUT, *, quick: bool = False,
-              holdout_load: float = 0.7) -> dict:  # fmt: skip
-    """The demo's third data source: import the simulated raw file, fit, diagnose, compare.
-
-    1. ``mftire import`` (TTC layout, SAE -> ISO, 10 points per sweep) to ``rig_sweeps.csv``;
-    2. MF 6.1 fit (template: :func:`template_for_fit`) on every load but
-       ``holdout_load`` x FNOMIN;
-    3. diagnosis of the residual (the temperature channels are candidates), with the same
-       load held out of the effect fit;
-    4. held-out RMS (% of peak) of Fx and Fy at the held-out load, before (MF fit) and
-       after (MF + the diagnosed effect).
-
-    Returns a summary dict (also written to ``out_dir/rig_summary.json``).
-    """
-    import json
-    import warnings
-
-    from mftire.diagnosis.diagnose import diagnose
-    from mftire.diagnosis.report import write_report
-    from mftire.fitting.core import fit_tir
-    from mftire.iotools.atomic import write_text_atomic
-    from mftire.iotools.rig import import_rig
-    from mftire.iotools.tir import read_tir, write_tir
-    from mftire.tyre import Tyre
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    if not Path(raw_file).exists():  # e.g. an installed package without validation/: simulate it (~5 s)
-        raw_file = make(out / "simulated_ttc_run.dat.gz")
-    sweeps, rep = import_rig(raw_file, "ttc", output=out / "rig_sweeps.csv", points_per_sweep=10)
-    template = read_tir(TIR)
-    fnomin = float(template["FNOMIN"])
-    held = np.isclose(sweeps["Fz_set"], holdout_load * fnomin, rtol=0.05)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        fit = fit_tir(sweeps[~held].assign(source="rig"), template_for_fit(), progress=False)
-    write_tir(fit.parameters, out / "rig_fitted.tir")
-    fitted = Tyre(fit.parameters, name="MF 6.1 fit to the rig file")
-    level = float(sweeps.loc[held, "Fz_set"].iloc[0])
-    diag = diagnose(sweeps.assign(source="rig"), fitted, ("Fz", [level]), progress=False, n_perm=49 if quick else 99)
-    write_report(diag, out / "rig_diagnosis")
-    summary = {"import": str(rep).splitlines()[0], "points": len(sweeps), "sweeps": rep.n_sweeps,
-               "dropped_rows": rep.dropped, "heldout_load_N": holdout_load * fnomin,
-               "heldout_rms_pct_before": heldout_rms(fitted, sweeps[held]),
-               "heldout_rms_pct_after": heldout_rms(diag.extended, sweeps[held], {
-                   v: sweeps.loc[held, v].to_numpy() for v in diag.extended.required_variables})
-               if diag.significant else None,
-               "diagnosis": diag.summary(),
-               "cause": diag.ranking[0].variable if diag.significant else None,
-               "diagnosis_heldout": [e.__dict__ for e in diag.errors]}  # fmt: skip
-    write_text_atomic(out / "rig_summary.json", json.dumps(summary, indent=1, default=float) + "\n")
-    return summary
-
-
 def template_for_fit(seed: int = 11, spread: float = 0.3):
     """Fit template: the generating tyre with every fitted coefficient perturbed by up to +-``spread``.
 
@@ -337,6 +290,24 @@ def heldout_rms(tyre, data: pd.DataFrame, variables: dict | None = None) -> dict
     return res
 
 
+def chain(out_dir: str | os.PathLike, pair_step: int = 1) -> dict:
+    """The demo's rig stage (:func:`mftire.demo.rig_stage`) on every ``pair_step``-th pair of
+    sweeps of the shipped file (1: all 400 sweeps); returns its summary."""
+    import warnings
+
+    from mftire.demo import rig_stage
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return rig_stage(out_dir, pair_step=pair_step).summary
+
+
 if __name__ == "__main__":
-    target = make(sys.argv[1] if len(sys.argv) > 1 else OUT)
-    print(f"wrote {target} ({os.path.getsize(target) / 1e6:.2f} MB), SIMULATED data")
+    if len(sys.argv) > 1 and sys.argv[1] == "--chain":  # --chain OUT_DIR [PAIR_STEP]
+        import json
+
+        summary = chain(sys.argv[2], int(sys.argv[3]) if len(sys.argv) > 3 else 1)
+        print(json.dumps(summary, indent=1, default=float))
+    else:
+        target = make(sys.argv[1] if len(sys.argv) > 1 else OUT)
+        print(f"wrote {target} ({os.path.getsize(target) / 1e6:.2f} MB), SIMULATED data")

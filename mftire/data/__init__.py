@@ -1,4 +1,4 @@
-"""Data shipped with mftire (see NOTICE.md): the default ``.tir``."""
+"""Data shipped with mftire (see NOTICE.md): the default ``.tir`` and the simulated raw rig run."""
 
 from __future__ import annotations
 
@@ -8,3 +8,9 @@ from importlib import resources
 def default_tir() -> str:
     """Path of the shipped default ``.tir`` (MF 6.1, 255/55 R20, MFeval example; see NOTICE.md)."""
     return str(resources.files(__name__) / "default.tir")
+
+
+def rig_run() -> str:
+    """Path of the shipped SIMULATED raw rig run file (TTC-style layout, metric units, SAE axes,
+    100 Hz, gzipped), written by ``validation/make_rig_file.py``; see NOTICE.md."""
+    return str(resources.files(__name__) / "simulated_ttc_run.dat.gz")

@@ -222,8 +222,20 @@ def _read_body(path: str, sep: str, skip: int, names: list[str]) -> pd.DataFrame
     return df
 
 
-def _data_line(df: pd.DataFrame, i: int, skip: int) -> int:
-    """File line (1-based) of data row ``i``; exact unless blank lines were skipped."""
+def _data_line(path: str, i: int, skip: int) -> int:
+    """File line (1-based) of data row ``i`` after ``skip`` header lines, counting the blank
+    lines the reader skipped (the file is read again: only for an error message)."""
+    opener = gzip.open if _is_gzip(path) else open
+    row = -1
+    try:
+        with opener(path, "rt", encoding="utf-8", errors="replace", newline="") as fh:
+            for lineno, line in enumerate(fh, start=1):
+                if lineno > skip and line.strip("\r\n"):
+                    row += 1
+                    if row == i:
+                        return lineno
+    except (OSError, EOFError):
+        pass
     return skip + 1 + i
 
 
@@ -236,7 +248,7 @@ def _numeric(path: str, df: pd.DataFrame, column: str, skip: int, allow_nan: boo
         if bad.any():
             i = int(np.flatnonzero(bad.to_numpy())[0])
             raise MftireInputError(
-                f"{path}:{_data_line(df, i, skip)}: column {column!r}: {str(s.iloc[i])!r} is not a number"
+                f"{path}:{_data_line(path, i, skip)}: column {column!r}: {str(s.iloc[i])!r} is not a number"
             )
         s = conv
     x = s.to_numpy(dtype=float)
@@ -244,7 +256,7 @@ def _numeric(path: str, df: pd.DataFrame, column: str, skip: int, allow_nan: boo
         bad = ~np.isfinite(x)
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
-            raise MftireInputError(f"{path}:{_data_line(df, i, skip)}: column {column!r}: empty or non-finite value")
+            raise MftireInputError(f"{path}:{_data_line(path, i, skip)}: column {column!r}: empty or non-finite value")
     return x
 
 
@@ -267,7 +279,7 @@ def _check_time(path: str, t: np.ndarray, column: str, skip: int, df: pd.DataFra
     if back.size:
         i = int(back[0]) + 1
         raise MftireInputError(
-            f"{path}:{_data_line(df, i, skip)}: column {column!r}: time goes backwards "
+            f"{path}:{_data_line(path, i, skip)}: column {column!r}: time goes backwards "
             f"({t[i]:g} after {t[i - 1]:g}); the time column must be monotonic"
         )
 
@@ -976,7 +988,9 @@ def segment(
     rep.n_sweeps = int(first.size)
     rep.directions = {str(k): int(v) for k, v in first.value_counts().items()}
     rep.n_points = len(base)
-    base.attrs = {k: v for k, v in df.attrs.items()}
+    # no attrs on the table: pandas deep-copies them on every column access, which slows every
+    # later step (fit, diagnosis); the report holds what they held
+    base.attrs = {}
     return base, rep
 
 
