@@ -466,8 +466,7 @@ def _diagnose(
     # the chosen candidate's best laws and the control, refitted with every MF coefficient
     _progress(f"refitting every coefficient with the laws of {effect.variable}", progress)
     prob, law_fits, eff_ch, folds, in_blocks, control_cv = context[id(effect)]
-    refined, extended, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv,
-                                             cause.variable)
+    refined, extended, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv)
     if refined is None:
         msg = ("no significant effect: the best laws did not beat the control once every coefficient was "
                "refitted (" + "; ".join(notes) + ")")

@@ -601,7 +601,6 @@ def _full_refit(data: pd.DataFrame, tyre: Tyre) -> Tyre:
 def refine_effect(
     prob: _Problem, fits: Sequence[tuple[EffectFit, Law, np.ndarray | None]], n_pressures: int,
     effect_channels: Sequence[str] | None, folds: np.ndarray | None, local_control_cv: float = float("nan"),
-    variable: str | None = None,
 ) -> tuple[EffectFit | None, Tyre | None, list[str]]:
     """Refit the best laws and the control with every MF coefficient (the staged fitter), then choose
     among them by held-out-sweep error, each model's law and main coefficients refitted on each fold.
@@ -613,7 +612,7 @@ def refine_effect(
     full, and must beat the control refitted the same way (``local_control_cv``: the main coefficients
     without an effect; a full refit without an effect) by :data:`MAX_RESIDUAL_VS_CONTROL`: an effect must
     explain what refitting the model cannot.  Among those within :data:`PARSIMONY` of the lowest held-out
-    error, a law in the candidate's own ``variable`` wins, then the one with the fewest coefficients.
+    error, the law with the fewest coefficients wins (then the lowest error).
     Returns ``(chosen, extended tyre, messages)``; chosen is None when no law beats the control by
     :data:`MAX_RESIDUAL_VS_CONTROL` on held-out sweeps.
     """
@@ -647,11 +646,10 @@ def refine_effect(
     eligible = [o for o in options if o[0] <= MAX_RESIDUAL_VS_CONTROL * o[1]]
     if not eligible:
         return None, None, messages
-    # parsimony as in choose_effect: within PARSIMONY of the lowest held-out error, a law in the candidate's
-    # own variable, then the fewest coefficients
+    # parsimony as in choose_effect: within PARSIMONY of the lowest held-out error, the fewest coefficients
     lowest = min(o[0] for o in eligible)
     near = [o for o in eligible if o[0] <= (1.0 + PARSIMONY) * lowest]
-    cv, cv_control, fit, tyre = min(near, key=lambda o: (o[2].variable != variable, o[2].n_params, o[0]))
+    cv, cv_control, fit, tyre = min(near, key=lambda o: (o[2].n_params, o[0]))
     section = {k: v for k, v in (tyre.extensions or {}).items() if k not in (base.extensions or {})}
     standard = {k: float(v) for k, v in tyre.flat.items() if k in base.flat and v != base.flat[k]}
     refined = EffectFit(fit.name, fit.variable, fit.physical,
