@@ -31,6 +31,13 @@ _spec.loader.exec_module(gen)
 SCHEMA = ["Fz", "kappa", "alpha", "gamma", "Vx", "P", "Fx", "Fy", "Mz", "Mx", "My"]
 FOLDERS = {False: DATA / "unanticipated", True: DATA / "unanticipated_reduced"}
 EFFECT_CASES = [c for c in gen.CASES if not c.startswith("null")]
+#: (case, reduced) of every shipped copy: the FE-made effect cases are shipped at full size only
+COPIES = [(c, r) for c in gen.CASES for r in (True, False) if not (r and c in gen.FULL_ONLY)]
+
+
+def _size(name: str) -> bool:
+    """The copy a check reads: the reduced one where it exists."""
+    return name not in gen.FULL_ONLY
 
 
 def _load(name: str, reduced: bool) -> tuple[pd.DataFrame, dict, Path]:
@@ -40,14 +47,14 @@ def _load(name: str, reduced: bool) -> tuple[pd.DataFrame, dict, Path]:
 
 def test_every_case_is_shipped():
     assert len(gen.CASES) >= 8
-    for reduced in (False, True):
-        for name in gen.CASES:
-            for f in ("sweeps.csv", "fitted.tir", "expected.json"):
-                assert (FOLDERS[reduced] / name / f).is_file(), (reduced, name, f)
+    for name, reduced in COPIES:
+        for f in ("sweeps.csv", "fitted.tir", "expected.json"):
+            assert (FOLDERS[reduced] / name / f).is_file(), (reduced, name, f)
+    for name in gen.FULL_ONLY:
+        assert not (FOLDERS[True] / name).exists()
 
 
-@pytest.mark.parametrize("reduced", [True, False], ids=["reduced", "full"])
-@pytest.mark.parametrize("name", gen.CASES)
+@pytest.mark.parametrize("name, reduced", COPIES, ids=[f"{c}-{'reduced' if r else 'full'}" for c, r in COPIES])
 def test_schema_sizes_and_expected(name, reduced):
     d, exp, folder = _load(name, reduced)
     assert list(d.columns[: len(SCHEMA)]) == SCHEMA
@@ -105,10 +112,10 @@ def _clean_residuals(name: str, reduced: bool, rows: slice | None = None):
 @pytest.mark.parametrize("name", gen.CASES)
 def test_truth_reproduces_the_stored_channels(name):
     """The generating model at the stored inputs gives the stored Fx, Fy to the noise level."""
-    case = gen.make_case(name, True)
+    case = gen.make_case(name, _size(name))
     # FE cases: two runs (one braking, one cornering) to keep the FE solves short
     runs = [0, 1] if case.model == "fe" else None
-    table, true, exp, _ = _clean_residuals(name, True, runs)
+    table, true, exp, _ = _clean_residuals(name, _size(name), runs)
     for ch in ("Fx", "Fy"):
         sigma = exp["noise_sigma"][ch]  # the largest sigma of the campaign
         r = (table[ch] - true[ch]).to_numpy()
@@ -127,8 +134,8 @@ def test_truth_reproduces_the_stored_channels(name):
 @pytest.mark.parametrize("name", gen.CASES)
 def test_oracle_cut(name):
     """expected.json's oracle: the held-out Fx+Fy RMS of fitted.tir and of the truth, recomputed."""
-    d, exp, folder = _load(name, True)
-    case = gen.make_case(name, True)
+    d, exp, folder = _load(name, _size(name))
+    case = gen.make_case(name, _size(name))
     h = exp["holdout"]
     held = d[gen.holdout_mask(d, h["column"], h["values"])]
     true = gen.truth(case, held)
