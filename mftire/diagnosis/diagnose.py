@@ -450,7 +450,8 @@ def _diagnose(
         by_law = {law.name: (law, val) for _, law, val in laws}
         ranked = sorted((f for f in fits[1:] if np.isfinite(f.heldout) and f.heldout < 1.0 and f.name in by_law),
                         key=lambda f: f.heldout)  # fmt: skip
-        ranked = [chosen] + [f for f in ranked if f is not chosen]
+        # the local comparison chose the variable; the full refit chooses among its laws
+        ranked = [chosen] + [f for f in ranked if f is not chosen and f.variable == chosen.variable]
         context[id(chosen)] = (prob, [(f, *by_law[f.name]) for f in ranked if f.name in by_law], eff_ch, folds,
                                blocks is not None, control.cv)
     # the lowest held-out error wins; a better-ranked candidate within 10 % of it is preferred
