@@ -27,9 +27,7 @@ def test_reduced_demo_runs_the_whole_loop(tmp_path, capsys):
         assert section in html
     doc = json.loads((out / "report.json").read_text())
     s = doc["numbers"]["summary"]
-    # the sliding-speed friction of the FE surrogate: named as the slip speed, or (since the full refit of
-    # 2026-11-24, known) as the forward speed, whose quadratic friction law predicts the held-out speed best
-    assert s["cause"] in ("Vs", "Vx")
+    assert s["cause"] == "Vs"
     assert s["heldout_Fx_rms_pct_after"] <= 0.5 * s["heldout_Fx_rms_pct_before"]
     assert 0.8 <= s["heldout_inside_prediction_band"] <= 1.0
     # every table of the page is in the JSON

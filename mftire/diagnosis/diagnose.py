@@ -148,16 +148,18 @@ def channel_noise(df: pd.DataFrame, channel: str) -> float:
 SET_POINTS = ("Fz_set", "Vx_set", "P_set", "gamma_set")
 
 
-def confounding_blocks(df: pd.DataFrame, v: np.ndarray, threshold: float = CONFOUND_R) -> np.ndarray | None:
+def confounding_blocks(df: pd.DataFrame, v: np.ndarray, threshold: float = CONFOUND_R,
+                       variable: str | None = None) -> np.ndarray | None:
     """Blocks of rows at one MF operating condition (the levels of every set point whose sweep means
     correlate with the candidate's, |r| > ``threshold``), or None when the candidate is not
     confounded with an MF input.  A candidate confounded with the load, say a drift in time with
-    the loads tested in blocks, can only be told from it inside those blocks."""
+    the loads tested in blocks, can only be told from it inside those blocks.  The candidate's own set
+    point (``Vx`` and ``Vx_set``) is not a confounder."""
     sweeps = df["sweep_id"].to_numpy()
     vm = pd.Series(np.asarray(v, float)).groupby(sweeps).mean()
     keys = []
     for sp in SET_POINTS:
-        if sp not in df.columns:
+        if sp not in df.columns or sp == f"{variable}_set":
             continue
         sm = df[sp].astype(float).groupby(sweeps).mean().reindex(vm.index)
         if sm.nunique() < 2 or vm.nunique() < 2:
@@ -433,7 +435,7 @@ def _diagnose(
         eff_ch = [ch for ch, sc in e.channel_scores.items() if sc >= max(0.05, 0.25 * e.score)] or [e.channel]
         # held-out folds: the levels of a sweep-level candidate (a level never seen in training, as the
         # held-out condition), else groups of sweeps
-        blocks = confounding_blocks(prob.df, v)
+        blocks = confounding_blocks(prob.df, v, variable=variable)
         kinds = prob.df["sweep_var"].to_numpy() if "sweep_var" in prob.df.columns else None
         folds = level_folds(v, prob.df["sweep_id"].to_numpy(), c.sweep_level, blocks=blocks, kinds=kinds)
         n_levels = int(np.unique(np.round(v[np.isfinite(v)], 9)).size)
@@ -450,8 +452,7 @@ def _diagnose(
         by_law = {law.name: (law, val) for _, law, val in laws}
         ranked = sorted((f for f in fits[1:] if np.isfinite(f.heldout) and f.heldout < 1.0 and f.name in by_law),
                         key=lambda f: f.heldout)  # fmt: skip
-        # the local comparison chose the variable; the full refit chooses among its laws
-        ranked = [chosen] + [f for f in ranked if f is not chosen and f.variable == chosen.variable]
+        ranked = [chosen] + [f for f in ranked if f is not chosen]
         context[id(chosen)] = (prob, [(f, *by_law[f.name]) for f in ranked if f.name in by_law], eff_ch, folds,
                                blocks is not None, control.cv)
     # the lowest held-out error wins; a better-ranked candidate within 10 % of it is preferred
