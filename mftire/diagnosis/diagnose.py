@@ -406,8 +406,8 @@ def _diagnose(
     group = [e for e in significant if e.score >= 0.6 * top.score][:3]
     group += [e for e in significant if e.channel in PROFILE_CHANNELS and e not in group][:2]
     n_pressures = len(levels(df[train], "P"))
-    found: list[tuple[EffectFit, CandidateScore]] = []
-    context: dict[int, tuple] = {}  #: id(chosen fit) -> what refine_effect needs
+    #: (chosen law, candidate, what refine_effect needs for that candidate)
+    found: list[tuple[EffectFit, CandidateScore, tuple]] = []
     tried: list[EffectFit] = []
     control: EffectFit | None = None  # the refit without any effect, shared by the candidates
     dtrain = df[train].reset_index(drop=True)
@@ -448,26 +448,25 @@ def _diagnose(
             continue
         if note:
             chosen.messages.insert(0, note)
-        found.append((chosen, e))
         by_law = {law.name: (law, val) for _, law, val in laws}
         ranked = sorted((f for f in fits[1:] if np.isfinite(f.heldout) and f.heldout < 1.0 and f.name in by_law),
                         key=lambda f: f.heldout)  # fmt: skip
         ranked = [chosen] + [f for f in ranked if f is not chosen]
-        context[id(chosen)] = (prob, [(f, *by_law[f.name]) for f in ranked if f.name in by_law], eff_ch, folds,
-                               blocks is not None, control.cv)
+        found.append((chosen, e, (prob, [(f, *by_law[f.name]) for f in ranked], eff_ch, folds, blocks is not None,
+                                  control.cv)))  # fmt: skip
     # the lowest held-out error wins; a better-ranked candidate within 10 % of it is preferred
-    lowest = min((f.heldout for f, _ in found), default=np.inf)
-    best = next(((f, e) for f, e in found if f.heldout <= 1.1 * lowest), None)
+    lowest = min((f.heldout for f, _, _ in found), default=np.inf)
+    best = next((t for t in found if t[0].heldout <= 1.1 * lowest), None)
     if best is None:
         msg = ("no significant effect: candidates were flagged, but no model term explains the residual better "
                "than refitting the model without it")
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
                                profiles=profiles)  # fmt: skip
-    effect, cause = best
+    effect, cause, context = best
     # the chosen candidate's best laws and the control, refitted with every MF coefficient
     _progress(f"refitting every coefficient with the laws of {effect.variable}", progress)
-    prob, law_fits, eff_ch, folds, in_blocks, control_cv = context[id(effect)]
+    prob, law_fits, eff_ch, folds, in_blocks, control_cv = context
     refined, extended, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv)
     if refined is None:
         msg = ("no significant effect: the best laws did not beat the control once every coefficient was "

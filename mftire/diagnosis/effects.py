@@ -20,6 +20,7 @@ column, a time column when the data have one, and the effect says so.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -570,12 +571,16 @@ def choose_effect(
         fit.heldout = cv / cv_control if cv_control > 0 else np.inf
         fit.cv = cv
         scored.append((cv, fit))
-    lowest = min(cv for cv, _ in scored)
-    if lowest > MAX_RESIDUAL_VS_CONTROL * cv_control:
+    if min(cv for cv, _ in scored) > MAX_RESIDUAL_VS_CONTROL * cv_control:
         return None, all_fits
-    # parsimony: among the laws within PARSIMONY of the lowest held-out error, the fewest coefficients
-    near = [(f.n_params, cv, f) for cv, f in scored if cv <= (1.0 + PARSIMONY) * lowest]
-    return min(near, key=lambda t: (t[0], t[1]))[2], all_fits
+    return _parsimonious(scored)[1], all_fits
+
+
+def _parsimonious(scored: Sequence[tuple]) -> tuple:
+    """Of ``(held-out error, EffectFit, ...)`` entries: among those within :data:`PARSIMONY` of the lowest
+    error, the one with the fewest coefficients (then the lowest error)."""
+    lowest = min(t[0] for t in scored)
+    return min((t for t in scored if t[0] <= (1.0 + PARSIMONY) * lowest), key=lambda t: (t[1].n_params, t[0]))
 
 
 #: Laws refined by a full refit (:func:`refine_effect`): the best of the local comparison.
@@ -630,26 +635,23 @@ def refine_effect(
                 f"control, every coefficient refitted without an effect: held-out-sweep error {cv_full:.4g}"]
     # each law as fitted locally (its held-out error from choose_effect) and refitted in full; each variant
     # must beat the control refitted the same way
-    options: list[tuple[float, float, EffectFit, Tyre]] = [(f.cv, cv_local, f, f.apply(base)) for f, _, _ in fits
+    options: list[tuple[float, EffectFit, Tyre, float]] = [(f.cv, f, f.apply(base), cv_local) for f, _, _ in fits
                                                            if np.isfinite(f.cv)]  # fmt: skip
+    base_terms = {t.index for t in base.extension_set.terms}
     for fit, _law, values in list(fits)[:REFINE_LAWS]:
         tyre = _full_refit(train, fit.apply(base))
-        new = [t for t in tyre.extension_set.terms if t.index not in {u.index for u in base.extension_set.terms}]
-        keys = [k for t in new for k in t.coefficient_keys]
+        keys = [k for t in tyre.extension_set.terms if t.index not in base_terms for k in t.coefficient_keys]
         p = replace_tyre(prob, tyre)
         if values is not None and fit.variable not in BUILTIN_VARIABLES:
             p.variables = {**p.variables, fit.variable: np.asarray(values)}
         cv = heldout_error(p, CONTROL, "", None, n_pressures, None, effect_channels, folds, extra_keys=keys)
         messages.append(f"{fit.name} in {fit.variable}: held-out-sweep error {cv:.4g} with every coefficient "
                         f"refitted, {fit.cv:.4g} with the main coefficients")  # fmt: skip
-        options.append((cv, cv_full, fit, tyre))
-    eligible = [o for o in options if o[0] <= MAX_RESIDUAL_VS_CONTROL * o[1]]
+        options.append((cv, fit, tyre, cv_full))
+    eligible = [o for o in options if o[0] <= MAX_RESIDUAL_VS_CONTROL * o[3]]
     if not eligible:
         return None, None, messages
-    # parsimony as in choose_effect: within PARSIMONY of the lowest held-out error, the fewest coefficients
-    lowest = min(o[0] for o in eligible)
-    near = [o for o in eligible if o[0] <= (1.0 + PARSIMONY) * lowest]
-    cv, cv_control, fit, tyre = min(near, key=lambda o: (o[2].n_params, o[0]))
+    cv, fit, tyre, cv_control = _parsimonious(eligible)
     section = {k: v for k, v in (tyre.extensions or {}).items() if k not in (base.extensions or {})}
     standard = {k: float(v) for k, v in tyre.flat.items() if k in base.flat and v != base.flat[k]}
     refined = EffectFit(fit.name, fit.variable, fit.physical,
@@ -661,4 +663,4 @@ def refine_effect(
 
 def replace_tyre(prob: _Problem, tyre: Tyre) -> _Problem:
     """The problem with another base tyre."""
-    return _Problem(tyre, prob.df, prob.channels, prob.scale, dict(prob.variables), prob.weights)
+    return dataclasses.replace(prob, tyre=tyre, variables=dict(prob.variables))
