@@ -1038,16 +1038,7 @@ static double prepare_point(const MFParams *p, Ctx *m, const MFInputs *in, doubl
     return (c->P - p->NOMPRES) / p->NOMPRES; /* eq 4.E2b */
 }
 
-/* What mf_channels computes (bits of want), as mftire.mf.solver.channels and outputs. */
-#define MF_WANT_FX 1u    /* Fx, mux, Kxk */
-#define MF_WANT_FY 2u    /* Fy, muy, Kya */
-#define MF_WANT_MZ 4u    /* Mz, t, Mzr (needs FX, FY) */
-#define MF_WANT_MX 8u    /* Mx (needs FY) */
-#define MF_WANT_MY 16u   /* My (needs FX) */
-#define MF_WANT_RAD 32u  /* rho, Rl, Cz (needs FX, FY) */
-#define MF_WANT_PATCH 64u /* 2a, 2b */
-#define MF_WANT_RELAX 128u /* Cx, Cy, sigmax, sigmay (needs FX, FY) */
-#define MF_WANT_ALL 255u
+/* What mf_channels computes: the MF_WANT_* bits of mf_eval.h (mftire.mf.solver.channels, outputs). */
 
 /*
  * Pieces 2 and 3 of solver.py for one conditioned point c (c->omega filled): the model
@@ -1115,6 +1106,12 @@ static void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c,
 
 int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *out, mf_warning_fn warn, void *ctx)
 {
+    return mf_evaluate_want(p, use_mode, in, MF_WANT_ALL, out, warn, ctx);
+}
+
+int mf_evaluate_want(const MFParams *p, int use_mode, const MFInputs *in, unsigned want, MFOutputs *out,
+                     mf_warning_fn warn, void *ctx)
+{
     char msg[256];
     Ctx m;
     Cond c;
@@ -1138,7 +1135,7 @@ int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *
     omega_in = omega_given ? clean(&m, MF_W_NAN_OMEGA, "omega", in->omega, 0.0) : 0.0;
     effective_rolling_radius(p, &c, dpi, omega_given, omega_in, &kmax, &Re, &Romega, &omega);
     c.omega = omega;
-    mf_channels(p, &m, &ext, &c, dpi, Romega, data, in->muRoad, MF_WANT_ALL, out);
+    mf_channels(p, &m, &ext, &c, dpi, Romega, data, in->muRoad, want, out);
     out->Fz = c.uFz; out->Re = Re; out->omega = c.omega;
 
     if (warn && m.warnings)

@@ -73,12 +73,30 @@ int mf_check_mode(int use_mode, char *msg, unsigned long n);
 /* Check that FITTYP is one the evaluator handles (6, 61, 62). */
 int mf_check_fittyp(const MFParams *p, char *msg, unsigned long n);
 
+/* Channel groups of mf_evaluate_want (what a group needs is computed too). */
+#define MF_WANT_FX 1u     /* Fx, mux, Kxk */
+#define MF_WANT_FY 2u     /* Fy, muy, Kya */
+#define MF_WANT_MZ 4u     /* Mz, t, Mzr (needs FX, FY) */
+#define MF_WANT_MX 8u     /* Mx (needs FY) */
+#define MF_WANT_MY 16u    /* My (needs FX) */
+#define MF_WANT_RAD 32u   /* rho, Rl, Cz (needs FX, FY) */
+#define MF_WANT_PATCH 64u /* 2a, 2b */
+#define MF_WANT_RELAX 128u /* Cx, Cy, sigmax, sigmay (needs FX, FY) */
+#define MF_WANT_ALL 255u
+
 /*
  * Evaluate one operating point.  Returns MF_OK, or MF_BAD_MODE / MF_BAD_FITTYP
  * (then *out is untouched).  warn may be NULL.
  */
 int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *out,
                 mf_warning_fn warn, void *ctx);
+
+/*
+ * mf_evaluate for the channel groups of want only (MF_WANT_* bits; Fz, Re and omega always):
+ * the fields of *out that no wanted group sets are left untouched.
+ */
+int mf_evaluate_want(const MFParams *p, int use_mode, const MFInputs *in, unsigned want, MFOutputs *out,
+                     mf_warning_fn warn, void *ctx);
 
 #ifdef __cplusplus
 }
