@@ -403,6 +403,13 @@ static double clip_curvature(Ctx *m, double E, int kind, const char *name, const
     return E;
 }
 
+/* Longitudinal slip stiffness Kxk [N] (eq 4.E15). */
+static double kxk(const MFParams *p, double Fz, double dfz, double dpi)
+{
+    return Fz * (p->PKX1 + p->PKX2 * dfz) * exp(p->PKX3 * dfz) * (1.0 + p->PPX1 * dpi + p->PPX2 * sq(dpi)) *
+           p->LKX; /* eq 4.E15 */
+}
+
 /* Pure longitudinal force: Fx0 [N], mux [-], Kxk [N]. */
 static void fx0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double z1, double *Fx0_out,
                 double *mux_out, double *Kxk_out)
@@ -414,8 +421,7 @@ static void fx0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double
           b->LMUX_star; /* eq 4.E13 */
     if (Fz == 0.0) mux = 0.0;
     Dx = mux * Fz * z1; /* eq 4.E12 */
-    Kxk = Fz * (p->PKX1 + p->PKX2 * dfz) * exp(p->PKX3 * dfz) * (1.0 + p->PPX1 * dpi + p->PPX2 * sq(dpi)) *
-          p->LKX; /* eq 4.E15 */
+    Kxk = kxk(p, Fz, dfz, dpi); /* eq 4.E15 */
     Bx = Kxk / (Cx * Dx + MF_EPSILON * sign_nonzero(Dx)); /* eq 4.E16 */
     SHx = (p->PHX1 + p->PHX2 * dfz) * p->LHX * c->smooth; /* eq 4.E17 (low-speed reduced) */
     SVx = Fz * (p->PVX1 + p->PVX2 * dfz) * p->LVX * b->LMUX_prime * z1 * c->smooth; /* eq 4.E18 */
@@ -1053,8 +1059,8 @@ static void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c,
     AlignTerms at;
     double z1, Fx0, mux = 0.0, Kxk = 0.0, Fy_comb, Gyk = 0.0, Fx = 0.0, Fy = 0.0;
     double off[2] = {0.0, 0.0}; /* force offsets of the model extensions, as factors of Fz */
-    int need_fx = (want & (MF_WANT_FX | MF_WANT_MZ | MF_WANT_MY | MF_WANT_RAD | MF_WANT_RELAX)) != 0;
-    int need_fy = (want & (MF_WANT_FY | MF_WANT_MZ | MF_WANT_MX | MF_WANT_RAD | MF_WANT_RELAX)) != 0;
+    int need_fx = (want & (MF_WANT_FX | MF_WANT_MZ | MF_WANT_MY | MF_WANT_RAD)) != 0;
+    int need_fy = (want & (MF_WANT_FY | MF_WANT_MZ | MF_WANT_MX | MF_WANT_RAD)) != 0;
 #if MF_N_TERMS > 0 || defined(MF_EXT_RUNTIME)
     MFParams q; /* p with the extension terms applied to its scaling factors */
     if (ext->n > 0) {
@@ -1101,7 +1107,16 @@ static void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c,
         out->a2 = 2.0 * a;
         out->b2 = 2.0 * bw;
     }
-    if (want & MF_WANT_RELAX) relaxation(p, c, Kxk, lat.Kya, &out->Cx, &out->Cy, &out->sigmax, &out->sigmay);
+    if (want & MF_WANT_RELAX) {
+        /* the relaxation lengths need the slip stiffnesses only (Besselink 2010 eq 19) */
+        if (!need_fx) Kxk = kxk(p, c->Fz, b.dfz, b.dpi); /* eq 4.E15 */
+        if (!need_fy) {
+            double z2 = 1.0, z3 = 1.0;
+            if (m->turn_slip) zeta2_zeta3(p, b.dfz, c->alpha, c->phi, &z2, &z3);
+            lat.Kya = kya(p, c->Fz, b.Fz0p, b.dpi, b.gamma_star, z3); /* eq 4.E25 */
+        }
+        relaxation(p, c, Kxk, lat.Kya, &out->Cx, &out->Cy, &out->sigmax, &out->sigmay);
+    }
 }
 
 int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *out, mf_warning_fn warn, void *ctx)
