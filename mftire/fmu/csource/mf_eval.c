@@ -62,7 +62,9 @@ static double clip(double v, double lo, double hi)
     return v;
 }
 
-/* Evaluation context: decoded mode, warning mask. */
+/* Evaluation context: decoded mode, warning mask.  The equations only set bits of the mask
+ * (no formatting, no calls with side effects: the array kernel vectorises them across points);
+ * mf_warning_text gives the message of a kind afterwards. */
 typedef struct {
     int limits, alpha_star, turn_slip, combined;
     /* The zero-camber Fy0 of the combined-slip aligning moment reuses the Fy0 already computed
@@ -70,25 +72,63 @@ typedef struct {
      * batch without / with camber somewhere (the array kernel; numpy decides per batch). */
     int batch_camber;
     unsigned long warnings;
-    char detail[MF_W_COUNT][160];
 } Ctx;
 
-static void flag(Ctx *x, int kind, const char *text)
-{
-    if (!(x->warnings & (1UL << kind))) {
-        x->warnings |= 1UL << kind;
-        snprintf(x->detail[kind], sizeof x->detail[kind], "%s", text);
-    }
-}
+static void flag(Ctx *x, int kind) { x->warnings |= 1UL << kind; }
 
-static void flag_limit(Ctx *x, int kind, const char *label, const char *key, double value)
+/* The message of warning kind `kind` (the texts of the numpy path, mftire.mf.inputs / solver). */
+void mf_warning_text(const MFParams *p, int kind, char *buf, unsigned long n)
 {
-    char buf[160];
-    snprintf(buf, sizeof buf, "%s %s the limit %s=%.17g. Values have been saturated.", label,
-             (kind == MF_W_ALPHA_LOW || kind == MF_W_GAMMA_LOW || kind == MF_W_FZ_LOW ||
-              kind == MF_W_P_LOW || kind == MF_W_KAPPA_LOW) ? "below" : "above",
-             key, value);
-    flag(x, kind, buf);
+    static const char *const nan_names[] = {"Fz", "kappa", "alpha", "gamma", "phit", "Vx", "omega"};
+    static const struct { int kind; const char *label, *side, *key; } limits[] = {
+        {MF_W_ALPHA_LOW, "Slip angle", "below", "ALPMIN"}, {MF_W_ALPHA_HIGH, "Slip angle", "above", "ALPMAX"},
+        {MF_W_GAMMA_LOW, "Inclination angle", "below", "CAMMIN"},
+        {MF_W_GAMMA_HIGH, "Inclination angle", "above", "CAMMAX"},
+        {MF_W_FZ_HIGH, "Vertical load", "above", "FZMAX"}, {MF_W_FZ_LOW, "Vertical load", "below", "FZMIN"},
+        {MF_W_P_LOW, "Pressure", "below", "PRESMIN"}, {MF_W_P_HIGH, "Pressure", "above", "PRESMAX"},
+        {MF_W_KAPPA_LOW, "Slip ratio", "below", "KPUMIN"}, {MF_W_KAPPA_HIGH, "Slip ratio", "above", "KPUMAX"},
+    };
+    static const struct { int kind; const char *name, *eq; } curv[] = {
+        {MF_W_EX, "Ex", "4.E14"}, {MF_W_EY, "Ey", "4.E24"}, {MF_W_EXA, "Exa", "4.E56"},
+        {MF_W_EYK, "Eyk", "4.E64"}, {MF_W_ET, "Et", "4.E44"}, {MF_W_EY0, "Ey", "4.E24"},
+    };
+    double value[10];
+    unsigned k;
+    value[0] = p->ALPMIN; value[1] = p->ALPMAX; value[2] = p->CAMMIN; value[3] = p->CAMMAX;
+    value[4] = p->FZMAX; value[5] = p->FZMIN; value[6] = p->PRESMIN; value[7] = p->PRESMAX;
+    value[8] = p->KPUMIN; value[9] = p->KPUMAX;
+    if (n == 0) return;
+    buf[0] = '\0';
+    if (kind >= MF_W_NAN_FZ && kind <= MF_W_NAN_OMEGA) {
+        snprintf(buf, n, "1 NaN value(s) in input '%s' replaced by %.1f.", nan_names[kind - MF_W_NAN_FZ], 0.0);
+        return;
+    }
+    if (kind >= MF_W_NAN_DATA0 && kind <= MF_W_NAN_DATA3) {
+#if MF_N_DATA > 0
+        static const char *const data_names[MF_N_DATA] = MF_DATA_NAMES;
+        if (kind - MF_W_NAN_DATA0 < MF_N_DATA) {
+            snprintf(buf, n, "1 NaN value(s) in input '%s' replaced by %.1f.", data_names[kind - MF_W_NAN_DATA0], 0.0);
+            return;
+        }
+#endif
+        snprintf(buf, n, "1 NaN value(s) in input 'data%d' replaced by %.1f.", kind - MF_W_NAN_DATA0, 0.0);
+        return;
+    }
+    for (k = 0; k < sizeof limits / sizeof limits[0]; k++)
+        if (limits[k].kind == kind) {
+            snprintf(buf, n, "%s %s the limit %s=%.17g. Values have been saturated.", limits[k].label,
+                     limits[k].side, limits[k].key, value[k]);
+            return;
+        }
+    if (kind == MF_W_LOW_SPEED) {
+        snprintf(buf, n, "Speed input Vx below the limit VXLOW=%.17g. Low speed mode activated.", p->VXLOW);
+        return;
+    }
+    for (k = 0; k < sizeof curv / sizeof curv[0]; k++)
+        if (curv[k].kind == kind) {
+            snprintf(buf, n, "%s over limit (>1), eq %s; clipped to 1.", curv[k].name, curv[k].eq);
+            return;
+        }
 }
 
 /* ------------------------------------------------------------------ modes.py */
@@ -151,8 +191,8 @@ typedef struct {
 /* The pressure clipped to [PRESMIN, PRESMAX] with a warning (limit mode). */
 static double limit_pressure(const MFParams *p, Ctx *m, double P)
 {
-    if (P < p->PRESMIN) flag_limit(m, MF_W_P_LOW, "Pressure", "PRESMIN", p->PRESMIN);
-    if (P > p->PRESMAX) flag_limit(m, MF_W_P_HIGH, "Pressure", "PRESMAX", p->PRESMAX);
+    if (P < p->PRESMIN) flag(m, MF_W_P_LOW);
+    if (P > p->PRESMAX) flag(m, MF_W_P_HIGH);
     return P < p->PRESMIN ? p->PRESMIN : (P > p->PRESMAX ? p->PRESMAX : P);
 }
 
@@ -192,29 +232,24 @@ static void condition_inputs(const MFParams *p, Ctx *m, double Fz, double kappa,
         speed_sum = fabs(Vx) + fabs(tan(alpha) * Vx);
         if (speed_sum < VXLOW) alpha = alpha * (speed_sum / VXLOW);
 
-        if (alpha < p->ALPMIN) flag_limit(m, MF_W_ALPHA_LOW, "Slip angle", "ALPMIN", p->ALPMIN);
-        if (alpha > p->ALPMAX) flag_limit(m, MF_W_ALPHA_HIGH, "Slip angle", "ALPMAX", p->ALPMAX);
+        if (alpha < p->ALPMIN) flag(m, MF_W_ALPHA_LOW);
+        if (alpha > p->ALPMAX) flag(m, MF_W_ALPHA_HIGH);
         alpha = alpha < p->ALPMIN ? p->ALPMIN : (alpha > p->ALPMAX ? p->ALPMAX : alpha);
-        if (gamma < p->CAMMIN) flag_limit(m, MF_W_GAMMA_LOW, "Inclination angle", "CAMMIN", p->CAMMIN);
-        if (gamma > p->CAMMAX) flag_limit(m, MF_W_GAMMA_HIGH, "Inclination angle", "CAMMAX", p->CAMMAX);
+        if (gamma < p->CAMMIN) flag(m, MF_W_GAMMA_LOW);
+        if (gamma > p->CAMMAX) flag(m, MF_W_GAMMA_HIGH);
         gamma = limit_camber(p, gamma);
 
         if (Fz > p->FZMAX) {
-            flag_limit(m, MF_W_FZ_HIGH, "Vertical load", "FZMAX", p->FZMAX);
+            flag(m, MF_W_FZ_HIGH);
             Fz = p->FZMAX;
         }
-        if (Fz < p->FZMIN) flag_limit(m, MF_W_FZ_LOW, "Vertical load", "FZMIN", p->FZMIN);
+        if (Fz < p->FZMIN) flag(m, MF_W_FZ_LOW);
         Fz_low = Fz < p->FZMIN ? p->FZMIN : Fz;
         P = limit_pressure(p, m, P);
-        if (kappa < p->KPUMIN) flag_limit(m, MF_W_KAPPA_LOW, "Slip ratio", "KPUMIN", p->KPUMIN);
-        if (kappa > p->KPUMAX) flag_limit(m, MF_W_KAPPA_HIGH, "Slip ratio", "KPUMAX", p->KPUMAX);
+        if (kappa < p->KPUMIN) flag(m, MF_W_KAPPA_LOW);
+        if (kappa > p->KPUMAX) flag(m, MF_W_KAPPA_HIGH);
         kappa = kappa < p->KPUMIN ? p->KPUMIN : (kappa > p->KPUMAX ? p->KPUMAX : kappa);
-        if (low_speed) {
-            char buf[160];
-            snprintf(buf, sizeof buf, "Speed input Vx below the limit VXLOW=%.17g. Low speed mode activated.",
-                     VXLOW);
-            flag(m, MF_W_LOW_SPEED, buf);
-        }
+        if (low_speed) flag(m, MF_W_LOW_SPEED);
     }
 
     /* MFeval departure: the reported slip angle is zero at exactly zero speed. */
@@ -392,12 +427,10 @@ static double zeta6(const MFParams *p, double phi) { return cos_atan(p->QBRP1 * 
 /* ------------------------------------------------------------------ longitudinal.py */
 
 /* Curvature factors must not exceed 1; clipped with a warning in limit mode. */
-static double clip_curvature(Ctx *m, double E, int kind, const char *name, const char *eq)
+static double clip_curvature(Ctx *m, double E, int kind)
 {
     if (m->limits && E > 1.0) {
-        char buf[160];
-        snprintf(buf, sizeof buf, "%s over limit (>1), eq %s; clipped to 1.", name, eq);
-        flag(m, kind, buf);
+        flag(m, kind);
         return 1.0;
     }
     return E;
@@ -427,7 +460,7 @@ static void fx0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double
     SVx = Fz * (p->PVX1 + p->PVX2 * dfz) * p->LVX * b->LMUX_prime * z1 * c->smooth; /* eq 4.E18 */
     kappax = c->kappa + SHx; /* eq 4.E10 */
     Ex = (p->PEX1 + p->PEX2 * dfz + p->PEX3 * sq(dfz)) * (1.0 - p->PEX4 * sgn(kappax)) * p->LEX;
-    Ex = clip_curvature(m, Ex, MF_W_EX, "Ex", "4.E14"); /* eq 4.E14 */
+    Ex = clip_curvature(m, Ex, MF_W_EX); /* eq 4.E14 */
     Bk = Bx * kappax;
     Fx0 = Dx * sin(Cx * atan(Bk - Ex * (Bk - atan(Bk)))) + SVx; /* eq 4.E9 */
     if (c->Vx < 0.0) Fx0 = -Fx0; /* driving backwards */
@@ -440,7 +473,7 @@ static void fx0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double
 static double fx_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double Fx0)
 {
     double Cxa = p->RCX1; /* eq 4.E55 */
-    double Exa = clip_curvature(m, p->REX1 + p->REX2 * b->dfz, MF_W_EXA, "Exa", "4.E56"); /* eq 4.E56 */
+    double Exa = clip_curvature(m, p->REX1 + p->REX2 * b->dfz, MF_W_EXA); /* eq 4.E56 */
     double SHxa = p->RHX1; /* eq 4.E57 */
     double Bxa = (p->RBX1 + p->RBX3 * sq(b->gamma_star)) * cos_atan(p->RBX2 * c->kappa) * p->LXAL; /* 4.E54 */
     double alphas = b->alpha_star + SHxa; /* eq 4.E53 */
@@ -525,7 +558,7 @@ static void fy0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double
     Dy = muy * Fz * zeta2; /* eq 4.E22 */
     Ey = (p->PEY1 + p->PEY2 * dfz) *
          (1.0 + p->PEY5 * sq(gamma_star) - (p->PEY3 + p->PEY4 * gamma_star) * sign_nonzero(alphay)) * p->LEY;
-    Ey = clip_curvature(m, Ey, ey_kind, "Ey", "4.E24"); /* eq 4.E24 */
+    Ey = clip_curvature(m, Ey, ey_kind); /* eq 4.E24 */
     By = Kya / (Cy * Dy + MF_EPSILON * sign_nonzero(Dy)); /* eq 4.E26 */
     Ba = By * alphay;
     Fy0 = Dy * sin(Cy * atan(Ba - Ey * (Ba - atan(Ba)))) + SVy; /* eq 4.E19 */
@@ -545,7 +578,7 @@ static double fy_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic 
            zeta2; /* eq 4.E67 */
     SVyk = DVyk * sin(p->RVY5 * atan(p->RVY6 * c->kappa)) * p->LVYKA; /* eq 4.E66 */
     SHyk = p->RHY1 + p->RHY2 * dfz; /* eq 4.E65 */
-    Eyk = clip_curvature(m, p->REY1 + p->REY2 * dfz, MF_W_EYK, "Eyk", "4.E64"); /* eq 4.E64 */
+    Eyk = clip_curvature(m, p->REY1 + p->REY2 * dfz, MF_W_EYK); /* eq 4.E64 */
     Cyk = p->RCY1; /* eq 4.E63 */
     Byk = (p->RBY1 + p->RBY4 * sq(gamma_star)) * cos_atan(p->RBY2 * (alpha_star - p->RBY3)) * p->LYKA; /* 4.E62 */
     kappas = c->kappa + SHyk; /* eq 4.E61 */
@@ -607,7 +640,7 @@ static void aligning_terms(const MFParams *p, Ctx *m, const Cond *c, const Basic
     Ct = p->QCZ1; /* eq 4.E41 */
     Et = (p->QEZ1 + p->QEZ2 * dfz + p->QEZ3 * sq(dfz)) *
          (1.0 + (p->QEZ4 + p->QEZ5 * gamma_star) * (2.0 / MF_PI) * atan(Bt * Ct * alphat));
-    Et = clip_curvature(m, Et, MF_W_ET, "Et", "4.E44"); /* eq 4.E44 */
+    Et = clip_curvature(m, Et, MF_W_ET); /* eq 4.E44 */
 
     if (m->turn_slip) {
         double Fz0p = b->Fz0p, Mzp_inf, CDrp, DDrp, Kzgr0, BDrp, Drp, Mzp90;
@@ -997,12 +1030,10 @@ static void apply_extensions(const ExtTable *ext, const MFParams *p, const Cond 
 
 /* ------------------------------------------------------------------ solver.py */
 
-static double clean(Ctx *m, int kind, const char *name, double x, double fill)
+static double clean(Ctx *m, int kind, double x, double fill)
 {
     if (isnan(x)) {
-        char buf[160];
-        snprintf(buf, sizeof buf, "1 NaN value(s) in input '%s' replaced by %.1f.", name, fill);
-        flag(m, kind, buf);
+        flag(m, kind);
         return fill;
     }
     return x;
@@ -1027,17 +1058,16 @@ static double prepare_point(const MFParams *p, Ctx *m, const MFInputs *in, doubl
     double Fz, kappa, alpha, gamma, phit, Vx, P;
     int k;
 #if MF_N_DATA > 0
-    static const char *const data_names[MF_N_DATA] = MF_DATA_NAMES;
-    for (k = 0; k < MF_N_DATA; k++) data[k] = clean(m, MF_W_NAN_DATA0 + k, data_names[k], in->data[k], 0.0);
+    for (k = 0; k < MF_N_DATA; k++) data[k] = clean(m, MF_W_NAN_DATA0 + k, in->data[k], 0.0);
 #endif
     (void)k;
     (void)data;
-    Fz = clean(m, MF_W_NAN_FZ, "Fz", in->Fz, 0.0);
-    kappa = clean(m, MF_W_NAN_KAPPA, "kappa", in->kappa, 0.0);
-    alpha = clean(m, MF_W_NAN_ALPHA, "alpha", in->alpha, 0.0);
-    gamma = clean(m, MF_W_NAN_GAMMA, "gamma", in->gamma, 0.0);
-    phit = clean(m, MF_W_NAN_PHIT, "phit", in->phit, 0.0);
-    Vx = clean(m, MF_W_NAN_VX, "Vx", in->Vx, 0.0);
+    Fz = clean(m, MF_W_NAN_FZ, in->Fz, 0.0);
+    kappa = clean(m, MF_W_NAN_KAPPA, in->kappa, 0.0);
+    alpha = clean(m, MF_W_NAN_ALPHA, in->alpha, 0.0);
+    gamma = clean(m, MF_W_NAN_GAMMA, in->gamma, 0.0);
+    phit = clean(m, MF_W_NAN_PHIT, in->phit, 0.0);
+    Vx = clean(m, MF_W_NAN_VX, in->Vx, 0.0);
     P = in->P;
     if (isnan(P) || P <= 0.0) P = p->INFLPRES;
     condition_inputs(p, m, Fz, kappa, alpha, gamma, phit, Vx, P, c);
@@ -1141,13 +1171,13 @@ int mf_evaluate_want(const MFParams *p, int use_mode, const MFInputs *in, unsign
 
     if (mf_check_mode(use_mode, msg, sizeof msg) != MF_OK) return MF_BAD_MODE;
     if (mf_check_fittyp(p, msg, sizeof msg) != MF_OK) return MF_BAD_FITTYP;
-    m.warnings = 0; /* m.detail[k] is written only when bit k is set */
+    m.warnings = 0;
     m.batch_camber = -1;
     decode_mode(&m, use_mode);
     dpi = prepare_point(p, &m, in, data, &c);
     /* omega = 0 means "not given" (estimated); NaN is cleaned to a given 0 as in Python */
     omega_given = in->omega != 0.0;
-    omega_in = omega_given ? clean(&m, MF_W_NAN_OMEGA, "omega", in->omega, 0.0) : 0.0;
+    omega_in = omega_given ? clean(&m, MF_W_NAN_OMEGA, in->omega, 0.0) : 0.0;
     effective_rolling_radius(p, &c, dpi, omega_given, omega_in, &kmax, &Re, &Romega, &omega);
     c.omega = omega;
     mf_channels(p, &m, &ext, &c, dpi, Romega, data, in->muRoad, want, out);
@@ -1155,6 +1185,10 @@ int mf_evaluate_want(const MFParams *p, int use_mode, const MFInputs *in, unsign
 
     if (warn && m.warnings)
         for (k = 0; k < MF_W_COUNT; k++)
-            if (m.warnings & (1UL << k)) warn(ctx, k, m.detail[k]);
+            if (m.warnings & (1UL << k)) {
+                char text[200];
+                mf_warning_text(p, k, text, sizeof text);
+                warn(ctx, k, text);
+            }
     return MF_OK;
 }

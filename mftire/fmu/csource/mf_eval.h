@@ -59,6 +59,9 @@ enum {
     MF_W_COUNT
 };
 
+/* The human-readable text of warning kind `kind` (for the limits: the file's limit value). */
+void mf_warning_text(const MFParams *p, int kind, char *buf, unsigned long n);
+
 /* Called once per distinct warning of an evaluation (kind, human-readable text). */
 typedef void (*mf_warning_fn)(void *ctx, int kind, const char *message);
 
