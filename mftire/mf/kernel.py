@@ -154,7 +154,10 @@ def available() -> bool:
 def status() -> str:
     """One line: the kernel in use, or why the numpy path is used."""
     lib = load()
-    return f"compiled kernel {lib._name}" if lib is not None else f"numpy path: {_why}"
+    if lib is None:
+        return f"numpy path: {_why}"
+    loops = "vectorised lane loops" if lib.mf_kernel_simd() else "scalar loops (built without SIMD)"
+    return f"compiled kernel {lib._name} ({loops})"
 
 
 _env: str | None = None  # MFTIRE_BACKEND, read at the first evaluation

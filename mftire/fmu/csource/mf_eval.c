@@ -20,6 +20,12 @@
 
 #include "mf_eval.h"
 
+/* Linkage of the model's functions: static here; the array kernel (mf_kernel.c) defines it as
+ * always-inline so that its lane loops hold the whole model and can be vectorised. */
+#ifndef MF_FN
+#define MF_FN static
+#endif
+
 /* Small number against singularities at zero speed (Pacejka 2012, eq 4.E6a). */
 #define MF_EPSILON 1e-6
 #define MF_PI 3.14159265358979323846
@@ -27,7 +33,7 @@
 /* ------------------------------------------------------------------ helpers */
 
 /* numpy.sign: -1, 0, +1, NaN for NaN */
-static double sgn(double x)
+MF_FN double sgn(double x)
 {
     if (x > 0.0) return 1.0;
     if (x < 0.0) return -1.0;
@@ -36,13 +42,13 @@ static double sgn(double x)
 }
 
 /* sign(x) with sign(0) = +1, used against 0/0 (Pacejka 2012, p. 177). */
-static double sign_nonzero(double x) { return sgn(x) + (x == 0.0 ? 1.0 : 0.0); }
+MF_FN double sign_nonzero(double x) { return sgn(x) + (x == 0.0 ? 1.0 : 0.0); }
 
-static double sq(double x) { return x * x; }
+MF_FN double sq(double x) { return x * x; }
 
 /* cos(atan(x)) in its exact algebraic form 1/sqrt(1 + x^2) (one square root instead of two
  * transcendental calls; agrees with numpy's cos(arctan(x)) to rounding). */
-static double cos_atan(double x) { return 1.0 / sqrt(1.0 + x * x); }
+MF_FN double cos_atan(double x) { return 1.0 / sqrt(1.0 + x * x); }
 
 /* ------------------------------------------------------------------ family.py (PAC2002) */
 
@@ -50,12 +56,16 @@ static double cos_atan(double x) { return 1.0 / sqrt(1.0 + x * x); }
 #define MF_PAC2002_CODE 2002.0
 
 /* The MF 5.2 equation family: FITTYP 6 and PAC2002. */
-static int is_mf52(const MFParams *p) { return p->FITTYP == 6.0 || p->FITTYP == MF_PAC2002_CODE; }
+MF_FN int is_mf52(const MFParams *p) { return p->FITTYP == 6.0 || p->FITTYP == MF_PAC2002_CODE; }
 
-static int is_pac2002(const MFParams *p) { return p->FITTYP == MF_PAC2002_CODE; }
+MF_FN int is_pac2002(const MFParams *p) { return p->FITTYP == MF_PAC2002_CODE; }
+
+/* fmax as glibc computes it (x when x >= y or y is NaN, else y), written out so that the
+ * array kernel can vectorise it: max(NaN, 0) = 0 as MATLAB's max() in the reference. */
+MF_FN double max_num(double x, double y) { return (x >= y || isnan(y)) ? x : y; }
 
 /* numpy.clip(v, lo, hi): NaN passes through */
-static double clip(double v, double lo, double hi)
+MF_FN double clip(double v, double lo, double hi)
 {
     if (v < lo) v = lo;
     if (v > hi) v = hi;
@@ -71,10 +81,14 @@ typedef struct {
      * where there is no camber: -1 decides per point (one point: the FMU), 0 / 1 for a whole
      * batch without / with camber somewhere (the array kernel; numpy decides per batch). */
     int batch_camber;
+    /* 1: the loaded radius by the closed form whatever the file (the array kernel's vectorised
+     * loops, which cannot hold the MF 6.2 root iteration; the kernel computes it again for MF 5.2
+     * and 6.2 files); 0: by the file's model (loaded_radius). */
+    int closed_radius;
     unsigned long warnings;
 } Ctx;
 
-static void flag(Ctx *x, int kind) { x->warnings |= 1UL << kind; }
+MF_FN void flag(Ctx *x, int kind) { x->warnings |= 1UL << kind; }
 
 /* The message of warning kind `kind` (the texts of the numpy path, mftire.mf.inputs / solver). */
 void mf_warning_text(const MFParams *p, int kind, char *buf, unsigned long n)
@@ -189,7 +203,7 @@ typedef struct {
 } Cond;
 
 /* The pressure clipped to [PRESMIN, PRESMAX] with a warning (limit mode). */
-static double limit_pressure(const MFParams *p, Ctx *m, double P)
+MF_FN double limit_pressure(const MFParams *p, Ctx *m, double P)
 {
     if (P < p->PRESMIN) flag(m, MF_W_P_LOW);
     if (P > p->PRESMAX) flag(m, MF_W_P_HIGH);
@@ -197,12 +211,12 @@ static double limit_pressure(const MFParams *p, Ctx *m, double P)
 }
 
 /* The inclination angle clipped to [CAMMIN, CAMMAX] (limit mode; the warnings are condition_inputs'). */
-static double limit_camber(const MFParams *p, double gamma)
+MF_FN double limit_camber(const MFParams *p, double gamma)
 {
     return gamma < p->CAMMIN ? p->CAMMIN : (gamma > p->CAMMAX ? p->CAMMAX : gamma);
 }
 
-static void condition_inputs(const MFParams *p, Ctx *m, double Fz, double kappa, double alpha, double gamma,
+MF_FN void condition_inputs(const MFParams *p, Ctx *m, double Fz, double kappa, double alpha, double gamma,
                              double phit, double Vx, double P, Cond *c)
 {
     double uFz, ukappa, ualpha, ugamma, uVx, ukappa_low, Fz_low, smooth = 1.0;
@@ -268,7 +282,7 @@ static void condition_inputs(const MFParams *p, Ctx *m, double Fz, double kappa,
  * manual) protected to +-VXLOW below VXLOW, and eq 4.76 is used without the book's
  * sign change because the road z axis points up.
  */
-static void turn_slip_spin(const MFParams *p, Cond *c)
+MF_FN void turn_slip_spin(const MFParams *p, Cond *c)
 {
     double Fz0p = p->LFZO * p->FNOMIN; /* eq 4.E1 */
     double dfz = (c->Fz - Fz0p) / Fz0p; /* eq 4.E2a */
@@ -296,7 +310,7 @@ typedef struct {
     double LMUX_star, LMUY_star, LMUX_prime, LMUY_prime; /* eqs 4.E7, 4.E8 */
 } Basic;
 
-static void basic(const MFParams *p, const Ctx *m, const Cond *c, double muRoad, Basic *b)
+MF_FN void basic(const MFParams *p, const Ctx *m, const Cond *c, double muRoad, Basic *b)
 {
     double absVx, Vsy, Vc, Vc_prime, s, LMUV, Amu;
     b->Fz0p = p->LFZO * p->FNOMIN;                 /* eq 4.E1 */
@@ -342,7 +356,7 @@ static void basic(const MFParams *p, const Ctx *m, const Cond *c, double muRoad,
 /* ------------------------------------------------------------------ vertical.py (radii) */
 
 /* Free-spinning radius R_omega with centrifugal growth [m] (Besselink 2010 eq 1). */
-static double free_radius(const MFParams *p, double omega)
+MF_FN double free_radius(const MFParams *p, double omega)
 {
     double R0 = p->UNLOADED_RADIUS;
     return R0 * (p->Q_RE0 + p->Q_V1 * sq((omega * R0) / p->LONGVL));
@@ -350,10 +364,44 @@ static double free_radius(const MFParams *p, double omega)
 
 /* Effective rolling radius Re = Romega - re_deflection [m] (Besselink 2010 eq 7); the
  * deflection term does not depend on omega, so the iteration below computes it once. */
-static double re_deflection(const MFParams *p, double Fz, double Cz)
+MF_FN double re_deflection(const MFParams *p, double Fz, double Cz)
 {
     double Fz0 = p->FNOMIN;
     return (Fz0 / Cz) * (p->DREFF * atan(p->BREFF * (Fz / Fz0)) + p->FREFF * (Fz / Fz0));
+}
+
+/* The fixed-point iteration for Re when omega is not given (below): start and tolerance of
+ * the reference evaluator. */
+#define MF_RE_START 0.965 /* Re starts at 0.965*R0 */
+#define MF_RE_TOL 1e-9    /* [m] */
+
+/* The load part of Re, Romega - Re [m]: Besselink 2010 eq 7 with Cz of eq 5. */
+MF_FN double re_load_deflection(const MFParams *p, double Fz, double dpi)
+{
+    double Cz = p->VERTICAL_STIFFNESS * (1.0 + p->PFZ1 * dpi); /* Besselink 2010 eq 5 */
+    return re_deflection(p, Fz, Cz);
+}
+
+/* Is the iteration still moving (the reference's loop condition)?  NaN stops it. */
+MF_FN int re_moving(double Re, double Re_old) { return fabs(Re_old - Re) > MF_RE_TOL; }
+
+/* One update: omega = (1 + kappa)*Vx/Re (eq 2.5), Romega (Besselink 2010 eq 1), Re (eq 7). */
+MF_FN void re_update(const MFParams *p, double defl, double kappa, double Vx, double *Re, double *Re_old,
+                      double *omega, double *Romega)
+{
+    *Re_old = *Re;
+    *omega = (kappa * Vx + Vx) / *Re; /* eq 2.5 */
+    *Romega = free_radius(p, *omega);
+    *Re = *Romega - defl;
+}
+
+/* Re, Romega and omega for a given wheel spin omega_in (no iteration). */
+MF_FN void re_given_omega(const MFParams *p, double defl, double omega_in, double *Re, double *Romega,
+                           double *omega)
+{
+    *omega = omega_in + DBL_EPSILON; /* as the reference: avoids Romega = 0 exactly */
+    *Romega = free_radius(p, *omega);
+    *Re = *Romega - defl;
 }
 
 /*
@@ -365,33 +413,23 @@ static double re_deflection(const MFParams *p, double Fz, double Cz)
  * updates are made and *kmax returns how many were (the array kernel, mf_kernel.c, finds
  * the batch's count with a first pass and then makes exactly that many for every point).
  */
-static void effective_rolling_radius(const MFParams *p, const Cond *c, double dpi, int omega_given,
+MF_FN void effective_rolling_radius(const MFParams *p, const Cond *c, double dpi, int omega_given,
                                      double omega_in, int *kmax, double *Re_out, double *Romega_out,
                                      double *omega_out)
 {
-    double Cz = p->VERTICAL_STIFFNESS * (1.0 + p->PFZ1 * dpi); /* Besselink 2010 eq 5 */
-    double Fz = c->uFz, Vx = c->Vx, kappa = c->ukappa;
-    double defl = re_deflection(p, Fz, Cz), R0, Re, Re_old, omega, Romega;
+    double defl = re_load_deflection(p, c->uFz, dpi), Re, Re_old, omega, Romega;
     int i;
     if (omega_given) {
-        omega = omega_in + DBL_EPSILON; /* as the reference: avoids Romega = 0 exactly */
-        Romega = free_radius(p, omega);
-        *Re_out = Romega - defl;
-        *Romega_out = Romega;
-        *omega_out = omega;
+        re_given_omega(p, defl, omega_in, Re_out, Romega_out, omega_out);
         return;
     }
-    R0 = p->UNLOADED_RADIUS;
-    Re = R0 * 0.965;
-    Re_old = R0;
+    Re = p->UNLOADED_RADIUS * MF_RE_START;
+    Re_old = p->UNLOADED_RADIUS;
     omega = 0.0;
-    Romega = R0;
+    Romega = p->UNLOADED_RADIUS;
     for (i = 0; i < *kmax; i++) {
-        if (!(fabs(Re_old - Re) > 1e-9)) break;
-        Re_old = Re;
-        omega = (kappa * Vx + Vx) / Re; /* eq 2.5 */
-        Romega = free_radius(p, omega);
-        Re = Romega - defl;
+        if (!re_moving(Re, Re_old)) break;
+        re_update(p, defl, c->ukappa, c->Vx, &Re, &Re_old, &omega, &Romega);
     }
     *kmax = i; /* the number of updates made */
     *Re_out = Re;
@@ -402,14 +440,14 @@ static void effective_rolling_radius(const MFParams *p, const Cond *c, double dp
 /* ------------------------------------------------------------------ turnslip.py */
 
 /* Fx peak reduction zeta1 (eqs 4.105, 4.106). */
-static double zeta1(const MFParams *p, double dfz, double kappa, double phi)
+MF_FN double zeta1(const MFParams *p, double dfz, double kappa, double phi)
 {
     double Bxp = p->PDXP1 * (1.0 + p->PDXP2 * dfz) * cos_atan(p->PDXP3 * kappa); /* eq 4.106 */
     return cos_atan(Bxp * p->UNLOADED_RADIUS * phi);                           /* eq 4.105 */
 }
 
 /* Fy peak reduction zeta2 and cornering-stiffness reduction zeta3 (eqs 4.77-4.79). */
-static void zeta2_zeta3(const MFParams *p, double dfz, double alpha, double phi, double *z2, double *z3)
+MF_FN void zeta2_zeta3(const MFParams *p, double dfz, double alpha, double phi, double *z2, double *z3)
 {
     double R0 = p->UNLOADED_RADIUS, Byp, aphi;
     *z3 = cos_atan(p->PKYP1 * sq(R0) * sq(phi));                                     /* eq 4.79 */
@@ -419,15 +457,21 @@ static void zeta2_zeta3(const MFParams *p, double dfz, double alpha, double phi,
 }
 
 /* Pneumatic-trail reduction zeta5 (eq 4.91). */
-static double zeta5(const MFParams *p, double phi) { return cos_atan(p->QDTP1 * p->UNLOADED_RADIUS * phi); }
+MF_FN double zeta5(const MFParams *p, double phi) { return cos_atan(p->QDTP1 * p->UNLOADED_RADIUS * phi); }
 
 /* Residual-torque slope reduction zeta6 (eq 4.102). */
-static double zeta6(const MFParams *p, double phi) { return cos_atan(p->QBRP1 * p->UNLOADED_RADIUS * phi); }
+MF_FN double zeta6(const MFParams *p, double phi) { return cos_atan(p->QBRP1 * p->UNLOADED_RADIUS * phi); }
 
 /* ------------------------------------------------------------------ longitudinal.py */
 
+/* The warnings of the curvature clips below, by the channel group that raises them (the array
+ * kernel computes some groups that were not asked for and keeps only the asked groups' warnings). */
+#define MF_W_OF_FX ((1UL << MF_W_EX) | (1UL << MF_W_EXA))
+#define MF_W_OF_FY ((1UL << MF_W_EY) | (1UL << MF_W_EYK))
+#define MF_W_OF_MZ ((1UL << MF_W_ET) | (1UL << MF_W_EY0))
+
 /* Curvature factors must not exceed 1; clipped with a warning in limit mode. */
-static double clip_curvature(Ctx *m, double E, int kind)
+MF_FN double clip_curvature(Ctx *m, double E, int kind)
 {
     if (m->limits && E > 1.0) {
         flag(m, kind);
@@ -437,14 +481,14 @@ static double clip_curvature(Ctx *m, double E, int kind)
 }
 
 /* Longitudinal slip stiffness Kxk [N] (eq 4.E15). */
-static double kxk(const MFParams *p, double Fz, double dfz, double dpi)
+MF_FN double kxk(const MFParams *p, double Fz, double dfz, double dpi)
 {
     return Fz * (p->PKX1 + p->PKX2 * dfz) * exp(p->PKX3 * dfz) * (1.0 + p->PPX1 * dpi + p->PPX2 * sq(dpi)) *
            p->LKX; /* eq 4.E15 */
 }
 
 /* Pure longitudinal force: Fx0 [N], mux [-], Kxk [N]. */
-static void fx0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double z1, double *Fx0_out,
+MF_FN void fx0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double z1, double *Fx0_out,
                 double *mux_out, double *Kxk_out)
 {
     double Fz = c->Fz, dfz = b->dfz, dpi = b->dpi;
@@ -470,7 +514,7 @@ static void fx0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double
 }
 
 /* Combined-slip longitudinal force Fx = Gxa*Fx0 [N] (eqs 4.E50-4.E57). */
-static double fx_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double Fx0)
+MF_FN double fx_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double Fx0)
 {
     double Cxa = p->RCX1; /* eq 4.E55 */
     double Exa = clip_curvature(m, p->REX1 + p->REX2 * b->dfz, MF_W_EXA); /* eq 4.E56 */
@@ -491,7 +535,7 @@ typedef struct {
 } PureLat;
 
 /* Cornering stiffness Kya [N/rad] (eq 4.E25). */
-static double kya(const MFParams *p, double Fz, double Fz0p, double dpi, double gamma_star, double zeta3)
+MF_FN double kya(const MFParams *p, double Fz, double Fz0p, double dpi, double gamma_star, double zeta3)
 {
     return p->PKY1 * Fz0p * (1.0 + p->PPY1 * dpi) * (1.0 - p->PKY3 * fabs(gamma_star)) *
            sin(p->PKY4 * atan((Fz / Fz0p) / ((p->PKY2 + p->PKY5 * sq(gamma_star)) * (1.0 + p->PPY2 * dpi)))) *
@@ -499,7 +543,7 @@ static double kya(const MFParams *p, double Fz, double Fz0p, double dpi, double 
 }
 
 /* Pure lateral force at inclination gamma_star (eqs 4.E19-4.E30). */
-static void fy0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double gamma_star, int turn_slip,
+MF_FN void fy0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double gamma_star, int turn_slip,
                 int ey_kind, PureLat *lat)
 {
     double Fz = c->Fz, dfz = b->dfz, dpi = b->dpi, Fz0p = b->Fz0p;
@@ -569,7 +613,7 @@ static void fy0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double
 }
 
 /* Combined-slip lateral force (eqs 4.E58-4.E67): returns Fy, sets Gyk. */
-static double fy_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double Fy0, double muy,
+MF_FN double fy_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double Fy0, double muy,
                           double zeta2, double *Gyk_out)
 {
     double dfz = b->dfz, alpha_star = b->alpha_star, gamma_star = b->gamma_star;
@@ -600,14 +644,14 @@ typedef struct {
 } AlignTerms;
 
 /* Pneumatic trail t(alpha) (eq 4.E33/4.E73). */
-static double trail_mf(double Dt, double Ct, double Bt, double Et, double alpha, double alpha_prime)
+MF_FN double trail_mf(double Dt, double Ct, double Bt, double Et, double alpha, double alpha_prime)
 {
     double Ba = Bt * alpha;
     return Dt * cos(Ct * atan(Ba - Et * (Ba - atan(Ba)))) * cos(alpha_prime); /* eq 4.E33/4.E73 */
 }
 
 /* Trail and residual-torque factors (eqs 4.E33-4.E47; Besselink 2010 A58, A60). */
-static void aligning_terms(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, const PureLat *lat, double Gyk,
+MF_FN void aligning_terms(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, const PureLat *lat, double Gyk,
                            AlignTerms *a)
 {
     double R0 = p->UNLOADED_RADIUS;
@@ -679,7 +723,7 @@ static void aligning_terms(const MFParams *p, Ctx *m, const Cond *c, const Basic
 }
 
 /* Dr*cos(Cr*u) with a possibly complex Cr, real part. */
-static double residual(double Dr, double complex Cr, double u, double factor)
+MF_FN double residual(double Dr, double complex Cr, double u, double factor)
 {
     if (cimag(Cr) == 0.0) return Dr * cos(creal(Cr) * u) * factor;
     return creal(Dr * ccos(Cr * u) * factor);
@@ -687,7 +731,7 @@ static double residual(double Dr, double complex Cr, double u, double factor)
 
 /* PAC2002 pure-slip aligning moment (mftire.mf.pac2002.mz0): Mz0 = -t*Fy0 + Mzr with Fy0 at the
    actual camber (Pacejka 2006 eqs 4.E31, 4.E32) and cos(alpha) once in Mzr (inside Dr, eq 4.E36). */
-static void mz0_pac2002(const Cond *c, const Basic *b, const AlignTerms *a, const PureLat *lat, double *Mz,
+MF_FN void mz0_pac2002(const Cond *c, const Basic *b, const AlignTerms *a, const PureLat *lat, double *Mz,
                         double *t_out, double *Mzr_out)
 {
     double t0 = trail_mf(a->Dt, a->Ct, a->Bt, a->Et, a->alphat, b->alpha_prime) * c->smooth; /* eq 4.E33 */
@@ -698,7 +742,7 @@ static void mz0_pac2002(const Cond *c, const Basic *b, const AlignTerms *a, cons
 }
 
 /* Pure-slip aligning moment (eqs 4.E31-4.E36): Mz0, t0, Mzr0. */
-static void mz0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, const AlignTerms *a, double *Mz,
+MF_FN void mz0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, const AlignTerms *a, double *Mz,
                 double *t_out, double *Mzr_out)
 {
     PureLat lat0;
@@ -717,7 +761,7 @@ static void mz0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, const 
 }
 
 /* Combined-slip aligning moment (eqs 4.E71-4.E78; Besselink 2010 A54-A56). */
-static void mz_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, const AlignTerms *a, double Kxk,
+MF_FN void mz_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, const AlignTerms *a, double Kxk,
                         double Fx, double Fy, double Gyk, const PureLat *lat, double *Mz_out, double *t_out,
                         double *Mzr_out)
 {
@@ -769,7 +813,7 @@ static void mz_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b
  * draft of Besselink et al. (2010), eq 49, with QSX12-QSX14 does.  Below FZMIN the
  * load is reduced as Fz*(Fz/FZMIN)^2 (found empirically by the reference's author).
  */
-static double mx(const MFParams *p, const Cond *c, double dpi, double Fy)
+MF_FN double mx(const MFParams *p, const Cond *c, double dpi, double Fy)
 {
     double Fz = c->Fz, FZMIN = p->FZMIN, R0 = p->UNLOADED_RADIUS, Fz0 = p->FNOMIN, g = c->gamma;
     if (Fz < FZMIN) Fz = Fz * sq(Fz / FZMIN);
@@ -791,7 +835,7 @@ static double mx(const MFParams *p, const Cond *c, double dpi, double Fy)
  * Fz*(Fz/FZMIN) and its low-speed treatment (a sine ramp over slips near lock,
  * sign change beyond) are reproduced.  Uses the load and slip as given (unlimited).
  */
-static double my(const MFParams *p, const Cond *c, double Fx)
+MF_FN double my(const MFParams *p, const Cond *c, double Fx)
 {
     double Fz = c->uFz, FZMIN = p->FZMIN, Vx = c->Vx, kappa = c->ukappa;
     double R0 = p->UNLOADED_RADIUS, Fz0 = p->FNOMIN, V0 = p->LONGVL, vr, My, high, low;
@@ -821,7 +865,7 @@ static double my(const MFParams *p, const Cond *c, double Fx)
 /* ------------------------------------------------------------------ vertical.py (loaded radius) */
 
 /* Linear load-deflection coefficient Q_FZ1 from VERTICAL_STIFFNESS (Besselink 2010 eq 4). */
-static double q_fz1(const MFParams *p)
+MF_FN double q_fz1(const MFParams *p)
 {
     return sqrt(sq(p->VERTICAL_STIFFNESS * p->UNLOADED_RADIUS / p->FNOMIN) - 4.0 * p->Q_FZ2);
 }
@@ -831,7 +875,7 @@ static double q_fz1(const MFParams *p)
  * Fz = (Q_FZ2*(rho/R0)^2 + Q_FZ1*(rho/R0))*(1 + Q_V2*R0/V0*|omega| - (Q_FCX*Fx/Fz0)^2
  * - (Q_FCY*Fy/Fz0)^2)*(1 + PFZ1*dpi)*Fz0 solved for rho in closed form.
  */
-static void loaded_radius_61(const MFParams *p, const Cond *c, double dpi, double omega, double Romega, double Fx,
+MF_FN void loaded_radius_61(const MFParams *p, const Cond *c, double dpi, double omega, double Romega, double Fx,
                              double Fy, double *rho_out, double *Rl_out, double *Cz_out)
 {
     double Fz = c->Fz_low, R0 = p->UNLOADED_RADIUS, Fz0 = p->FNOMIN, V0 = p->LONGVL;
@@ -839,29 +883,33 @@ static void loaded_radius_61(const MFParams *p, const Cond *c, double dpi, doubl
     double ext = (1.0 + speed - sq(p->Q_FCX * Fx / Fz0) - sq(p->Q_FCY * Fy / Fz0)) * (1.0 + p->PFZ1 * dpi) * Fz0;
     double A = p->Q_FZ2, B = q_fz1(p), C = -(Fz / ext);
     double x = (-B + sqrt(sq(B) - 4.0 * A * C)) / (2.0 * A);
-    double rho = fmax(x * R0, 0.0); /* NaN (Q_FZ2 = 0) gives 0, as max() in the reference */
-    double Rl = fmax(Romega - rho, 0.0); /* Pacejka 2012 eq A3.2 */
+    double rho = max_num(x * R0, 0.0); /* NaN (Q_FZ2 = 0) gives 0, as max() in the reference */
+    double Rl = max_num(Romega - rho, 0.0); /* Pacejka 2012 eq A3.2 */
     if (Fz == 0.0) rho = 1e-6;
     *rho_out = rho;
     *Rl_out = Rl;
     *Cz_out = Fz / rho;
 }
 
+/* Whether the file's loaded radius has the closed form of MF 6.1: FITTYP 61 and PAC2002 (whose
+ * MF 6.2 equation reduces to it); MF 5.2 and 6.2 files solve the MF 6.2 equation (below). */
+MF_FN int radius_closed_form(const MFParams *p) { return p->FITTYP == 61.0 || is_pac2002(p); }
+
 /* MF 6.2 vertical force for a given loaded radius (MF-Tyre/MF-Swift 6.2 manual). */
-static double vertical_force_62(const MFParams *p, double gamma, double abs_tan_gamma, double omega, double Romega,
+MF_FN double vertical_force_62(const MFParams *p, double gamma, double abs_tan_gamma, double omega, double Romega,
                                 double dpi, double Rl, double Fx, double Fy, double qfz1, double *rho_out)
 {
     double R0 = p->UNLOADED_RADIUS, Fz0 = p->FNOMIN, V0 = p->LONGVL;
     double ratio = Rl / Romega;
     double Sfyg = (p->Q_FYS1 + p->Q_FYS2 * ratio + p->Q_FYS3 * sq(ratio)) * gamma;
-    double rho_fr = fmax(Romega - Rl, 0.0);
+    double rho_fr = max_num(Romega - Rl, 0.0);
     double rtw = (1.075 - 0.5 * p->ASPECT_RATIO) * p->WIDTH; /* reference tread width */
     double q1 = p->Q_CAM1, q2 = p->Q_CAM2, rho_g, rho, fcorr;
     rho_g = sq((q1 * Rl + q2 * sq(Rl)) * gamma) * (rtw / 8.0) * abs_tan_gamma /
                 sq((q1 * Romega + q2 * sq(Romega)) * gamma) -
             p->Q_CAM3 * rho_fr * fabs(gamma);
     if (isnan(rho_g)) rho_g = 0.0;
-    rho = fmax(rho_fr + rho_g, 0.0);
+    rho = max_num(rho_fr + rho_g, 0.0);
     fcorr = (1.0 + p->Q_V2 * (R0 / V0) * fabs(omega) - sq(p->Q_FCX * Fx / Fz0) -
              sq(pow(rho / R0, p->Q_FCY2) * (p->Q_FCY * (Fy - Sfyg) / Fz0))) *
             (1.0 + p->PFZ1 * dpi);
@@ -874,7 +922,7 @@ static double vertical_force_62(const MFParams *p, double gamma, double abs_tan_
  * bracketed Newton iteration (bisection whenever a Newton step leaves the bracket)
  * to a force residual of 1e-9*Fz.  Where no root lies in [0, Romega], Rl = Romega.
  */
-static void loaded_radius_62(const MFParams *p, const Cond *c, double dpi, double omega, double Romega, double Fx,
+MF_FN void loaded_radius_62(const MFParams *p, const Cond *c, double dpi, double omega, double Romega, double Fx,
                              double Fy, double *rho_out, double *Rl_out, double *Cz_out)
 {
     double target = c->Fz, g = c->gamma, qfz1 = q_fz1(p), dummy, rho;
@@ -911,12 +959,23 @@ static void loaded_radius_62(const MFParams *p, const Cond *c, double dpi, doubl
     *Cz_out = target / rho;
 }
 
+/* Deflection rho, loaded radius Rl and vertical stiffness Cz of the file's model: the closed form
+ * (MF 6.1, PAC2002) or the root of the MF 6.2 equation (MF 5.2, 6.2). */
+MF_FN void loaded_radius(const MFParams *p, const Ctx *m, const Cond *c, double dpi, double Romega, double Fx,
+                         double Fy, MFOutputs *out)
+{
+    if (m->closed_radius || radius_closed_form(p))
+        loaded_radius_61(p, c, dpi, c->omega, Romega, Fx, Fy, &out->rho, &out->Rl, &out->Cz);
+    else
+        loaded_radius_62(p, c, dpi, c->omega, Romega, Fx, Fy, &out->rho, &out->Rl, &out->Cz);
+}
+
 /*
  * Contact-patch half length a and half width b [m] (Besselink 2010 eqs 9, 10).
  * Uses the load as given; beyond rim bottoming the load is held at the bottoming
  * load (empirical rule of the reference evaluator).
  */
-static void contact_patch(const MFParams *p, const Cond *c, double dpi, double *a_out, double *b_out)
+MF_FN void contact_patch(const MFParams *p, const Cond *c, double dpi, double *a_out, double *b_out)
 {
     double R0 = p->UNLOADED_RADIUS, w = p->WIDTH, Fz0 = p->FNOMIN;
     double NCz = p->VERTICAL_STIFFNESS * (1.0 + p->PFZ1 * dpi); /* Besselink 2010 eq 5 */
@@ -942,7 +1001,7 @@ static void contact_patch(const MFParams *p, const Cond *c, double dpi, double *
 /* ------------------------------------------------------------------ relaxation.py */
 
 /* Carcass stiffnesses and relaxation lengths (Besselink et al. 2010 eqs 17-19). */
-static void relaxation(const MFParams *p, const Cond *c, double Kxk, double Kya, double *Cx_out, double *Cy_out,
+MF_FN void relaxation(const MFParams *p, const Cond *c, double Kxk, double Kya, double *Cx_out, double *Cy_out,
                        double *sx_out, double *sy_out)
 {
     double Fz0 = p->FNOMIN, R0 = p->UNLOADED_RADIUS;
@@ -991,7 +1050,7 @@ typedef struct {
 #if MF_N_TERMS > 0 || defined(MF_EXT_RUNTIME)
 /* The value of the table form: c holds the n levels, then the n values; nearest level wins
  * (numpy argmin: the first of equal distances). */
-static double mf_ext_table(double u, const double *c, int n)
+MF_FN double mf_ext_table(double u, const double *c, int n)
 {
     int k, best = 0;
     for (k = 1; k < n; k++)
@@ -1002,7 +1061,7 @@ static double mf_ext_table(double u, const double *c, int n)
 /* q = p with the targeted scaling factors multiplied by f; off[0], off[1] the FX/FY offset sums.
  * The term fields are read as doubles from p's storage at the indices of the table (in the
  * array kernel the storage runs on past MFParams with the numbers of the terms). */
-static void apply_extensions(const ExtTable *ext, const MFParams *p, const Cond *c, const double *data, MFParams *q,
+MF_FN void apply_extensions(const ExtTable *ext, const MFParams *p, const Cond *c, const double *data, MFParams *q,
                              double *off)
 {
     const double *P = (const double *)p;
@@ -1030,7 +1089,7 @@ static void apply_extensions(const ExtTable *ext, const MFParams *p, const Cond 
 
 /* ------------------------------------------------------------------ solver.py */
 
-static double clean(Ctx *m, int kind, double x, double fill)
+MF_FN double clean(Ctx *m, int kind, double x, double fill)
 {
     if (isnan(x)) {
         flag(m, kind);
@@ -1040,12 +1099,13 @@ static double clean(Ctx *m, int kind, double x, double fill)
 }
 
 /* Decode a checked useMode into the context. */
-static void decode_mode(Ctx *m, int use_mode)
+MF_FN void decode_mode(Ctx *m, int use_mode)
 {
     m->limits = use_mode / 100 == 1;
     m->alpha_star = (use_mode / 10) % 10 == 2;
     m->turn_slip = use_mode % 10 == 2;
     m->combined = use_mode % 10 != 0;
+    m->closed_radius = 0;
 }
 
 /*
@@ -1053,7 +1113,7 @@ static void decode_mode(Ctx *m, int use_mode)
  * with a warning, then the input stage (condition_inputs).  data receives the cleaned data
  * variables.  Returns dpi (eq 4.E2b).
  */
-static double prepare_point(const MFParams *p, Ctx *m, const MFInputs *in, double *data, Cond *c)
+MF_FN double prepare_point(const MFParams *p, Ctx *m, const MFInputs *in, double *data, Cond *c)
 {
     double Fz, kappa, alpha, gamma, phit, Vx, P;
     int k;
@@ -1081,7 +1141,7 @@ static double prepare_point(const MFParams *p, Ctx *m, const MFInputs *in, doubl
  * extensions, turn slip, the channels of want (what they need is computed too) and the
  * outputs that depend on them.  Fields of out that are not wanted are left untouched.
  */
-static void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c, double dpi, double Romega,
+MF_FN void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c, double dpi, double Romega,
                         const double *data, double muRoad, unsigned want, MFOutputs *out)
 {
     Basic b;
@@ -1125,12 +1185,7 @@ static void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c,
     }
     if (want & MF_WANT_MX) out->Mx = mx(p, c, dpi, Fy);
     if (want & MF_WANT_MY) out->My = my(p, c, Fx);
-    if (want & MF_WANT_RAD) {
-        if (p->FITTYP == 61.0 || is_pac2002(p)) /* PAC2002: the MF 6.2 equation reduces to 6.1 */
-            loaded_radius_61(p, c, dpi, c->omega, Romega, Fx, Fy, &out->rho, &out->Rl, &out->Cz);
-        else
-            loaded_radius_62(p, c, dpi, c->omega, Romega, Fx, Fy, &out->rho, &out->Rl, &out->Cz);
-    }
+    if (want & MF_WANT_RAD) loaded_radius(p, m, c, dpi, Romega, Fx, Fy, out);
     if (want & MF_WANT_PATCH) {
         double a, bw;
         contact_patch(p, c, dpi, &a, &bw);
