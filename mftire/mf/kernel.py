@@ -384,11 +384,8 @@ def evaluate(
         return None
     nan = (ctypes.c_long * _N_IN)()
     mask = ctypes.c_ulong(0)
-    scratch = None
-    if not omega_given and n > 1:  # the first pass's radii, for the second (mf_kernel.c)
-        scratch = np.empty((1 + ("Re" not in rows) + ("omega" not in rows)) * n)
     rc = lib.mf_kernel_evaluate(packed[1], packed[2], packed[3], int(mode), n, ptrs, steps, int(omega_given), outp,
-                                None if scratch is None else scratch.ctypes.data, nan, ctypes.byref(mask))  # fmt: skip
+                                None, nan, ctypes.byref(mask))  # fmt: skip
     if rc != 0:  # bad mode or FITTYP: the numpy path raises its own error
         return None
     if any(nan) or mask.value:
