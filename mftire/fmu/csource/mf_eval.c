@@ -921,42 +921,83 @@ MF_FN double vertical_force_62(const MFParams *p, double gamma, double abs_tan_g
  * MF 6.2 loaded radius: the root of vertical_force_62(Rl) = Fz in [0, Romega], by a
  * bracketed Newton iteration (bisection whenever a Newton step leaves the bracket)
  * to a force residual of 1e-9*Fz.  Where no root lies in [0, Romega], Rl = Romega.
+ * In pieces (start, step, finish) so that the array kernel can run the steps of many points
+ * side by side; loaded_radius_62 puts them together.
  */
-MF_FN void loaded_radius_62(const MFParams *p, const Cond *c, double dpi, double omega, double Romega, double Fx,
-                             double Fy, double *rho_out, double *Rl_out, double *Cz_out)
+typedef struct {
+    double target, g, atg, omega, Romega, dpi, Fx, Fy; /* the equation's fixed arguments (8: arrays of them
+                                                          vectorise in the array kernel) */
+} Root62;
+/* The search's state: the iterate x, the bracket [lo, hi] and no_root (1.0 when no root lies in
+ * [0, Romega]), kept apart so that the array kernel holds them in lanes. */
+
+#define MF_ROOT62_STEPS 60 /* iterations at most */
+
+/* vertical_force_62(Rl) - Fz [N] */
+MF_FN double root62_residual(const MFParams *p, const Root62 *r, double Rl)
 {
-    double target = c->Fz, g = c->gamma, qfz1 = q_fz1(p), dummy, rho;
-    double atg = fabs(tan(g)); /* |tan(gamma)| of vertical_force_62, constant over the iteration */
-    double lo = 0.0, hi = Romega, f_hi, rho0, Rl0, Cz0, x, h = 1e-7, tol_f, Rl;
-    int no_root, i;
-#define F62(R) (vertical_force_62(p, g, atg, omega, Romega, dpi, (R), Fx, Fy, qfz1, &dummy) - target)
-    f_hi = F62(hi);
+    double rho;
+    return vertical_force_62(p, r->g, r->atg, r->omega, r->Romega, r->dpi, Rl, r->Fx, r->Fy, q_fz1(p), &rho) -
+           r->target;
+}
+
+MF_FN void root62_start(const MFParams *p, const Cond *c, double dpi, double omega, double Romega, double Fx,
+                        double Fy, Root62 *r, double *lo, double *hi, double *x, double *no_root)
+{
+    double rho0, Rl0, Cz0;
+    r->target = c->Fz;
+    r->g = c->gamma;
+    r->atg = fabs(tan(c->gamma)); /* |tan(gamma)| of vertical_force_62, constant over the iteration */
+    r->omega = omega;
+    r->Romega = Romega;
+    r->dpi = dpi;
+    r->Fx = Fx;
+    r->Fy = Fy;
+    *lo = 0.0;
+    *hi = Romega;
     /* Force at zero free deflection already >= target (camber deflection only).  NaN
      * (0*inf when Q_FCY2 < 0 and rho = 0) counts as below target. */
-    no_root = f_hi >= 0.0;
+    *no_root = root62_residual(p, r, Romega) >= 0.0;
     /* start from the MF 6.1 closed form without camber and force terms */
     loaded_radius_61(p, c, dpi, omega, Romega, 0.0, 0.0, &rho0, &Rl0, &Cz0);
-    x = clip(Romega - rho0, 0.0, Romega);
-    tol_f = 1e-9 * (target > 1.0 ? target : 1.0); /* [N] */
-    for (i = 0; i < 60; i++) {
-        double fx = F62(x), dfx, x_new;
-        int converged, bad;
-        if (fx > 0.0) lo = x; else hi = x;
-        converged = fabs(fx) <= tol_f;
-        if (converged || no_root) break;
-        dfx = (F62(x + h) - fx) / h;
-        x_new = x - fx / dfx;
-        bad = (x_new < lo) || (x_new > hi) || !isfinite(x_new);
-        if (bad) x_new = 0.5 * (lo + hi);
-        x = x_new;
-    }
-#undef F62
-    Rl = no_root ? Romega : x;
-    vertical_force_62(p, g, atg, omega, Romega, dpi, Rl, Fx, Fy, qfz1, &rho);
-    if (target == 0.0) rho = 1e-6;
+    *x = clip(Romega - rho0, 0.0, Romega);
+}
+
+/* One iteration: returns 0 when the search has ended (converged, or no root). */
+MF_FN int root62_step(const MFParams *p, const Root62 *r, double no_root, double *lo, double *hi, double *x)
+{
+    const double h = 1e-7, tol_f = 1e-9 * (r->target > 1.0 ? r->target : 1.0); /* [N] */
+    double fx = root62_residual(p, r, *x), dfx, x_new;
+    if (fx > 0.0) *lo = *x; else *hi = *x;
+    if (fabs(fx) <= tol_f || no_root != 0.0) return 0;
+    dfx = (root62_residual(p, r, *x + h) - fx) / h;
+    x_new = *x - fx / dfx;
+    if ((x_new < *lo) || (x_new > *hi) || !isfinite(x_new)) x_new = 0.5 * (*lo + *hi);
+    *x = x_new;
+    return 1;
+}
+
+MF_FN void root62_finish(const MFParams *p, const Root62 *r, double no_root, double x, double *rho_out,
+                         double *Rl_out, double *Cz_out)
+{
+    double rho, Rl = no_root != 0.0 ? r->Romega : x;
+    vertical_force_62(p, r->g, r->atg, r->omega, r->Romega, r->dpi, Rl, r->Fx, r->Fy, q_fz1(p), &rho);
+    if (r->target == 0.0) rho = 1e-6;
     *rho_out = rho;
     *Rl_out = Rl;
-    *Cz_out = target / rho;
+    *Cz_out = r->target / rho;
+}
+
+MF_FN void loaded_radius_62(const MFParams *p, const Cond *c, double dpi, double omega, double Romega, double Fx,
+                            double Fy, double *rho_out, double *Rl_out, double *Cz_out)
+{
+    Root62 r;
+    double lo, hi, x, no_root;
+    int i;
+    root62_start(p, c, dpi, omega, Romega, Fx, Fy, &r, &lo, &hi, &x, &no_root);
+    for (i = 0; i < MF_ROOT62_STEPS; i++)
+        if (!root62_step(p, &r, no_root, &lo, &hi, &x)) break;
+    root62_finish(p, &r, no_root, x, rho_out, Rl_out, Cz_out);
 }
 
 /* Deflection rho, loaded radius Rl and vertical stiffness Cz of the file's model: the closed form
@@ -1108,20 +1149,25 @@ MF_FN void decode_mode(Ctx *m, int use_mode)
     m->closed_radius = 0;
 }
 
-/*
- * Piece 1 of solver.py without the wheel spin: NaN inputs replaced by 0 (pressure: INFLPRES)
- * with a warning, then the input stage (condition_inputs).  data receives the cleaned data
- * variables.  Returns dpi (eq 4.E2b).
- */
-MF_FN double prepare_point(const MFParams *p, Ctx *m, const MFInputs *in, double *data, Cond *c)
+/* The data variables of the model extensions (MFInputs.data) with NaN replaced by 0 and a warning. */
+MF_FN void clean_data(Ctx *m, const MFInputs *in, double *data)
 {
-    double Fz, kappa, alpha, gamma, phit, Vx, P;
     int k;
+    for (k = 0; k < MF_MAX_DATA; k++) data[k] = 0.0;
 #if MF_N_DATA > 0
     for (k = 0; k < MF_N_DATA; k++) data[k] = clean(m, MF_W_NAN_DATA0 + k, in->data[k], 0.0);
 #endif
-    (void)k;
-    (void)data;
+    (void)m;
+    (void)in;
+}
+
+/*
+ * Piece 1 of solver.py without the wheel spin: NaN inputs replaced by 0 (pressure: INFLPRES)
+ * with a warning, then the input stage (condition_inputs).  Returns dpi (eq 4.E2b).
+ */
+MF_FN double prepare_point(const MFParams *p, Ctx *m, const MFInputs *in, Cond *c)
+{
+    double Fz, kappa, alpha, gamma, phit, Vx, P;
     Fz = clean(m, MF_W_NAN_FZ, in->Fz, 0.0);
     kappa = clean(m, MF_W_NAN_KAPPA, in->kappa, 0.0);
     alpha = clean(m, MF_W_NAN_ALPHA, in->alpha, 0.0);
@@ -1229,7 +1275,8 @@ int mf_evaluate_want(const MFParams *p, int use_mode, const MFInputs *in, unsign
     m.warnings = 0;
     m.batch_camber = -1;
     decode_mode(&m, use_mode);
-    dpi = prepare_point(p, &m, in, data, &c);
+    clean_data(&m, in, data);
+    dpi = prepare_point(p, &m, in, &c);
     /* omega = 0 means "not given" (estimated); NaN is cleaned to a given 0 as in Python */
     omega_given = in->omega != 0.0;
     omega_in = omega_given ? clean(&m, MF_W_NAN_OMEGA, in->omega, 0.0) : 0.0;

@@ -302,7 +302,8 @@ MF_INLINE unsigned long lane(const MFParams *p, int limits, int alpha_star, int 
     Cond c;
     MFInputs pt;
     MFOutputs o;
-    double data[MF_MAX_DATA], dpi;
+    static const double no_data[MF_MAX_DATA] = {0.0};
+    double dpi;
     m.limits = limits;
     m.alpha_star = alpha_star;
     m.turn_slip = 0;
@@ -311,9 +312,9 @@ MF_INLINE unsigned long lane(const MFParams *p, int limits, int alpha_star, int 
     m.closed_radius = 1; /* no root iteration in a lane loop: see radius_of_file */
     m.warnings = 0;
     lane_point(B, i, &pt);
-    dpi = prepare_point(p, &m, &pt, data, &c);
+    dpi = prepare_point(p, &m, &pt, &c);
     c.omega = B->omega[i];
-    mf_channels(p, &m, &no_ext, &c, dpi, B->Romega[i], data, 1.0, want, &o);
+    mf_channels(p, &m, &no_ext, &c, dpi, B->Romega[i], no_data, 1.0, want, &o);
     lane_store(B, i, want, &c, &o);
     return m.warnings;
 }
@@ -368,7 +369,8 @@ static void evaluate_scalar(const MFParams *p, const Ctx *mode, const ExtTable *
         int kk = kmax;
         m.warnings = 0;
         lane_point(B, i, &pt);
-        dpi = prepare_point(p, &m, &pt, data, &c);
+        clean_data(&m, &pt, data);
+        dpi = prepare_point(p, &m, &pt, &c);
         omega_in = isnan(pt.omega) ? 0.0 : pt.omega;
         effective_rolling_radius(p, &c, dpi, omega_given, omega_in, &kk, &B->Re[i], &B->Romega[i], &B->omega[i]);
         c.omega = B->omega[i];
@@ -379,25 +381,53 @@ static void evaluate_scalar(const MFParams *p, const Ctx *mode, const ExtTable *
     }
 }
 
-/* The loaded radius of MF 5.2 and 6.2 files, lane by lane after a lane loop (which gives the closed
- * form): the root of the MF 6.2 equation, found by an iteration of varying length. */
-static void radius_of_file(const MFParams *p, const Ctx *mode, Block *B, int lanes)
+/* The loaded radius of MF 5.2 and 6.2 files after a lane loop (which gives the closed form): the
+ * root of the MF 6.2 equation (mf_eval.c, loaded_radius_62), the search steps of the lanes side by
+ * side, each lane stopping where its own search stops. */
+/* The start of lane i's search: its conditioned point, as the lane loop had it. */
+MF_INLINE void radius_start(const MFParams *p, int limits, int alpha_star, const Block *B, int i, Root62 *st,
+                            double *lo, double *hi, double *x, double *no_root)
 {
-    int i;
+    Ctx m;
+    Cond c;
+    MFInputs pt;
+    double dpi;
+    m.limits = limits;
+    m.alpha_star = alpha_star;
+    m.warnings = 0;
+    lane_point(B, i, &pt);
+    dpi = prepare_point(p, &m, &pt, &c);
+    root62_start(p, &c, dpi, B->omega[i], B->Romega[i], B->out[O_FX][i], B->out[O_FY][i], st, lo, hi, x, no_root);
+}
+
+static MF_CLONES void radius_of_file(const MFParams *restrict p, int limits, int alpha_star, Block *restrict B,
+                                    int lanes)
+{
+    Root62 st[MF_BLOCK]; /* the fixed arguments; the iterate and the bracket in lanes: */
+    double lo[MF_BLOCK], hi[MF_BLOCK], x[MF_BLOCK], no_root[MF_BLOCK];
+    int going[MF_BLOCK], i, k;
+    MF_SIMD
     for (i = 0; i < lanes; i++) {
-        Ctx m = *mode;
-        Cond c;
-        MFInputs pt;
-        MFOutputs o;
-        double data[MF_MAX_DATA], dpi;
-        lane_point(B, i, &pt);
-        dpi = prepare_point(p, &m, &pt, data, &c);
-        c.omega = B->omega[i];
-        loaded_radius(p, &m, &c, dpi, B->Romega[i], B->out[O_FX][i], B->out[O_FY][i], &o);
-        B->out[O_RHO][i] = o.rho;
-        B->out[O_RL][i] = o.Rl;
-        B->out[O_CZ][i] = o.Cz;
+        radius_start(p, limits, alpha_star, B, i, &st[i], &lo[i], &hi[i], &x[i], &no_root[i]);
+        going[i] = 1;
     }
+    for (k = 0; k < MF_ROOT62_STEPS; k++) {
+        int any = 0;
+        MF_SIMD_OR_ANY
+        for (i = 0; i < lanes; i++) {
+            double l = lo[i], h = hi[i], r = x[i];
+            int go = root62_step(p, &st[i], no_root[i], &l, &h, &r) && going[i]; /* (a stopped lane's step is dropped) */
+            lo[i] = going[i] ? l : lo[i];
+            hi[i] = going[i] ? h : hi[i];
+            x[i] = going[i] ? r : x[i];
+            going[i] = go;
+            any |= go;
+        }
+        if (!any) break;
+    }
+    MF_SIMD
+    for (i = 0; i < lanes; i++)
+        root62_finish(p, &st[i], no_root[i], x[i], &B->out[O_RHO][i], &B->out[O_RL][i], &B->out[O_CZ][i]);
 }
 
 /*
@@ -477,7 +507,7 @@ MF_KERNEL_API int mf_kernel_evaluate(const double *params, const int *terms, int
         if (loop) {
             if (radius) radius_block(p, mode.limits, omega_given, kmax, B, lanes);
             loop(p, mode.batch_camber, B, lanes, &w);
-            if ((want & MF_WANT_RAD) && !radius_closed_form(p)) radius_of_file(p, &mode, B, nb);
+            if ((want & MF_WANT_RAD) && !radius_closed_form(p)) radius_of_file(p, mode.limits, mode.alpha_star, B, lanes);
         } else {
             evaluate_scalar(p, &mode, &ext, want, omega_given, kmax, B, nb, &w);
         }
