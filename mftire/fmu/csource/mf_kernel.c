@@ -124,11 +124,18 @@ MF_KERNEL_API int mf_kernel_simd(void)
 #endif
 }
 
+/* Lane arrays are aligned to the widest vector (64 bytes): the vectoriser then runs every lane in
+ * the vector body, never in a scalar prologue peeled off for alignment (scalar libm there would
+ * make a point's last bits depend on its place in the block). */
+#define MF_ALIGNED __attribute__((aligned(64)))
+
 /* One block: its inputs in lanes, the rolling radii, the outputs. */
 typedef struct {
-    double in[MF_N_IN][MF_BLOCK];
-    double Re[MF_BLOCK], Romega[MF_BLOCK], omega[MF_BLOCK];
-    double out[MF_N_OUT][MF_BLOCK];
+    MF_ALIGNED double in[MF_N_IN][MF_BLOCK];
+    MF_ALIGNED double Re[MF_BLOCK];
+    MF_ALIGNED double Romega[MF_BLOCK];
+    MF_ALIGNED double omega[MF_BLOCK];
+    MF_ALIGNED double out[MF_N_OUT][MF_BLOCK];
 } Block;
 
 /* Copy points [start, start + nb) into the lanes, padded to `lanes` with the first point; with
@@ -181,43 +188,49 @@ MF_INLINE void radius_inputs(const MFParams *p, Ctx *m, const Block *B, int i, d
 static MF_CLONES int radius_block(const MFParams *restrict p, int limits, int omega_given, int kmax,
                                   Block *restrict B, int lanes)
 {
-    double defl[MF_BLOCK], kap[MF_BLOCK], vx[MF_BLOCK];
-    int count[MF_BLOCK], moving[MF_BLOCK], i, k, least = kmax;
-    MF_SIMD
-    for (i = 0; i < lanes; i++) {
-        Ctx m;
-        double Fz, dpi, omega = 0.0, Re, Romega = p->UNLOADED_RADIUS, w = B->in[7][i];
-        m.limits = limits;
-        m.warnings = 0;
-        radius_inputs(p, &m, B, i, &Fz, &kap[i], &vx[i], &dpi);
-        defl[i] = re_load_deflection(p, Fz, dpi);
-        Re = p->UNLOADED_RADIUS * MF_RE_START;
-        if (omega_given) re_given_omega(p, defl[i], isnan(w) ? 0.0 : w, &Re, &Romega, &omega);
-        B->Re[i] = Re;
-        B->Romega[i] = Romega;
-        B->omega[i] = omega;
-        count[i] = 0;
-        moving[i] = !omega_given;
-    }
+    MF_ALIGNED double defl[MF_BLOCK];
+    MF_ALIGNED double kap[MF_BLOCK];
+    MF_ALIGNED double vx[MF_BLOCK];
+    MF_ALIGNED int count[MF_BLOCK];
+    MF_ALIGNED int moving[MF_BLOCK];
+    int i, i0, k, least = kmax;
+    for (i0 = 0; i0 < lanes; i0 += MF_LANES)
+        MF_SIMD
+        for (i = i0; i < i0 + MF_LANES; i++) {
+            Ctx m;
+            double Fz, dpi, omega = 0.0, Re, Romega = p->UNLOADED_RADIUS, w = B->in[7][i];
+            m.limits = limits;
+            m.warnings = 0;
+            radius_inputs(p, &m, B, i, &Fz, &kap[i], &vx[i], &dpi);
+            defl[i] = re_load_deflection(p, Fz, dpi);
+            Re = p->UNLOADED_RADIUS * MF_RE_START;
+            if (omega_given) re_given_omega(p, defl[i], isnan(w) ? 0.0 : w, &Re, &Romega, &omega);
+            B->Re[i] = Re;
+            B->Romega[i] = Romega;
+            B->omega[i] = omega;
+            count[i] = 0;
+            moving[i] = !omega_given;
+        }
     if (omega_given) return kmax;
     {
-        double Re_old[MF_BLOCK];
+        MF_ALIGNED double Re_old[MF_BLOCK];
         for (i = 0; i < lanes; i++) Re_old[i] = p->UNLOADED_RADIUS;
         for (k = 0; k < kmax; k++) {
             int any = 0;
-            MF_SIMD_OR_ANY
-            for (i = 0; i < lanes; i++) {
-                double om, Rw, r = B->Re[i], r_old = Re_old[i];
-                int go = moving[i] && re_moving(r, r_old);
-                re_update(p, defl[i], kap[i], vx[i], &r, &r_old, &om, &Rw);
-                B->Re[i] = go ? r : B->Re[i];
-                Re_old[i] = go ? r_old : Re_old[i];
-                B->omega[i] = go ? om : B->omega[i];
-                B->Romega[i] = go ? Rw : B->Romega[i];
-                count[i] += go;
-                moving[i] = go;
-                any |= go;
-            }
+            for (i0 = 0; i0 < lanes; i0 += MF_LANES)
+                MF_SIMD_OR_ANY
+                for (i = i0; i < i0 + MF_LANES; i++) {
+                    double om, Rw, r = B->Re[i], r_old = Re_old[i];
+                    int go = moving[i] && re_moving(r, r_old);
+                    re_update(p, defl[i], kap[i], vx[i], &r, &r_old, &om, &Rw);
+                    B->Re[i] = go ? r : B->Re[i];
+                    Re_old[i] = go ? r_old : Re_old[i];
+                    B->omega[i] = go ? om : B->omega[i];
+                    B->Romega[i] = go ? Rw : B->Romega[i];
+                    count[i] += go;
+                    moving[i] = go;
+                    any |= go;
+                }
             if (!any) break;
         }
     }
@@ -328,9 +341,11 @@ typedef void (*LaneLoop)(const MFParams *p, int batch_camber, Block *B, int lane
                                unsigned long *warnings)                                                       \
     {                                                                                                         \
         unsigned long w = 0;                                                                                  \
-        int i;                                                                                                \
-        MF_SIMD_OR_W                                                                                          \
-        for (i = 0; i < lanes; i++) w |= lane(p, LIMITS, ASTAR, COMBINED, batch_camber, WANT, B, i);         \
+        int i, i0;                                                                                            \
+        for (i0 = 0; i0 < lanes; i0 += MF_LANES)                                                              \
+            MF_SIMD_OR_W                                                                                      \
+            for (i = i0; i < i0 + MF_LANES; i++)                                                              \
+                w |= lane(p, LIMITS, ASTAR, COMBINED, batch_camber, WANT, B, i);                              \
         *warnings |= w;                                                                                       \
     }
 #define MF_LANE_LOOPS(L, A, C)                                                                                \
@@ -403,30 +418,37 @@ MF_INLINE void radius_start(const MFParams *p, int limits, int alpha_star, const
 static MF_CLONES void radius_of_file(const MFParams *restrict p, int limits, int alpha_star, Block *restrict B,
                                     int lanes)
 {
-    Root62 st[MF_BLOCK]; /* the fixed arguments; the iterate and the bracket in lanes: */
-    double lo[MF_BLOCK], hi[MF_BLOCK], x[MF_BLOCK], no_root[MF_BLOCK];
-    int going[MF_BLOCK], i, k;
-    MF_SIMD
-    for (i = 0; i < lanes; i++) {
-        radius_start(p, limits, alpha_star, B, i, &st[i], &lo[i], &hi[i], &x[i], &no_root[i]);
-        going[i] = 1;
-    }
+    MF_ALIGNED Root62 st[MF_BLOCK]; /* the fixed arguments; the iterate and the bracket in lanes: */
+    MF_ALIGNED double lo[MF_BLOCK];
+    MF_ALIGNED double hi[MF_BLOCK];
+    MF_ALIGNED double x[MF_BLOCK];
+    MF_ALIGNED double no_root[MF_BLOCK];
+    MF_ALIGNED int going[MF_BLOCK];
+    int i, i0, k;
+    for (i0 = 0; i0 < lanes; i0 += MF_LANES)
+        MF_SIMD
+        for (i = i0; i < i0 + MF_LANES; i++) {
+            radius_start(p, limits, alpha_star, B, i, &st[i], &lo[i], &hi[i], &x[i], &no_root[i]);
+            going[i] = 1;
+        }
     for (k = 0; k < MF_ROOT62_STEPS; k++) {
         int any = 0;
-        MF_SIMD_OR_ANY
-        for (i = 0; i < lanes; i++) {
-            double l = lo[i], h = hi[i], r = x[i];
-            int go = root62_step(p, &st[i], no_root[i], &l, &h, &r) && going[i]; /* (a stopped lane's step is dropped) */
-            lo[i] = going[i] ? l : lo[i];
-            hi[i] = going[i] ? h : hi[i];
-            x[i] = going[i] ? r : x[i];
-            going[i] = go;
-            any |= go;
-        }
+        for (i0 = 0; i0 < lanes; i0 += MF_LANES)
+            MF_SIMD_OR_ANY
+            for (i = i0; i < i0 + MF_LANES; i++) {
+                double l = lo[i], h = hi[i], r = x[i];
+                int go = root62_step(p, &st[i], no_root[i], &l, &h, &r) && going[i]; /* (a stopped lane's step is dropped) */
+                lo[i] = going[i] ? l : lo[i];
+                hi[i] = going[i] ? h : hi[i];
+                x[i] = going[i] ? r : x[i];
+                going[i] = go;
+                any |= go;
+            }
         if (!any) break;
     }
-    MF_SIMD
-    for (i = 0; i < lanes; i++)
+    for (i0 = 0; i0 < lanes; i0 += MF_LANES)
+        MF_SIMD
+        for (i = i0; i < i0 + MF_LANES; i++)
         root62_finish(p, &st[i], no_root[i], x[i], &B->out[O_RHO][i], &B->out[O_RL][i], &B->out[O_CZ][i]);
 }
 
