@@ -395,13 +395,18 @@ def test_host_modes_give_the_same_outputs(fmu_path):
 
 
 @needs_c_compiler
-def test_container_mode_checks_the_step(fmu_path):
-    """Container mode: fixed step, steps one after the other (the container checks its own time)."""
+def test_container_mode_checks_the_step(fmu_path, tmp_path):
+    """Container mode: the container FMU validates; fixed step, steps one after the other (the container
+    checks its own time)."""
+    from fmpy.validation import validate_fmu
+
     from mftire.errors import MftireError
-    from mftire.fmu.transient_host import TransientFMUs, container_available
+    from mftire.fmu.transient_host import TransientFMUs, build_container, container_available
 
     if not container_available():
         pytest.skip("fmpy has no container FMU here")
+    path = build_container(fmu_path, ("a", "b"), ("Fz", "Vx"), ("Fx", "Re"), {"TR_TAU_X": 0.02}, 1e-3, tmp_path)
+    assert validate_fmu(str(path)) == []
     with TransientFMUs(fmu_path, ("a", "b"), mode="container", step_size=2e-3) as ty:
         ty.step_values(0.0, 2e-3, [4000.0, 10.0, 0.0, 30.0] * 2)
         with pytest.raises(MftireError, match="fixed"):

@@ -80,7 +80,7 @@ def build_container(
     from fmpy import read_model_description
     from fmpy.container_fmu.cli import create_container_fmu
     from fmpy.container_fmu.config import Component, Configuration
-    from fmpy.model_description import CoSimulation, DefaultExperiment, ModelDescription, ModelVariable
+    from fmpy.model_description import CoSimulation, DefaultExperiment, ModelDescription, ModelVariable, Unknown
 
     fmu = Path(fmu).resolve()
     md = read_model_description(str(fmu))
@@ -112,6 +112,8 @@ def build_container(
         defaultExperiment=DefaultExperiment(stepSize=repr(step_size)),
         coSimulation=CoSimulation(fixedInternalStepSize=step_size),
         modelVariables=variables,
+        outputs=[Unknown(variable=v) for v in variables if v.causality == "output"],
+        initialUnknowns=[Unknown(variable=v) for v in variables if v.causality == "output"],
     )
     config = Configuration(parallelDoStep=False, modelDescription=container, components=components,
                            connections=[], variableMappings=mappings)  # fmt: skip
