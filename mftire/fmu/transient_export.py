@@ -50,7 +50,7 @@ def output_names() -> list[str]:
 
 #: Hand-written C sources of the transient FMU.
 TRANSIENT_SOURCES = ("mf_eval.c", "mf_eval.h", "mf_transient.c", "mf_transient.h", "fmi2_transient.c",
-                     *FMI2_COMMON_SOURCES)
+                     *FMI2_COMMON_SOURCES)  # fmt: skip
 
 #: Unit names of :data:`mftire.transient.CONSTANTS` -> FMI units.
 _CONST_UNIT = {"s": "s", "m": "m", "-": None}
