@@ -310,7 +310,7 @@ def main(argv=None) -> int:
         steps = len(inputs)
         print(f"{T_END:g} s vehicle manoeuvre at 1 kHz ({steps} steps), four transient tyre FMUs (Co-Simulation) "
               f"through fmpy (median / best of {r}):")  # fmt: skip
-        label = {"container": "fmpy's container FMU (3 calls/step)", "direct": "prebound calls (12 calls/step)",
+        label = {"container": "fmpy's container FMU, 3 calls/step", "direct": "prebound calls, 12 calls/step",
                  "fmpy": "fmpy's wrapper methods"}  # fmt: skip
         for m in modes:
             a, b = med[m]
@@ -319,13 +319,14 @@ def main(argv=None) -> int:
         print(f"  parked on the 20 % slope: largest speed over the last second {drift * 1e3:.2e} mm/s")
         us = 1e6 / steps  # seconds per run -> µs per step
         print("Where a vehicle step goes (medians; µs per step of 4 tyres):")
-        print(f"  vehicle model alone (stub tyres):                         {t_veh[0] * us:6.2f}")
-        for m, t in t_tyres.items():
-            print(f"  tyre calls alone from Python ({label[m]:35s}) {t[0] * us:6.2f}")
-        print(f"    the 12 direct ctypes calls with no C work:              {t_empty[0] * us:6.2f}  "
-              f"({t_empty[0] * us / 12:.2f} µs per call)")  # fmt: skip
-        print(f"  the same tyre steps from a C host (the FMU's own work):   {t_host[0] * us:6.2f}  "
-              f"({t_host[0] * us / 4:.2f} µs per tyre step; C alone {T_END / t_host[0]:.0f}x real time)")  # fmt: skip
+        rows = [("vehicle model alone (stub tyres)", t_veh[0])]
+        rows += [(f"tyre calls alone from Python ({label[m]})", t[0]) for m, t in t_tyres.items()]
+        rows += [("the 12 direct ctypes calls with no C work", t_empty[0])]
+        rows += [("the tyre steps from a C host (the FMU's own work)", t_host[0])]
+        for text, t in rows:
+            print(f"  {text:60s} {t * us:6.2f}")
+        print(f"  ({t_empty[0] * us / 12:.2f} µs per empty call; {t_host[0] * us / 4:.2f} µs per tyre step in C, "
+              f"C alone {T_END / t_host[0]:.0f}x real time)")  # fmt: skip
         if args.callgrind:
             if not shutil.which("valgrind"):
                 print("--callgrind: valgrind not found")
@@ -338,9 +339,10 @@ def main(argv=None) -> int:
                 parts += [("empty", "the 12 direct ctypes calls with no C work")]
                 for what, text in parts:
                     ins = instructions_per_step(_self_cmd(what, fmu, inputs_file), tmp)
-                    print(f"  {text:58s} {ins / 1e3:7.1f} k")
+                    print(f"  {text:60s} {ins / 1e3:6.1f} k")
                 host = instructions_per_step(lambda n: [*cmd[:4], str(n), *cmd[5:]], tmp)
-                print(f"  {'the FMU own work (C host, same tyre inputs)':58s} {host / 1e3:7.1f} k")
+                text = "the tyre steps from a C host (the FMU's own work)"
+                print(f"  {text:60s} {host / 1e3:6.1f} k")
         if args.workdir:
             print("C host kept: " + " ".join(cmd))
     print(f"load average after: {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} {os.getloadavg()[2]:.2f}")
