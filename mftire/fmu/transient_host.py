@@ -43,8 +43,8 @@ MODES = ("container", "direct", "fmpy")
 
 
 def container_available() -> bool:
-    """Whether fmpy offers its container FMU (:mod:`fmpy.container_fmu`, fmpy >= 0.3.22) with a binary
-    for this platform."""
+    """Whether fmpy offers its container FMU (:mod:`fmpy.container_fmu`: fmpy >= 0.3.28, used with 0.3.32)
+    with a binary for this platform."""
     try:
         import fmpy
         from fmpy.container_fmu import cli  # noqa: F401
