@@ -227,6 +227,70 @@ def test_c_and_python_derivatives_agree(model, probe):
 
 
 @needs_c_compiler
+def test_lazy_outputs_equal_the_full_evaluation(fmu_path, probe, model):
+    """The FMU computes outputs when read, only the channel groups read so far (and the zero-slip
+    offsets below VXLOW only for them): every output read, in any order and subset, equals the full
+    evaluation (all groups, probe library) at the same state bit for bit, and the Python model to
+    1e-9, below and above VXLOW."""
+    import fmpy
+
+    md = fmpy.read_model_description(str(fmu_path))
+    unzip = fmpy.extract(str(fmu_path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    outputs = [v.name for v in sorted(md.modelVariables, key=lambda v: v.valueReference) if v.causality == "output"]
+    assert outputs == output_names()
+    s = fmpy.fmi2.FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
+                            instanceName="lazy")  # fmt: skip
+    s.instantiate(callbacks=make_callbacks())
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+    rng = np.random.default_rng(17)
+    D = ctypes.c_double
+    names = ("Fz", "Vx", "Vy", "omega", "gamma", "P", "muRoad", "yawRate")
+    full = (D * len(outputs))()
+    seen = 0
+    for k in range(60):
+        Vx = [0.0, 0.2, 0.9, 3.0, -0.5, 15.0][k % 6]  # VXLOW = 1 m/s: w > 0 for the first, third and fifth
+        ins = (rng.uniform(1000, 8000), Vx, rng.uniform(-0.5, 0.5), rng.uniform(-5, 50), rng.uniform(-0.05, 0.05),
+               rng.uniform(2.0e5, 2.6e5), rng.uniform(0.5, 1.1), rng.uniform(-0.3, 0.3))  # fmt: skip
+        s.setReal([vr[n] for n in names], list(ins))
+        s.doStep(k * 1e-3, 1e-3)
+        # a growing, shuffled subset of the outputs, one GetReal each or all in one
+        ask = list(rng.permutation(outputs)[: 1 + k // 3])
+        got = [s.getReal([vr[n]])[0] for n in ask] if k % 2 else s.getReal([vr[n] for n in ask])
+        x = s.getReal([vr["u"], vr["v"]])
+        assert probe.mt_probe_all_outputs(111, (D * 8)(*ins), (D * 2)(*x), full) == 0
+        ref = dict(zip(outputs, full[:], strict=True))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            py = model.outputs(x, **dict(zip(names, ins, strict=True)))
+        for n, value in zip(ask, got, strict=True):
+            assert value == ref[n] or (np.isnan(value) and np.isnan(ref[n])), (k, n, value, ref[n])
+            assert abs(value - float(py[n])) <= 1e-9 * max(1.0, abs(value)), (k, n, value, float(py[n]))
+        seen += len(ask)
+    assert seen > 300
+    s.terminate()
+    s.freeInstance()
+    # below VXLOW, each force read for the first time after the step needs its zero-slip offset then
+    s = fmpy.fmi2.FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
+                            instanceName="first")  # fmt: skip
+    s.instantiate(callbacks=make_callbacks())
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+    ins = (4000.0, 0.2, 0.05, 0.5, 0.02, 2.2e5, 1.0, 0.1)
+    s.setReal([vr[n] for n in names], list(ins))
+    s.doStep(0.0, 1e-3)
+    got = {n: s.getReal([vr[n]])[0] for n in ("Fx", "Fy", "Mz")}
+    assert probe.mt_probe_all_outputs(111, (D * 8)(*ins), (D * 2)(*s.getReal([vr["u"], vr["v"]])), full) == 0
+    for n, value in got.items():
+        assert value == full[outputs.index(n)], n
+    s.terminate()
+    s.freeInstance()
+
+
+@needs_c_compiler
 def test_fmu_validates_and_declares_states(fmu_path):
     import fmpy
     from fmpy.validation import validate_fmu
@@ -299,30 +363,56 @@ def test_two_instances_are_independent(fmu_path):
 
 
 @needs_c_compiler
-def test_host_prebound_calls_equal_fmpy_methods(fmu_path):
-    """TransientFMUs: the prebound ctypes calls (step, step_values) and fmpy's wrapper methods give the
-    same outputs bit for bit, each instance on its own row."""
-    from mftire.fmu.transient_host import TransientFMUs
+def test_host_modes_give_the_same_outputs(fmu_path):
+    """TransientFMUs: fmpy's container FMU, the prebound ctypes calls (step, step_values) and fmpy's wrapper
+    methods give the same outputs bit for bit, each instance on its own row."""
+    from mftire.fmu.transient_host import TransientFMUs, container_available
 
     rng = np.random.default_rng(5)
     inputs = np.column_stack([rng.uniform(2000.0, 6000.0, 4), rng.uniform(-1.0, 20.0, 4), rng.uniform(-0.5, 0.5, 4),
                               rng.uniform(-5.0, 70.0, 4)])  # fmt: skip
+    inputs[0, 1] = 0.3  # below VXLOW: the low-speed damping TR_TAU_X acts
+    modes = ("container", "direct", "fmpy") if container_available() else ("direct", "fmpy")
     runs = []
-    for fast, flat in ((True, False), (True, True), (False, False), (False, True)):
-        with TransientFMUs(fmu_path, ("a", "b", "c", "d"), outputs=("Fx", "Fy", "Mz", "u", "v"), fast=fast) as ty:
-            out = []
-            for k in range(20):
-                u = inputs * (1.0 + 0.01 * k)
-                if flat:
-                    out.append(np.array(ty.step_values(k * 1e-3, 1e-3, u.ravel().tolist())).reshape(4, 5))
-                else:
-                    out.append(ty.step(k * 1e-3, 1e-3, u).copy())
-            assert ty.messages == [] or all(s <= 1 for s, _, _ in ty.messages)
-        runs.append(np.array(out))
-    for r in runs[1:]:
+    for mode, start in [(m, {"TR_CS_STEP": 5e-5, "TR_TAU_X": 0.02}) for m in modes] + [("direct", None)]:
+        for flat in (False, True):
+            with TransientFMUs(fmu_path, ("a", "b", "c", "d"), outputs=("Fx", "Fy", "Mz", "u", "v"), mode=mode,
+                               start_values=start) as ty:  # fmt: skip
+                out = []
+                for k in range(20):
+                    u = inputs * (1.0 + 0.01 * k)
+                    if flat:
+                        out.append(np.array(ty.step_values(k * 1e-3, 1e-3, u.ravel().tolist())).reshape(4, 5))
+                    else:
+                        out.append(ty.step(k * 1e-3, 1e-3, u).copy())
+                assert all(s <= 1 for s, _, _ in ty.messages)  # warnings at most
+            runs.append(np.array(out))
+    for r in runs[1:-2]:
         assert np.array_equal(r, runs[0])
+    assert not np.array_equal(runs[-1], runs[0])  # the start values reached the instances
     assert np.all(np.abs(runs[0][-1, :, 3:]) > 0.0)  # the deflection states moved, differently per instance
     assert len({tuple(row) for row in runs[0][-1]}) == 4
+
+
+@needs_c_compiler
+def test_container_mode_checks_the_step(fmu_path, tmp_path):
+    """Container mode: the container FMU validates; fixed step, steps one after the other (the container
+    checks its own time)."""
+    from fmpy.validation import validate_fmu
+
+    from mftire.errors import MftireError
+    from mftire.fmu.transient_host import TransientFMUs, build_container, container_available
+
+    if not container_available():
+        pytest.skip("fmpy has no container FMU here")
+    path = build_container(fmu_path, ("a", "b"), ("Fz", "Vx"), ("Fx", "Re"), {"TR_TAU_X": 0.02}, 1e-3, tmp_path)
+    assert validate_fmu(str(path)) == []
+    with TransientFMUs(fmu_path, ("a", "b"), mode="container", step_size=2e-3) as ty:
+        ty.step_values(0.0, 2e-3, [4000.0, 10.0, 0.0, 30.0] * 2)
+        with pytest.raises(MftireError, match="fixed"):
+            ty.step_values(2e-3, 1e-3, [4000.0, 10.0, 0.0, 30.0] * 2)
+        with pytest.raises(MftireError, match="expected t = 0.002"):
+            ty.step_values(6e-3, 2e-3, [4000.0, 10.0, 0.0, 30.0] * 2)
 
 
 def test_cli_transient_flag_fmi3_refused(tmp_path, capsys):

@@ -13,10 +13,10 @@ Both trajectories are plotted to a PNG and the script asserts that they agree.
 
 Second part (:func:`run_transient`): the same car on four instances of the
 *transient* tyre FMU (``mftire export-fmu --transient``: wheel kinematics in,
-relaxation-length slip states, low-speed model), in Co-Simulation at 1 kHz: standing
-still, launching, braking to a stop, then held by the brakes while the road tilts to a
-20 % slope.  Tyre forces and vehicle speed through the stop and the hold are plotted
-to ``<output stem>_transient.png``.
+relaxation-length slip states, low-speed model), in Co-Simulation at 1 kHz through
+fmpy (by default inside fmpy's container FMU): standing still, launching, braking to a
+stop, then held by the brakes while the road tilts to a 20 % slope.  Tyre forces and
+vehicle speed through the stop and the hold are plotted to ``<output stem>_transient.png``.
 
 Run::
 
@@ -283,6 +283,11 @@ STOP_INPUTS = ("Fz", "Vx", "omega")
 STOP_OUTPUTS = ("Fx", "My", "Re")
 
 
+def _ramp01(s: np.ndarray) -> np.ndarray:
+    """0 below 0, s between 0 and 1, 1 above (the torque and grade ramps)."""
+    return np.where(s <= 0.0, 0.0, np.where(s >= 1.0, 1.0, s))
+
+
 def simulate_stop_and_hold(tyres, veh: Vehicle = Vehicle(), sc: StopAndHold = StopAndHold()) -> dict:
     """Straight-line two-track car on the transient tyres ``tyres`` (a :class:`TransientFMUs` with
     the variables :data:`STOP_INPUTS` and :data:`STOP_OUTPUTS`).
@@ -292,80 +297,86 @@ def simulate_stop_and_hold(tyres, veh: Vehicle = Vehicle(), sc: StopAndHold = St
     wheel spins) advances with semi-implicit Euler.  The brakes are Coulomb friction
     with stiction: a wheel whose free motion the brake torque can stop is held at zero spin.
 
-    The step is scalar Python (no numpy inside the loop): one :meth:`TransientFMUs.step_values`
-    call per step carries the 4 x 3 inputs in and the 4 x 3 outputs out.
+    The controls (grade, brake, drive torque) depend on time only and are computed for all
+    steps before the loop; the step is scalar Python (no numpy inside the loop): one
+    :meth:`TransientFMUs.step_values` call per step carries the 4 x 3 inputs in and the 4 x 3
+    outputs out, and 16 values per step are recorded as packed doubles.
     """
     import math
+    import struct
 
     if tuple(tyres.inputs) != STOP_INPUTS or tuple(tyres.outputs) != STOP_OUTPUTS or tyres.n != 4:
         raise ValueError(f"simulate_stop_and_hold needs 4 tyres with inputs {STOP_INPUTS} and outputs {STOP_OUTPUTS}")
     n = int(round(sc.t_end / sc.dt))
     L = veh.a + veh.b
     J, dt, m, g, h_cg, b = sc.wheel_inertia, sc.dt, veh.m, veh.g, veh.h, veh.b
-    tilt, tilt_time, grade_end, brake, launch, ramp = sc.tilt, sc.tilt_time, sc.grade, sc.brake, sc.launch, sc.ramp
-    drive_torque, brake_front, brake_rear = sc.drive_torque, sc.brake_front, sc.brake_rear
+    # controls of every step (functions of time only)
+    t = np.arange(n + 1) * dt
+    grade = sc.grade * _ramp01((t - sc.tilt) / sc.tilt_time)
+    bk = _ramp01((t - sc.brake) / sc.ramp)  # brakes ramp on as the drive ramps off
+    Td = sc.drive_torque * _ramp01((t - sc.launch) / sc.ramp) * (1.0 - bk)  # rear wheels
+    lim_f, lim_r = dt * bk * sc.brake_front / J, dt * bk * sc.brake_rear / J  # brake spin change per step
+    controls = zip(t.tolist(), grade.tolist(), Td.tolist(), lim_f.tolist(), lim_r.tolist(), strict=True)
     atan, cos, sin, copysign = math.atan, math.cos, math.sin, math.copysign
     V, X = 0.0, 0.0
     om0 = om1 = om2 = om3 = 0.0
     Fx_sum = 0.0
-    grade_last, cos_t, sin_t = 0.0, 1.0, 0.0
+    grade_last, mg_cos_b, mg_cos_2, g_sin = 0.0, m * g * 1.0 * b, m * g * 1.0 / 2.0, g * 0.0
     step = tyres.step_values
-    rec = []  # flat: V, X, Fz_f, Fz_r, omega x 4, Fx x 4, Re x 4 of every step (16 values)
-    keep = rec.extend
-    for i in range(n + 1):
-        t = i * dt
-        s = (t - tilt) / tilt_time
-        grade = grade_end * (0.0 if s <= 0.0 else (1.0 if s >= 1.0 else s))
-        if grade != grade_last:
-            th = atan(grade)
-            cos_t, sin_t, grade_last = cos(th), sin(th), grade
+    rec = bytearray()  # V, X, Fz_f, Fz_r, omega x 4, Fx x 4, Re x 4 of every step: 16 doubles
+    keep, pack = rec.extend, struct.Struct("=16d").pack
+    for ti, gr, Td_r, lf, lr in controls:
+        if gr != grade_last:
+            th = atan(gr)
+            cos_t, sin_t, grade_last = cos(th), sin(th), gr
+            mg_cos_b, mg_cos_2, g_sin = m * g * cos_t * b, m * g * cos_t / 2.0, g * sin_t
         # quasi-static pitch load transfer from the previous step's total tyre force
-        Fz_f = (m * g * cos_t * b - h_cg * Fx_sum) / L / 2.0
-        Fz_r = m * g * cos_t / 2.0 - Fz_f
-        y = step(t, dt, (Fz_f, V, om0, Fz_f, V, om1, Fz_r, V, om2, Fz_r, V, om3))
-        Fx0, My0, Re0, Fx1, My1, Re1, Fx2, My2, Re2, Fx3, My3, Re3 = y  # STOP_OUTPUTS per tyre
-        keep((V, X, Fz_f, Fz_r, om0, om1, om2, om3, Fx0, Fx1, Fx2, Fx3, Re0, Re1, Re2, Re3))
+        Fz_f = (mg_cos_b - h_cg * Fx_sum) / L / 2.0
+        Fz_r = mg_cos_2 - Fz_f
+        Fx0, My0, Re0, Fx1, My1, Re1, Fx2, My2, Re2, Fx3, My3, Re3 = step(
+            ti, dt, (Fz_f, V, om0, Fz_f, V, om1, Fz_r, V, om2, Fz_r, V, om3)
+        )  # STOP_OUTPUTS per tyre
+        keep(pack(V, X, Fz_f, Fz_r, om0, om1, om2, om3, Fx0, Fx1, Fx2, Fx3, Re0, Re1, Re2, Re3))
         Fx_sum = Fx0 + Fx1 + Fx2 + Fx3
-        s = (t - brake) / ramp
-        bk = 0.0 if s <= 0.0 else (1.0 if s >= 1.0 else s)  # brakes ramp on as the drive ramps off
-        s = (t - launch) / ramp
-        Td = drive_torque * (0.0 if s <= 0.0 else (1.0 if s >= 1.0 else s)) * (1.0 - bk)  # rear wheels
         # wheel spin without the brake, then the brake with stiction (held at 0 if it can stop the wheel)
-        free, lim = om0 + dt * (My0 - Re0 * Fx0) / J, dt * bk * brake_front / J
-        om0 = 0.0 if abs(free) <= lim else free - copysign(lim, free)
+        free = om0 + dt * (My0 - Re0 * Fx0) / J
+        om0 = 0.0 if abs(free) <= lf else free - copysign(lf, free)
         free = om1 + dt * (My1 - Re1 * Fx1) / J
-        om1 = 0.0 if abs(free) <= lim else free - copysign(lim, free)
-        free, lim = om2 + dt * (Td - Re2 * Fx2 + My2) / J, dt * bk * brake_rear / J
-        om2 = 0.0 if abs(free) <= lim else free - copysign(lim, free)
-        free = om3 + dt * (Td - Re3 * Fx3 + My3) / J
-        om3 = 0.0 if abs(free) <= lim else free - copysign(lim, free)
-        V += dt * (Fx_sum / m - g * sin_t)
+        om1 = 0.0 if abs(free) <= lf else free - copysign(lf, free)
+        free = om2 + dt * (Td_r - Re2 * Fx2 + My2) / J
+        om2 = 0.0 if abs(free) <= lr else free - copysign(lr, free)
+        free = om3 + dt * (Td_r - Re3 * Fx3 + My3) / J
+        om3 = 0.0 if abs(free) <= lr else free - copysign(lr, free)
+        V += dt * (Fx_sum / m - g_sin)
         X += dt * V
-    R = np.fromiter(rec, float, len(rec)).reshape(n + 1, 16)
-    t = np.arange(n + 1) * dt
-    s = (t - tilt) / tilt_time
-    grade = grade_end * np.where(s <= 0.0, 0.0, np.where(s >= 1.0, 1.0, s))  # as in the loop
+    R = np.frombuffer(rec, float).reshape(n + 1, 16)
     return {"t": t, "V": R[:, 0], "X": R[:, 1], "grade": grade, "Fx": R[:, 8:12], "Fz": R[:, [2, 2, 3, 3]],
             "omega": R[:, 4:8], "Re": R[:, 12:16]}  # fmt: skip
 
 
 def run_transient(tir=DEFAULT_TIR, output: str | Path | None = "vehicle_example_transient.png",
-                  sc: StopAndHold = StopAndHold(), fmu_path: str | Path | None = None) -> dict:  # fmt: skip
+                  sc: StopAndHold = StopAndHold(), fmu_path: str | Path | None = None,
+                  mode: str | None = None) -> dict:  # fmt: skip
     """Standstill, launch, stop and hold on a 20 % slope with the transient tyre FMU; plot.
 
-    Returns the trajectory and a few figures (``drift``: the largest speed over the last
-    second, ``seconds``: run time).
+    ``mode``: how fmpy drives the four instances (:class:`mftire.fmu.transient_host.TransientFMUs`);
+    default fmpy's container FMU where fmpy has one, else direct calls.  Returns the trajectory and a
+    few figures (``drift``: the largest speed over the last second, ``seconds``: run time of the
+    simulation loop, ``mode``).
     """
     from mftire.fmu.export import export_fmu
-    from mftire.fmu.transient_host import TransientFMUs
+    from mftire.fmu.transient_host import TransientFMUs, container_available
 
+    mode = mode or ("container" if container_available() else "direct")
     with tempfile.TemporaryDirectory(prefix="mftire-vehicle-") as tmp:
         if fmu_path is None:
             fmu_path = export_fmu(tir, Path(tmp) / "tyre_transient.fmu", transient=True)
-        t0 = time.perf_counter()
-        with TransientFMUs(fmu_path, WHEELS, inputs=STOP_INPUTS, outputs=STOP_OUTPUTS) as tyres:
+        with TransientFMUs(fmu_path, WHEELS, inputs=STOP_INPUTS, outputs=STOP_OUTPUTS, mode=mode,
+                           step_size=sc.dt) as tyres:  # fmt: skip
+            t0 = time.perf_counter()
             res = simulate_stop_and_hold(tyres, sc=sc)
-        res["seconds"] = time.perf_counter() - t0
+            res["seconds"] = time.perf_counter() - t0
+        res["mode"] = mode
     last = res["t"] > sc.t_end - 1.0
     res["drift"] = float(np.max(np.abs(res["V"][last])))
     assert np.all(np.isfinite(res["Fx"])), "tyre forces must stay finite"
@@ -427,7 +438,7 @@ def main(argv=None) -> int:
         out_t = out.with_name(out.stem + "_transient.png")
         tr = run_transient(args.tir, out_t)
         print(f"wrote {out_t}: transient tyre FMU, stop and hold on a 20 % slope, drift {1000 * tr['drift']:.4f} mm/s "
-              f"(run time {tr['seconds']:.2f} s for {StopAndHold().t_end:g} s)")  # fmt: skip
+              f"(simulation loop {tr['seconds']:.2f} s for {StopAndHold().t_end:g} s, {tr['mode']} mode)")  # fmt: skip
     return 0
 
 

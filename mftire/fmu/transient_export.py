@@ -50,13 +50,33 @@ def output_names() -> list[str]:
 
 #: Hand-written C sources of the transient FMU.
 TRANSIENT_SOURCES = ("mf_eval.c", "mf_eval.h", "mf_transient.c", "mf_transient.h", "fmi2_transient.c",
-                     *FMI2_COMMON_SOURCES)
+                     *FMI2_COMMON_SOURCES)  # fmt: skip
 
 #: Unit names of :data:`mftire.transient.CONSTANTS` -> FMI units.
 _CONST_UNIT = {"s": "s", "m": "m", "-": None}
 
 #: C member of MTOutputs for each output name.
 _STEADY_FIELD = {name: field for name, field, _, _ in vt.OUTPUTS}
+
+#: The channel group of ``mf_evaluate_want`` (``MF_WANT_<group>`` of ``csource/mf_eval.h``) each output
+#: needs: the FMU evaluates only the groups of the outputs read (lazy outputs, ``fmi2_transient.c``).
+OUTPUT_GROUPS: dict[str, str] = {
+    "Fx": "FX", "mux": "FX", "Kxk": "FX", "Fy": "FY", "muy": "FY", "Kya": "FY", "Mz": "MZ", "t": "MZ",
+    "Mzr": "MZ", "Mx": "MX", "My": "MY", "Rl": "RAD", "rho": "RAD", "a2": "PATCH", "b2": "PATCH",
+    "sigmax": "RELAX", "sigmay": "RELAX",
+}  # fmt: skip
+
+#: Outputs every evaluation sets (no channel group): the transient slips, the load used and Re.
+UNGROUPED_OUTPUTS = ("kappa_t", "alpha_t", "Fz_out", "Re")
+
+
+def output_group(name: str) -> str:
+    """The C expression of the channel-group bits of output ``name`` (``0`` for :data:`UNGROUPED_OUTPUTS`)."""
+    if name in OUTPUT_GROUPS:
+        return f"MF_WANT_{OUTPUT_GROUPS[name]}"
+    if name in UNGROUPED_OUTPUTS:
+        return "0"
+    raise FMUExportError(f"transient FMU output {name!r} has no channel group (add it to OUTPUT_GROUPS)")
 
 
 def _output_rows() -> list[tuple[str, str, str | None, str]]:
@@ -135,6 +155,7 @@ def transient_model_header(variables: list[vt.Variable], model_identifier: str) 
         "typedef struct {",
         "    unsigned char kind;",
         "    unsigned char fixed;",
+        "    unsigned char want;    /* outputs: the channel groups (MF_WANT_*) they need */",
         "    unsigned short offset; /* byte offset in MTInputs / MTOutputs / MFParams; state index */",
         "} MTVarInfo;",
         "",
@@ -154,7 +175,8 @@ def transient_model_header(variables: list[vt.Variable], model_identifier: str) 
             off = v.field
         else:
             off = "0"
-        lines.append(f"    {{{kinds[v.kind]}, {fixed}, {off}}}, /* {v.vr} {vt._c_comment(v.name)} */")
+        want = output_group(v.name) if v.kind == "output" else "0"
+        lines.append(f"    {{{kinds[v.kind]}, {fixed}, {want}, {off}}}, /* {v.vr} {vt._c_comment(v.name)} */")
     lines += ["};", "", "static const char *const MT_VAR_NAMES[MT_N_VARS] = {"]
     lines += [f"    {vt.c_string(v.name)}," for v in by_vr]
     lines += ["};", "", "static const MTInputs MT_INPUT_START = {"]
@@ -306,7 +328,7 @@ __attribute__((visibility("default"))) int mt_probe_rates(int use_mode, const do
     MTKin k;
     int rc;
     load_inputs(&in, inputs);
-    rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, &k, NULL, NULL);
+    rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, 0u, &k, NULL, NULL);
     if (rc) return rc;
     mt_rates(&MT_PARAM_START, &k, x, dx);
     if (kin) { kin[0] = k.Vsx; kin[1] = k.Vsy; kin[2] = k.sigx; kin[3] = k.sigy; kin[4] = k.w; }
@@ -322,12 +344,30 @@ __attribute__((visibility("default"))) int mt_probe_outputs(int use_mode, const 
     MTOutputs o;
     int rc;
     load_inputs(&in, inputs);
-    rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, &k, NULL, NULL);
+    rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, MF_WANT_ALL, &k, NULL, NULL);
     if (rc) return rc;
-    rc = mt_outputs(&MT_PARAM_START, use_mode, &k, x, &o, NULL, NULL);
+    rc = mt_outputs(&MT_PARAM_START, use_mode, &k, x, MF_WANT_ALL, &o, NULL, NULL);
     if (rc) return rc;
     y[0] = o.ss.Fx; y[1] = o.ss.Fy; y[2] = o.ss.Mz; y[3] = o.ss.Mx; y[4] = o.ss.My;
     y[5] = o.kappa_t; y[6] = o.alpha_t;
+    return 0;
+}
+
+/* Every output (value-reference order) at the state x, from the full evaluation (all channel groups). */
+__attribute__((visibility("default"))) int mt_probe_all_outputs(int use_mode, const double *inputs, const double *x,
+                                                                double *y)
+{
+    MTInputs in;
+    MTKin k;
+    MTOutputs o;
+    int rc, vr, i = 0;
+    load_inputs(&in, inputs);
+    rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, MF_WANT_ALL, &k, NULL, NULL);
+    if (rc) return rc;
+    rc = mt_outputs(&MT_PARAM_START, use_mode, &k, x, MF_WANT_ALL, &o, NULL, NULL);
+    if (rc) return rc;
+    for (vr = 0; vr < MT_N_VARS; vr++)
+        if (MT_VARS[vr].kind == MT_K_OUTPUT) y[i++] = *(const double *)((const char *)&o + MT_VARS[vr].offset);
     return 0;
 }
 
@@ -344,7 +384,7 @@ __attribute__((visibility("default"))) double mt_probe_bench(int use_mode, const
     clock_gettime(CLOCK_MONOTONIC, &t0);
     for (i = 0; i < n; i++) {
         in.Vy = inputs[2] + 1e-9 * (double)(i & 1023);
-        mt_kinematics(&MT_PARAM_START, use_mode, &in, &k, NULL, NULL);
+        mt_kinematics(&MT_PARAM_START, use_mode, &in, 0u, &k, NULL, NULL);
         mt_rates(&MT_PARAM_START, &k, x, dx);
         acc += dx[0] + dx[1];
     }

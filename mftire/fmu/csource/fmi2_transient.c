@@ -8,6 +8,13 @@
  * it takes n = ceil(H / TR_CS_STEP) equal exponential-Euler sub-steps (TR_CS_STEP:
  * tunable parameter, default 1e-4 s).  See mt_advance in mf_transient.c.
  *
+ * Outputs are computed lazily: the first fmi2GetReal of an output after new inputs, states or a step
+ * evaluates the Magic Formula at the transient slips for the channel groups (MF_WANT_* of mf_eval.h)
+ * of every output read so far (MTVarInfo.want), and the zero-slip evaluation of the kinematics computes
+ * the rolling offsets only below VXLOW and only for those groups.  Each output equals the full
+ * evaluation (mt_outputs with MF_WANT_ALL) bit for bit; a group read for the first time is added
+ * (one more evaluation then).  An input set to its present value (bit for bit) changes nothing.
+ *
  * The value-reference table, start values and GUID come from mt_model_gen.h, generated
  * by mftire/fmu/transient_export.py from one variable table.  The functions that do not
  * depend on the model are in fmi2_common.c, shared with the steady-state tyre.
@@ -30,6 +37,8 @@ typedef struct {
     MTKin kin;
     MTOutputs out;
     int kin_ok, out_ok;
+    unsigned out_have; /* channel groups of out (valid when out_ok) */
+    unsigned out_want; /* channel groups of every output read so far */
     int use_mode;
     double time;
     int debug_logging;
@@ -59,6 +68,7 @@ static void reset(Instance *ins)
     ins->use_mode = MT_USEMODE_START;
     ins->time = 0.0;
     ins->kin_ok = ins->out_ok = 0;
+    ins->out_have = ins->out_want = 0;
     memset(ins->warn_count, 0, sizeof ins->warn_count);
 }
 
@@ -71,25 +81,37 @@ static int bad_code(Instance *ins, int rc)
     return 1;
 }
 
+/* The kinematics, with the rolling offsets of the output groups read so far. */
 static int update_kin(Instance *ins)
 {
     int rc;
-    if (ins->kin_ok) return 0;
-    rc = mt_kinematics(&ins->params, ins->use_mode, &ins->inputs, &ins->kin, on_warning, ins);
+    if (ins->kin_ok && !(ins->out_want & MT_OFFSETS & ~ins->kin.offsets)) return 0;
+    rc = mt_kinematics(&ins->params, ins->use_mode, &ins->inputs, ins->out_want, &ins->kin, on_warning, ins);
     if (rc != MF_OK) return bad_code(ins, rc);
     ins->kin_ok = 1;
     return 0;
 }
 
-static int update_out(Instance *ins)
+/* The outputs of the channel groups `want` (and of all groups read before). */
+static int update_out(Instance *ins, unsigned want)
 {
     int rc;
-    if (ins->out_ok) return 0;
+    ins->out_want |= want;
+    if (ins->out_ok && !(ins->out_want & ~ins->out_have)) return 0;
     if (update_kin(ins)) return 1;
-    rc = mt_outputs(&ins->params, ins->use_mode, &ins->kin, ins->x, &ins->out, on_warning, ins);
+    rc = mt_outputs(&ins->params, ins->use_mode, &ins->kin, ins->x, ins->out_want, &ins->out, on_warning, ins);
     if (rc != MF_OK) return bad_code(ins, rc);
+    ins->out_have = ins->out_want;
     ins->out_ok = 1;
     return 0;
+}
+
+/* Store an input or parameter; the kinematics and outputs are out of date unless the value is the same. */
+static void store(Instance *ins, double *dst, double value)
+{
+    if (memcmp(dst, &value, sizeof value) == 0) return; /* bit for bit the same: nothing changes */
+    *dst = value;
+    ins->kin_ok = ins->out_ok = 0;
 }
 
 static fmi2Status get_real(Instance *ins, unsigned vr, double *value)
@@ -109,7 +131,7 @@ static fmi2Status get_real(Instance *ins, unsigned vr, double *value)
         *value = dx[v->offset];
         return fmi2OK;
     case MT_K_OUTPUT:
-        if (update_out(ins)) return fmi2Error;
+        if (update_out(ins, v->want)) return fmi2Error;
         *value = *(const double *)((const char *)&ins->out + v->offset);
         return fmi2OK;
     default: break;
@@ -126,16 +148,14 @@ static fmi2Status set_real(Instance *ins, unsigned vr, double value)
     v = &MT_VARS[vr];
     switch (v->kind) {
     case MT_K_INPUT:
-        *(double *)((char *)&ins->inputs + v->offset) = value;
-        ins->kin_ok = ins->out_ok = 0;
+        store(ins, (double *)((char *)&ins->inputs + v->offset), value);
         return fmi2OK;
     case MT_K_PARAM:
         if (v->fixed && ins->base.state != FMI2_INSTANTIATED && ins->base.state != FMI2_INIT) {
             fmi2_logf(&ins->base, fmi2Error, "logStatusError", "%s is a fixed parameter", MT_VAR_NAMES[vr]);
             return fmi2Error;
         }
-        *(double *)((char *)&ins->params + v->offset) = value;
-        ins->kin_ok = ins->out_ok = 0;
+        store(ins, (double *)((char *)&ins->params + v->offset), value);
         return fmi2OK;
     case MT_K_STATE:
         if (ins->base.state == FMI2_RUNNING) {
@@ -184,7 +204,7 @@ FMI2_Export fmi2Status fmi2ExitInitializationMode(fmi2Component c)
         INS->base.state = FMI2_ERROR;
         return fmi2Error;
     }
-    if (update_out(INS)) {
+    if (update_out(INS, 0)) {
         INS->base.state = FMI2_ERROR;
         return fmi2Error;
     }
@@ -302,7 +322,7 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunication
     if (update_kin(INS)) return fmi2Error; /* inputs are held over the step */
     mt_advance(&INS->params, &INS->kin, INS->x, H);
     INS->time = currentCommunicationPoint + H;
-    INS->out_ok = 0;
-    return update_out(INS) ? fmi2Error : fmi2OK;
+    INS->out_ok = 0; /* the outputs at the new state are computed when read */
+    return fmi2OK;
 }
 

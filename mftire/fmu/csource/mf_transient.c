@@ -8,13 +8,21 @@
 
 static double nan_to(double x, double fill) { return isnan(x) ? fill : x; }
 
-int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, MTKin *k, mf_warning_fn warn, void *ctx)
+int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned offsets, MTKin *k,
+                  mf_warning_fn warn, void *ctx)
 {
     const double PI = 3.14159265358979323846;
     double Fz = nan_to(in->Fz, 0.0), Vx = nan_to(in->Vx, 0.0), Vy = nan_to(in->Vy, 0.0);
     double omega = nan_to(in->omega, 0.0), yaw = nan_to(in->yawRate, 0.0);
     double vxlow = p->VXLOW, absVx = fabs(Vx), vfloor, Vev, r, q;
+    unsigned want = MF_WANT_RELAX;
     int rc, i;
+    r = absVx / vxlow < 1.0 ? absVx / vxlow : 1.0;
+    /* low-speed weight (cosine, as MFeval's VXLOW reduction); from VXLOW on exactly 0.5 * (1 + cos(PI)) = 0 */
+    k->w = r < 1.0 ? 0.5 * (1.0 + cos(PI * r)) : 0.0;
+    /* the rolling offsets are needed below VXLOW only (w > 0), and only for the groups asked for */
+    if (k->w > 0.0) want |= offsets & MT_OFFSETS;
+    k->offsets = k->w > 0.0 ? offsets & MT_OFFSETS : MT_OFFSETS;
     /* evaluation speed: forward, never below VXLOW; the floor is the next double above VXLOW so that the
      * Magic Formula stays out of its low-speed mode (|Vx| <= VXLOW, whose factors are all 1 at VXLOW) */
     vfloor = nextafter(vxlow, INFINITY);
@@ -29,18 +37,18 @@ int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, MTKin *k,
     k->ev.omega = omega == 0.0 ? 1e-300 : omega; /* a true 0: not "estimate omega" */
     k->ev.muRoad = nan_to(in->muRoad, 1.0);
     for (i = 0; i < MF_MAX_DATA; i++) k->ev.data[i] = in->data[i];
-    rc = mf_evaluate(p, use_mode, &k->ev, &k->zero, warn, ctx);
+    k->zero.Fx = k->zero.Fy = k->zero.Mz = 0.0; /* offsets not evaluated: 0 (w = 0, or not used) */
+    rc = mf_evaluate_want(p, use_mode, &k->ev, want, &k->zero, warn, ctx);
     if (rc != MF_OK) return rc;
     k->Vx = Vx;
     k->Vsx = Vx - omega * k->zero.Re; /* longitudinal slip velocity (Pacejka 2012 eq 2.5 / 4.E5) */
     k->Vsy = Vy;
     k->sigx = k->zero.sigmax > p->TR_SIGMA_MIN ? k->zero.sigmax : p->TR_SIGMA_MIN; /* Besselink 2010 eq 19 */
     k->sigy = k->zero.sigmay > p->TR_SIGMA_MIN ? k->zero.sigmay : p->TR_SIGMA_MIN; /* Besselink 2010 eq 19 */
-    r = absVx / vxlow < 1.0 ? absVx / vxlow : 1.0;
-    k->w = 0.5 * (1.0 + cos(PI * r)); /* low-speed weight (cosine, as MFeval's VXLOW reduction) */
     q = Vx / vxlow;
     q = q > 1.0 ? 1.0 : (q < -1.0 ? -1.0 : q);
-    k->My_sign = sin(0.5 * PI * q);
+    /* smooth sign of the rolling direction; sin(+-PI/2) is exactly +-1 in double */
+    k->My_sign = q == 1.0 ? 1.0 : (q == -1.0 ? -1.0 : sin(0.5 * PI * q));
     return MF_OK;
 }
 
@@ -62,8 +70,8 @@ void mt_rates(const MFParams *p, const MTKin *k, const double x[2], double dx[2]
     dx[1] = k->Vsy - ay * x[1];  /* Pacejka 2012 §7.2.1: dv/dt + |Vx|/sigma_alpha*v = Vsy (ISO sign) */
 }
 
-int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2], MTOutputs *out,
-               mf_warning_fn warn, void *ctx)
+int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2], unsigned want,
+               MTOutputs *out, mf_warning_fn warn, void *ctx)
 {
     double dx[2];
     MFInputs ev = k->ev;
@@ -73,12 +81,13 @@ int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2
     out->alpha_t = atan((x[1] + k->w * p->TR_TAU_Y * dx[1]) / k->sigy); /* tan alpha' = v/sigma_alpha */
     ev.kappa = out->kappa_t;
     ev.alpha = out->alpha_t;
-    rc = mf_evaluate(p, use_mode, &ev, &out->ss, warn, ctx);
+    rc = mf_evaluate_want(p, use_mode, &ev, want, &out->ss, warn, ctx);
     if (rc != MF_OK) return rc;
-    out->ss.Fx -= k->w * k->zero.Fx; /* rolling offsets fade out below VXLOW */
-    out->ss.Fy -= k->w * k->zero.Fy;
-    out->ss.Mz -= k->w * k->zero.Mz;
-    out->ss.My *= k->My_sign; /* rolling resistance opposes the rolling direction */
+    /* rolling offsets fade out below VXLOW (an output is valid only when its group is wanted) */
+    if (want & MF_WANT_FX) out->ss.Fx -= k->w * k->zero.Fx;
+    if (want & MF_WANT_FY) out->ss.Fy -= k->w * k->zero.Fy;
+    if (want & MF_WANT_MZ) out->ss.Mz -= k->w * k->zero.Mz;
+    if (want & MF_WANT_MY) out->ss.My *= k->My_sign; /* rolling resistance opposes the rolling direction */
     return MF_OK;
 }
 

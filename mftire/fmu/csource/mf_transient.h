@@ -37,8 +37,12 @@ typedef struct {
     double w;             /* low-speed weight: 1 at standstill, 0 from VXLOW */
     double My_sign;       /* smooth sign of the rolling-resistance moment */
     MFInputs ev;          /* evaluator inputs (slips set per evaluation) */
-    MFOutputs zero;       /* steady state at zero slip: offsets, Re, sigma */
+    MFOutputs zero;       /* steady state at zero slip: Re, sigma and the rolling offsets Fx, Fy, Mz */
+    unsigned offsets;     /* MT_OFFSETS groups whose rolling offsets zero holds (all of them when w = 0) */
 } MTKin;
+
+/* The channel groups (MF_WANT_*) whose outputs carry a rolling offset that fades out below VXLOW. */
+#define MT_OFFSETS (MF_WANT_FX | MF_WANT_FY | MF_WANT_MZ)
 
 /* Transient outputs: the steady-state channels at the transient slips plus the slips. */
 typedef struct {
@@ -46,15 +50,25 @@ typedef struct {
     double kappa_t, alpha_t;
 } MTOutputs;
 
-/* Kinematics: one steady-state evaluation at zero slip.  Returns MF_OK or an mf_evaluate code. */
-int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, MTKin *k, mf_warning_fn warn, void *ctx);
+/*
+ * Kinematics: one steady-state evaluation at zero slip, of the groups it needs (mf_evaluate_want): the
+ * slip stiffnesses for the relaxation lengths (MF_WANT_RELAX; Re always) and, below VXLOW only (w > 0),
+ * the rolling offsets of the groups `offsets` & MT_OFFSETS.  Offsets not computed are set to 0 (they are
+ * multiplied by w = 0, or not used).  Returns MF_OK or an mf_evaluate code.
+ */
+int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned offsets, MTKin *k,
+                  mf_warning_fn warn, void *ctx);
 
 /* State derivatives dx = (du/dt, dv/dt) at the state x = (u, v). */
 void mt_rates(const MFParams *p, const MTKin *k, const double x[2], double dx[2]);
 
-/* Outputs at the state x: one steady-state evaluation at the transient slips. */
-int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2], MTOutputs *out,
-               mf_warning_fn warn, void *ctx);
+/*
+ * Outputs at the state x: one steady-state evaluation at the transient slips, of the channel groups want
+ * (MF_WANT_*; MF_WANT_ALL: every output).  The fields of groups not wanted are left untouched; kappa_t,
+ * alpha_t, Fz and Re are always set.  k must hold the offsets of want & MT_OFFSETS (mt_kinematics).
+ */
+int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2], unsigned want,
+               MTOutputs *out, mf_warning_fn warn, void *ctx);
 
 /* One exponential-Euler step of length h (leak rates frozen at the start of the step). */
 void mt_step(const MFParams *p, const MTKin *k, double x[2], double h);
