@@ -133,9 +133,9 @@ def main() -> None:
 
     lib = kernel.load()
     packed = kernel._packed(tyre.flat, tyre.extension_set)
-    io = kernel._c_double_io(4000.0, 0.1, 0.05, 0.0, 0.0, tyre["LONGVL"], tyre["INFLPRES"], 0.0)
+    io = kernel._c_double_io(0, 0, mode, 0, kernel._ALL, 4000.0, 0.1, 0.05, 0.0, 0.0, tyre["LONGVL"], tyre["INFLPRES"], 0.0)
     layers = {
-        "C only (ctypes call)": lambda: lib.mf_kernel_point(packed[1], packed[2], packed[3], mode, 0, kernel._ALL, io),
+        "C only (ctypes call)": lambda: lib.mf_kernel_point(packed[4], packed[5], io),
         "+ kernel.evaluate": lambda: kernel.evaluate(tyre.flat, 4000.0, 0.1, 0.05, 0.0, 0.0, None, None, None, mode,
                                                      tyre.extension_set, None),
         "+ evaluate_arrays": lambda: solver.evaluate_arrays(tyre.flat, 4000.0, 0.1, 0.05, mode=mode,

@@ -14,13 +14,22 @@ from typing import TYPE_CHECKING, Any, Union
 
 import numpy as np
 
-from mftire.input_checks import check_keywords, warn_units
+from mftire.input_checks import UNIT_LIMITS, check_keywords, warn_units
 from mftire.iotools.tir import TirParameters, as_parameters, read_tir
 from mftire.mf import pac2002
 from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
 from mftire.mf.family import PAC2002_CODE
+from mftire.mf import kernel
 from mftire.mf.kernel import FlatParameters
-from mftire.mf.solver import OUTPUT_NAMES, OUTPUT_UNITS, UnsupportedModelError, evaluate_arrays, unsupported_message
+from mftire.mf.solver import (
+    _CHECKED_MODES,
+    OUTPUT_NAMES,
+    OUTPUT_UNITS,
+    UnsupportedModelError,
+    check_fittyp,
+    evaluate_arrays,
+    unsupported_message,
+)
 from mftire.parameters import with_defaults
 
 if TYPE_CHECKING:  # pandas is imported by the table methods only (fast ``mftire info``)
@@ -79,6 +88,8 @@ class Tyre:
         self.required_variables: list[str] = self.extension_set.external_variables
         path = getattr(params, "path", None)
         self.name = name or (os.path.basename(str(path)) if path else "tyre")
+
+    _point: _Point | None = None  # the latency path's state (see evaluate)
 
     def evaluate_frame(self, df: pd.DataFrame, mode: int = 111, name: str = "data") -> pd.DataFrame:
         """Evaluate at the rows of a table: the one way to evaluate a table.
@@ -178,6 +189,46 @@ class Tyre:
             The channels asked for (default the 30 of :data:`mftire.mf.solver.OUTPUT_NAMES`),
             arrays of the broadcast input shape (numpy scalars for scalar inputs).
         """
+        # One operating point given as numbers, all channels, the kernel (``backend`` None,
+        # "auto" with MFTIRE_BACKEND read and not "numpy", or "kernel"), a mode checked before:
+        # the latency path, with the semantics of the general path below (same checks, warnings,
+        # numbers and types; tests/test_point_path.py).  Anything else takes the general path.
+        if (
+            channels is None
+            and not variables
+            and type(Fz) in _SCALARS
+            and type(kappa) in _SCALARS
+            and type(alpha) in _SCALARS
+            and type(gamma) in _SCALARS
+            and type(phit) in _SCALARS
+            and type(Vx) in _OPTIONAL
+            and type(P) in _OPTIONAL
+            and type(omega) in _OPTIONAL
+            and mode in _CHECKED_MODES
+            and (
+                backend == "kernel"
+                if backend is not None and backend != "auto"
+                else kernel._env is not None and kernel._env != "numpy"
+            )
+        ):
+            pt, flat = self._point, self.flat
+            if (
+                pt is None
+                or pt.flat is not flat
+                or pt.version != flat.version
+                or pt.ext is not self.extension_set
+                or pt.lib is not kernel._lib
+            ):
+                pt = self._point = _point_state(self)
+            if pt is not None:
+                if not (-pt.alpha_limit <= alpha <= pt.alpha_limit and (Fz >= pt.fz_limit or Fz <= 0.0)):
+                    warn_units(self, Fz, alpha)  # a unit warning is possible: the one check
+                out = kernel.point(pt.fn, pt.packed, flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode,
+                                   OUTPUT_NAMES, MFResult)  # fmt: skip
+                if out is None:  # the C code refused the mode or FITTYP: the path that raises
+                    out = MFResult(evaluate_arrays(flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode,
+                                                   self.extension_set, None, None, backend))  # fmt: skip
+                return out
         if self.flat.get("FITTYP") in (None, 0, 0.0, 5, 5.0):
             why = unsupported_message(5 if self.format == "MF_05" else self.fittyp)
             raise UnsupportedModelError(f"{self.name} ({self.format}): {why}")
@@ -189,6 +240,44 @@ class Tyre:
             channels, backend,
         )  # fmt: skip
         return MFResult(out)
+
+
+#: Input types of the latency path of :meth:`Tyre.evaluate` (other scalars, such as bool or
+#: numpy.float32, and arrays take the general path).
+_SCALARS = frozenset((float, int, np.float64))
+_OPTIONAL = _SCALARS | {type(None)}
+
+
+class _Point:
+    """What :meth:`Tyre.evaluate` needs for scalar calls, prepared once per parameter set: valid
+    while ``flat`` is the tyre's parameter dict at ``version``, ``ext`` its extension set and
+    ``lib`` the kernel library in use."""
+
+    __slots__ = ("flat", "version", "ext", "lib", "fn", "packed", "fz_limit", "alpha_limit")
+
+
+def _point_state(tyre: Tyre) -> _Point | None:
+    """The latency path's state for ``tyre``, or None when its calls take the general path (no
+    kernel, a model the evaluator refuses, per-point parameters, extension variables)."""
+    flat, ext = tyre.flat, tyre.extension_set
+    if not isinstance(flat, FlatParameters) or ext.external_variables:
+        return None
+    if flat.get("FITTYP") in (None, 0, 0.0, 5, 5.0):
+        return None
+    try:
+        check_fittyp(flat)
+    except UnsupportedModelError:
+        return None
+    lib = kernel.load()
+    packed = None if lib is None else kernel._packed(flat, ext)
+    if packed is None:
+        return None
+    pt = _Point()
+    pt.flat, pt.version, pt.ext, pt.lib = flat, flat.version, ext, lib
+    pt.fn, pt.packed = lib.mf_kernel_point, packed
+    # warn_units can warn only outside these bounds (a NaN is outside too)
+    pt.fz_limit, pt.alpha_limit = UNIT_LIMITS["Fz"] * flat["FNOMIN"], UNIT_LIMITS["alpha"]
+    return pt
 
 
 _FRAME_INPUTS = ("Fz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "omega")

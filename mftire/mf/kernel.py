@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import ctypes
 import os
+import struct
 import sys
 import threading
 import warnings
@@ -134,7 +135,9 @@ def load(path: str | os.PathLike | None = None):
         vp, ci = ctypes.c_void_p, ctypes.c_int
         f.argtypes = (vp, vp, ci, ci, ctypes.c_long, vp, vp, ci, vp, vp, vp, vp)
         f.restype = ci
-        lib.mf_kernel_point.argtypes = (vp, vp, ci, ci, ci, ctypes.c_ulong, vp)
+        # no argtypes: called with ready ctypes objects only (_pack's pointers, the buffer), which
+        # ctypes passes without converting them (the latency of a scalar call)
+        lib.mf_kernel_point.argtypes = None
         lib.mf_kernel_point.restype = ci
         _lib, _why = lib, ""
         return lib
@@ -189,17 +192,19 @@ def use_kernel(backend: str | None) -> bool:
 
 
 def _pack(p: Mapping[str, float], ext) -> tuple:
-    """``(keep, params address, terms address or None, n_terms)``: MFParams followed by the
-    numbers of the extension terms, and the run-time term table (MFTerm records of
-    mf_ext_gen.h) pointing into it; ``keep`` holds the arrays at those addresses.  None when a
-    parameter is not one number (the numpy path evaluates per-point parameter arrays)."""
+    """``(keep, params address, terms address or None, n_terms, params pointer, terms pointer
+    or None)``: MFParams followed by the numbers of the extension terms, and the run-time term
+    table (MFTerm records of mf_ext_gen.h) pointing into it; ``keep`` holds the arrays at those
+    addresses, the pointers are the addresses as ``ctypes.c_void_p`` (for mf_kernel_point).
+    None when a parameter is not one number (the numpy path evaluates per-point parameter
+    arrays)."""
     values = [p[k] for k in PARAM_KEYS]
     if not all(type(v) is float or np.ndim(v) == 0 for v in values):
         return None
     base = [float(v) for v in values]
     if not ext:
         params = np.array(base)
-        return params, params.ctypes.data, None, 0
+        return params, params.ctypes.data, None, 0, ctypes.c_void_p(params.ctypes.data), None
     from mftire.mf.extensions import BUILTIN_VARIABLES, OFFSET_TARGETS
 
     builtin = list(BUILTIN_VARIABLES)
@@ -232,7 +237,8 @@ def _pack(p: Mapping[str, float], ext) -> tuple:
     if not all(np.ndim(v) == 0 for v in numbers):
         return None
     params, terms = np.array(base + numbers), np.array(rows, dtype=np.intc)
-    return (params, terms), params.ctypes.data, terms.ctypes.data, len(rows)
+    addresses = params.ctypes.data, terms.ctypes.data
+    return (params, terms), *addresses, len(rows), *map(ctypes.c_void_p, addresses)
 
 
 class FlatParameters(dict):
@@ -318,9 +324,9 @@ def evaluate(
     lib = load()
     if lib is None:
         return None
+    external = ext.external_variables if ext else []
     if (
-        not variables
-        and isinstance(Fz, _SCALAR)
+        isinstance(Fz, _SCALAR)
         and isinstance(kappa, _SCALAR)
         and isinstance(alpha, _SCALAR)
         and isinstance(gamma, _SCALAR)
@@ -328,9 +334,15 @@ def evaluate(
         and isinstance(Vx, _NONE_OR_SCALAR)
         and isinstance(P, _NONE_OR_SCALAR)
         and isinstance(omega, _NONE_OR_SCALAR)
-        and not (ext and ext.external_variables)
+        and len(variables or ()) == len(external)
+        and all(isinstance(variables.get(k), _SCALAR) for k in external)
     ):
-        return _point(lib, p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, ext, channels)
+        packed = _packed(p, ext)
+        if packed is None:
+            return None
+        data = tuple(variables[k] for k in external)
+        return point(lib.mf_kernel_point, packed, p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, channels,
+                     dict, external, data, depth=4)  # fmt: skip
     names = list(variables or {})
     external = ext.external_variables if ext else []
     if any(k not in external for k in names) or any(k not in names for k in external):
@@ -397,42 +409,61 @@ def evaluate(
 
 _SCALAR = (float, int)
 _NONE_OR_SCALAR = (float, int, type(None))
-_IO = _N_IN * 2 + len(OUTPUTS) + 2  # mf_kernel_point's buffer
-_c_double_io = ctypes.c_double * _IO
+
+# mf_kernel_point's buffer (mf_kernel.c): a header (number of terms, of data variables, useMode,
+# omega given, channel mask), the inputs, the outputs, the NaN counts, the warning mask, a summary flag.
+_PT_IN = 5
+_PT_OUT = _PT_IN + _N_IN
+_PT_NAN = _PT_OUT + len(OUTPUTS)
+_PT_WARN = _PT_NAN + _N_IN
+_PT_ANY = _PT_WARN + 1
+_c_double_io = ctypes.c_double * (_PT_ANY + 1)
+#: Writes the header and the eight operating-point inputs with one call (``struct`` converts as
+#: ctypes does: ``float(x)``; the caller has checked that each is an int or a float).
+_put = struct.Struct(f"{_PT_IN + 8}d").pack_into
 _ALL = (1 << len(OUTPUTS)) - 1
-_local = threading.local()  # one mf_kernel_point buffer per thread
+_local = threading.local()  # one mf_kernel_point buffer per thread (ctypes releases the GIL)
 
 
-def _point(lib, p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, ext, channels):
-    """One operating point given as Python numbers: one C call on one buffer (call latency)."""
-    packed = _packed(p, ext)  # held until the call returns
-    if packed is None:
-        return None
+def _buffer() -> tuple:
+    """This thread's mf_kernel_point buffer and a numpy view of its outputs."""
+    try:
+        return _local.point
+    except AttributeError:
+        io = _c_double_io()
+        _local.point = io, np.frombuffer(io, count=len(OUTPUTS), offset=_PT_OUT * 8)
+        return _local.point
+
+
+def point(fn, packed, p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, channels=OUTPUTS, result=dict,
+          external=(), data=(), depth=2):  # fmt: skip
+    """One operating point given as Python numbers, by one C call (``fn``: the library's
+    ``mf_kernel_point``) on this thread's buffer: the latency path of scalar calls.
+
+    ``packed``: :func:`_packed` of ``p``; ``channels``: output names (all: :data:`OUTPUTS` or None);
+    ``result``: the mapping type returned (``dict``, :class:`mftire.MFResult`); ``external``,
+    ``data``: the extension variables' names and values; ``depth``: the ``stacklevel`` that
+    names the caller of ``Tyre.evaluate`` from the caller of this function (the warnings'
+    location, as the array path's).  None when the
+    C code refuses the mode or FITTYP (the caller then takes the path that raises).
+    """
+    io, values = _buffer()
     omega_given = omega is not None and omega != 0.0
-    io = getattr(_local, "io", None)
-    if io is None:
-        io = _local.io = _c_double_io()
-    io[0] = Fz
-    io[1] = kappa
-    io[2] = alpha
-    io[3] = gamma
-    io[4] = phit
-    io[5] = p["LONGVL"] if Vx is None else Vx
-    io[6] = p["INFLPRES"] if P is None else P
-    io[7] = omega if omega_given else 0.0
-    everything = channels is None or channels == OUTPUTS
+    everything = channels is OUTPUTS or channels is None or channels == OUTPUTS
     mask = _ALL if everything else sum(1 << _OUT_INDEX[k] for k in channels)
-    rc = lib.mf_kernel_point(packed[1], packed[2], packed[3], int(mode), omega_given, mask, io)
-    if rc != 0:
+    _put(io, 0, packed[3], len(data), mode, omega_given, mask, Fz, kappa, alpha, gamma, phit,
+         p["LONGVL"] if Vx is None else Vx, p["INFLPRES"] if P is None else P, omega if omega_given else 0.0)  # fmt: skip
+    for k, v in enumerate(data):
+        io[_PT_IN + 8 + k] = v
+    if fn(packed[4], packed[5], io):
         return None
-    values = np.frombuffer(io, count=len(OUTPUTS), offset=_N_IN * 8)
-    if everything:
-        out = dict(zip(OUTPUTS, values, strict=True))
+    if everything:  # numpy scalars (copies): taken before a warning handler may evaluate again
+        out = result(zip(OUTPUTS, values))
     else:
-        out = {k: values[_OUT_INDEX[k]] for k in channels}
-    if io[_IO - 1]:  # after the values are taken: a warning handler may evaluate again
-        flags = io[_N_IN + len(OUTPUTS) : _IO - 1]
-        _issue_warnings(p, [int(v) for v in flags[:_N_IN]], int(flags[_N_IN]), [], omega_given, depth=7)
+        out = result({k: values[_OUT_INDEX[k]] for k in channels})
+    if io[_PT_ANY]:
+        nan = [int(v) for v in io[_PT_NAN : _PT_WARN]]
+        _issue_warnings(p, nan, int(io[_PT_WARN]), external, omega_given, depth=depth + 3)
     return out
 
 
