@@ -223,8 +223,7 @@ class Tyre:
             if pt is not None:
                 if not (-pt.alpha_limit <= alpha <= pt.alpha_limit and (Fz >= pt.fz_limit or Fz <= 0.0)):
                     warn_units(self, Fz, alpha)  # a unit warning is possible: the one check
-                out = kernel.point(pt.fn, pt.packed, flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode,
-                                   OUTPUT_NAMES, MFResult)  # fmt: skip
+                out = pt.evaluate(Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode)
                 if out is None:  # the C code refused the mode or FITTYP: the path that raises
                     out = MFResult(evaluate_arrays(flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode,
                                                    self.extension_set, None, None, backend))  # fmt: skip
@@ -253,7 +252,7 @@ class _Point:
     while ``flat`` is the tyre's parameter dict at ``version``, ``ext`` its extension set and
     ``lib`` the kernel library in use."""
 
-    __slots__ = ("flat", "version", "ext", "lib", "fn", "packed", "fz_limit", "alpha_limit")
+    __slots__ = ("flat", "version", "ext", "lib", "evaluate", "fz_limit", "alpha_limit")
 
 
 def _point_state(tyre: Tyre) -> _Point | None:
@@ -269,12 +268,11 @@ def _point_state(tyre: Tyre) -> _Point | None:
     except UnsupportedModelError:
         return None
     lib = kernel.load()
-    packed = None if lib is None else kernel._packed(flat, ext)
-    if packed is None:
+    evaluate = None if lib is None else kernel.point_function(flat, ext, MFResult)
+    if evaluate is None:
         return None
     pt = _Point()
-    pt.flat, pt.version, pt.ext, pt.lib = flat, flat.version, ext, lib
-    pt.fn, pt.packed = lib.mf_kernel_point, packed
+    pt.flat, pt.version, pt.ext, pt.lib, pt.evaluate = flat, flat.version, ext, lib, evaluate
     # warn_units can warn only outside these bounds (a NaN is outside too)
     pt.fz_limit, pt.alpha_limit = UNIT_LIMITS["Fz"] * flat["FNOMIN"], UNIT_LIMITS["alpha"]
     return pt

@@ -337,12 +337,12 @@ def evaluate(
         and len(variables or ()) == len(external)
         and all(isinstance(variables.get(k), _SCALAR) for k in external)
     ):
-        packed = _packed(p, ext)
-        if packed is None:
+        point = _point_function(p, ext)
+        if point is None:
             return None
         data = tuple(variables[k] for k in external)
-        return point(lib.mf_kernel_point, packed, p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, channels,
-                     dict, external, data, depth=4)  # fmt: skip
+        return point(Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode,
+                     None if channels is None or channels == OUTPUTS else channels, external, data, 4)  # fmt: skip
     names = list(variables or {})
     external = ext.external_variables if ext else []
     if any(k not in external for k in names) or any(k not in names for k in external):
@@ -411,60 +411,93 @@ _SCALAR = (float, int)
 _NONE_OR_SCALAR = (float, int, type(None))
 
 # mf_kernel_point's buffer (mf_kernel.c): a header (number of terms, of data variables, useMode,
-# omega given, channel mask), the inputs, the outputs, the NaN counts, the warning mask, a summary flag.
+# omega given, channel mask), the inputs, the outputs, the NaN counts, the warning mask; and the
+# return code that says that a count or the mask is not 0.
 _PT_IN = 5
 _PT_OUT = _PT_IN + _N_IN
 _PT_NAN = _PT_OUT + len(OUTPUTS)
 _PT_WARN = _PT_NAN + _N_IN
-_PT_ANY = _PT_WARN + 1
-_c_double_io = ctypes.c_double * (_PT_ANY + 1)
+_c_double_io = ctypes.c_double * (_PT_WARN + 1)
+_PT_REPORT = 16
 #: Writes the header and the eight operating-point inputs with one call (``struct`` converts as
-#: ctypes does: ``float(x)``; the caller has checked that each is an int or a float).
+#: ctypes does, ``float(x)``; the callers have checked that each is an int or a float).
 _put = struct.Struct(f"{_PT_IN + 8}d").pack_into
 _ALL = (1 << len(OUTPUTS)) - 1
+_TEMPLATE = dict.fromkeys(OUTPUTS)  # copied, then filled: no resizing of a growing dict
 _local = threading.local()  # one mf_kernel_point buffer per thread (ctypes releases the GIL)
 
 
-def _buffer() -> tuple:
-    """This thread's mf_kernel_point buffer and a numpy view of its outputs."""
-    try:
-        return _local.point
-    except AttributeError:
-        io = _c_double_io()
-        _local.point = io, np.frombuffer(io, count=len(OUTPUTS), offset=_PT_OUT * 8)
-        return _local.point
+def _new_buffer() -> tuple:
+    """This thread's mf_kernel_point buffer and a numpy view of its outputs (made at its first call)."""
+    io = _c_double_io()
+    _local.point = io, np.frombuffer(io, count=len(OUTPUTS), offset=_PT_OUT * 8)
+    return _local.point
 
 
-def point(fn, packed, p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, channels=OUTPUTS, result=dict,
-          external=(), data=(), depth=2):  # fmt: skip
-    """One operating point given as Python numbers, by one C call (``fn``: the library's
-    ``mf_kernel_point``) on this thread's buffer: the latency path of scalar calls.
+def point_function(p: Mapping[str, float], ext, result: type = dict):
+    """A function that evaluates one operating point of the parameters ``p`` with the extensions
+    ``ext`` by one C call (the library's ``mf_kernel_point``), or None when the kernel cannot
+    (no library, per-point parameters): the latency path of scalar calls.
 
-    ``packed``: :func:`_packed` of ``p``; ``channels``: output names (all: :data:`OUTPUTS` or None);
-    ``result``: the mapping type returned (``dict``, :class:`mftire.MFResult`); ``external``,
-    ``data``: the extension variables' names and values; ``depth``: the ``stacklevel`` that
-    names the caller of ``Tyre.evaluate`` from the caller of this function (the warnings'
-    location, as the array path's).  None when the
-    C code refuses the mode or FITTYP (the caller then takes the path that raises).
+    What it returns is valid while ``p`` and ``ext`` do not change (it holds their packed form
+    and LONGVL, INFLPRES).  Its arguments: ``Fz, kappa, alpha, gamma, phit, Vx, P, omega``
+    (numbers, ints or floats, checked by the caller; ``Vx``, ``P``, ``omega`` may be None),
+    ``mode``, ``channels`` (output names; None: all), the extension variables' names and
+    values ``external``, ``data``, and ``depth``, the ``stacklevel`` that names the caller of
+    ``Tyre.evaluate`` from its own caller (where the warnings point, as in the array path).
+    It returns ``result`` (``dict``, :class:`mftire.MFResult`) of numpy scalars with the
+    array path's values and warnings, or None when the C code refuses the mode or FITTYP (the
+    caller then takes the path that raises).
     """
-    io, values = _buffer()
-    omega_given = omega is not None and omega != 0.0
-    everything = channels is OUTPUTS or channels is None or channels == OUTPUTS
-    mask = _ALL if everything else sum(1 << _OUT_INDEX[k] for k in channels)
-    _put(io, 0, packed[3], len(data), mode, omega_given, mask, Fz, kappa, alpha, gamma, phit,
-         p["LONGVL"] if Vx is None else Vx, p["INFLPRES"] if P is None else P, omega if omega_given else 0.0)  # fmt: skip
-    for k, v in enumerate(data):
-        io[_PT_IN + 8 + k] = v
-    if fn(packed[4], packed[5], io):
+    lib = load()
+    packed = None if lib is None else _packed(p, ext)
+    if packed is None:
         return None
-    if everything:  # numpy scalars (copies): taken before a warning handler may evaluate again
-        out = result(zip(OUTPUTS, values))
-    else:
-        out = result({k: values[_OUT_INDEX[k]] for k in channels})
-    if io[_PT_ANY]:
-        nan = [int(v) for v in io[_PT_NAN : _PT_WARN]]
-        _issue_warnings(p, nan, int(io[_PT_WARN]), external, omega_given, depth=depth + 3)
-    return out
+    fn, c_params, c_terms, n_terms = lib.mf_kernel_point, packed[4], packed[5], packed[3]
+    longvl, inflpres = p["LONGVL"], p["INFLPRES"]
+    put, template, local = _put, _TEMPLATE, _local
+
+    def evaluate_point(Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, channels=None, external=(), data=(),
+                       depth=2):  # fmt: skip
+        try:
+            io, values = local.point
+        except AttributeError:
+            io, values = _new_buffer()
+        omega_given = omega is not None and omega != 0.0
+        mask = _ALL if channels is None else sum(1 << _OUT_INDEX[k] for k in channels)
+        put(io, 0, n_terms, len(data), mode, omega_given, mask, Fz, kappa, alpha, gamma, phit,
+            longvl if Vx is None else Vx, inflpres if P is None else P, omega if omega_given else 0.0)  # fmt: skip
+        if data:
+            io[_PT_IN + 8 : _PT_IN + 8 + len(data)] = data
+        rc = fn(c_params, c_terms, io)
+        if rc and rc != _PT_REPORT:
+            return None
+        # numpy scalars (copies), taken before a warning handler may evaluate again on this thread
+        if channels is None:
+            out = result(template)
+            out.update(zip(OUTPUTS, values))
+        else:
+            out = result({k: values[_OUT_INDEX[k]] for k in channels})
+        if rc:
+            nan = [int(v) for v in io[_PT_NAN:_PT_WARN]]
+            _issue_warnings(p, nan, int(io[_PT_WARN]), external, omega_given, depth + 3)
+        return out
+
+    evaluate_point.packed = packed  # the arrays at the addresses the C call reads
+    return evaluate_point
+
+
+def _point_function(p: Mapping[str, float], ext):
+    """:func:`point_function` of ``p`` (returning dicts), cached on a :class:`FlatParameters`
+    until it changes (or the library does)."""
+    if not isinstance(p, FlatParameters):
+        return point_function(p, ext)
+    key = (p.version, id(ext), id(_lib))
+    cache = p.__dict__.get("_kernel_point")
+    if cache is None or cache[0] != key:
+        cache = (key, point_function(p, ext), ext, _lib)  # ext, _lib kept alive: their ids are in the key
+        p.__dict__["_kernel_point"] = cache
+    return cache[1]
 
 
 def _issue_warnings(p, nan, mask: int, external: Sequence[str], omega_given: bool, depth: int = 6) -> None:

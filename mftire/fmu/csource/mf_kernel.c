@@ -559,26 +559,28 @@ MF_KERNEL_API int mf_kernel_evaluate(const double *params, const int *terms, int
 }
 
 /*
- * One point, for the latency of scalar calls (mftire.mf.kernel.point_call): the batch of one
- * point of mf_kernel_evaluate, with everything but the two parameter tables in one buffer so
- * that the Python side makes one ctypes call with three pointer arguments.  io (doubles):
+ * One point, for the latency of scalar calls (mftire.mf.kernel.point_function): the batch of
+ * one point of mf_kernel_evaluate, with everything but the two parameter tables in one buffer,
+ * so that Python makes one ctypes call with three ready pointer arguments.  io (doubles):
  *   [0] n_terms, [1] how many data variables are given (the others are absent, as NULL inputs
  *   of mf_kernel_evaluate), [2] useMode, [3] 1 when omega is given, [4] the mask of the outputs
  *   wanted (bit k: output k; instKya also computes Fy);
  *   [MF_PT_IN, +MF_N_IN) the inputs, [MF_PT_OUT, +MF_N_OUT) the outputs wanted,
- *   [MF_PT_NAN, +MF_N_IN) the NaN counts per input, [MF_PT_WARN] the warning mask and
- *   [MF_PT_ANY] 1 when a count or the mask is not 0, else 0 (the integers as doubles, exact).
+ *   [MF_PT_NAN, +MF_N_IN) the NaN counts per input, [MF_PT_WARN] the warning mask (the
+ *   integers as doubles, exact).
+ * Returns MF_OK, MF_PT_REPORT (MF_OK, and a NaN count or the warning mask is not 0: Python
+ * issues warnings), or MF_BAD_MODE / MF_BAD_FITTYP.
  */
 #define MF_PT_IN 5
 #define MF_PT_OUT (MF_PT_IN + MF_N_IN)
 #define MF_PT_NAN (MF_PT_OUT + MF_N_OUT)
 #define MF_PT_WARN (MF_PT_NAN + MF_N_IN)
-#define MF_PT_ANY (MF_PT_WARN + 1)
+#define MF_PT_REPORT 16
 MF_KERNEL_API int mf_kernel_point(const double *params, const int *terms, double *io)
 {
     const double *in[MF_N_IN];
     double *out[MF_N_OUT];
-    long step[MF_N_IN], nan[MF_N_IN];
+    long step[MF_N_IN], nan[MF_N_IN] = {0};
     unsigned long warnings = 0, channels = (unsigned long)io[4];
     int k, rc, n_data = (int)io[1], any;
     for (k = 0; k < MF_N_IN; k++) {
@@ -589,13 +591,12 @@ MF_KERNEL_API int mf_kernel_point(const double *params, const int *terms, double
     if (out[O_INSTKYA] && !out[O_FY]) out[O_FY] = io + MF_PT_OUT + O_FY; /* instKya reads Fy */
     rc = mf_kernel_evaluate(params, terms, (int)io[0], (int)io[2], 1, in, step, io[3] != 0.0, out, NULL, nan,
                             &warnings);
-    if (rc != MF_OK) return rc; /* bad mode or FITTYP: the caller takes the path that raises */
+    if (rc != MF_OK) return rc; /* the caller takes the path that raises */
     any = warnings != 0;
     for (k = 0; k < MF_N_IN; k++) {
         io[MF_PT_NAN + k] = (double)nan[k];
         any |= nan[k] != 0;
     }
     io[MF_PT_WARN] = (double)warnings;
-    io[MF_PT_ANY] = any;
-    return rc;
+    return any ? MF_PT_REPORT : MF_OK;
 }
