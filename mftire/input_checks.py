@@ -56,7 +56,10 @@ def _largest(x, absolute: bool) -> float:
     if isinstance(x, (int, float)):
         v = abs(x) if absolute else float(x)
         return v if v == v else 0.0
-    a = np.asarray(x, dtype=float)
+    try:
+        a = np.asarray(x, dtype=float)
+    except (TypeError, ValueError):  # not numbers: the evaluator's own check says so (MftireInputError)
+        return 0.0
     if absolute:
         a = np.abs(a)
     return float(np.nanmax(a)) if a.size and not np.isnan(a).all() else 0.0

@@ -254,6 +254,13 @@ class _Point:
 
     __slots__ = ("flat", "version", "ext", "lib", "evaluate", "fz_limit", "alpha_limit")
 
+    def __reduce__(self):  # a copied or unpickled tyre prepares its own (addresses, the library)
+        return _no_point, ()
+
+
+def _no_point() -> None:
+    return None
+
 
 def _point_state(tyre: Tyre) -> _Point | None:
     """The latency path's state for ``tyre``, or None when its calls take the general path (no

@@ -136,25 +136,40 @@ def _agree(a: dict, b: dict, p, alpha_c: np.ndarray | None = None) -> None:
 
 
 def _both(tyre: Tyre, **kw):
-    """(kernel result, its warnings, numpy result, its warnings); checks that the kernel ran."""
+    """(kernel result, its warnings, numpy result, its warnings); checks that the kernel ran
+    (the array path, kernel.evaluate, or the latency path of scalar calls, kernel.point_function)."""
     out, ran = [], []
-    real = kernel.evaluate
+    real, real_point = kernel.evaluate, kernel.point_function
 
     def spy(*args, **kwargs):
         res = real(*args, **kwargs)
         ran.append(res is not None)
         return res
 
+    def spy_point(*args, **kwargs):
+        f = real_point(*args, **kwargs)
+
+        def counted(*a, **k):
+            res = f(*a, **k)
+            ran.append(res is not None)
+            return res
+
+        return None if f is None else counted
+
     for backend in ("kernel", "numpy"):
         with warnings.catch_warnings(record=True) as rec:
             warnings.simplefilter("always")
-            kernel.evaluate = spy
+            kernel.evaluate, kernel.point_function = spy, spy_point
+            tyre._point = None  # prepared again, through the spy
+            tyre.flat.__dict__.pop("_kernel_point", None)
             try:
                 res = tyre.evaluate(backend=backend, **kw)
             finally:
-                kernel.evaluate = real
+                kernel.evaluate, kernel.point_function = real, real_point
+                tyre._point = None
+                tyre.flat.__dict__.pop("_kernel_point", None)
         out += [res, [(w.category, str(w.message)) for w in rec]]
-    assert ran == [True], "the kernel path fell back to numpy"
+    assert ran and all(ran), "the kernel path fell back to numpy"
     return out
 
 
@@ -320,6 +335,7 @@ def test_backend_switch(monkeypatch):
         raise AssertionError("the kernel was called")
 
     monkeypatch.setattr(kernel, "evaluate", boom)
+    monkeypatch.setattr(kernel, "point_function", boom)  # the latency path of scalar calls
     monkeypatch.setenv("MFTIRE_BACKEND", "numpy")
     monkeypatch.setattr(kernel, "_env", None)  # read again, as at the start of a process
     assert tyre.evaluate(4000.0, 0.1, 0.05) == ref  # the environment forces numpy

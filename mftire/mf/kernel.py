@@ -248,6 +248,10 @@ class FlatParameters(dict):
 
     version = 0
 
+    def __getstate__(self) -> dict:
+        # the kernel's caches (addresses, functions) stay behind: a copy or an unpickled set packs again
+        return {k: v for k, v in self.__dict__.items() if not k.startswith("_kernel")}
+
     def _changed(self) -> None:
         self.version = self.__dict__.get("version", 0) + 1
 
