@@ -16,10 +16,9 @@ import numpy as np
 
 from mftire.input_checks import UNIT_LIMITS, check_keywords, warn_units
 from mftire.iotools.tir import TirParameters, as_parameters, read_tir
-from mftire.mf import pac2002
+from mftire.mf import kernel, pac2002
 from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
 from mftire.mf.family import PAC2002_CODE
-from mftire.mf import kernel
 from mftire.mf.kernel import FlatParameters
 from mftire.mf.solver import (
     _CHECKED_MODES,

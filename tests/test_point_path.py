@@ -309,8 +309,8 @@ def test_copies_and_pickles_prepare_their_own():
 def test_threads_have_their_own_buffer():
     tyre = TYRES["MF62"]
     rng = np.random.default_rng(3)
-    points = [(float(f), float(k), float(a)) for f, k, a in
-              zip(rng.uniform(1e3, 8e3, 400), rng.uniform(-0.3, 0.3, 400), rng.uniform(-0.2, 0.2, 400))]  # fmt: skip
+    x = rng.uniform([1e3, -0.3, -0.2], [8e3, 0.3, 0.2], (400, 3))
+    points = [tuple(map(float, row)) for row in x]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         ref = [tyre.evaluate(*x, Vx=25.0) for x in points]

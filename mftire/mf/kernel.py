@@ -479,7 +479,7 @@ def point_function(p: Mapping[str, float], ext, result: type = dict):
         # numpy scalars (copies), taken before a warning handler may evaluate again on this thread
         if channels is None:
             out = result(template)
-            out.update(zip(OUTPUTS, values))
+            out.update(zip(OUTPUTS, values, strict=False))  # same length: no end check on the array
         else:
             out = result({k: values[_OUT_INDEX[k]] for k in channels})
         if rc:
