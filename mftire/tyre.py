@@ -187,6 +187,13 @@ class Tyre:
         MFResult
             The channels asked for (default the 30 of :data:`mftire.mf.solver.OUTPUT_NAMES`),
             arrays of the broadcast input shape (numpy scalars for scalar inputs).
+
+        Notes
+        -----
+        One operating point given as numbers (``int``, ``float``, ``numpy.float64``), all
+        channels and the kernel take a short path to one C call (a few microseconds; see
+        :func:`mftire.mf.kernel.point_function`), with the same checks, warnings and numbers
+        as arrays of one point.
         """
         # One operating point given as numbers, all channels, the kernel (``backend`` None,
         # "auto" with MFTIRE_BACKEND read and not "numpy", or "kernel"), a mode checked before:

@@ -27,6 +27,15 @@ Choosing the path
 The input checks of :mod:`mftire.input_checks`, the model check and the broadcasting stay
 in Python; warnings (NaN inputs, clipping, curvature factors) are issued in Python from
 what the kernel reports, with the texts of the numpy path.
+
+Scalar calls (latency)
+    One operating point given as Python numbers takes :func:`point_function`: the packed
+    parameters and a ready ``ctypes`` call are prepared once per parameter set, each call
+    writes the inputs into this thread's buffer with one ``struct.pack_into``, makes one
+    call of ``mf_kernel_point`` (a batch of one point of ``mf_kernel_evaluate``: the array
+    path's numbers bit for bit) and copies the 30 outputs into numpy scalars; the warnings
+    are formatted only when the C code reports one.  ``Tyre.evaluate`` calls it directly
+    for scalar inputs and all channels (``tests/test_point_path.py``).
 """
 
 from __future__ import annotations
