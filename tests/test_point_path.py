@@ -9,10 +9,12 @@ set, the library and the backend, and is safe across threads and re-entrant warn
 from __future__ import annotations
 
 import copy
+import gc
 import math
 import pickle
 import threading
 import warnings
+import weakref
 
 import numpy as np
 import pytest
@@ -340,3 +342,18 @@ def test_a_warning_handler_may_evaluate_again():
         warnings.showwarning = lambda *a, **k: inner.append(tyre.evaluate(7000.0, -0.2, -0.1, Vx=30.0))
         out = tyre.evaluate(**kw)
     assert inner and out == ref and inner[0] != ref
+
+
+def test_a_tyre_is_freed_without_the_cycle_collector():
+    """The prepared calls hold the packed parameters, not the parameter dict: no reference cycle."""
+    tyre = load(REFERENCE_TYRES["MF61"])
+    tyre.evaluate(4000.0, 0.1, 0.05)
+    tyre.evaluate(4000.0, 0.1, 0.05, channels=("Fx", "Fy"))  # the general path's cached point function
+    assert "_kernel_point" in tyre.flat.__dict__ and tyre._point is not None
+    refs = weakref.ref(tyre), weakref.ref(tyre.flat)
+    gc.disable()
+    try:
+        del tyre
+        assert all(r() is None for r in refs)
+    finally:
+        gc.enable()

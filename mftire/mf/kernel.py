@@ -452,9 +452,10 @@ def point_function(p: Mapping[str, float], ext, result: type = dict):
     ``ext`` by one C call (the library's ``mf_kernel_point``), or None when the kernel cannot
     (no library, per-point parameters): the latency path of scalar calls.
 
-    What it returns is valid while ``p`` and ``ext`` do not change (it holds their packed form
-    and LONGVL, INFLPRES).  Its arguments: ``Fz, kappa, alpha, gamma, phit, Vx, P, omega``
-    (numbers, ints or floats, checked by the caller; ``Vx``, ``P``, ``omega`` may be None),
+    What it returns is valid while ``p`` and ``ext`` do not change (it holds their packed form,
+    LONGVL, INFLPRES and the limits its warnings name, not ``p``).  Its arguments: ``Fz, kappa,
+    alpha, gamma, phit, Vx, P, omega`` (numbers, ints or floats, checked by the caller; ``Vx``,
+    ``P``, ``omega`` may be None),
     ``mode``, ``channels`` (output names; None: all), the extension variables' names and
     values ``external``, ``data``, and ``depth``, the ``stacklevel`` that names the caller of
     ``Tyre.evaluate`` from its own caller (where the warnings point, as in the array path).
@@ -468,6 +469,8 @@ def point_function(p: Mapping[str, float], ext, result: type = dict):
         return None
     fn, c_params, c_terms, n_terms = lib.mf_kernel_point, packed[4], packed[5], packed[3]
     longvl, inflpres = p["LONGVL"], p["INFLPRES"]
+    # the limits the warnings name, not p itself: no reference cycle through p's cache
+    limits = {key: p[key] for key in (*(k[3] for k in _LIMITS), "VXLOW")}
     put, template, local = _put, _TEMPLATE, _local
 
     def evaluate_point(Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, channels=None, external=(), data=(),
@@ -493,7 +496,7 @@ def point_function(p: Mapping[str, float], ext, result: type = dict):
             out = result({k: values[_OUT_INDEX[k]] for k in channels})
         if rc:
             nan = [int(v) for v in io[_PT_NAN:_PT_WARN]]
-            _issue_warnings(p, nan, int(io[_PT_WARN]), external, omega_given, depth + 3)
+            _issue_warnings(limits, nan, int(io[_PT_WARN]), external, omega_given, depth + 3)
         return out
 
     evaluate_point.packed = packed  # the arrays at the addresses the C call reads
