@@ -234,7 +234,7 @@ class Tyre:
                     out = MFResult(evaluate_arrays(flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode,
                                                    self.extension_set, None, None, backend))  # fmt: skip
                 return out
-        if self.flat.get("FITTYP") in (None, 0, 0.0, 5, 5.0):
+        if self.flat.get("FITTYP") in _REFUSED_FITTYP:
             why = unsupported_message(5 if self.format == "MF_05" else self.fittyp)
             raise UnsupportedModelError(f"{self.name} ({self.format}): {why}")
         if variables:
@@ -247,6 +247,8 @@ class Tyre:
         return MFResult(out)
 
 
+#: FITTYP values :meth:`Tyre.evaluate` refuses with its own message (none, MF-Tyre 5.0).
+_REFUSED_FITTYP = (None, 0, 0.0, 5, 5.0)
 #: Input types of the latency path of :meth:`Tyre.evaluate` (other scalars, such as bool or
 #: numpy.float32, and arrays take the general path).
 _SCALARS = frozenset((float, int, np.float64))
@@ -274,7 +276,7 @@ def _point_state(tyre: Tyre) -> _Point | None:
     flat, ext = tyre.flat, tyre.extension_set
     if not isinstance(flat, FlatParameters) or ext.external_variables:
         return None
-    if flat.get("FITTYP") in (None, 0, 0.0, 5, 5.0):
+    if flat.get("FITTYP") in _REFUSED_FITTYP:
         return None
     try:
         check_fittyp(flat)
