@@ -138,6 +138,17 @@ typedef struct {
     MF_ALIGNED double out[MF_N_OUT][MF_BLOCK];
 } Block;
 
+/* dst[0..n) = src[0..n) (a loop for the few values of a single point, memcpy for blocks) */
+static void copy(double *dst, const double *src, int n)
+{
+    int i;
+    if (n > 8) {
+        memcpy(dst, src, (size_t)n * sizeof(double));
+        return;
+    }
+    for (i = 0; i < n; i++) dst[i] = src[i];
+}
+
 /* Copy points [start, start + nb) into the lanes, padded to `lanes` with the first point; with
  * nan given, count the NaN values of each input over the nb points (an input with one value for
  * every point counts it at every point). */
@@ -154,7 +165,7 @@ static void load_block(Block *B, const double *const *in, const long *step, long
             for (i = 0; i < lanes; i++) dst[i] = in[k][0];
             count = isnan(in[k][0]) ? nb : 0;
         } else {
-            memcpy(dst, in[k] + start, (size_t)nb * sizeof(double));
+            copy(dst, in[k] + start, nb);
             for (i = nb; i < lanes; i++) dst[i] = dst[0];
             if (nan)
                 for (i = 0; i < nb; i++) count += isnan(dst[i]);
@@ -534,7 +545,7 @@ MF_KERNEL_API int mf_kernel_evaluate(const double *params, const int *terms, int
             evaluate_scalar(p, &mode, &ext, want, omega_given, kmax, B, nb, &w);
         }
         for (k = 0; k < MF_N_OUT; k++)
-            if (out[k]) memcpy(out[k] + start, B->out[k], (size_t)nb * sizeof(double));
+            if (out[k]) copy(out[k] + start, B->out[k], nb);
     }
 
     /* instKya: d Fy / d alpha between neighbours, the last repeated; 0 for a single point. */
