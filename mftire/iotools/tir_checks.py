@@ -26,8 +26,9 @@ CONTACT_PATCH, TURNSLIP_...)
 ============================  ===========  ==========================================
 
 A missing *required* section is an error; a missing *optional* one is a warning
-that lists the keys that take default values.  ``FNOMIN`` and ``UNLOADED_RADIUS``
-are required keys, and the pure-slip core coefficients (:data:`CORE_KEYS`) of a
+that lists the keys that take default values.  ``FNOMIN`` is a required key
+(a missing ``UNLOADED_RADIUS`` is a warning: MFeval's default is used and the moments scale
+with it), and the pure-slip core coefficients (:data:`CORE_KEYS`) of a
 present coefficient section must be there too: their absence usually means a
 truncated or hand-cut file.
 
@@ -65,13 +66,30 @@ OPTIONAL_SECTIONS = ("OVERTURNING_COEFFICIENTS", "ROLLING_COEFFICIENTS", "SCALIN
 #: Further optional sections of MF 6.1 / 6.2 (pressure terms).
 OPTIONAL_SECTIONS_6X = ("OPERATING_CONDITIONS", "INFLATION_PRESSURE_RANGE")
 #: Keys a file must give (no default is a sensible guess).
-REQUIRED_KEYS = ("FNOMIN", "UNLOADED_RADIUS")
+REQUIRED_KEYS = ("FNOMIN",)
+#: Keys whose absence is a warning: MFeval's default is used, and the message says what scales with it.
+WARN_MISSING = {
+    "UNLOADED_RADIUS": "Fx and Fy do not depend on it, but Mz (trail, residual torque), Mx, My, the radii, the "
+                       "contact patch and the relaxation lengths scale with it",
+}
 #: Pure-slip core coefficients of each coefficient section (present in MF 5.2, 6.1 and 6.2).
 CORE_KEYS = {
     "LONGITUDINAL_COEFFICIENTS": ("PCX1", "PDX1", "PKX1"),
     "LATERAL_COEFFICIENTS": ("PCY1", "PDY1", "PKY1"),
     "ALIGNING_COEFFICIENTS": ("QBZ1", "QCZ1", "QDZ1"),
 }
+
+
+def required_keys() -> frozenset[str]:
+    """Keys without which a file cannot be evaluated: :data:`REQUIRED_KEYS` and the core coefficients
+    (:data:`CORE_KEYS`).  A blank or non-numeric value on one of them is a reading error
+    (:func:`mftire.iotools.tir.read_tir`)."""
+    return frozenset(REQUIRED_KEYS).union(*CORE_KEYS.values())
+
+
+#: Aligning-moment coefficients whose zeros make Mz vanish: trail peak (eq 4.E42), residual torque peak
+#: (eq 4.E47, MF 6.1 adds QDZ10/11) and the Fx moment arm s (eq 4.E76).
+ZERO_MZ = ("QDZ1", "QDZ2", "QDZ6", "QDZ7", "QDZ8", "QDZ9", "QDZ10", "QDZ11", "SSZ1", "SSZ2", "SSZ3", "SSZ4")
 #: Plausible ranges (SI) of the constants, for any road or rig tyre from a bicycle to an aircraft.
 PLAUSIBLE = {
     "FNOMIN": (50.0, 5e5),  # N
@@ -177,9 +195,10 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
     if sections is None:
         sections = bool(path) and secs is not None
 
+    model = getattr(params, "model", None) or ({61: "MF 6.1", 62: "MF 6.2"}.get(fittyp, ""))
     if sections and secs is not None:
         present = {s for s, body in secs.items() if isinstance(body, Mapping)}
-        mf6x = fittyp in (61, 62)
+        mf6x = model in ("MF 6.1", "MF 6.2")
         missing = [s for s in REQUIRED_SECTIONS if s not in present]
         order = [s for s in secs]
         if missing:
@@ -205,10 +224,13 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
             home = next(p.section for p in PARAMETERS if p.key == key)
             if key not in flat and home in present:
                 rep.errors.append(f"required key {key} missing in [{home}]")
+        for key, scaled in WARN_MISSING.items():
+            home = next(p for p in PARAMETERS if p.key == key)
+            if key not in flat:
+                rep.warnings.append(f"{key} missing: MFeval's default {home.default:g} {home.unit} is used; {scaled}")
         std = {p.key: p for p in PARAMETERS if p.mfeval and p.unit != "str"}
-        pac = str(flat.get("PROPERTY_FILE_FORMAT", "")).strip().upper() == "PAC2002"
         for key, p in std.items():
-            if pac and key == "FITTYP":  # a PAC2002 file names its format instead
+            if key == "FITTYP" and flat.get("FITTYP") is None:  # the file names its format instead
                 continue
             if key not in flat and p.section in present and (mf6x or p.section not in OPTIONAL_SECTIONS_6X):
                 rep.defaulted.setdefault(p.section, []).append(key)
@@ -252,6 +274,9 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
         rep.warnings.append(f"VERTICAL_STIFFNESS = {kz:g} N/m: the deflection, the loaded and effective rolling "
                             "radii, the contact patch and the relaxation lengths divide by it and come out "
                             "NaN or infinite")
+    if "QDZ1" in flat and all(not _number(flat.get(k)) or flat[k] == 0 for k in ZERO_MZ):
+        rep.warnings.append(f"{', '.join(k for k in ZERO_MZ if k in flat)} = 0: Mz is identically zero (the file "
+                            "has no aligning-moment characteristic)")
     for force, keys, kind, mode in (ZERO_PEAK["Fx"], ZERO_PEAK["Fy"]):
         zero = [k for k in keys if _number(flat.get(k)) and flat[k] == 0]
         if zero:
@@ -275,5 +300,5 @@ def check_tyre(tyre: Any) -> CheckReport:
     return check_parameters(tyre.parameters, source=getattr(tyre.parameters, "path", None) or tyre.name)
 
 
-__all__ = ["CORE_KEYS", "CheckReport", "OPTIONAL_SECTIONS", "OPTIONAL_SECTIONS_6X", "PLAUSIBLE", "REQUIRED_KEYS",
+__all__ = ["CORE_KEYS", "WARN_MISSING", "ZERO_MZ", "required_keys", "CheckReport", "OPTIONAL_SECTIONS", "OPTIONAL_SECTIONS_6X", "PLAUSIBLE", "REQUIRED_KEYS",
            "REQUIRED_SECTIONS", "TirCheckError", "check_parameters", "check_tyre", "checked"]
