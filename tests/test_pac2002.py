@@ -31,7 +31,7 @@ from hypothesis import strategies as st
 from mftire.iotools.tir import read_tir
 from mftire.mf.family import PAC2002_CODE
 from mftire.mf.pac2002 import PAC2002Warning
-from mftire.mf.solver import OUTPUT_NAMES, UnsupportedModelError, evaluate_arrays
+from mftire.mf.solver import OUTPUT_NAMES, evaluate_arrays
 from mftire.tyre import Tyre, load
 
 HMMWV = TIR / "chrono_HMMWV_Pac02Tire.tir"

@@ -342,7 +342,7 @@ def test_duplicate_key_warns_and_the_last_value_is_used(tmp_path):
 
 def test_duplicate_key_with_the_same_value(tmp_path):
     path = write_text(tmp_path, MINIMAL + "[VERTICAL]\nFNOMIN = 4000\nFNOMIN = 4000.0\n")
-    with pytest.warns(TirWarning, match=r"line 5: duplicate key FNOMIN in \[VERTICAL\] \(first on line 4, same value\)"):
+    with pytest.warns(TirWarning, match=r"line 5: duplicate key FNOMIN in \[VERTICAL\] \(first on line 4, same val"):
         assert read_tir(path)["FNOMIN"] == 4000
 
 

@@ -73,7 +73,8 @@ def test_blank_value_on_a_used_key_with_a_default_warns_and_takes_the_default(tm
         tyre = Tyre.from_file(path)
     m = " ".join(str(w.message) for w in caught if isinstance(w.message, TirWarning))
     assert "3 value(s) treated as absent (INFLPRES, VERTICAL_STIFFNESS, FZMAX)" in m
-    assert "the evaluator uses the defaults of INFLPRES (NOMPRES), VERTICAL_STIFFNESS (200000 N/m), FZMAX (10000 N)" in m
+    assert ("the evaluator uses the defaults of INFLPRES (NOMPRES), VERTICAL_STIFFNESS (200000 N/m), "
+            "FZMAX (10000 N)") in m
     assert tyre.flat["INFLPRES"] == tyre.flat["NOMPRES"] and tyre.flat["FZMAX"] == 10000.0
     out = tyre.evaluate(4000.0, 0.05, 0.02)
     assert np.isfinite([out[k] for k in ("Fx", "Fy", "Mz", "Re", "Rl")]).all()
@@ -212,7 +213,8 @@ def test_wild_collection_evaluates_with_plausible_signs_and_magnitudes(tmp_path)
     assert {"PAC2002", "MF_05", "FITTYP 6", "FITTYP 61", "FITTYP 62"} <= formats
     assert no_fx == NO_FX and MF05 <= plausible
     assert len(files) == 25 and len(plausible) == 24 == len(files) - len(NO_FX)
-    print(f"\nwild collection: {len(plausible)} of {len(files)} plausible; no longitudinal characteristic: {len(no_fx)}")
+    print(f"\nwild collection: {len(plausible)} of {len(files)} plausible; "
+          f"no longitudinal characteristic: {len(no_fx)}")
 
 
 def test_zero_vertical_stiffness_and_zero_peak_factors_warn(tmp_path):
