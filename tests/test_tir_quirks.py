@@ -288,3 +288,27 @@ def test_pac2002_file_missing_optional_sections_evaluates(tmp_path):
     assert tyre.format == "PAC2002"
     out = tyre.evaluate(35000.0, np.array([0.05, 0.0]), np.array([0.0, 0.05]))
     assert out["Fx"][0] > 0 > out["Fy"][1] and out["Mz"][1] > 0
+
+
+# ------------------------------------------------------------------ PAC2002 spellings
+def test_pac2002_tire_conditions_in_kpa_are_converted(tmp_path):
+    """IP / IP_NOM of [TIRE_CONDITIONS] are pressures: a file in kPa is the same tyre as one in Pa."""
+    text = _text(HMMWV)
+    assert re.search(r"(?m)^IP\s*=\s*800000", text)
+    kpa = re.sub(r"(?m)^(IP(?:_NOM)?\s*=\s*)800000", r"\g<1>800", text)
+    kpa = re.sub(r"(?m)^PRESSURE\s*=.*$", "PRESSURE = 'kPa'", kpa)
+    kpa = kpa.replace("[TIRE_CONDITIONS]", "[TYRE_CONDITIONS]")  # the British spelling of Stackpole's files
+    a, b = _load_text(tmp_path, kpa), load(HMMWV)
+    assert a.flat["INFLPRES"] == b.flat["INFLPRES"] == 800000.0
+    _same(_outputs(a), _outputs(b))
+
+
+def test_pac2002_lkyg_is_the_camber_stiffness_factor_lkyc(tmp_path):
+    text = _text(HMMWV)
+    with_lkyg = text.replace("[SCALING_COEFFICIENTS]", "[SCALING_COEFFICIENTS]\nLKYG = 0.6", 1)
+    with_lkyc = text.replace("[SCALING_COEFFICIENTS]", "[SCALING_COEFFICIENTS]\nLKYC = 0.6", 1)
+    a, b, ref = _load_text(tmp_path, with_lkyg, "g.tir"), _load_text(tmp_path, with_lkyc, "c.tir"), load(HMMWV)
+    _same(_outputs(a), _outputs(b))
+    Fz = 35000.0
+    fa, fr = a.evaluate(Fz, 0.0, 0.02, np.array([0.0, 0.05])), ref.evaluate(Fz, 0.0, 0.02, np.array([0.0, 0.05]))
+    assert fa["Fy"][0] == fr["Fy"][0] and fa["Fy"][1] != fr["Fy"][1]  # only the camber terms change

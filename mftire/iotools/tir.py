@@ -132,7 +132,7 @@ from typing import Any
 from mftire.errors import MftireError
 from mftire.iotools.atomic import write_text_atomic
 from mftire.iotools.units import UNITS, exact_factor
-from mftire.parameters import BY_KEY, STANDARD_SECTIONS, UNIT_DIMENSIONS
+from mftire.parameters import BY_KEY, OTHER_UNITS, STANDARD_SECTIONS, UNIT_DIMENSIONS
 
 __all__ = [
     "DuplicateKeyError",
@@ -852,11 +852,12 @@ def _convert_units(params: TirParameters, where: dict, section_line: dict, sourc
                 if not _is_number(value):
                     continue
                 p = BY_KEY.get(key)
-                if p is None:
+                unit = p.unit if p is not None else OTHER_UNITS.get(key)
+                if unit is None:
                     unconverted.append(key)
                     continue
                 factor = Fraction(1)
-                for quantity, power in UNIT_DIMENSIONS.get(p.unit, {}).items():
+                for quantity, power in UNIT_DIMENSIONS.get(unit, {}).items():
                     factor *= factors[quantity] ** power
                 if factor != 1:
                     body[key] = _scale(value, factor)

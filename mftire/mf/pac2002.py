@@ -27,7 +27,11 @@ combined-slip Mz       F'y = Fy - SVyk with the same SVyk as Fy (eq 4.E74);
                        the trail is not multiplied by LFZO (eq 4.E73)
 pressure keys          ``[TIRE_CONDITIONS]`` IP / IP_NOM and QPZ1, QPZ2, QPX1
                        of newer PAC2002 files are the MF 6.1 INFLPRES /
-                       NOMPRES, PPZ1, PPZ2, PPMX1 (:func:`prepare`)
+                       NOMPRES, PPZ1, PPZ2, PPMX1 (:func:`prepare`); LKYG is
+                       MF 5.2's LKYC (camber terms of SHy, SVy)
+moment arm s           R0*(SSZ1 + SSZ2*Fy/Fz0' + ...) with Fz0' = LFZO*FNOMIN
+                       (eq 4.E76; MF 5.2 as MFeval uses FNOMIN), in
+                       :func:`mftire.mf.aligning.mz_combined`
 terms absent in 2006   PKY4 = 2 (the fixed "2" of eq 4.E25), and PKY5, PEY5,
                        RBX3, RBY4, QDZ10, QDZ11, QSX12-QSX14 = 0; the MF 6.2
                        vertical terms (Q_CAM*, Q_FYS*, Q_FCY2) = 0, so the
@@ -117,6 +121,10 @@ _ABSENT = {
 #: PAC2002 pressure keys -> the MF 6.1 keys of the shared equations.
 _PRESSURE = {"IP": "INFLPRES", "IP_NOM": "NOMPRES", "QPZ1": "PPZ1", "QPZ2": "PPZ2", "QPX1": "PPMX1"}
 
+#: PAC2002 names of MF 5.2 scaling factors: LKYG (camber stiffness, on the PHY3 and PVY3/PVY4 camber
+#: terms of eqs 4.E27, 4.E29, as Chrono's ChPac02Tire applies it) is MF 5.2's LKYC.
+_RENAMED = {"LKYG": "LKYC"}
+
 _UNUSED_ROLLING = ("QSY5", "QSY6", "QSY7", "QSY8")
 
 
@@ -150,7 +158,7 @@ def prepare(p: dict) -> dict:
     for key in _CAMBER_FOLD:
         q[key] = 1.0
     q.update(_ABSENT)
-    for pac_key, mf_key in _PRESSURE.items():
+    for pac_key, mf_key in (_PRESSURE | _RENAMED).items():
         if pac_key in p:
             q[mf_key] = float(p[pac_key])
     q["FITTYP"] = PAC2002_CODE
