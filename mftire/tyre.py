@@ -72,7 +72,9 @@ class Tyre:
         if code is not None:  # internal model code of the evaluator, not the file's FITTYP (mftire.mf.family)
             self.flat["FITTYP"] = code
         if code == PAC2002_CODE:
-            pac2002.warn_unused(self.parameters.flat())
+            file_values = self.parameters.flat()
+            pac2002.warn_unused(file_values)
+            self.flat.update(pac2002.absent_terms(file_values))  # absent terms off (docs/pac2002.md)
             # the folded parameter set every pipeline evaluates (evaluator, fitter, diagnosis, FMU)
             self.flat = pac2002.prepare(self.flat)
         from mftire.input_checks import check_constants
