@@ -119,6 +119,8 @@ class CheckReport:
     warnings: list[str] = field(default_factory=list)
     #: ``{SECTION: [keys taking their default]}`` for the standard keys of the file's version.
     defaulted: dict[str, list[str]] = field(default_factory=dict)
+    #: The file's model (``TirParameters.model``), when known.
+    model: str = ""
 
     @property
     def ok(self) -> bool:
@@ -136,7 +138,9 @@ class CheckReport:
         if not self.errors and not self.warnings:
             lines.append("  all passed")
         if self.defaulted:
-            lines.append("keys taking default values:")
+            lines.append("keys taking default values:" if self.model not in ("PAC2002", "MF-Tyre 5.0") else
+                         "keys taking default values (a coefficient absent from a PAC2002 or MF_05 file is zero, "
+                         "mftire.mf.pac2002.absent_terms):")
             for sec, keys in self.defaulted.items():
                 lines.append(f"  [{sec}] {', '.join(keys)}")
         return "\n".join(lines)
@@ -191,7 +195,7 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
     else:
         flat = {str(k).upper(): v for k, v in dict(params).items()}
     fittyp = _fittyp(flat)
-    rep = CheckReport(os.fspath(source), fittyp)
+    rep = CheckReport(os.fspath(source), fittyp, model=str(getattr(params, "model", "") or ""))
     if sections is None:
         sections = bool(path) and secs is not None
 
