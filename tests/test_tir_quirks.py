@@ -312,3 +312,24 @@ def test_pac2002_lkyg_is_the_camber_stiffness_factor_lkyc(tmp_path):
     Fz = 35000.0
     fa, fr = a.evaluate(Fz, 0.0, 0.02, np.array([0.0, 0.05])), ref.evaluate(Fz, 0.0, 0.02, np.array([0.0, 0.05]))
     assert fa["Fy"][0] == fr["Fy"][0] and fa["Fy"][1] != fr["Fy"][1]  # only the camber terms change
+
+
+def test_ranges_in_one_nonstandard_section_are_used_without_a_missing_section_warning(tmp_path):
+    """An FSAE team file keeps KPUMIN .. FZMAX in one [RANGE] section: the values are used, nothing is missing."""
+    text = _text()
+    moved = []
+    for sec in ("LONG_SLIP_RANGE", "SLIP_ANGLE_RANGE", "INCLINATION_ANGLE_RANGE", "VERTICAL_FORCE_RANGE"):
+        m = re.search(rf"(?s)\[{sec}\]\n(.*?)(?=\n\$|\n\[)", text)
+        moved.append(m.group(1))
+        text = text.replace(m.group(0), "")
+    text = text.replace("[SCALING_COEFFICIENTS]", "[RANGE]\n" + "\n".join(moved) + "\n[SCALING_COEFFICIENTS]", 1)
+    path = tmp_path / "range.tir"
+    path.write_text(text)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        tyre = load(path)
+    assert not [w for w in caught if "missing" in str(w.message)], [str(w.message) for w in caught]
+    ref = load(MF61)
+    for k in ("KPUMIN", "KPUMAX", "ALPMIN", "ALPMAX", "CAMMIN", "CAMMAX", "FZMIN", "FZMAX"):
+        assert tyre.flat[k] == ref.flat[k], k
+    _same(_outputs(tyre), _reference())

@@ -210,9 +210,12 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
             rep.errors.append(f"required section(s) {', '.join(f'[{s}]' for s in missing)} missing"
                               + (" (is the file truncated?)" if truncated else ""))
         optional = OPTIONAL_SECTIONS + (OPTIONAL_SECTIONS_6X if mf6x else ())
-        opt_missing = [s for s in optional if s not in present]
+        # a missing optional section whose keys the file gives elsewhere (e.g. one [RANGE] section) is fine
+        opt_missing = [s for s in optional if s not in present and any(
+            p.key not in flat for p in PARAMETERS if p.section == s and p.mfeval and p.unit != "str")]
         if opt_missing:
-            keys = [p.key for p in PARAMETERS if p.section in opt_missing and p.mfeval and p.unit != "str"]
+            keys = [p.key for p in PARAMETERS if p.section in opt_missing and p.mfeval and p.unit != "str"
+                    and p.key not in flat]
             shown = ", ".join(keys[:8]) + (f" and {len(keys) - 8} more" if len(keys) > 8 else "")
             rep.warnings.append(f"optional section(s) {', '.join(f'[{s}]' for s in opt_missing)} missing; "
                                 f"{len(keys)} key(s) take default values ({shown})")
@@ -239,7 +242,7 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
             if key not in flat and p.section in present and (mf6x or p.section not in OPTIONAL_SECTIONS_6X):
                 rep.defaulted.setdefault(p.section, []).append(key)
         for s in opt_missing:
-            keys = [p.key for p in PARAMETERS if p.section == s and p.mfeval and p.unit != "str"]
+            keys = [p.key for p in PARAMETERS if p.section == s and p.mfeval and p.unit != "str" and p.key not in flat]
             if keys:
                 rep.defaulted[s] = keys
 
