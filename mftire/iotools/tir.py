@@ -33,16 +33,20 @@ per line (the file's own description, else the table's), floats with
 default: MFeval 4.0's reader drops the last character of every line, assuming it
 is a carriage return, and the MFeval and ADAMS example files all use CRLF.
 
-``FITTYP``
-----------
-``FITTYP`` in ``[MODEL]`` must be one of 5 (MF-Tyre 5.0), 6 and 21 (MF 5.2
-family), 61 (MF 6.1) or 62 (MF 6.2); anything else raises
-:class:`UnknownFittypError`.  A file without ``FITTYP`` raises
-:class:`MissingFittypError`, except a PAC2002 file
-(``PROPERTY_FILE_FORMAT = 'PAC2002'``) or an MF-Tyre 5.0 file (``'MF_05'``), which
-read with ``fittyp`` None and ``format`` ``"PAC2002"`` / ``"MF_05"``: no MF version
-number is invented for them.  When a file has both (e.g. ``'PAC2002'`` and
-``FITTYP = 5``) the explicit ``FITTYP`` decides.
+``FITTYP`` and ``PROPERTY_FILE_FORMAT``
+--------------------------------------
+No version is invented: the file must say which model it holds.  ``FITTYP`` in
+``[MODEL]`` (5 MF-Tyre 5.0, 6 and 21 MF 5.2, 61 MF 6.1, 62 MF 6.2; an integral float or
+a quoted number is accepted) decides when present; any other value raises
+:class:`UnknownFittypError` with a hint (``52``: "an MF 5.2 file has FITTYP = 6").
+Without ``FITTYP``, a ``PROPERTY_FILE_FORMAT`` that names the model
+(:data:`FORMAT_MODELS`: ``'PAC2002'``, ``'MF_05'``, ``'MF_52'``, ``'MF_61'``, ``'MF6.2'``,
+compared by :func:`format_token`) is enough; a generic one (``'USER'``, ``'MF-TYRE'``) or
+none raises :class:`MissingFittypError`, another tyre model (``'PAC89'``, ``'PAC-TIME'``)
+:class:`UnsupportedFormatError`.  A ``PROPERTY_FILE_FORMAT`` naming another equation set
+than ``FITTYP`` is a :class:`TirWarning` (FITTYP decides).  ``TirParameters.fittyp`` is
+the file's FITTYP or None, ``.format`` what the file says (``'FITTYP 61'``, ``'MF_05'``,
+``'PAC2002'``, ``'MF_61'``), ``.model`` the equation set.
 
 Units
 -----
@@ -80,6 +84,7 @@ LATERAL_STIFFNESS
 VERTICAL_DAMPING                                       N·s/m       yes
 YAW_STIFFNESS                                          N·m/rad     yes
 NOMPRES, INFLPRES, PRESMIN, PRESMAX                    Pa          yes
+IP, IP_NOM (PAC2002 ``[TIRE_CONDITIONS]``)             Pa          yes
 MASS, BELT_MASS, MBELT                                 kg          yes
 IXX, IYY, BELT_IXX, BELT_IYY                           kg·m²       yes
 LONGVL, VXLOW                                          m/s         yes
@@ -106,13 +111,19 @@ Every problem raises :class:`TirError` (a :class:`mftire.errors.MftireError`)
 or one of its subclasses, with the file name, line number and offending text in
 the message: :class:`MalformedLineError`, :class:`NonNumericValueError`,
 :class:`UnknownUnitError`, :class:`UnknownFittypError`,
-:class:`MissingFittypError`, :class:`DuplicateKeyError` (a key twice in one
-section), :class:`EmptyFileError`.
+:class:`MissingFittypError`, :class:`UnsupportedFormatError`,
+:class:`DuplicateKeyError` (a key twice in one section, under ``strict``),
+:class:`EmptyFileError`.
 
 Tolerated quirks of real files: a blank value (``KEY =``) or a non-numeric value on
-a standard numeric key that the evaluator does not use (``MASS = kg``) is a
-:class:`TirWarning` (file, line, key) and the key is treated as absent; on a key the
-evaluator uses (:func:`mftire.mf.usedkeys.evaluator_keys`) it is an error.
+a standard numeric key that the evaluator does not use (``MASS = kg``), and a blank value
+on a key it uses that has a default (``INFLPRES =``, the ranges), are treated as absent,
+with one :class:`TirWarning` per file naming every line; a blank or non-numeric value on
+a required key (:func:`mftire.iotools.tir_checks.required_keys`), or text on a key the
+evaluator uses (:func:`mftire.mf.usedkeys.evaluator_keys`), is an error.  A key given
+twice in a section is a :class:`TirWarning` and the last value counts (as MFeval and
+Chrono read files).  Adams's ``(COMMENTS)`` / ``{comment_string}`` / quoted-line blocks
+inside a section are kept (``TirParameters.blocks``) and written back.
 ``read_tir(path, strict=True)`` makes every warning an error.
 """
 
