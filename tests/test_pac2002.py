@@ -391,3 +391,27 @@ def test_fmu_exports_a_pac2002_file_and_agrees_with_python(tmp_path):
                     assert abs(got[k] - float(ref[k])) <= 1e-9 * (abs(float(ref[k])) + scale), (k, mode, pt)
                 n += 1
     assert n == 240
+
+
+@needs_c_compiler
+def test_fmu_exports_an_mf05_file_and_agrees_with_python(tmp_path):
+    from fmpy import extract
+
+    from mftire.fmu.export import export_fmu
+    from mftire.fmu.host import FMUTyre
+
+    tyre = load(WILD / "chrono_feda_335_65R22_5_G275MSA_70psi.tir")
+    path = export_fmu(tyre, tmp_path / "mf05.fmu", fmi_version=2)
+    unzipdir = extract(str(path), unzipdir=str(tmp_path / "x"))
+    rng = np.random.default_rng(5)
+    with FMUTyre(unzipdir, "CS", start_values={"useMode": 111}) as fmu:
+        for _ in range(40):
+            pt = {"Fz": rng.uniform(0.5, 1.3) * 19000.0, "kappa": rng.uniform(-0.5, 0.0), "alpha": rng.uniform(-0.2, 0.2),
+                  "gamma": rng.uniform(-0.1, 0.1), "phit": 0.0, "Vx": rng.uniform(2.0, 30.0), "P": 220000.0,
+                  "omega": 0.0, "muRoad": 1.0}
+            got = fmu.evaluate(**pt)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                ref = tyre.evaluate(pt["Fz"], pt["kappa"], pt["alpha"], pt["gamma"], 0.0, pt["Vx"])
+            for k in ("Fx", "Fy", "Mx", "My", "Mz"):
+                assert abs(got[k] - float(ref[k])) <= 1e-9 * (abs(float(ref[k])) + 19000.0), (k, pt)
