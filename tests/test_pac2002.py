@@ -407,7 +407,8 @@ def test_fmu_exports_an_mf05_file_and_agrees_with_python(tmp_path):
     with FMUTyre(unzipdir, "CS", start_values={"useMode": 111}) as fmu:
         for _ in range(40):
             pt = {"Fz": rng.uniform(0.5, 1.3) * 19000.0, "kappa": rng.uniform(-0.5, 0.0),
-                  "alpha": rng.uniform(-0.2, 0.2), "gamma": rng.uniform(-0.1, 0.1), "phit": 0.0, "Vx": rng.uniform(2.0, 30.0), "P": 220000.0,
+                  "alpha": rng.uniform(-0.2, 0.2), "gamma": rng.uniform(-0.1, 0.1), "phit": 0.0,
+                  "Vx": rng.uniform(2.0, 30.0), "P": 220000.0,
                   "omega": 0.0, "muRoad": 1.0}
             got = fmu.evaluate(**pt)
             with warnings.catch_warnings():
