@@ -86,6 +86,7 @@ def test_blank_value_on_a_used_key_with_a_default_warns_and_takes_the_default(tm
     ("key", "value", "cls"),
     [("PKY1", " ", MalformedLineError), ("FNOMIN", " kN", NonNumericValueError), ("FNOMIN", "", MalformedLineError),
      ("QDZ1", " $ blank", MalformedLineError), ("LONGVL", " fast", NonNumericValueError),
+     ("QSY1", " ", MalformedLineError), ("RBX1", "", MalformedLineError),
      ("PDX1", " 1,2", NonNumericValueError)],
 )
 def test_blank_or_non_numeric_value_on_a_used_key_is_an_error(tmp_path, key, value, cls):

@@ -119,7 +119,8 @@ Tolerated quirks of real files: a blank value (``KEY =``) or a non-numeric value
 a standard numeric key that the evaluator does not use (``MASS = kg``), and a blank value
 on a key it uses that has a default (``INFLPRES =``, the ranges), are treated as absent,
 with one :class:`TirWarning` per file naming every line; a blank or non-numeric value on
-a required key (:func:`mftire.iotools.tir_checks.required_keys`), or text on a key the
+a required key (:func:`mftire.iotools.tir_checks.required_keys`), a blank force or moment
+coefficient the evaluator uses (``tir_checks.COEFFICIENT_SECTIONS``), or text on a key the
 evaluator uses (:func:`mftire.mf.usedkeys.evaluator_keys`), is an error.  A key given
 twice in a section is a :class:`TirWarning` and the last value counts (as MFeval and
 Chrono read files).  Adams's ``(COMMENTS)`` / ``{comment_string}`` / quoted-line blocks
@@ -687,17 +688,20 @@ def parse_tir(text: str, path: Any = None, strict: bool = False) -> TirParameter
         """A blank or non-numeric value.  Error on a required key (no sensible default), on a key
         the evaluator uses when the value is text, and under ``strict``; else a warning and the key
         is treated as absent (a blank on a key the evaluator uses takes its default)."""
-        from mftire.iotools.tir_checks import required_keys
+        from mftire.iotools.tir_checks import COEFFICIENT_SECTIONS, required_keys
         from mftire.mf.usedkeys import evaluator_keys
 
         used = key in evaluator_keys()
+        p = BY_KEY.get(key)
         if key in required_keys():
             raise fail(cls, f"{reason} (the evaluator uses {key}, and it has no default)", lineno, line)
         if used and not blank:
             raise fail(cls, f"{reason} (the evaluator uses {key})", lineno, line)
+        if used and p is not None and p.section in COEFFICIENT_SECTIONS:
+            raise fail(cls, f"{reason} (the evaluator uses {key}: a coefficient of the force and moment "
+                       "characteristic takes no default)", lineno, line)
         if strict:
             raise fail(cls, f"{reason} (strict reading)", lineno, line)
-        p = BY_KEY.get(key)
         default = None
         if used and p is not None:
             default = "NOMPRES" if key == "INFLPRES" else f"{p.default:g}" + ("" if p.unit == "-" else f" {p.unit}")

@@ -80,6 +80,12 @@ CORE_KEYS = {
 }
 
 
+#: Sections of the force and moment coefficients: a blank value there is an error (the characteristic would
+#: take another tyre's value); a blank operating condition, range, dimension or stiffness takes its default.
+COEFFICIENT_SECTIONS = ("LONGITUDINAL_COEFFICIENTS", "LATERAL_COEFFICIENTS", "ALIGNING_COEFFICIENTS",
+                        "OVERTURNING_COEFFICIENTS", "ROLLING_COEFFICIENTS", "TURNSLIP_COEFFICIENTS")
+
+
 def required_keys() -> frozenset[str]:
     """Keys without which a file cannot be evaluated: :data:`REQUIRED_KEYS` and the core coefficients
     (:data:`CORE_KEYS`).  A blank or non-numeric value on one of them is a reading error
@@ -307,6 +313,6 @@ def check_tyre(tyre: Any) -> CheckReport:
     return check_parameters(tyre.parameters, source=getattr(tyre.parameters, "path", None) or tyre.name)
 
 
-__all__ = ["CORE_KEYS", "CheckReport", "OPTIONAL_SECTIONS", "OPTIONAL_SECTIONS_6X", "PLAUSIBLE", "REQUIRED_KEYS",
+__all__ = ["COEFFICIENT_SECTIONS", "CORE_KEYS", "CheckReport", "OPTIONAL_SECTIONS", "OPTIONAL_SECTIONS_6X", "PLAUSIBLE", "REQUIRED_KEYS",
            "REQUIRED_SECTIONS", "TirCheckError", "WARN_MISSING", "ZERO_MZ", "check_parameters", "check_tyre", "checked",
            "required_keys"]
