@@ -437,6 +437,11 @@ del _TABLE
 #: Lookup by upper-case key.
 BY_KEY: dict[str, Parameter] = {p.key: p for p in PARAMETERS}
 
+#: Units of keys that are not standard parameters (no default, not filled in) but that a reader must
+#: convert from non-SI ``[UNITS]``: the operating pressures of PAC2002's ``[TIRE_CONDITIONS]`` /
+#: ``[TYRE_CONDITIONS]``, which :mod:`mftire.mf.pac2002` maps to INFLPRES / NOMPRES.
+OTHER_UNITS: dict[str, str] = {"IP": "Pa", "IP_NOM": "Pa"}
+
 #: Standard section names (without brackets) in the order a ``.tir`` file lists them.
 STANDARD_SECTIONS: tuple[str, ...] = (
     "MDI_HEADER",

@@ -18,7 +18,7 @@ from mftire.input_checks import UNIT_LIMITS, check_keywords, warn_units
 from mftire.iotools.tir import TirParameters, as_parameters, read_tir
 from mftire.mf import kernel, pac2002
 from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
-from mftire.mf.family import PAC2002_CODE
+from mftire.mf.family import MODEL_CODES, PAC2002_CODE
 from mftire.mf.kernel import FlatParameters
 from mftire.mf.solver import (
     _CHECKED_MODES,
@@ -68,10 +68,13 @@ class Tyre:
         #: non-standard keys outside sections are kept in :attr:`flat` only).
         self.parameters: TirParameters = as_parameters(params, unknown="drop")
         self.flat: dict[str, float] = with_defaults(params)
-        if self.parameters.format == "PAC2002":
-            # internal model code of the evaluator, not the file's FITTYP (mftire.mf.family)
-            self.flat["FITTYP"] = PAC2002_CODE
-            pac2002.warn_unused(self.parameters.flat())
+        code = MODEL_CODES.get(self.parameters.model)
+        if code is not None:  # internal model code of the evaluator, not the file's FITTYP (mftire.mf.family)
+            self.flat["FITTYP"] = code
+        if code == PAC2002_CODE:
+            file_values = self.parameters.flat()
+            pac2002.warn_unused(file_values)
+            self.flat.update(pac2002.absent_terms(file_values))  # absent terms off (docs/pac2002.md)
             # the folded parameter set every pipeline evaluates (evaluator, fitter, diagnosis, FMU)
             self.flat = pac2002.prepare(self.flat)
         from mftire.input_checks import check_constants
@@ -120,7 +123,8 @@ class Tyre:
 
     @property
     def fittyp(self) -> int | None:
-        """The file's ``FITTYP`` (61, 62, 6 for MF 5.2, ...), None when the file has none (PAC2002)."""
+        """The file's ``FITTYP`` (61, 62, 6 for MF 5.2, 5 for MF-Tyre 5.0, ...), None when the file has none
+        (PAC2002, or a file whose ``PROPERTY_FILE_FORMAT`` names its version)."""
         return self.parameters.fittyp
 
     @property
@@ -234,8 +238,8 @@ class Tyre:
                     out = MFResult(evaluate_arrays(flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode,
                                                    self.extension_set, None, None, backend))  # fmt: skip
                 return out
-        if self.flat.get("FITTYP") in _REFUSED_FITTYP:
-            why = unsupported_message(5 if self.format == "MF_05" else self.fittyp)
+        if self.flat.get("FITTYP") not in _EVALUATED_CODES:
+            why = unsupported_message(self.parameters.get("FITTYP"))
             raise UnsupportedModelError(f"{self.name} ({self.format}): {why}")
         if variables:
             check_keywords(variables, self.required_variables)
@@ -247,8 +251,9 @@ class Tyre:
         return MFResult(out)
 
 
-#: FITTYP values :meth:`Tyre.evaluate` refuses with its own message (none, MF-Tyre 5.0).
-_REFUSED_FITTYP = (None, 0, 0.0, 5, 5.0)
+#: Model codes :meth:`Tyre.evaluate` evaluates (mftire.mf.family.MODEL_CODES); any other value of
+#: ``flat["FITTYP"]`` (none, an unsupported FITTYP of a flat mapping) is refused with its own message.
+_EVALUATED_CODES = frozenset(MODEL_CODES.values())
 #: Input types of the latency path of :meth:`Tyre.evaluate` (other scalars, such as bool or
 #: numpy.float32, and arrays take the general path).
 _SCALARS = frozenset((float, int, np.float64))
@@ -276,7 +281,7 @@ def _point_state(tyre: Tyre) -> _Point | None:
     flat, ext = tyre.flat, tyre.extension_set
     if not isinstance(flat, FlatParameters) or ext.external_variables:
         return None
-    if flat.get("FITTYP") in _REFUSED_FITTYP:
+    if flat.get("FITTYP") not in _EVALUATED_CODES:
         return None
     try:
         check_fittyp(flat)

@@ -579,8 +579,9 @@ def test_simulate_fmu(fmus, version, fmi_type):
 def test_export_errors_are_clear(tmp_path):
     with pytest.raises(FMUExportError, match="no C compiler found"):
         export_fmu(BASE, tmp_path / "a.fmu", compiler="/nonexistent/bin/cc")
-    with pytest.raises(FMUExportError, match="cannot be evaluated.*MF_05"):
-        export_fmu(TIR / "chrono_335_65R22_5_G275MSA_60psi.tir", tmp_path / "b.fmu")
+    # (MF_05 files evaluate and export since issue 16: an unsupported FITTYP is refused instead)
+    with pytest.raises(FMUExportError, match="cannot be evaluated.*FITTYP 7 is not evaluated"):
+        export_fmu(dict(load(TIR / "MagicFormula61_Parameters.tir").flat, FITTYP=7), tmp_path / "b.fmu")
     with pytest.raises(FMUExportError, match="fmi_version"):
         export_fmu(BASE, tmp_path / "c.fmu", fmi_version=4)
     assert not list(tmp_path.iterdir())  # nothing half-written

@@ -19,6 +19,7 @@ were read for facts only (equation forms, which terms PAC2002 has).
 from __future__ import annotations
 
 import math
+import re
 import warnings
 
 import numpy as np
@@ -30,7 +31,7 @@ from hypothesis import strategies as st
 from mftire.iotools.tir import read_tir
 from mftire.mf.family import PAC2002_CODE
 from mftire.mf.pac2002 import PAC2002Warning
-from mftire.mf.solver import OUTPUT_NAMES, UnsupportedModelError, evaluate_arrays
+from mftire.mf.solver import OUTPUT_NAMES, evaluate_arrays
 from mftire.tyre import Tyre, load
 
 HMMWV = TIR / "chrono_HMMWV_Pac02Tire.tir"
@@ -56,19 +57,43 @@ def test_format_is_reported_as_the_file_says():
     assert (mf61.fittyp, mf61.format) == (61, "FITTYP 61")
 
 
-def test_mf05_is_refused_naming_the_format(tmp_path):
-    tyre = load(WILD / "chrono_feda_335_65R22_5_G275MSA_40psi.tir")
-    with pytest.raises(UnsupportedModelError, match=r"\(MF_05\).*MF_05 / MF-Tyre 5\.0"):
-        tyre.evaluate(16929.0, 0.0, 0.0)
-    # an MF_05 file without FITTYP reads and is refused by name, not as "FITTYP 0"
-    text = (WILD / "chrono_feda_335_65R22_5_G275MSA_40psi.tir").read_text().replace("FITTYP = 5\n", "")
-    path = tmp_path / "mf05.tir"
-    path.write_text(text)
-    tyre = load(path)
-    assert tyre.fittyp is None and tyre.format == "MF_05"
-    with pytest.raises(UnsupportedModelError, match="MF_05 / MF-Tyre 5.0") as excinfo:
-        tyre.evaluate(16929.0, 0.0, 0.0)
-    assert "FITTYP 0" not in str(excinfo.value)
+def test_mf05_evaluates_with_the_pac2002_equations(tmp_path):
+    """MF_05 (FITTYP 5) runs the PAC2002 path (docs/pac2002.md, "MF_05"): the same file marked PAC2002
+    instead gives the same numbers, bit for bit, and the format is reported as the file says."""
+    src = WILD / "chrono_feda_335_65R22_5_G275MSA_40psi.tir"
+    mf05 = load(src)
+    assert (mf05.fittyp, mf05.format) == (5, "MF_05") and mf05.flat["FITTYP"] == PAC2002_CODE
+    text = src.read_bytes().decode("latin-1")
+    as_pac = tmp_path / "as_pac2002.tir"
+    as_pac.write_text(re.sub(r"(?m)^FITTYP\s*=.*$", "", text).replace("'MF_05'", "'PAC2002'"), encoding="latin-1")
+    no_fittyp = tmp_path / "mf05_no_fittyp.tir"
+    no_fittyp.write_text(re.sub(r"(?m)^FITTYP\s*=.*$", "", text), encoding="latin-1")
+    pac, bare = load(as_pac), load(no_fittyp)
+    assert (pac.fittyp, pac.format) == (None, "PAC2002")
+    assert (bare.fittyp, bare.format) == (None, "MF_05")  # no FITTYP invented
+    kappa, alpha = np.meshgrid(np.linspace(-0.3, 0.0, 7), np.radians(np.linspace(-10, 10, 9)))
+    ref = mf05.evaluate(16929.0, kappa, alpha, 0.02)
+    for other in (pac, bare):
+        out = other.evaluate(16929.0, kappa, alpha, 0.02)
+        for k in ref:
+            np.testing.assert_array_equal(out[k], ref[k], err_msg=k)
+
+
+def test_mf05_negative_pdy1_is_the_sign_convention_of_its_exporter():
+    """MF_05 files of the Goodyear exporter have PDY1 < 0 with PKY1 < 0 (Chrono's ChPac02Tire takes |muy|).
+    Fy0 = Dy sin(Cy atan(By a - ...)) with By = Kya/(Cy Dy) is odd in (Dy, By) jointly, so the literal
+    equations give the same Fy and Mz as |PDY1|, |PDY2| when the kappa-induced side force is zero (RVY = 0)."""
+    tyre = load(WILD / "chrono_feda_335_65R22_5_G275MSA_70psi.tir")
+    flipped = tyre.parameters.copy()
+    for key in ("PDY1", "PDY2"):
+        flipped.set(key, -flipped[key])
+    assert tyre.flat["PDY1"] < 0 < flipped["PDY1"]
+    other = Tyre(flipped)
+    kappa, alpha = np.meshgrid(np.linspace(-0.3, 0.0, 7), np.radians(np.linspace(-10, 10, 9)))
+    a, b = tyre.evaluate(19000.0, kappa, alpha, 0.03), other.evaluate(19000.0, kappa, alpha, 0.03)
+    for k in ("Fx", "Fy", "Mz", "Mx", "My"):
+        np.testing.assert_allclose(a[k], b[k], rtol=1e-12, atol=1e-9 * 19000.0, err_msg=k)
+    np.testing.assert_allclose(a["muy"], b["muy"], rtol=1e-12)  # the muy output is |muy| (as MFeval)
 
 
 # ------------------------------------------------------------------ equivalence with MF 5.2
@@ -236,7 +261,7 @@ def _reference(p: dict, Fz: float, kappa: float, alpha: float, gamma: float, Vx:
         r2 = (Kx / Ky) ** 2 * kappa**2
         at_eq = math.atan(math.sqrt(math.tan(at) ** 2 + r2)) * math.copysign(1.0, at)
         ar_eq = math.atan(math.sqrt(math.tan(ar) ** 2 + r2)) * math.copysign(1.0, ar)
-        s = R0 * (p["SSZ1"] + p["SSZ2"] * Fy / Fz0 + (p["SSZ3"] + p["SSZ4"] * dfz) * gamma) * p["LS"]
+        s = R0 * (p["SSZ1"] + p["SSZ2"] * Fy / Fz0p + (p["SSZ3"] + p["SSZ4"] * dfz) * gamma) * p["LS"]
         Mzr = Dr * math.cos(math.atan(Br * ar_eq)) * math.cos(alpha)
         Mz = -trail(at_eq) * (Fy - SVyk) + Mzr + s * Fx
     Mx = R0 * Fz * p["LMX"] * (p["QSX1"] * p["LVMX"] - p["QSX2"] * gamma + p["QSX3"] * Fy / Fz0)
@@ -366,3 +391,28 @@ def test_fmu_exports_a_pac2002_file_and_agrees_with_python(tmp_path):
                     assert abs(got[k] - float(ref[k])) <= 1e-9 * (abs(float(ref[k])) + scale), (k, mode, pt)
                 n += 1
     assert n == 240
+
+
+@needs_c_compiler
+def test_fmu_exports_an_mf05_file_and_agrees_with_python(tmp_path):
+    from fmpy import extract
+
+    from mftire.fmu.export import export_fmu
+    from mftire.fmu.host import FMUTyre
+
+    tyre = load(WILD / "chrono_feda_335_65R22_5_G275MSA_70psi.tir")
+    path = export_fmu(tyre, tmp_path / "mf05.fmu", fmi_version=2)
+    unzipdir = extract(str(path), unzipdir=str(tmp_path / "x"))
+    rng = np.random.default_rng(5)
+    with FMUTyre(unzipdir, "CS", start_values={"useMode": 111}) as fmu:
+        for _ in range(40):
+            pt = {"Fz": rng.uniform(0.5, 1.3) * 19000.0, "kappa": rng.uniform(-0.5, 0.0),
+                  "alpha": rng.uniform(-0.2, 0.2), "gamma": rng.uniform(-0.1, 0.1), "phit": 0.0,
+                  "Vx": rng.uniform(2.0, 30.0), "P": 220000.0,
+                  "omega": 0.0, "muRoad": 1.0}
+            got = fmu.evaluate(**pt)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                ref = tyre.evaluate(pt["Fz"], pt["kappa"], pt["alpha"], pt["gamma"], 0.0, pt["Vx"])
+            for k in ("Fx", "Fy", "Mx", "My", "Mz"):
+                assert abs(got[k] - float(ref[k])) <= 1e-9 * (abs(float(ref[k])) + 19000.0), (k, pt)

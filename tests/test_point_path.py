@@ -228,8 +228,9 @@ def test_errors_are_the_general_paths():
         tyre.evaluate(4000.0, 0.0, 0.0, backend="fortran")
     with pytest.raises(MftireInputError, match="not numeric"):
         tyre.evaluate("4 kN", 0.0, 0.0)
-    old = load(TIR / "chrono_335_65R22_5_G275MSA_60psi.tir")
-    with pytest.raises(UnsupportedModelError, match="FITTYP 5 is not evaluated"):
+    # (MF_05 files evaluate since issue 16: an unsupported FITTYP of a flat mapping is refused instead)
+    old = Tyre(dict(tyre.flat, FITTYP=7))
+    with pytest.raises(UnsupportedModelError, match="FITTYP 7 is not evaluated"):
         old.evaluate(4000.0, 0.0, 0.0)
     # other scalar types take the general path, with the same numbers
     ref = tyre.evaluate(4000.0, 0.1, 0.05, gamma=0.0)

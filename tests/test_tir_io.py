@@ -22,6 +22,7 @@ from mftire.iotools.tir import (
     TirError,
     TirParameters,
     TirTable,
+    TirWarning,
     UnknownFittypError,
     UnknownUnitError,
     format_tir,
@@ -326,20 +327,33 @@ def test_missing_fittyp_accepted_for_pac2002(tmp_path):
     assert params.fittyp is None and params.model == "PAC2002"
 
 
-def test_duplicate_key(tmp_path):
+def test_duplicate_key_warns_and_the_last_value_is_used(tmp_path):
+    # MFeval's and Chrono's readers take the last value; mftire does too, but says so
     path = write_text(tmp_path, MINIMAL + "[VERTICAL]\nFNOMIN = 4000\nfnomin = 5000\n")
+    with pytest.warns(TirWarning, match=r"tyre\.tir, line 5: duplicate key FNOMIN in \[VERTICAL\] \(first on line 4, "
+                      r"value 4000\); the last value is used"):
+        params = read_tir(path)
+    assert params["FNOMIN"] == 5000
     with pytest.raises(DuplicateKeyError) as excinfo:
-        read_tir(path)
+        read_tir(path, strict=True)
     assert_located(excinfo, path, 5, "fnomin = 5000")
-    assert "line 4" in str(excinfo.value)
+    assert "line 4" in str(excinfo.value) and "strict" in str(excinfo.value)
+
+
+def test_duplicate_key_with_the_same_value(tmp_path):
+    path = write_text(tmp_path, MINIMAL + "[VERTICAL]\nFNOMIN = 4000\nFNOMIN = 4000.0\n")
+    with pytest.warns(TirWarning, match=r"line 5: duplicate key FNOMIN in \[VERTICAL\] \(first on line 4, same val"):
+        assert read_tir(path)["FNOMIN"] == 4000
 
 
 def test_duplicate_key_in_repeated_section(tmp_path):
     path = write_text(tmp_path, MINIMAL + "[VERTICAL]\nFNOMIN = 4000\n[DIMENSION]\nWIDTH = 0.2\n"
                       "[VERTICAL]\nFNOMIN = 5000\n")
     with pytest.raises(DuplicateKeyError) as excinfo:
-        read_tir(path)
+        read_tir(path, strict=True)
     assert_located(excinfo, path, 8, "FNOMIN = 5000")
+    with pytest.warns(TirWarning, match="line 8: duplicate key FNOMIN"):
+        assert read_tir(path)["FNOMIN"] == 5000
 
 
 def test_same_key_in_two_sections_is_fine(tmp_path):

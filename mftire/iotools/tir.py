@@ -33,16 +33,20 @@ per line (the file's own description, else the table's), floats with
 default: MFeval 4.0's reader drops the last character of every line, assuming it
 is a carriage return, and the MFeval and ADAMS example files all use CRLF.
 
-``FITTYP``
-----------
-``FITTYP`` in ``[MODEL]`` must be one of 5 (MF-Tyre 5.0), 6 and 21 (MF 5.2
-family), 61 (MF 6.1) or 62 (MF 6.2); anything else raises
-:class:`UnknownFittypError`.  A file without ``FITTYP`` raises
-:class:`MissingFittypError`, except a PAC2002 file
-(``PROPERTY_FILE_FORMAT = 'PAC2002'``) or an MF-Tyre 5.0 file (``'MF_05'``), which
-read with ``fittyp`` None and ``format`` ``"PAC2002"`` / ``"MF_05"``: no MF version
-number is invented for them.  When a file has both (e.g. ``'PAC2002'`` and
-``FITTYP = 5``) the explicit ``FITTYP`` decides.
+``FITTYP`` and ``PROPERTY_FILE_FORMAT``
+--------------------------------------
+No version is invented: the file must say which model it holds.  ``FITTYP`` in
+``[MODEL]`` (5 MF-Tyre 5.0, 6 and 21 MF 5.2, 61 MF 6.1, 62 MF 6.2; an integral float or
+a quoted number is accepted) decides when present; any other value raises
+:class:`UnknownFittypError` with a hint (``52``: "an MF 5.2 file has FITTYP = 6").
+Without ``FITTYP``, a ``PROPERTY_FILE_FORMAT`` that names the model
+(:data:`FORMAT_MODELS`: ``'PAC2002'``, ``'MF_05'``, ``'MF_52'``, ``'MF_61'``, ``'MF6.2'``,
+compared by :func:`format_token`) is enough; a generic one (``'USER'``, ``'MF-TYRE'``) or
+none raises :class:`MissingFittypError`, another tyre model (``'PAC89'``, ``'PAC-TIME'``)
+:class:`UnsupportedFormatError`.  A ``PROPERTY_FILE_FORMAT`` naming another equation set
+than ``FITTYP`` is a :class:`TirWarning` (FITTYP decides).  ``TirParameters.fittyp`` is
+the file's FITTYP or None, ``.format`` what the file says (``'FITTYP 61'``, ``'MF_05'``,
+``'PAC2002'``, ``'MF_61'``), ``.model`` the equation set.
 
 Units
 -----
@@ -80,6 +84,7 @@ LATERAL_STIFFNESS
 VERTICAL_DAMPING                                       N·s/m       yes
 YAW_STIFFNESS                                          N·m/rad     yes
 NOMPRES, INFLPRES, PRESMIN, PRESMAX                    Pa          yes
+IP, IP_NOM (PAC2002 ``[TIRE_CONDITIONS]``)             Pa          yes
 MASS, BELT_MASS, MBELT                                 kg          yes
 IXX, IYY, BELT_IXX, BELT_IYY                           kg·m²       yes
 LONGVL, VXLOW                                          m/s         yes
@@ -106,13 +111,20 @@ Every problem raises :class:`TirError` (a :class:`mftire.errors.MftireError`)
 or one of its subclasses, with the file name, line number and offending text in
 the message: :class:`MalformedLineError`, :class:`NonNumericValueError`,
 :class:`UnknownUnitError`, :class:`UnknownFittypError`,
-:class:`MissingFittypError`, :class:`DuplicateKeyError` (a key twice in one
-section), :class:`EmptyFileError`.
+:class:`MissingFittypError`, :class:`UnsupportedFormatError`,
+:class:`DuplicateKeyError` (a key twice in one section, under ``strict``),
+:class:`EmptyFileError`.
 
 Tolerated quirks of real files: a blank value (``KEY =``) or a non-numeric value on
-a standard numeric key that the evaluator does not use (``MASS = kg``) is a
-:class:`TirWarning` (file, line, key) and the key is treated as absent; on a key the
-evaluator uses (:func:`mftire.mf.usedkeys.evaluator_keys`) it is an error.
+a standard numeric key that the evaluator does not use (``MASS = kg``), and a blank value
+on a key it uses that has a default (``INFLPRES =``, the ranges), are treated as absent,
+with one :class:`TirWarning` per file naming every line; a blank or non-numeric value on
+a required key (:func:`mftire.iotools.tir_checks.required_keys`), a blank force or moment
+coefficient the evaluator uses (``tir_checks.COEFFICIENT_SECTIONS``), or text on a key the
+evaluator uses (:func:`mftire.mf.usedkeys.evaluator_keys`), is an error.  A key given
+twice in a section is a :class:`TirWarning` and the last value counts (as MFeval and
+Chrono read files).  Adams's ``(COMMENTS)`` / ``{comment_string}`` / quoted-line blocks
+inside a section are kept (``TirParameters.blocks``) and written back.
 ``read_tir(path, strict=True)`` makes every warning an error.
 """
 
@@ -132,12 +144,13 @@ from typing import Any
 from mftire.errors import MftireError
 from mftire.iotools.atomic import write_text_atomic
 from mftire.iotools.units import UNITS, exact_factor
-from mftire.parameters import BY_KEY, STANDARD_SECTIONS, UNIT_DIMENSIONS
+from mftire.parameters import BY_KEY, OTHER_UNITS, STANDARD_SECTIONS, UNIT_DIMENSIONS
 
 __all__ = [
     "DuplicateKeyError",
     "EmptyFileError",
     "FITTYP_MODELS",
+    "FORMAT_MODELS",
     "FittypError",
     "MalformedLineError",
     "MissingFittypError",
@@ -148,6 +161,8 @@ __all__ = [
     "TirWarning",
     "UnknownFittypError",
     "UnknownUnitError",
+    "UnsupportedFormatError",
+    "format_token",
     "format_tir",
     "parse_tir",
     "read_tir",
@@ -156,11 +171,40 @@ __all__ = [
 
 Value = float | int | str
 
-#: FITTYP values the reader accepts, with the model they denote.
+#: FITTYP values the reader accepts, with the model they denote (21: MF 5.2 coefficients in an
+#: MF-Tyre 6.0 file; MFeval and its ports evaluate 6 and 21 alike).
 FITTYP_MODELS: dict[int, str] = {5: "MF-Tyre 5.0", 6: "MF 5.2", 21: "MF 5.2", 61: "MF 6.1", 62: "MF 6.2"}
 
-#: PROPERTY_FILE_FORMAT values for which a missing FITTYP is accepted, with the model they denote.
-_FORMATS_WITHOUT_FITTYP = {"PAC2002": "PAC2002", "MF_05": "MF-Tyre 5.0"}
+#: ``PROPERTY_FILE_FORMAT`` spellings that name the model of a file without ``FITTYP``, compared
+#: after :func:`format_token` (upper case; blanks, ``-``, ``_`` and ``.`` removed: ``'MF_05'``,
+#: ``'mf-05'`` and ``'MF 05'`` are one token).
+FORMAT_MODELS: dict[str, str] = {
+    "PAC2002": "PAC2002", "PAC02": "PAC2002",
+    "MF05": "MF-Tyre 5.0", "MF50": "MF-Tyre 5.0", "MFTYRE50": "MF-Tyre 5.0",
+    "MF52": "MF 5.2", "MFTYRE52": "MF 5.2",
+    "MF61": "MF 6.1", "MFTYRE61": "MF 6.1",
+    "MF62": "MF 6.2", "MFTYRE62": "MF 6.2",
+}  # fmt: skip
+#: ``PROPERTY_FILE_FORMAT`` values that do not say which Magic Formula version a file holds (its
+#: ``FITTYP`` does): TNO's MF-Tyre/MF-Swift exports, MFeval's ``'USER'``.
+GENERIC_FORMATS = frozenset({"", "USER", "MFTYRE", "MFSWIFT", "TNO", "TNOMF", "MF", "DEFAULT", "MAGICFORMULA"})
+#: ``PROPERTY_FILE_FORMAT`` values of other tyre models that share the ``.tir`` layout, not the equations.
+OTHER_MODELS: dict[str, str] = {
+    "PACTIME": "PAC-TIME", "PACMC": "PAC MC (motorcycle)", "PAC89": "Pacejka '89", "PAC94": "Pacejka '94",
+    "FIALA": "Fiala", "UA": "UA tire", "FTIRE": "FTire", "5PT": "Adams 5.2.1",
+}  # fmt: skip
+
+
+def format_token(value: Any) -> str:
+    """``PROPERTY_FILE_FORMAT`` compared as a token: upper case without blanks, ``-``, ``_``, ``.``."""
+    return re.sub(r"[\s_.\-]", "", str(value).upper()) if isinstance(value, str) else ""
+
+
+def _fittyp_number(value: Any) -> int | None:
+    """The FITTYP as an int when it is one of :data:`FITTYP_MODELS`, else None."""
+    if isinstance(value, float) and value.is_integer():
+        value = int(value)
+    return value if _is_number(value) and value in FITTYP_MODELS else None
 
 
 # --------------------------------------------------------------------------- errors
@@ -215,6 +259,10 @@ class MissingFittypError(FittypError):
     """The file has no ``FITTYP`` and its ``PROPERTY_FILE_FORMAT`` does not imply a model."""
 
 
+class UnsupportedFormatError(FittypError):
+    """``PROPERTY_FILE_FORMAT`` names another tyre model (PAC-TIME, PAC89, Fiala, ...)."""
+
+
 class TirWarning(UserWarning):
     """A tolerated problem in a ``.tir`` file (``read_tir(..., strict=True)`` makes it a :class:`TirError`)."""
 
@@ -234,6 +282,9 @@ _KEY_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*\Z")
 _SECTION_RE = re.compile(r"\[\s*([A-Za-z0-9_][A-Za-z0-9_ .\-]*?)\s*\]\s*(?:[$!].*)?\Z")
 _SEPARATOR_RE = re.compile(r"\$-{3,}")
 _TABLE_HEADER_RE = re.compile(r"\{([^{}]*)\}\s*(?:[$!].*)?\Z")
+_BLOCK_RE = re.compile(r"\(\s*[A-Za-z_][A-Za-z0-9_ ]*\)\s*(?:[$!].*)?\Z")
+_QUOTED_ROW_RE = re.compile(r"""(?:'[^']*'|"[^"]*")\s*(?:[$!].*)?\Z""")
+_DECIMAL_COMMA_RE = re.compile(r"[+-]?\d*,\d+(?:[eEdD][+-]?\d+)?\Z")
 
 
 def _parse_number(token: str) -> int | float | None:
@@ -335,6 +386,9 @@ class TirParameters:
         self.sections: dict[str, Section] = {}
         self.comments: dict[tuple[str, str], str] = {}
         self.header_comments: list[str] = []
+        #: ``{SECTION: [lines]}``: free-text blocks inside a section, e.g. Adams's
+        #: ``(COMMENTS)`` / ``{comment_string}`` / ``'text'`` lines; kept and written back.
+        self.blocks: dict[str, list[str]] = {}
         self.path: str | None = None if path is None else str(path)
         for name, body in (sections or {}).items():
             name = name.upper()
@@ -394,45 +448,38 @@ class TirParameters:
     @property
     def fittyp(self) -> int | None:
         """The ``FITTYP`` of the file as an int, or None if absent (e.g. PAC2002) or not supported."""
-        value = self.get("FITTYP")
-        if isinstance(value, float) and value.is_integer():
-            value = int(value)
-        if _is_number(value) and value in FITTYP_MODELS:
-            return int(value)
-        return None
+        return _fittyp_number(self.get("FITTYP"))
 
     @property
     def model(self) -> str:
-        """Model family.
+        """Model family: what the equations are.
 
-        One of ``"MF 6.2"``, ``"MF 6.1"``, ``"MF 5.2"`` (FITTYP 6 or 21), ``"MF-Tyre 5.0"``,
-        ``"PAC2002"`` (no FITTYP) or ``"unknown"``.
+        One of ``"MF 6.2"``, ``"MF 6.1"``, ``"MF 5.2"`` (FITTYP 6 or 21, or a
+        ``PROPERTY_FILE_FORMAT`` such as ``'MF_52'``), ``"MF-Tyre 5.0"`` (FITTYP 5 or
+        ``'MF_05'``), ``"PAC2002"`` or ``"unknown"``.  ``FITTYP`` decides when a file has one;
+        else ``PROPERTY_FILE_FORMAT`` (:data:`FORMAT_MODELS`).
         """
         fittyp = self.fittyp
         if fittyp is not None:
             return FITTYP_MODELS[fittyp]
-        fmt = self.get("PROPERTY_FILE_FORMAT")
-        if isinstance(fmt, str) and fmt.strip().upper() in _FORMATS_WITHOUT_FITTYP:
-            return _FORMATS_WITHOUT_FITTYP[fmt.strip().upper()]
-        return "unknown"
+        return FORMAT_MODELS.get(format_token(self.get("PROPERTY_FILE_FORMAT")), "unknown")
 
     @property
     def format(self) -> str:
         """The format as the file states it, no version invented.
 
         ``"FITTYP 61"`` (``62``, ``6``, ``21``) for a file with a ``FITTYP``,
-        ``"MF_05"`` for an MF-Tyre 5.0 file (``FITTYP = 5`` or
-        ``PROPERTY_FILE_FORMAT = 'MF_05'``), ``"PAC2002"`` for a PAC2002 file without
-        ``FITTYP``, else the ``PROPERTY_FILE_FORMAT`` string or ``"unknown"``.
+        ``"MF_05"`` for an MF-Tyre 5.0 file (``FITTYP = 5``), else the file's
+        ``PROPERTY_FILE_FORMAT`` in upper case (``"PAC2002"``, ``"MF_05"``, ``"MF_61"``, ...)
+        or ``"unknown"``.
         """
         fittyp = self.fittyp
-        fmt = self.get("PROPERTY_FILE_FORMAT")
-        fmt = fmt.strip().upper() if isinstance(fmt, str) else None
-        if fittyp == 5 or (fittyp is None and fmt == "MF_05"):
+        if fittyp == 5:
             return "MF_05"
         if fittyp is not None:
             return f"FITTYP {fittyp}"
-        return fmt or "unknown"
+        fmt = self.get("PROPERTY_FILE_FORMAT")
+        return fmt.strip().upper() if isinstance(fmt, str) and fmt.strip() else "unknown"
 
     # ---------------------------------------------------------------- changing
     def set(self, key: str, value: Value, section: str | None = None) -> None:
@@ -637,18 +684,31 @@ def parse_tir(text: str, path: Any = None, strict: bool = False) -> TirParameter
     def fail(cls: type[TirError], reason: str, lineno: int, line: str) -> TirError:
         return cls(reason, source, lineno, line)
 
-    def tolerate(cls: type[TirError], key: str, reason: str, lineno: int, line: str) -> None:
-        """Blank or non-numeric value: an error on a key the evaluator uses (or strict), else a warning."""
+    def tolerate(cls: type[TirError], key: str, reason: str, lineno: int, line: str, blank: bool) -> None:
+        """A blank or non-numeric value.  Error on a required key (no sensible default), on a key
+        the evaluator uses when the value is text, and under ``strict``; else a warning and the key
+        is treated as absent (a blank on a key the evaluator uses takes its default)."""
+        from mftire.iotools.tir_checks import COEFFICIENT_SECTIONS, required_keys
         from mftire.mf.usedkeys import evaluator_keys
 
-        if key in evaluator_keys():
+        used = key in evaluator_keys()
+        p = BY_KEY.get(key)
+        if key in required_keys():
+            raise fail(cls, f"{reason} (the evaluator uses {key}, and it has no default)", lineno, line)
+        if used and not blank:
             raise fail(cls, f"{reason} (the evaluator uses {key})", lineno, line)
+        if used and p is not None and p.section in COEFFICIENT_SECTIONS:
+            raise fail(cls, f"{reason} (the evaluator uses {key}: a coefficient of the force and moment "
+                       "characteristic takes no default)", lineno, line)
         if strict:
             raise fail(cls, f"{reason} (strict reading)", lineno, line)
-        warnings.warn(
-            TirWarning(f"{source}, line {lineno}: {reason}: {line!r}; {key} is treated as absent"), stacklevel=4
-        )
+        default = None
+        if used and p is not None:
+            default = "NOMPRES" if key == "INFLPRES" else f"{p.default:g}" + ("" if p.unit == "-" else f" {p.unit}")
+        tolerated.append((lineno, reason, line, key, default))
 
+    tolerated: list[tuple[int, str, str, str, str | None]] = []
+    block: str | None = None  # the section whose free-text block (COMMENTS) is being read
     for lineno, raw in enumerate(lines, 1):
         line = raw.strip()
         if not line:
@@ -674,12 +734,26 @@ def parse_tir(text: str, path: Any = None, strict: bool = False) -> TirParameter
                 params.sections[name] = {}
                 section_line[name] = (lineno, line)
             current = name
+            block = None
             continue
         if current is None:
             raise fail(MalformedLineError, "data before the first [SECTION] header", lineno, line)
         body = params.sections[current]
         eq = line.find("=")
-        is_pair = eq > 0 and not any(c in line[:eq] for c in "$!'\"{")
+        is_pair = eq > 0 and not any(c in line[:eq] for c in "$!'\"{(")
+        if is_pair:
+            block = None
+        elif block == current or (isinstance(body, dict) and _BLOCK_RE.match(line)):
+            block = current  # "(COMMENTS)", "{comment_string}", "'text'": a free-text block, kept
+            params.blocks.setdefault(current, []).append(line)
+            continue
+        elif (isinstance(body, TirTable) and not body.rows and body.columns is not None
+              and _QUOTED_ROW_RE.match(line)):
+            # a "{comment_string}" header with quoted rows: free text, not a table
+            block = current
+            params.sections[current] = {}
+            params.blocks.setdefault(current, []).extend(["{" + " ".join(body.columns) + "}", line])
+            continue
         if line[0] == "{":
             m = _TABLE_HEADER_RE.match(line)
             if not m:
@@ -715,19 +789,26 @@ def parse_tir(text: str, path: Any = None, strict: bool = False) -> TirParameter
         except _LineProblem as problem:
             if problem.reason != _NO_VALUE:
                 raise fail(problem.cls, problem.reason, lineno, line) from None
-            tolerate(problem.cls, key, f"{key} has no value", lineno, line)
+            tolerate(problem.cls, key, f"{key} has no value", lineno, line, blank=True)
             continue
         p = BY_KEY.get(key)
         if current != "UNITS" and p is not None and p.unit != "str" and not _is_number(value):
             number = _parse_number(value.strip()) if quoted and isinstance(value, str) else None
             if number is None:
-                tolerate(NonNumericValueError, key, f"{key} needs a number", lineno, line)
+                text = value.strip() if isinstance(value, str) else ""
+                hint = " (a decimal comma? write 0.85, not 0,85)" if _DECIMAL_COMMA_RE.match(text) else ""
+                tolerate(NonNumericValueError, key, f"{key} needs a number{hint}", lineno, line, blank=not text)
                 continue
             value = number
         if key in body:
-            first = where[(current, key)][0]
-            raise fail(DuplicateKeyError, f"duplicate key {key} in [{_base_name(current)}] "
-                       f"(first on line {first})", lineno, line)
+            first, _ = where[(current, key)]
+            same = _same_value(body[key], value)
+            reason = (f"duplicate key {key} in [{_base_name(current)}] (first on line {first}"
+                      + (", same value)" if same else f", value {body[key]!r}); the last value is used, as "
+                         "MFeval's and Chrono's readers do"))
+            if strict:
+                raise fail(DuplicateKeyError, reason + " (strict reading)", lineno, line)
+            warnings.warn(TirWarning(f"{source}, line {lineno}: {reason}: {line!r}"), stacklevel=3)
         body[key] = value
         where[(current, key)] = (lineno, line)
         if comment:
@@ -735,10 +816,22 @@ def parse_tir(text: str, path: Any = None, strict: bool = False) -> TirParameter
 
     if not found_data:
         raise EmptyFileError("empty file: no section and no parameter", source, max(len(lines), 1), "")
+    if tolerated:
+        _warn_tolerated(source, tolerated)
 
     _convert_units(params, where, section_line, source, strict)
-    _check_fittyp(params, where, section_line, source, lines)
+    _check_fittyp(params, where, section_line, source, lines, strict)
     return params
+
+
+def _warn_tolerated(source: str, tolerated: list[tuple[int, str, str, str, str | None]]) -> None:
+    """One :class:`TirWarning` for every blank or non-numeric value of a file (each with its line)."""
+    items = [f"line {n}: {reason}: {line!r}" for n, reason, line, _, _ in tolerated]
+    keys = ", ".join(dict.fromkeys(k for *_, k, _ in tolerated))
+    used = [f"{k} ({d})" for *_, k, d in tolerated if d is not None]
+    text = (f"{source}: {len(items)} value(s) treated as absent ({keys}): " + "; ".join(items)
+            + (f"; the evaluator uses the defaults of {', '.join(used)}" if used else ""))
+    warnings.warn(TirWarning(text), stacklevel=4)
 
 
 def _convert_units(params: TirParameters, where: dict, section_line: dict, source: str, strict: bool = False) -> None:
@@ -774,11 +867,12 @@ def _convert_units(params: TirParameters, where: dict, section_line: dict, sourc
                 if not _is_number(value):
                     continue
                 p = BY_KEY.get(key)
-                if p is None:
+                unit = p.unit if p is not None else OTHER_UNITS.get(key)
+                if unit is None:
                     unconverted.append(key)
                     continue
                 factor = Fraction(1)
-                for quantity, power in UNIT_DIMENSIONS.get(p.unit, {}).items():
+                for quantity, power in UNIT_DIMENSIONS.get(unit, {}).items():
                     factor *= factors[quantity] ** power
                 if factor != 1:
                     body[key] = _scale(value, factor)
@@ -798,29 +892,70 @@ def _convert_units(params: TirParameters, where: dict, section_line: dict, sourc
             units[quantity] = _SI_NAMES[quantity]
 
 
-def _check_fittyp(params: TirParameters, where: dict, section_line: dict, source: str, lines: list) -> None:
+def _fittyp_hint(value: Any) -> str:
+    """A hint for a FITTYP that is not one of :data:`FITTYP_MODELS`."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return ""
+    if v in (52.0, 5.2, 520.0, 512.0):
+        return "; an MF 5.2 file has FITTYP = 6 (or 21)"
+    if v in (6.1, 6.2, 610.0, 620.0, 612.0):
+        return f"; did you mean {61 if v in (6.1, 610.0, 612.0) else 62}?"
+    if v in (5.0, 50.0, 500.0):
+        return "; an MF-Tyre 5.0 file has FITTYP = 5"
+    return ""
+
+
+def _check_fittyp(params: TirParameters, where: dict, section_line: dict, source: str, lines: list,
+                  strict: bool = False) -> None:
+    """The file must say which model it holds: a supported ``FITTYP`` or a ``PROPERTY_FILE_FORMAT``
+    naming one (:data:`FORMAT_MODELS`); no version is invented.  ``FITTYP`` decides when both are
+    given; a ``PROPERTY_FILE_FORMAT`` naming another equation set is a :class:`TirWarning`."""
+    fmt = params.get("PROPERTY_FILE_FORMAT")
+    token = format_token(fmt)
     located = [(s, k) for (s, k) in where if k == "FITTYP"]
     if located:
         loc = ("MODEL", "FITTYP") if ("MODEL", "FITTYP") in where else located[0]
         lineno, line = where[loc]
         value = params.sections[loc[0]]["FITTYP"]  # type: ignore[index]
-        ok = (isinstance(value, int) and value in FITTYP_MODELS) or (
-            isinstance(value, float) and value.is_integer() and int(value) in FITTYP_MODELS
-        )
-        if not ok:
-            supported = ", ".join(str(k) for k in FITTYP_MODELS)
-            raise UnknownFittypError(f"unsupported FITTYP (supported: {supported})", source, lineno, line)
+        fittyp = _fittyp_number(value)
+        if fittyp is None:
+            supported = "5 (MF-Tyre 5.0), 6 and 21 (MF 5.2), 61 (MF 6.1), 62 (MF 6.2)"
+            raise UnknownFittypError(f"unsupported FITTYP {value!r} (supported: {supported}){_fittyp_hint(value)}",
+                                     source, lineno, line)
+        named = FORMAT_MODELS.get(token) or OTHER_MODELS.get(token)
+        model = FITTYP_MODELS[fittyp]
+        same = {named, model} <= {"PAC2002", "MF-Tyre 5.0"} or named == model  # one equation set (docs)
+        if named is not None and not same:
+            fline = next((where[k] for k in where if k[1] == "PROPERTY_FILE_FORMAT"), (lineno, line))
+            reason = (f"PROPERTY_FILE_FORMAT = {fmt!r} names {named}, but FITTYP = {fittyp} ({model}) "
+                      f"decides: the file is evaluated as {model}")
+            if strict:
+                raise FittypError(reason + " (strict reading)", source, fline[0], fline[1])
+            warnings.warn(TirWarning(f"{source}, line {fline[0]}: {reason}"), stacklevel=4)
         return
-    fmt = params.get("PROPERTY_FILE_FORMAT")
-    if isinstance(fmt, str) and fmt.strip().upper() in _FORMATS_WITHOUT_FITTYP:
+    if token in FORMAT_MODELS:
         return
     if "MODEL" in section_line:
         lineno, line = section_line["MODEL"]
     else:
         lineno = next((i for i, t in enumerate(lines, 1) if t.strip()), 1)
         line = lines[lineno - 1].strip() if lines else ""
-    raise MissingFittypError("no FITTYP in [MODEL] (and no PROPERTY_FILE_FORMAT = 'PAC2002' or 'MF_05')",
-                             source, lineno, line)
+    floc = next((where[k] for k in where if k[1] == "PROPERTY_FILE_FORMAT"), None)
+    if token in OTHER_MODELS:
+        raise UnsupportedFormatError(
+            f"PROPERTY_FILE_FORMAT = {fmt!r} is the {OTHER_MODELS[token]} tyre model, not a Magic Formula file "
+            "mftire evaluates (MF 5.2, PAC2002, MF-Tyre 5.0, MF 6.1, MF 6.2)", source, *(floc or (lineno, line)))
+    if fmt is not None and token not in GENERIC_FORMATS:
+        lineno, line = floc or (lineno, line)
+        raise MissingFittypError(
+            f"no FITTYP, and PROPERTY_FILE_FORMAT = {fmt!r} is not a format mftire knows (known without FITTYP: "
+            "'PAC2002', 'MF_05', 'MF_52', 'MF_61', 'MF_62')", source, lineno, line)
+    said = f"PROPERTY_FILE_FORMAT = {fmt!r} does not name the version" if fmt is not None else "no PROPERTY_FILE_FORMAT"
+    raise MissingFittypError(
+        f"no FITTYP in [MODEL] and {said}: add FITTYP = 61 (MF 6.1), 62 (MF 6.2) or 6 (MF 5.2), or "
+        "PROPERTY_FILE_FORMAT = 'PAC2002' / 'MF_05'", source, lineno, line)
 
 
 def read_tir(path: str | os.PathLike[str], strict: bool = False) -> TirParameters:
@@ -937,6 +1072,7 @@ def format_tir(params: TirParameters | Mapping[str, Any]) -> str:
                 out.append("{" + " ".join(body.columns) + "}")
             for row in body.rows:
                 out.append(" ".join(_format_value(v, "table row", base) for v in row))
+            out.extend(params.blocks.get(name, []))
             continue
         for key, value in body.items():
             if not _KEY_RE.match(key) or key != key.upper():
@@ -954,6 +1090,7 @@ def format_tir(params: TirParameters | Mapping[str, Any]) -> str:
             if comment:
                 text = f"{text:<50} ${comment.strip()}"
             out.append(text)
+        out.extend(params.blocks.get(name, []))
     return "\n".join(out) + "\n"
 
 

@@ -26,8 +26,9 @@ CONTACT_PATCH, TURNSLIP_...)
 ============================  ===========  ==========================================
 
 A missing *required* section is an error; a missing *optional* one is a warning
-that lists the keys that take default values.  ``FNOMIN`` and ``UNLOADED_RADIUS``
-are required keys, and the pure-slip core coefficients (:data:`CORE_KEYS`) of a
+that lists the keys that take default values.  ``FNOMIN`` is a required key
+(a missing ``UNLOADED_RADIUS`` is a warning: MFeval's default is used and the moments scale
+with it), and the pure-slip core coefficients (:data:`CORE_KEYS`) of a
 present coefficient section must be there too: their absence usually means a
 truncated or hand-cut file.
 
@@ -65,13 +66,36 @@ OPTIONAL_SECTIONS = ("OVERTURNING_COEFFICIENTS", "ROLLING_COEFFICIENTS", "SCALIN
 #: Further optional sections of MF 6.1 / 6.2 (pressure terms).
 OPTIONAL_SECTIONS_6X = ("OPERATING_CONDITIONS", "INFLATION_PRESSURE_RANGE")
 #: Keys a file must give (no default is a sensible guess).
-REQUIRED_KEYS = ("FNOMIN", "UNLOADED_RADIUS")
+REQUIRED_KEYS = ("FNOMIN",)
+#: Keys whose absence is a warning: MFeval's default is used, and the message says what scales with it.
+WARN_MISSING = {
+    "UNLOADED_RADIUS": "Fx and Fy do not depend on it, but Mz (trail, residual torque), Mx, My, the radii, the "
+                       "contact patch and the relaxation lengths scale with it",
+}
 #: Pure-slip core coefficients of each coefficient section (present in MF 5.2, 6.1 and 6.2).
 CORE_KEYS = {
     "LONGITUDINAL_COEFFICIENTS": ("PCX1", "PDX1", "PKX1"),
     "LATERAL_COEFFICIENTS": ("PCY1", "PDY1", "PKY1"),
     "ALIGNING_COEFFICIENTS": ("QBZ1", "QCZ1", "QDZ1"),
 }
+
+
+#: Sections of the force and moment coefficients: a blank value there is an error (the characteristic would
+#: take another tyre's value); a blank operating condition, range, dimension or stiffness takes its default.
+COEFFICIENT_SECTIONS = ("LONGITUDINAL_COEFFICIENTS", "LATERAL_COEFFICIENTS", "ALIGNING_COEFFICIENTS",
+                        "OVERTURNING_COEFFICIENTS", "ROLLING_COEFFICIENTS", "TURNSLIP_COEFFICIENTS")
+
+
+def required_keys() -> frozenset[str]:
+    """Keys without which a file cannot be evaluated: :data:`REQUIRED_KEYS` and the core coefficients
+    (:data:`CORE_KEYS`).  A blank or non-numeric value on one of them is a reading error
+    (:func:`mftire.iotools.tir.read_tir`)."""
+    return frozenset(REQUIRED_KEYS).union(*CORE_KEYS.values())
+
+
+#: Aligning-moment coefficients whose zeros make Mz vanish: trail peak (eq 4.E42), residual torque peak
+#: (eq 4.E47, MF 6.1 adds QDZ10/11) and the Fx moment arm s (eq 4.E76).
+ZERO_MZ = ("QDZ1", "QDZ2", "QDZ6", "QDZ7", "QDZ8", "QDZ9", "QDZ10", "QDZ11", "SSZ1", "SSZ2", "SSZ3", "SSZ4")
 #: Plausible ranges (SI) of the constants, for any road or rig tyre from a bicycle to an aircraft.
 PLAUSIBLE = {
     "FNOMIN": (50.0, 5e5),  # N
@@ -101,6 +125,8 @@ class CheckReport:
     warnings: list[str] = field(default_factory=list)
     #: ``{SECTION: [keys taking their default]}`` for the standard keys of the file's version.
     defaulted: dict[str, list[str]] = field(default_factory=dict)
+    #: The file's model (``TirParameters.model``), when known.
+    model: str = ""
 
     @property
     def ok(self) -> bool:
@@ -118,7 +144,9 @@ class CheckReport:
         if not self.errors and not self.warnings:
             lines.append("  all passed")
         if self.defaulted:
-            lines.append("keys taking default values:")
+            lines.append("keys taking default values:" if self.model not in ("PAC2002", "MF-Tyre 5.0") else
+                         "keys taking default values (a coefficient absent from a PAC2002 or MF_05 file is zero, "
+                         "mftire.mf.pac2002.absent_terms):")
             for sec, keys in self.defaulted.items():
                 lines.append(f"  [{sec}] {', '.join(keys)}")
         return "\n".join(lines)
@@ -173,13 +201,14 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
     else:
         flat = {str(k).upper(): v for k, v in dict(params).items()}
     fittyp = _fittyp(flat)
-    rep = CheckReport(os.fspath(source), fittyp)
+    rep = CheckReport(os.fspath(source), fittyp, model=str(getattr(params, "model", "") or ""))
     if sections is None:
         sections = bool(path) and secs is not None
 
+    model = getattr(params, "model", None) or ({61: "MF 6.1", 62: "MF 6.2"}.get(fittyp, ""))
     if sections and secs is not None:
         present = {s for s, body in secs.items() if isinstance(body, Mapping)}
-        mf6x = fittyp in (61, 62)
+        mf6x = model in ("MF 6.1", "MF 6.2")
         missing = [s for s in REQUIRED_SECTIONS if s not in present]
         order = [s for s in secs]
         if missing:
@@ -187,9 +216,12 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
             rep.errors.append(f"required section(s) {', '.join(f'[{s}]' for s in missing)} missing"
                               + (" (is the file truncated?)" if truncated else ""))
         optional = OPTIONAL_SECTIONS + (OPTIONAL_SECTIONS_6X if mf6x else ())
-        opt_missing = [s for s in optional if s not in present]
+        # a missing optional section whose keys the file gives elsewhere (e.g. one [RANGE] section) is fine
+        opt_missing = [s for s in optional if s not in present and any(
+            p.key not in flat for p in PARAMETERS if p.section == s and p.mfeval and p.unit != "str")]
         if opt_missing:
-            keys = [p.key for p in PARAMETERS if p.section in opt_missing and p.mfeval and p.unit != "str"]
+            keys = [p.key for p in PARAMETERS if p.section in opt_missing and p.mfeval and p.unit != "str"
+                    and p.key not in flat]
             shown = ", ".join(keys[:8]) + (f" and {len(keys) - 8} more" if len(keys) > 8 else "")
             rep.warnings.append(f"optional section(s) {', '.join(f'[{s}]' for s in opt_missing)} missing; "
                                 f"{len(keys)} key(s) take default values ({shown})")
@@ -205,15 +237,18 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
             home = next(p.section for p in PARAMETERS if p.key == key)
             if key not in flat and home in present:
                 rep.errors.append(f"required key {key} missing in [{home}]")
+        for key, scaled in WARN_MISSING.items():
+            home = next(p for p in PARAMETERS if p.key == key)
+            if key not in flat:
+                rep.warnings.append(f"{key} missing: MFeval's default {home.default:g} {home.unit} is used; {scaled}")
         std = {p.key: p for p in PARAMETERS if p.mfeval and p.unit != "str"}
-        pac = str(flat.get("PROPERTY_FILE_FORMAT", "")).strip().upper() == "PAC2002"
         for key, p in std.items():
-            if pac and key == "FITTYP":  # a PAC2002 file names its format instead
+            if key == "FITTYP" and flat.get("FITTYP") is None:  # the file names its format instead
                 continue
             if key not in flat and p.section in present and (mf6x or p.section not in OPTIONAL_SECTIONS_6X):
                 rep.defaulted.setdefault(p.section, []).append(key)
         for s in opt_missing:
-            keys = [p.key for p in PARAMETERS if p.section == s and p.mfeval and p.unit != "str"]
+            keys = [p.key for p in PARAMETERS if p.section == s and p.mfeval and p.unit != "str" and p.key not in flat]
             if keys:
                 rep.defaulted[s] = keys
 
@@ -252,6 +287,9 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
         rep.warnings.append(f"VERTICAL_STIFFNESS = {kz:g} N/m: the deflection, the loaded and effective rolling "
                             "radii, the contact patch and the relaxation lengths divide by it and come out "
                             "NaN or infinite")
+    if "QDZ1" in flat and all(not _number(flat.get(k)) or flat[k] == 0 for k in ZERO_MZ):
+        rep.warnings.append(f"{', '.join(k for k in ZERO_MZ if k in flat)} = 0: Mz is identically zero (the file "
+                            "has no aligning-moment characteristic)")
     for force, keys, kind, mode in (ZERO_PEAK["Fx"], ZERO_PEAK["Fy"]):
         zero = [k for k in keys if _number(flat.get(k)) and flat[k] == 0]
         if zero:
@@ -275,5 +313,6 @@ def check_tyre(tyre: Any) -> CheckReport:
     return check_parameters(tyre.parameters, source=getattr(tyre.parameters, "path", None) or tyre.name)
 
 
-__all__ = ["CORE_KEYS", "CheckReport", "OPTIONAL_SECTIONS", "OPTIONAL_SECTIONS_6X", "PLAUSIBLE", "REQUIRED_KEYS",
-           "REQUIRED_SECTIONS", "TirCheckError", "check_parameters", "check_tyre", "checked"]
+__all__ = ["COEFFICIENT_SECTIONS", "CORE_KEYS", "CheckReport", "OPTIONAL_SECTIONS", "OPTIONAL_SECTIONS_6X",
+           "PLAUSIBLE", "REQUIRED_KEYS", "REQUIRED_SECTIONS", "TirCheckError", "WARN_MISSING", "ZERO_MZ",
+           "check_parameters", "check_tyre", "checked", "required_keys"]

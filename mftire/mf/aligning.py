@@ -197,8 +197,10 @@ def mz_combined(
     # MFeval departure: Besselink 2010 A54/A55 (tan inside) instead of book 4.E77/4.E78.
     alphar_eq = np.arctan(np.sqrt(np.tan(a.alphar) ** 2 + ratio2)) * np.sign(a.alphar)  # A54
     alphat_eq = np.arctan(np.sqrt(np.tan(a.alphat) ** 2 + ratio2)) * np.sign(a.alphat)  # A55
-    # MFeval departure: A56 uses FNOMIN where book eq 4.E76 has Fz0'.
-    s = R0 * (p["SSZ1"] + p["SSZ2"] * (Fy / p["FNOMIN"]) + (p["SSZ3"] + p["SSZ4"] * b.dfz) * c.gamma) * p["LS"]  # A56
+    # MFeval departure: A56 uses FNOMIN where book eq 4.E76 has Fz0'; PAC2002 follows the book (eq 4.E76, as
+    # Chrono's ChPac02Tire: they differ when LFZO != 1, docs/pac2002.md).
+    Fz0s = b.Fz0p if is_pac2002(p) else p["FNOMIN"]
+    s = R0 * (p["SSZ1"] + p["SSZ2"] * (Fy / Fz0s) + (p["SSZ3"] + p["SSZ4"] * b.dfz) * c.gamma) * p["LS"]  # A56, 4.E76
     Mzr = a.Dr * np.cos(a.Cr * np.arctan(a.Br * alphar_eq))  # eq 4.E75
 
     if lat0 is None:

@@ -1,11 +1,14 @@
 """Model codes of the evaluator: which equation family a flat parameter dict selects.
 
-The evaluator dispatches on ``p["FITTYP"]``.  A file's own ``FITTYP`` (6, 61, 62) is
-used as it is.  A PAC2002 file has no ``FITTYP``; :class:`mftire.tyre.Tyre` marks its
-flat dict with :data:`PAC2002_CODE` instead.  That number is an internal model code of
-the evaluator (it is never written to a ``.tir`` file and never reported as the
-file's FITTYP: :attr:`mftire.tyre.Tyre.fittyp` is None and
-:attr:`mftire.tyre.Tyre.format` is ``'PAC2002'``).
+The evaluator dispatches on ``p["FITTYP"]``.  :class:`mftire.tyre.Tyre` writes there the
+model code of the file's model (:data:`MODEL_CODES`, keyed by
+:attr:`mftire.iotools.tir.TirParameters.model`): 6 for MF 5.2 (FITTYP 6 or 21, or a file
+that says ``'MF_52'``), 61 and 62 for MF 6.1 / 6.2, and :data:`PAC2002_CODE` for a
+PAC2002 file and for an MF-Tyre 5.0 file (FITTYP 5 / ``'MF_05'``, evaluated with the
+PAC2002 equations: ``docs/pac2002.md``).  These numbers are internal model codes of the
+evaluator: they are never written to a ``.tir`` file and never reported as the file's
+FITTYP (:attr:`mftire.tyre.Tyre.fittyp` is the file's own, None when it has none, and
+:attr:`mftire.tyre.Tyre.format` names what the file says).
 
 PAC2002 shares the MF 5.2 (FITTYP 6) code paths; :mod:`mftire.mf.pac2002` holds its
 differences (see ``docs/pac2002.md``).
@@ -28,3 +31,13 @@ def is_mf52(p: dict) -> bool:
 def is_pac2002(p: dict) -> bool:
     """True for a PAC2002 parameter set (model code :data:`PAC2002_CODE`)."""
     return p.get("FITTYP") == PAC2002_CODE
+
+
+#: Model (:attr:`mftire.iotools.tir.TirParameters.model`) -> model code of the evaluator.
+MODEL_CODES: dict[str, float] = {
+    "MF 5.2": 6.0,
+    "MF 6.1": 61.0,
+    "MF 6.2": 62.0,
+    "PAC2002": PAC2002_CODE,
+    "MF-Tyre 5.0": PAC2002_CODE,  # MF_05: the PAC2002 equations (docs/pac2002.md, "MF_05")
+}

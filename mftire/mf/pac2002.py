@@ -27,12 +27,18 @@ combined-slip Mz       F'y = Fy - SVyk with the same SVyk as Fy (eq 4.E74);
                        the trail is not multiplied by LFZO (eq 4.E73)
 pressure keys          ``[TIRE_CONDITIONS]`` IP / IP_NOM and QPZ1, QPZ2, QPX1
                        of newer PAC2002 files are the MF 6.1 INFLPRES /
-                       NOMPRES, PPZ1, PPZ2, PPMX1 (:func:`prepare`)
+                       NOMPRES, PPZ1, PPZ2, PPMX1 (:func:`prepare`); LKYG is
+                       MF 5.2's LKYC (camber terms of SHy, SVy)
+moment arm s           R0*(SSZ1 + SSZ2*Fy/Fz0' + ...) with Fz0' = LFZO*FNOMIN
+                       (eq 4.E76; MF 5.2 as MFeval uses FNOMIN), in
+                       :func:`mftire.mf.aligning.mz_combined`
 terms absent in 2006   PKY4 = 2 (the fixed "2" of eq 4.E25), and PKY5, PEY5,
                        RBX3, RBY4, QDZ10, QDZ11, QSX12-QSX14 = 0; the MF 6.2
                        vertical terms (Q_CAM*, Q_FYS*, Q_FCY2) = 0, so the
                        loaded radius is the closed-form root of the MF 6.1
                        equation (solver.py) instead of an iteration
+absent coefficients    zero (the term is off), not MFeval's defaults
+                       (:func:`absent_terms`)
 QSY5..QSY8             not in the published PAC2002/MF 5.2 rolling-resistance
                        equation (eq 4.E70); nonzero values are ignored with a
                        warning
@@ -48,6 +54,8 @@ See ``docs/pac2002.md`` for the full difference table.
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -57,8 +65,9 @@ from mftire.mf.family import PAC2002_CODE
 from mftire.mf.inputs import Conditions
 from mftire.mf.lateral import PureLateral
 from mftire.mf.modes import Mode
+from mftire.parameters import PARAMETERS
 
-__all__ = ["PAC2002_CODE", "PAC2002Warning", "camber_folding", "mz0", "prepare", "warn_unused"]
+__all__ = ["PAC2002_CODE", "PAC2002Warning", "absent_terms", "camber_folding", "mz0", "prepare", "warn_unused"]
 
 
 class PAC2002Warning(UserWarning):
@@ -117,7 +126,34 @@ _ABSENT = {
 #: PAC2002 pressure keys -> the MF 6.1 keys of the shared equations.
 _PRESSURE = {"IP": "INFLPRES", "IP_NOM": "NOMPRES", "QPZ1": "PPZ1", "QPZ2": "PPZ2", "QPX1": "PPMX1"}
 
+#: PAC2002 names of MF 5.2 scaling factors: LKYG (camber stiffness, on the PHY3 and PVY3/PVY4 camber
+#: terms of eqs 4.E27, 4.E29, as Chrono's ChPac02Tire applies it) is MF 5.2's LKYC.
+_RENAMED = {"LKYG": "LKYC"}
+
 _UNUSED_ROLLING = ("QSY5", "QSY6", "QSY7", "QSY8")
+
+#: Coefficient sections whose absent keys are neutral (zero) in a PAC2002 or MF_05 file: the term is not
+#: in the file's model version (an MF_05 file has no PDX3, REX1/2, REY1/2, RHY2, QBZ10, QSX4-11, QSY3-8;
+#: the Sedan PAC2002 file of Chrono has no combined-slip coefficients), as Chrono's ChPac02Tire reads it.
+#: MFeval's defaults (mftire.parameters, nonzero for e.g. RBX1, RCX1, QSY3, the turn-slip PDXP1) are the
+#: values of another tyre; they stay the defaults of MF 5.2 / 6.x files, which MFeval evaluates.
+_COEFFICIENT_SECTIONS = ("LONGITUDINAL_COEFFICIENTS", "LATERAL_COEFFICIENTS", "ALIGNING_COEFFICIENTS",
+                         "OVERTURNING_COEFFICIENTS", "ROLLING_COEFFICIENTS", "TURNSLIP_COEFFICIENTS")
+#: Divisors, for which zero is not neutral: an absent one keeps its default.
+_DIVISORS = ("PKY2", "PTY2")
+
+
+def absent_terms(file_values: Mapping[str, Any]) -> dict[str, float]:
+    """Zero for every coefficient the file lacks whose default is not zero (see :data:`_COEFFICIENT_SECTIONS`).
+
+    ``file_values`` are the file's own values (``TirParameters.flat()``).
+    """
+    return {
+        p.key: 0.0
+        for p in PARAMETERS
+        if p.section in _COEFFICIENT_SECTIONS and p.unit != "str" and p.default != 0
+        and p.key not in file_values and p.key not in _DIVISORS
+    }
 
 
 def camber_folding(p: dict) -> dict[str, float]:
@@ -150,7 +186,7 @@ def prepare(p: dict) -> dict:
     for key in _CAMBER_FOLD:
         q[key] = 1.0
     q.update(_ABSENT)
-    for pac_key, mf_key in _PRESSURE.items():
+    for pac_key, mf_key in (_PRESSURE | _RENAMED).items():
         if pac_key in p:
             q[mf_key] = float(p[pac_key])
     q["FITTYP"] = PAC2002_CODE

@@ -61,14 +61,10 @@ class UnsupportedModelError(MftireError):
 def unsupported_message(fittyp) -> str:
     """Why parameters with this ``FITTYP`` (None or 0: absent) are not evaluated."""
     shown = int(fittyp) if isinstance(fittyp, float) and fittyp.is_integer() else fittyp
-    evaluated = "mftire evaluates MF 6.1 (FITTYP 61), MF 6.2 (62), MF 5.2 (6) and PAC2002 property files"
+    evaluated = ("mftire evaluates MF 6.1 (FITTYP 61), MF 6.2 (62), MF 5.2 (6, 21), MF-Tyre 5.0 (5) and PAC2002 "
+                 "property files")
     if shown in (None, 0):
-        return f"the parameters have no FITTYP (and are not a PAC2002 file): {evaluated}."
-    if shown == 5:
-        return (
-            f"FITTYP 5 is not evaluated: MF_05 / MF-Tyre 5.0 files can be read and written, but the MF-Tyre 5.0 "
-            f"equations are not public in a form that can be verified; {evaluated}."
-        )
+        return f"the parameters have no FITTYP and their PROPERTY_FILE_FORMAT names no known model: {evaluated}."
     return f"FITTYP {shown} is not evaluated: {evaluated}."
 
 

@@ -34,5 +34,6 @@ def evaluator_keys() -> frozenset[str]:
         keys.add(factor)
         keys.update(k for k, _ in coefficients)
     keys.update(pac2002._PRESSURE)
+    keys.update(pac2002._RENAMED)
     keys.update(pac2002._UNUSED_ROLLING)
     return frozenset(keys)

@@ -771,8 +771,10 @@ MF_FN void mz_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b,
     /* MFeval departure: Besselink 2010 A54/A55 (tan inside) instead of book 4.E77/4.E78. */
     alphar_eq = atan(sqrt(sq(tan(a->alphar)) + ratio2)) * sgn(a->alphar); /* A54 */
     alphat_eq = atan(sqrt(sq(tan(a->alphat)) + ratio2)) * sgn(a->alphat); /* A55 */
-    /* MFeval departure: A56 uses FNOMIN where book eq 4.E76 has Fz0'. */
-    s = R0 * (p->SSZ1 + p->SSZ2 * (Fy / p->FNOMIN) + (p->SSZ3 + p->SSZ4 * b->dfz) * c->gamma) * p->LS; /* A56 */
+    /* MFeval departure: A56 uses FNOMIN where book eq 4.E76 has Fz0'.  PAC2002 branch (issue 16, wildtir2):
+       PAC2002 follows the book, s with Fz0' = LFZO*FNOMIN (mftire.mf.aligning.mz_combined). */
+    s = R0 * (p->SSZ1 + p->SSZ2 * (Fy / (is_pac2002(p) ? p->LFZO * p->FNOMIN : p->FNOMIN)) +
+              (p->SSZ3 + p->SSZ4 * b->dfz) * c->gamma) * p->LS; /* A56, 4.E76 */
     Mzr = residual(a->Dr, a->Cr, atan(a->Br * alphar_eq), 1.0); /* eq 4.E75 */
 
     /* Fy at zero camber (and zero spin weighting) for the trail term, eq 4.E74; the pure
