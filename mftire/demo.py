@@ -51,16 +51,26 @@ def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progre
              executor: Executor | None = None) -> dict:
     """Run the demo; returns a summary dict (also in ``output/report.json``).
 
-    ``executor`` runs the FE campaign chunks and the bootstrap refits (default: in this process;
-    see :mod:`mftire.parallel`); the results do not depend on it.
+    ``executor`` runs the FE campaign chunks, the bootstrap refits and the rig stage (default: in
+    this process, one step after the other; see :mod:`mftire.parallel`).  With workers, the
+    independent stages overlap: the rig stage starts at once and the bootstrap refits as soon as
+    the fit is done, while this process diagnoses; the results do not depend on it.
     Warnings of the steps are silenced inside the run only (global filters are restored).
     """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return _run_demo(output, quick, progress, executor)
+        with (executor or Executor()).session() as ex:
+            return _run_demo(output, quick, progress, ex)
 
 
-def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: Executor | None) -> dict:
+def _rig_task(args: tuple[str, bool]) -> RigStage:
+    """:func:`rig_stage` as a task for the executor (warnings silenced in the worker too)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return rig_stage(*args)
+
+
+def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: Executor) -> dict:
     from mftire.compare.core import compare
     from mftire.diagnosis.diagnose import diagnose
     from mftire.diagnosis.report import write_report
@@ -68,7 +78,7 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
     from mftire.fe.programmes import programme
     from mftire.fe.sweeps import campaign
     from mftire.fe.template import mf_template
-    from mftire.fitting.bands import bootstrap_bands, coverage_table
+    from mftire.fitting.bands import coverage_table, start_bootstrap_bands
     from mftire.fitting.core import fit_tir
     from mftire.report_html import HtmlReport
     from mftire.tyre import Tyre
@@ -80,6 +90,9 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
     step("FE-surrogate campaign of the default tyre" + (" (quick grid)" if quick else ""))
     fe_tyre = load_tyre(None)
     fe, free = campaign(fe_tyre, quick=quick, progress=False, executor=executor)
+    # the rig stage needs nothing of the others: with workers it runs from now on, alongside them
+    # (after the FE campaign, which keeps every worker busy)
+    rig_pending = executor.start_map(_rig_task, [(out, quick)])
     fe = fe.assign(source="fe")
     with atomic_path(os.path.join(out, "fe_sweeps.csv")) as tmp:
         fe.to_csv(tmp, index=False)
@@ -96,6 +109,9 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
     fit = fit_tir(both, template, weights="fe=1,measured=4", progress=False)
     write_tir(fit.parameters, os.path.join(out, "fitted.tir"))
     fitted = Tyre(fit.parameters, name="MF 6.1 fit")
+    # the bootstrap refits need only the fit: with workers they run while this process diagnoses
+    bands_pending = start_bootstrap_bands(None, template, n=4 if quick else 12, fit=fit, stages="1,2,3", seed=0,
+                                          executor=executor)  # fmt: skip
 
     step("diagnosis of the measured residual")
     diag = diagnose(meas, fitted, progress=False, n_perm=49 if quick else 99)
@@ -118,8 +134,7 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
 
     step("bootstrap bands over sweeps")
     heldout_rows = diag.data is not None and diag.train is not None
-    bands = bootstrap_bands(None, template, n=4 if quick else 12, fit=fit, stages="1,2,3", seed=0,
-                            executor=executor)
+    bands = bands_pending.result()
     coverage = None
     if heldout_rows:
         held = diag.data[~diag.train]
@@ -132,10 +147,10 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
     comp = compare(models, both, bands=bands)
     fig_dir = os.path.join(out, "figures")
     os.makedirs(fig_dir, exist_ok=True)
-    plots = comp.plots(fig_dir)
+    plots = comp.plots(fig_dir, executor=executor)
 
     step("third source: the simulated raw rig run imported, fitted, diagnosed" + (" (quick)" if quick else ""))
-    rig = rig_stage(out, quick=quick)
+    rig = rig_pending.result()[0]
 
     step("HTML report")
     rep = HtmlReport("mftire demo: MF 6.1 from FE and measured sweeps, closed loop",

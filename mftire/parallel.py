@@ -11,6 +11,12 @@ the chunks of an FE campaign (:func:`mftire.fe.sweeps.run_sweeps`) and ``mftire 
   (``--scheduler ADDRESS``; the optional extra ``pip install 'mftire[dask]'``). The workers need
   mftire installed. No scheduler of our own: Dask does the scheduling, retries and data transfer.
 
+**Sessions.** ``with executor.session() as ex:`` keeps the workers (a process pool, or a Dask
+client) up for several batches, and ``ex.start_map(fn, items)`` starts a batch without waiting for
+it, so that independent stages of a job overlap (``mftire demo`` runs the rig stage and the
+bootstrap refits while this process fits and diagnoses).  Outside a session, or with ``jobs=1``,
+``start_map`` defers the batch to the moment its results are asked for: the serial order.
+
 **Determinism.** A task is a pure function of its argument: random draws are made before the tasks
 are submitted (or from a seed the task carries), and results come back in submission order, so the
 result is bit for bit the serial one whatever the executor, the number of workers or the order in
@@ -22,12 +28,13 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import Any, Generic, TypeVar
 
 from mftire.errors import MftireInputError
 
-__all__ = ["Executor", "available_cores", "add_parallel_options"]
+__all__ = ["Executor", "Pending", "available_cores", "add_parallel_options"]
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -81,6 +88,10 @@ class Executor:
         instance with ``__call__``) unless the tasks run in this process.
         """
         items = list(items)
+        pool = getattr(self, "_pool", None)
+        if pool is not None:  # a session: the workers are up already
+            yield from _collect(_submit_all(pool, fn, items))
+            return
         if self.scheduler:
             yield from _dask_imap(str(self.scheduler), fn, items)
             return
@@ -94,6 +105,46 @@ class Executor:
         with ProcessPoolExecutor(max_workers=n) as pool:
             yield from pool.map(fn, items)
 
+    def start_map(self, fn: Callable[[T], R], items: Iterable[T]) -> Pending[R]:
+        """Start ``fn`` on each item now and return at once; :meth:`Pending.result` gives the results
+        in the order of ``items``.  In a :meth:`session` with workers the tasks are sent to them
+        straight away; otherwise they run when the results are first asked for (as :meth:`map`)."""
+        items = list(items)
+        pool = getattr(self, "_pool", None)
+        if pool is None:
+            return Pending(lambda: self.imap(fn, items))
+        futures = _submit_all(pool, fn, items)
+        return Pending(lambda: _collect(futures), futures)
+
+    @contextmanager
+    def session(self) -> Iterator[Executor]:
+        """This executor with its workers kept up until the ``with`` block ends.
+
+        Inside, :meth:`imap`/:meth:`map` reuse the same worker processes (or Dask client) for every
+        batch and :meth:`start_map` sends tasks without waiting for them.  With one worker and no
+        scheduler the session is this executor itself (everything runs in this process, in order).
+        Tasks still running when the block ends are waited for; tasks not started are cancelled.
+        """
+        if not self.scheduler and self.workers <= 1:
+            yield self
+            return
+        if self.scheduler:
+            pool: Any = _dask_client(str(self.scheduler))
+        else:
+            from concurrent.futures import ProcessPoolExecutor
+
+            pool = ProcessPoolExecutor(max_workers=self.workers)
+        ex = Executor(jobs=self.jobs, scheduler=self.scheduler)
+        object.__setattr__(ex, "_pool", pool)  # frozen: the open pool is not a field (not compared, not in repr)
+        try:
+            yield ex
+        finally:
+            object.__setattr__(ex, "_pool", None)
+            if self.scheduler:
+                pool.close()
+            else:
+                pool.shutdown(wait=True, cancel_futures=True)
+
     def map(self, fn: Callable[[T], R], items: Iterable[T]) -> list[R]:
         """``list(self.imap(fn, items))``: all results, in the order of ``items``."""
         return list(self.imap(fn, items))
@@ -104,22 +155,66 @@ class Executor:
         return cls(jobs=getattr(args, "jobs", None), scheduler=getattr(args, "scheduler", None))
 
 
-def _dask_imap(address: str, fn: Callable[[T], R], items: list[T]) -> Iterator[R]:
+class Pending(Generic[R]):
+    """Results of a batch started by :meth:`Executor.start_map`, in the order of its items."""
+
+    def __init__(self, run: Callable[[], Iterable[R]], futures: list | None = None) -> None:
+        self._run, self._futures, self._results = run, futures, None
+
+    def __iter__(self) -> Iterator[R]:
+        """The results one by one, each as soon as it (and every one before it) is ready."""
+        if self._results is not None:
+            yield from self._results
+            return
+        results = []
+        for r in self._run():
+            results.append(r)
+            yield r
+        self._results = results
+
+    def result(self) -> list[R]:
+        """All results (waits for them)."""
+        if self._results is None:
+            for _ in self:
+                pass
+        return list(self._results or [])
+
+    def cancel(self) -> None:
+        """Cancel the tasks not started yet (results are then not available)."""
+        for f in self._futures or ():
+            f.cancel()
+
+
+def _submit_all(pool: Any, fn: Callable[[T], R], items: list[T]) -> list:
+    """Futures of ``fn`` on each item: a process pool or a Dask client."""
+    if hasattr(pool, "gather"):  # a Dask client; pure=False: no hashing of large arguments
+        return list(pool.map(fn, items, pure=False)) if items else []
+    return [pool.submit(fn, x) for x in items]
+
+
+def _collect(futures: list) -> Iterator:
+    try:
+        for fut in futures:
+            yield fut.result()
+    finally:
+        for fut in futures:
+            fut.cancel()
+
+
+def _dask_client(address: str) -> Any:
     try:
         from distributed import Client
     except ImportError as exc:
         raise MftireInputError("--scheduler needs Dask distributed: pip install 'mftire[dask]'") from exc
     try:  # set_as_default=False: connecting must not change the caller's global Dask configuration
-        client = Client(address, set_as_default=False, timeout="20s")
+        return Client(address, set_as_default=False, timeout="20s")
     except (OSError, ValueError) as exc:
         raise MftireInputError(f"cannot use the Dask scheduler at {address!r}: {exc}") from exc
-    with client:
-        futures = client.map(fn, items, pure=False)  # pure=False: no hashing of large arguments
-        try:
-            for fut in futures:
-                yield fut.result()
-        finally:
-            client.cancel(futures)
+
+
+def _dask_imap(address: str, fn: Callable[[T], R], items: list[T]) -> Iterator[R]:
+    with _dask_client(address) as client:
+        yield from _collect(_submit_all(client, fn, items))
 
 
 def add_parallel_options(parser: Any, what: str) -> None:

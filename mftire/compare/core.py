@@ -25,6 +25,7 @@ from mftire.compare.tables import (
 )
 from mftire.iotools.atomic import atomic_path, write_text_atomic
 from mftire.iotools.jsonutil import jsonable
+from mftire.parallel import Executor
 from mftire.tyre import Tyre
 
 __all__ = ["Comparison", "compare", "write_comparison", "bands_frame"]
@@ -80,20 +81,36 @@ class Comparison:
         t.insert(0, "rows", d.groupby(["source", "origin"]).size())
         return t.reset_index()
 
-    def plots(self, directory: str | os.PathLike, dpi: int = 90) -> list[str]:
-        """Write the PNGs: one per family, stiffness, trail, free rolling. Returns their paths."""
+    def plots(self, directory: str | os.PathLike, dpi: int = 90, executor: Executor | None = None) -> list[str]:
+        """Write the PNGs: one per family, stiffness, trail, free rolling. Returns their paths.
+
+        ``executor`` draws the figures (each one a task; default: in this process, one after the
+        other); the files do not depend on it."""
         directory = os.fspath(directory)
         os.makedirs(directory, exist_ok=True)
-        out = []
-        for fam in FAMILIES:
-            p = plot_family(fam, self.data, self.grid, self.grid_predictions, os.path.join(directory, f"{fam}.png"),
-                            bands=self.bands, dpi=dpi)
-            out.append(p)
-        out.append(plot_stiffness(self.stiffness, os.path.join(directory, "stiffness.png"), dpi=dpi))
-        out.append(plot_trail(self.trail, self.grid, self.grid_predictions, os.path.join(directory, "trail.png"),
-                              dpi=dpi))
-        out.append(plot_free_rolling(self.free_rolling, os.path.join(directory, "free_rolling.png"), dpi=dpi))
+        jobs = [_Plot(plot_family, (fam, self.data, self.grid, self.grid_predictions,
+                                    os.path.join(directory, f"{fam}.png")), {"bands": self.bands, "dpi": dpi})
+                for fam in FAMILIES]  # fmt: skip
+        jobs.append(_Plot(plot_stiffness, (self.stiffness, os.path.join(directory, "stiffness.png")), {"dpi": dpi}))
+        jobs.append(_Plot(plot_trail, (self.trail, self.grid, self.grid_predictions,
+                                       os.path.join(directory, "trail.png")), {"dpi": dpi}))  # fmt: skip
+        jobs.append(_Plot(plot_free_rolling, (self.free_rolling, os.path.join(directory, "free_rolling.png")),
+                          {"dpi": dpi}))  # fmt: skip
+        out = (executor or Executor()).map(_run_plot, jobs)
         return [p for p in out if p]
+
+
+@dataclass(frozen=True)
+class _Plot:
+    """One figure of :meth:`Comparison.plots`: ``fn(*args, **kwargs)`` (a picklable task)."""
+
+    fn: Any
+    args: tuple
+    kwargs: dict
+
+
+def _run_plot(job: _Plot) -> str | None:
+    return job.fn(*job.args, **job.kwargs)
 
 
 def bands_frame(bands, grid: pd.DataFrame) -> pd.DataFrame | None:

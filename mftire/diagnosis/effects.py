@@ -40,6 +40,7 @@ from mftire.mf.extensions import (
     parse_section,
 )
 from mftire.mf.modes import Mode
+from mftire.mf.solver import Channels
 from mftire.tyre import Tyre
 
 
@@ -230,11 +231,21 @@ class _Problem:
     scale: dict[str, float]
     variables: dict[str, np.ndarray]
     weights: np.ndarray
+    #: the arrays of :meth:`targets`, made once (``df`` and ``weights`` are not changed in place)
+    _targets: tuple | None = field(default=None, init=False, repr=False, compare=False)
 
     @property
     def masks(self) -> dict[str, np.ndarray]:
         """Rows where each channel is used (:func:`primary_rows`)."""
-        return {c: primary_rows(self.df, c) for c in self.channels}
+        return self.targets()[1]
+
+    def targets(self) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], np.ndarray]:
+        """``(measured values, masks, sqrt(weights))`` of the channels, computed on first use: a fit
+        calls :func:`_residuals` thousands of times on the same rows."""
+        if self._targets is None:
+            self._targets = ({c: self.df[c].to_numpy(float) for c in self.channels},
+                             {c: primary_rows(self.df, c) for c in self.channels}, np.sqrt(self.weights))
+        return self._targets
 
 
 def make_problem(tyre: Tyre, df: pd.DataFrame, channels: Sequence[str], weights: np.ndarray | None = None) -> _Problem:
@@ -317,14 +328,17 @@ def _model(prob: _Problem, ext: ExtensionSet, variables: Mapping[str, np.ndarray
 
 def _residuals(prob: _Problem, model: Model, q: Mapping[str, float]) -> np.ndarray:
     """Weighted, peak-scaled residuals of the measured channels for parameters ``q``."""
-    d = prob.df
     with np.errstate(all="ignore"):
         out = model.channels(q, prob.channels)
+    return _residual_vector(prob, out)
+
+
+def _residual_vector(prob: _Problem, out: Channels) -> np.ndarray:
     parts = []
-    sw = np.sqrt(prob.weights)
+    y, masks, sw = prob.targets()
     for c in prob.channels:
-        r = (d[c].to_numpy(float) - np.real(getattr(out, c))) / prob.scale[c]
-        use = prob.masks[c] & np.isfinite(r)
+        r = (y[c] - np.real(getattr(out, c))) / prob.scale[c]
+        use = masks[c] & np.isfinite(r)
         parts.append(np.where(use, r, 0.0) * sw)
     return np.concatenate(parts)
 
@@ -443,10 +457,11 @@ def fit_effect(
                 section[k] = float(val)
         return standard, section
 
-    def fun(x):
-        q = {**base_q, **dict(zip(refit, x[len(keys):], strict=True)), **dict(zip(keys, x[: len(keys)],
-                                                                                   strict=True))}  # fmt: skip
-        return _residuals(prob, model, q)
+    def q_of(x):
+        return {**base_q, **dict(zip(refit, x[len(keys):], strict=True)), **dict(zip(keys, x[: len(keys)],
+                                                                                      strict=True))}  # fmt: skip
+
+    fun = _EffectResiduals(prob, model, q_of, [*keys, *refit])
 
     messages = []
     if not len(start):
@@ -472,6 +487,52 @@ def fit_effect(
     if term is not None:
         fit.messages.append(f"term: {term.describe()}")
     return fit
+
+
+#: The :class:`~mftire.mf.solver.Channels` terms that a change of one main coefficient (:data:`REFIT_KEYS`)
+#: makes stale, in mode :data:`MODE` (combined slip, no turn slip).  An Fx coefficient changes Fx0, Kxk and Fx
+#: (eqs 4.E9-4.E18, 4.E50) and through them Mz (s·Fx and Kxk in eqs 4.E74-4.E78); an Fy coefficient changes
+#: Fy0, Kya, Gyk-weighted Fy and the zero-camber Fy0 of the trail (eqs 4.E19-4.E30, 4.E58, 4.E74) and
+#: through them Mz; an Mz coefficient (QDZ, QEZ: eqs 4.E40-4.E47) changes Mz alone.  Neither force reads the
+#: other's coefficients (eqs 4.E50-4.E67), and the basic quantities (eqs 4.E1-4.E8) read none of them.
+_STALE = {
+    "Fx": ("Fx0", "mux", "Kxk", "Fx", "Mz", "t", "Mzr", "Mx", "My"),
+    "Fy": ("lat", "Fy", "Gyk", "lat0", "Mz", "t", "Mzr", "Mx", "My"),
+    "Mz": ("Mz", "t", "Mzr"),
+}
+_GROUP_OF = {k: ch for ch, ks in REFIT_KEYS.items() for k in ks}
+
+
+class _EffectResiduals:
+    """``fun(x)`` of an effect fit: :func:`_residuals` at the parameters ``q_of(x)`` (names ``names``).
+
+    Speed only, the same numbers: the evaluation at a new point is kept as the base; at a point that
+    differs from the base in one coefficient alone (a finite-difference column of the Jacobian), the
+    channels that a main coefficient does not change (:data:`_STALE`) are taken from the base instead of
+    being recomputed.
+    """
+
+    def __init__(self, prob: _Problem, model: Model, q_of, names: Sequence[str]) -> None:
+        self.prob, self.model, self.q_of = prob, model, q_of
+        # the turn-slip spin (mode x2x) would make the conditions depend on the parameters
+        self.group = [None if model.pre.mode.turn_slip else _GROUP_OF.get(k) for k in names]
+        self.last_x: np.ndarray | None = None  # bits of x at the last full evaluation
+        self.last: Channels | None = None
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        x = np.asarray(x, dtype=float)
+        q = self.q_of(x)
+        bits = np.ascontiguousarray(x).view(np.int64).copy()
+        diff = np.flatnonzero(bits != self.last_x) if self.last is not None else None
+        with np.errstate(all="ignore"):
+            if diff is not None and diff.size == 1 and self.group[diff[0]] is not None:
+                stale = dict.fromkeys(_STALE[self.group[diff[0]]])
+                out = self.model.channels(q, self.prob.channels, dataclasses.replace(self.last, **stale))
+            else:
+                out = self.model.channels(q, self.prob.channels)
+        if diff is None or diff.size > 1:  # a new point (not a column of the Jacobian at the base)
+            self.last_x, self.last = bits, out
+        return _residual_vector(self.prob, out)
 
 
 #: An effect must leave at most this share of the control refit's residual ...

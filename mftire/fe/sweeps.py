@@ -96,14 +96,16 @@ def solve_points(
 ) -> np.ndarray:
     """Forces (n, 5) = (Fx, Fy, Mz, Mx, My) at the points ``pts``, rows (Fz, Vx, P, omega, alpha, gamma).
 
-    The points are solved in vectorised chunks of at most ``chunk`` points, at least one chunk per
-    worker of ``executor`` (default: in this process).  A point's solution depends on that point
-    alone (the carcass and return-map iterations stop per point and per element), so the result is
-    bit for bit the same for every chunk size and executor.
+    The points are solved in vectorised chunks of at most ``chunk`` points, of equal size and a
+    multiple of the workers of ``executor`` in number (default: in this process), so that the
+    workers finish together.  A point's solution depends on that point alone (the carcass and
+    return-map iterations stop per point and per element), so the result is bit for bit the same
+    for every chunk size and executor.
     """
     n = pts.shape[1]
     workers = 1 if executor is None or executor.scheduler else executor.workers
-    size = max(1, min(chunk, -(-n // workers)))
+    n_chunks = workers * max(1, -(-n // (max(chunk, 1) * workers)))
+    size = max(1, -(-n // n_chunks))
     bounds = [(start, min(start + size, n)) for start in range(0, n, size)]
     chunks = (np.ascontiguousarray(pts[:, a:b]) for a, b in bounds)  # contiguous: the same SIMD paths everywhere
     res = np.zeros((n, 5))

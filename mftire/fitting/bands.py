@@ -58,11 +58,11 @@ from mftire.errors import MftireInputError
 from mftire.fitting.core import FitResult, fit_tir
 from mftire.iotools.jsonutil import jsonable
 from mftire.iotools.tir import TirParameters
-from mftire.parallel import Executor
+from mftire.parallel import Executor, Pending
 from mftire.tyre import Tyre
 
-__all__ = ["Bands", "bootstrap_bands", "band_coverage", "coverage_table", "resample_sweeps", "write_bands",
-           "BAND_CHANNELS"]
+__all__ = ["Bands", "bootstrap_bands", "start_bootstrap_bands", "PendingBands", "band_coverage", "coverage_table",
+           "resample_sweeps", "write_bands", "BAND_CHANNELS"]
 
 #: Channels given bands.
 BAND_CHANNELS: tuple[str, ...] = ("Fx", "Fy", "Mz", "Mx", "My")
@@ -161,7 +161,7 @@ class Bands:
         for ch in channels:
             f = base[ch]
             if mat[ch].shape[0]:
-                lo, hi = np.nanquantile(mat[ch], q, axis=0)
+                lo, hi = _column_quantiles(mat[ch], q)
             else:
                 lo = hi = f
             dlo, dhi = np.maximum(f - lo, 0.0), np.maximum(hi - f, 0.0)
@@ -195,6 +195,17 @@ class Bands:
             "coefficients": self.coefficient_table().to_dict(orient="records"),
             "replicates": [{k: float(r.get(k)) for k in self.keys} for r in self.replicates],
         }  # fmt: skip
+
+
+def _column_quantiles(mat: np.ndarray, q: tuple[float, float]) -> np.ndarray:
+    """``np.nanquantile(mat, q, axis=0)``, the same numbers: columns without NaN in one vectorised
+    call (numpy's nanquantile goes column by column in Python)."""
+    nan = np.isnan(mat).any(axis=0)
+    out = np.empty((len(q), mat.shape[1]))
+    out[:, ~nan] = np.quantile(mat[:, ~nan], q, axis=0)
+    if nan.any():
+        out[:, nan] = np.nanquantile(mat[:, nan], q, axis=0)
+    return out
 
 
 def _evaluate(tyre: Tyre, points: pd.DataFrame, mode: int, channels: Sequence[str]) -> dict[str, np.ndarray]:
@@ -329,6 +340,30 @@ def bootstrap_bands(
     -------
     Bands
     """
+    return start_bootstrap_bands(
+        data, template, n, level=level, grid=grid, fit=fit, stages=stages, weights=weights, alpha_star=alpha_star,
+        seed=seed, strata=strata, executor=executor, progress=progress).result()
+
+
+def start_bootstrap_bands(
+    data,
+    template: TirParameters | str | os.PathLike | Tyre,
+    n: int = 50,
+    *,
+    level: float = 0.95,
+    grid: pd.DataFrame | None = None,
+    fit: FitResult | None = None,
+    stages: str | Sequence | None = None,
+    weights: str | Mapping[str, float] | None = None,
+    alpha_star: bool = False,
+    seed: int | None = 0,
+    strata: Sequence[str] = ("source", "kind"),
+    executor: Executor | None = None,
+    progress: bool | Callable[[str], None] | None = None,
+) -> PendingBands:
+    """:func:`bootstrap_bands` started: the replicates are drawn and handed to ``executor`` at once
+    (in an :meth:`~mftire.parallel.Executor.session` they run while the caller goes on), and
+    :meth:`PendingBands.result` collects them into the :class:`Bands` (the same bit for bit)."""
     if not 0 < level < 1:
         raise MftireInputError(f"band level must be between 0 and 1, got {level}")
     if n < 2:
@@ -340,32 +375,54 @@ def bootstrap_bands(
         fit = fit_tir(data, template, stages=stages, weights=weights, alpha_star=alpha_star, progress=False)
     ran = sorted({s.number for s in fit.stages if s.status == "fitted"})
     rep_stages = stages if stages is not None else (",".join(str(s) for s in ran) or "all")
-    stages_txt = rep_stages if isinstance(rep_stages, str) else ",".join(str(s) for s in rep_stages)
     table = fit.data
     rng = np.random.default_rng(seed)
     samples = [resample_sweeps(table, rng, strata) for _ in range(n)]  # drawn up front: results do not
     job = _ReplicateFit(fit.parameters, rep_stages, weights, alpha_star)  # depend on the executor
-    reps: list[TirParameters] = []
-    failed = 0
-    for b, r in enumerate((executor or Executor()).imap(job, samples)):
-        failed += _collect(r, reps, b, n, say, t0)
-    keys = list(dict.fromkeys(fit.identified))
-    bands = Bands(base=fit.parameters, replicates=reps, level=level, sigma=_residual_sigma(fit, BAND_CHANNELS),
-                  mode=fit.mode + 100, keys=keys, n_requested=n, n_failed=failed, stages=stages_txt)
-    bands.notes = [
-        f"bootstrap over whole sweeps, stratified by source and sweep kind: {len(reps)} replicates "
-        f"({failed} failed), level {level:g}",
-        f"replicate fits warm-started from the full fit, stages {stages_txt}",
-        "confidence band: pointwise replicate quantiles; prediction band: adds the full fit's robust "
-        "residual scatter per channel and source in quadrature (use for held-out measured points)",
-    ]
-    if grid is None:
-        from mftire.compare.data import assign_families, curve_grid
+    pending = (executor or Executor()).start_map(job, samples)
+    return PendingBands(pending, fit, rep_stages, n, level, grid, say, t0)
 
-        grid = curve_grid(assign_families(table.assign(origin="")))
-    bands.grid = pd.concat([grid, bands.at(grid, source=None)], axis=1) if len(grid) else grid
-    bands.time = time.perf_counter() - t0
-    return bands
+
+@dataclass
+class PendingBands:
+    """Bootstrap replicates under way (:func:`start_bootstrap_bands`)."""
+
+    pending: Pending
+    fit: FitResult
+    rep_stages: str | Sequence
+    n: int
+    level: float
+    grid: pd.DataFrame | None
+    say: Callable[[str], None]
+    t0: float
+
+    def result(self) -> Bands:
+        """Wait for the replicates and build the bands."""
+        fit, n, level, say, t0 = self.fit, self.n, self.level, self.say, self.t0
+        rep_stages, grid = self.rep_stages, self.grid
+        stages_txt = rep_stages if isinstance(rep_stages, str) else ",".join(str(s) for s in rep_stages)
+        reps: list[TirParameters] = []
+        failed = 0
+        for b, r in enumerate(self.pending):
+            failed += _collect(r, reps, b, n, say, t0)
+        table = fit.data
+        keys = list(dict.fromkeys(fit.identified))
+        bands = Bands(base=fit.parameters, replicates=reps, level=level, sigma=_residual_sigma(fit, BAND_CHANNELS),
+                      mode=fit.mode + 100, keys=keys, n_requested=n, n_failed=failed, stages=stages_txt)
+        bands.notes = [
+            f"bootstrap over whole sweeps, stratified by source and sweep kind: {len(reps)} replicates "
+            f"({failed} failed), level {level:g}",
+            f"replicate fits warm-started from the full fit, stages {stages_txt}",
+            "confidence band: pointwise replicate quantiles; prediction band: adds the full fit's robust "
+            "residual scatter per channel and source in quadrature (use for held-out measured points)",
+        ]
+        if grid is None:
+            from mftire.compare.data import assign_families, curve_grid
+
+            grid = curve_grid(assign_families(table.assign(origin="")))
+        bands.grid = pd.concat([grid, bands.at(grid, source=None)], axis=1) if len(grid) else grid
+        bands.time = time.perf_counter() - t0
+        return bands
 
 
 def _heldout_table(heldout) -> pd.DataFrame:

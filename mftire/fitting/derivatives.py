@@ -32,39 +32,42 @@ __all__ = ["Var", "jacobian"]
 
 
 class Var:
-    """A value in the computation graph: ``v`` and the ``(parent, local derivative)`` edges."""
+    """A value in the computation graph: ``v`` and the ``(parent, local derivative)`` edges
+    (``adj``: the adjoint during the backward sweep of :func:`jacobian`, None otherwise)."""
 
-    __slots__ = ("v", "edges")
+    __slots__ = ("v", "edges", "adj")
     __array_priority__ = 1000.0
 
     def __init__(self, v, edges: tuple = ()):
         self.v = v
         self.edges = edges
+        self.adj = None
 
-    # Python operators go through the numpy ufuncs (and so through __array_ufunc__)
+    # Python operators apply the rule of the numpy ufunc directly (what np.add(self, o) would
+    # reach through __array_ufunc__, without numpy's dispatch)
     def __add__(self, o):
-        return np.add(self, o)
+        return _add(self, o)
 
     def __radd__(self, o):
-        return np.add(o, self)
+        return _add(o, self)
 
     def __sub__(self, o):
-        return np.subtract(self, o)
+        return _sub(self, o)
 
     def __rsub__(self, o):
-        return np.subtract(o, self)
+        return _sub(o, self)
 
     def __mul__(self, o):
-        return np.multiply(self, o)
+        return _mul(self, o)
 
     def __rmul__(self, o):
-        return np.multiply(o, self)
+        return _mul(o, self)
 
     def __truediv__(self, o):
-        return np.true_divide(self, o)
+        return _div(self, o)
 
     def __rtruediv__(self, o):
-        return np.true_divide(o, self)
+        return _div(o, self)
 
     def __pow__(self, o):
         return np.power(self, o)
@@ -141,24 +144,48 @@ def _unary(f: Callable, df: Callable) -> Callable:
     return rule
 
 
+# The binary rules below are _node written out for speed: the same values, the same edges in the
+# same order (a before b, non-Var operands left out).  At least one operand is a Var.
+
+
 def _add(a, b):
-    return _node(_value(a) + _value(b), (a, 1.0), (b, 1.0))
+    if type(a) is Var:
+        if type(b) is Var:
+            return Var(a.v + b.v, ((a, 1.0), (b, 1.0)))
+        return Var(a.v + b, ((a, 1.0),))
+    return Var(a + b.v, ((b, 1.0),))
 
 
 def _sub(a, b):
-    return _node(_value(a) - _value(b), (a, 1.0), (b, -1.0))
+    if type(a) is Var:
+        if type(b) is Var:
+            return Var(a.v - b.v, ((a, 1.0), (b, -1.0)))
+        return Var(a.v - b, ((a, 1.0),))
+    return Var(a - b.v, ((b, -1.0),))
 
 
 def _mul(a, b):
-    av, bv = _value(a), _value(b)
-    return _node(av * bv, (a, bv), (b, av))
+    if type(a) is Var:
+        av = a.v
+        if type(b) is Var:
+            bv = b.v
+            return Var(av * bv, ((a, bv), (b, av)))
+        return Var(av * b, ((a, b),))
+    bv = b.v
+    return Var(a * bv, ((b, a),))
 
 
 def _div(a, b):
-    av, bv = _value(a), _value(b)
-    v = av / bv
-    inv = 1.0 / bv
-    return _node(v, (a, inv), (b, -v * inv) if isinstance(b, Var) else (b, 0.0))
+    if type(b) is Var:
+        bv = b.v
+        av = a.v if type(a) is Var else a
+        v = av / bv
+        inv = 1.0 / bv
+        if type(a) is Var:
+            return Var(v, ((a, inv), (b, -v * inv)))
+        return Var(v, ((b, -v * inv),))
+    v = a.v / b
+    return Var(v, ((a, 1.0 / b),))
 
 
 def _pow(a, b):
@@ -219,35 +246,48 @@ def jacobian(
         jac = np.zeros((n, len(keys)))
         if not isinstance(out, Var):
             return np.broadcast_to(np.asarray(out, dtype=float), (n,)).copy(), jac
-        # topological order (parents before children), iteratively
+        # topological order (parents before children), iteratively: a depth-first post-order
         order: list[Var] = []
         seen: set[int] = set()
-        stack: list[tuple[Var, bool]] = [(out, False)]
+        stack: list = [out, False]  # pairs (node, expanded), flattened
+        push, pop, add = order.append, stack.pop, seen.add
         while stack:
-            node, expanded = stack.pop()
+            expanded = pop()
+            node = pop()
             if expanded:
-                order.append(node)
+                push(node)
                 continue
-            if id(node) in seen:
+            nid = id(node)
+            if nid in seen:
                 continue
-            seen.add(id(node))
-            stack.append((node, True))
-            stack.extend((parent, False) for parent, _ in node.edges if id(parent) not in seen)
-        adjoint: dict[int, object] = {id(out): 1.0}
-        for node in reversed(order):
-            if not node.edges:  # a coefficient: its adjoint is its Jacobian column
-                continue
-            a = adjoint.pop(id(node), None)
-            if a is None:
-                continue
-            for parent, local in node.edges:
-                if isinstance(local, float) and local in (1.0, -1.0):
-                    contribution = a if local == 1.0 else -a
-                else:
-                    contribution = a * local
-                pid = id(parent)
-                adjoint[pid] = contribution if pid not in adjoint else adjoint[pid] + contribution
-        for j, leaf in enumerate(leaves):
-            jac[:, j] = np.broadcast_to(adjoint.get(id(leaf), 0.0), (n,))
+            add(nid)
+            stack += (node, True)
+            for parent, _ in node.edges:
+                if id(parent) not in seen:
+                    stack += (parent, False)
+        # backward sweep: each node's adjoint is complete when its turn comes (reverse topological order)
+        out.adj = 1.0
+        try:
+            for node in reversed(order):
+                edges = node.edges
+                if not edges:  # a coefficient: its adjoint is its Jacobian column
+                    continue
+                a = node.adj
+                if a is None:
+                    continue
+                node.adj = None
+                for parent, local in edges:
+                    if isinstance(local, float) and local in (1.0, -1.0):
+                        contribution = a if local == 1.0 else -a
+                    else:
+                        contribution = a * local
+                    pa = parent.adj
+                    parent.adj = contribution if pa is None else pa + contribution
+            for j, leaf in enumerate(leaves):
+                if leaf.adj is not None:  # a scalar or (n,): numpy broadcasts it into the column
+                    jac[:, j] = leaf.adj
+        finally:
+            for node in order:
+                node.adj = None
         value = np.broadcast_to(np.asarray(out.v, dtype=float), (n,)).copy()
     return value, np.where(np.isfinite(jac), jac, 0.0)
