@@ -248,59 +248,19 @@ def _fit_channel(tyre: Tyre, df: pd.DataFrame, channel: str, sigma: float, rng: 
 
 def _cv_score(v: np.ndarray, lam: np.ndarray, categorical: bool) -> float:
     """Leave-one-sweep-out R² of λ predicted from v (a line, or per-level means)."""
-    return float(_cv_scores(np.asarray(v, float)[None, :], lam, categorical)[0])
-
-
-def _cv_scores(V: np.ndarray, lam: np.ndarray, categorical: bool) -> np.ndarray:
-    """:func:`_cv_score` of each row of ``V`` (m, n) against λ (n,), all rows at once.
-
-    Leave-one-out without refitting n times: with the sums over all n sweeps, the fit to the
-    other n − 1 is the least-squares line (mean for a level) of the sums less sweep i's own terms.
-    Each row's score depends on that row alone.
-    """
-    V = np.asarray(V, float)
-    lam = np.asarray(lam, float)
-    m, n = V.shape
-    scores = np.zeros(m)
-    if n < 4 or np.std(lam) == 0:
-        return scores
-    live = ~np.all(V == V[:, :1], axis=1)  # np.std(v) == 0: a constant candidate predicts nothing
-    if not live.any():
-        return scores
-    V = V[live]
-    total = lam.sum()
-    if categorical:
-        cnt = np.zeros(V.shape)  # per sweep i: the other sweeps at its level, and their λ sum
-        grp = np.zeros(V.shape)
-        for level in np.unique(V):
-            at = V == level
-            cnt += at * (at.sum(axis=1, keepdims=True) - 1.0)
-            grp += at * ((at * lam).sum(axis=1, keepdims=True) - lam)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            pred = np.where(cnt > 0, grp / np.maximum(cnt, 1.0), (total - lam) / (n - 1))
-    else:
-        # centred at each row's mean (and λ's): the sums of the others stay well conditioned
-        x = V - V.mean(axis=1, keepdims=True)
-        y = lam - lam.mean()
-        n1 = n - 1.0
-        sx = x.sum(axis=1, keepdims=True) - x  # sums over the sweeps j != i
-        sy = y.sum() - y
-        sxx = (x * x).sum(axis=1, keepdims=True) - x * x
-        sxy = (x * y).sum(axis=1, keepdims=True) - x * y
-        vxx = sxx - sx * sx / n1  # n' var(x') of the others
-        vxy = sxy - sx * sy / n1
-        # the others all at one value (two levels, sweep i alone at one): the mean of the others
-        flat = np.zeros(V.shape, bool)
-        for r in range(V.shape[0]):
-            u, inv, cnt = np.unique(V[r], return_inverse=True, return_counts=True)
-            if u.size == 2:
-                flat[r] = cnt[inv] == 1
-        with np.errstate(invalid="ignore", divide="ignore"):
-            a = np.where(flat, 0.0, vxy / np.where(flat, 1.0, vxx))
-        b = (sy - a * sx) / n1  # line through the others' means (centred coordinates)
-        pred = a * x + b + lam.mean()
-    scores[live] = 1.0 - np.mean((lam - pred) ** 2, axis=1) / float(np.var(lam))
-    return scores
+    n = len(v)
+    if n < 4 or np.std(v) == 0 or np.std(lam) == 0:
+        return 0.0
+    pred = np.empty(n)
+    for i in range(n):
+        m = np.arange(n) != i
+        if categorical:
+            same = m & (v == v[i])
+            pred[i] = lam[same].mean() if same.any() else lam[m].mean()
+        else:
+            a, b = np.polyfit(v[m], lam[m], 1) if np.std(v[m]) > 0 else (0.0, lam[m].mean())
+            pred[i] = a * v[i] + b
+    return 1.0 - float(np.mean((lam - pred) ** 2)) / float(np.var(lam))
 
 
 def _within_block_p(v: np.ndarray, lam: np.ndarray, blocks: np.ndarray) -> float:
@@ -394,8 +354,9 @@ def _link(factors: list[FactorProfile], table: pd.DataFrame, candidates, rng, n_
             score = _cv_score(v, lam, categorical)
             if score <= 0:
                 continue
-            perms = np.array([rng.permutation(v) for _ in range(n_perm)]).reshape(n_perm, len(v))
-            exceed = int(np.sum(_cv_scores(perms, lam, categorical) >= score))
+            exceed = 0
+            for _ in range(n_perm):
+                exceed += _cv_score(rng.permutation(v), lam, categorical) >= score
             r = float(np.corrcoef(v, lam)[0, 1])
             link = VariableLink(cname, f.factor, score, (1 + exceed) / (1 + n_perm), r)
             for name, c in confounders.items():
