@@ -51,10 +51,11 @@ def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progre
              executor: Executor | None = None) -> dict:
     """Run the demo; returns a summary dict (also in ``output/report.json``).
 
-    ``executor`` runs the FE campaign chunks, the bootstrap refits and the rig stage (default: in
-    this process, one step after the other; see :mod:`mftire.parallel`).  With workers, the
-    independent stages overlap: the rig stage starts at once and the bootstrap refits as soon as
-    the fit is done, while this process diagnoses; the results do not depend on it.
+    ``executor`` runs the FE campaign chunks, the rig stage, the diagnosis, the bootstrap refits and
+    the comparison figures (default: in this process, one step after the other; see
+    :mod:`mftire.parallel`).  With workers, the independent stages overlap: the rig stage starts
+    after the FE campaign, the diagnosis and the bootstrap refits as soon as the fit is done; the
+    results do not depend on it.
     Warnings of the steps are silenced inside the run only (global filters are restored).
     """
     with warnings.catch_warnings():
@@ -70,9 +71,18 @@ def _rig_task(args: tuple[str, bool]) -> RigStage:
         return rig_stage(*args)
 
 
+def _diagnose_task(args: tuple) -> Any:
+    """:func:`mftire.diagnosis.diagnose.diagnose` of the measured campaign as a task for the executor."""
+    from mftire.diagnosis.diagnose import diagnose
+
+    data, tyre, n_perm = args
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return diagnose(data, tyre, progress=False, n_perm=n_perm)
+
+
 def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: Executor) -> dict:
     from mftire.compare.core import compare
-    from mftire.diagnosis.diagnose import diagnose
     from mftire.diagnosis.report import write_report
     from mftire.fe.config import load_tyre
     from mftire.fe.programmes import programme
@@ -109,12 +119,14 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
     fit = fit_tir(both, template, weights="fe=1,measured=4", progress=False)
     write_tir(fit.parameters, os.path.join(out, "fitted.tir"))
     fitted = Tyre(fit.parameters, name="MF 6.1 fit")
-    # the bootstrap refits need only the fit: with workers they run while this process diagnoses
+    # with workers, the diagnosis goes to the first free one and the bootstrap refits (they need only the
+    # fit) queue behind it: as many busy processes as workers, the diagnosis (which the rest waits for) first
+    diag_pending = executor.start_map(_diagnose_task, [(meas, fitted, 49 if quick else 99)])
     bands_pending = start_bootstrap_bands(None, template, n=4 if quick else 12, fit=fit, stages="1,2,3", seed=0,
                                           executor=executor)  # fmt: skip
 
     step("diagnosis of the measured residual")
-    diag = diagnose(meas, fitted, progress=False, n_perm=49 if quick else 99)
+    diag = diag_pending.result()[0]
     diag_doc = write_report(diag, os.path.join(out, "diagnosis"))
     extended = diag.extended if diag.significant else None
     if extended is not None:

@@ -9,6 +9,8 @@ import numpy as np
 import pandas as pd
 import pytest
 from conftest import REFERENCE_TYRES
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mftire.cli import main
 from mftire.fitting.bands import band_coverage, bootstrap_bands, coverage_table, resample_sweeps
@@ -99,3 +101,19 @@ def test_cli_fit_bands(tmp_path, capsys):
     assert rc == 0 and (tmp_path / "cmp" / "cornering.png").exists()
     assert main(["fit", str(tmp_path / "rig.csv"), "--template", str(TIR), "--output", str(tmp_path / "x.tir"),
                  "--bands", "1"]) == 2
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(2, 15), st.integers(1, 40), st.floats(0.0, 0.5), st.integers(0, 2**31 - 1))
+def test_column_quantiles_are_numpys_nanquantile(rows, cols, nan_share, seed):
+    from mftire.fitting.bands import _column_quantiles
+
+    rng = np.random.default_rng(seed)
+    mat = rng.normal(size=(rows, cols)) * rng.choice([1e-3, 1.0, 1e4], size=cols)
+    mat[rng.random(mat.shape) < nan_share] = np.nan
+    q = (0.025, 0.975)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns
+        expected = np.nanquantile(mat, q, axis=0)
+        got = _column_quantiles(mat, q)
+    assert got.tobytes() == np.asarray(expected).tobytes()

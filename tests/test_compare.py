@@ -149,3 +149,14 @@ def test_cli_errors(tmp_path, capsys):
     assert "missing.csv" in capsys.readouterr().err
     rc = main(["compare", "--tir", str(TIR), "--output", str(tmp_path)])
     assert rc == 2
+
+
+def test_figures_drawn_on_workers_are_the_serial_ones(tmp_path, self_comparison):
+    from mftire.parallel import Executor
+
+    serial = self_comparison.plots(tmp_path / "serial")
+    with Executor(jobs=2).session() as ex:
+        pooled = self_comparison.plots(tmp_path / "pooled", executor=ex)
+    assert [p.replace("pooled", "serial") for p in pooled] == serial and len(serial) >= 4
+    for a, b in zip(serial, pooled, strict=True):  # the same files, byte for byte
+        assert open(a, "rb").read() == open(b, "rb").read(), a

@@ -117,7 +117,11 @@ def test_dask_local_cluster_matches_serial_bit_for_bit(fe_serial, fit, bands_ser
             ex = Executor(scheduler=cluster.scheduler_address)
             table, free = _fe(ex)
             bands = _bands(fit, ex)
-    assert table.equals(fe_serial[0]) and free.equals(fe_serial[1])
+            with ex.session() as open_ex:  # one client for several batches, one started ahead
+                pending = open_ex.start_map(abs, [-2, 3])
+                table2, _ = _fe(open_ex)
+                assert pending.result() == [2, 3]
+    assert table.equals(fe_serial[0]) and free.equals(fe_serial[1]) and table2.equals(fe_serial[0])
     _same_bands(bands_serial, bands)
 
 
@@ -125,3 +129,34 @@ def test_bad_scheduler_address_is_a_clear_error():
     pytest.importorskip("distributed", reason="Dask distributed not installed")
     with pytest.raises(MftireInputError, match="Dask scheduler at 'nonsense://x'"):
         Executor(scheduler="nonsense://x").map(abs, [1])
+
+
+def test_session_reuses_workers_and_start_map_returns_at_once():
+    # in a session the batches share one pool; start_map hands the tasks out without waiting
+    with Executor(jobs=2).session() as ex:
+        first = ex.start_map(abs, [-3, 2, -1])
+        second = ex.start_map(abs, [-5, 4])
+        assert ex.map(abs, [-7]) == [7]
+        assert second.result() == [5, 4] and first.result() == [3, 2, 1]
+        assert list(first) == [3, 2, 1]  # the results stay available
+    # one worker: the session is the executor itself, and a batch runs when its results are asked for
+    ran = []
+    ex1 = Executor(jobs=1)
+    with ex1.session() as same:
+        assert same is ex1
+        pending = same.start_map(ran.append, [1, 2])
+        assert ran == []
+        assert pending.result() == [None, None] and ran == [1, 2]
+
+
+def test_bootstrap_started_in_a_session_matches_serial_bit_for_bit(fit, bands_serial):
+    from mftire.fitting.bands import start_bootstrap_bands
+
+    grid = fit.data[["Fz", "kappa", "alpha", "gamma", "Vx", "P"]].iloc[::4].reset_index(drop=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with Executor(jobs=2).session() as ex:
+            pending = start_bootstrap_bands(None, TIR, n=3, fit=fit, stages="1", seed=7, grid=grid, executor=ex)
+            assert ex.map(abs, [-1]) == [1]  # the pool takes other work while the replicates run
+            bands = pending.result()
+    _same_bands(bands_serial, bands)
