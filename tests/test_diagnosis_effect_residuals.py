@@ -72,6 +72,7 @@ def test_finite_difference_columns_equal_full_evaluations_bit_for_bit(problem):
 
 def test_effect_fit_is_unchanged_by_the_reuse(problem, monkeypatch):
     law = effects.Law("slip_speed_quadratic", ("LMUX", "LMUY"), "quadratic")
+    monkeypatch.setattr(effects, "MAX_ITER", 6)  # a few iterations (each with its Jacobian) make the point
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         fast = effects.fit_effect(problem, law, "Vs", None)

@@ -99,3 +99,19 @@ def test_exact_fit_matches_finite_difference_fit(case):
         assert rms["exact"] <= 1.001 * rms["2-point"]
     assert fits["exact"].identified == fits["2-point"].identified
     assert all(s.success for s in fits["exact"].stages)
+
+
+def test_model_reuses_the_basic_quantities_only_while_their_parameters_hold(case):
+    from mftire.fitting.model import CHANNELS, Model
+
+    data, template = case
+    p = with_defaults(template)
+    x = Inputs.from_frame(group_sweeps(data).iloc[::5])
+    model = Model(p, x, fitting_mode(), ExtensionSet(()))
+    for q in (p, dict(p, PDX1=1.1 * p["PDX1"], QDZ1=0.9 * p["QDZ1"]), dict(p, LMUX=0.8 * p["LMUX"]),
+              dict(p, LFZO=1.2), p):  # coefficients, then the parameters of eqs 4.E1-4.E8, then back
+        got = model.channels(q, CHANNELS)
+        fresh = Model(p, x, fitting_mode(), ExtensionSet(())).channels(q, CHANNELS)
+        for ch in CHANNELS:
+            assert np.asarray(getattr(got, ch)).tobytes() == np.asarray(getattr(fresh, ch)).tobytes(), ch
+    assert model.channels(dict(p, LFZO=1.2), ("Fx",)).Fx.tobytes() != model.channels(p, ("Fx",)).Fx.tobytes()

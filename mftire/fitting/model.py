@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from mftire.mf.basic import basic
 from mftire.mf.extensions import ExtensionSet
 from mftire.mf.modes import Mode
 from mftire.mf.solver import Channels, channels, prepare, scaled
@@ -25,6 +26,8 @@ from mftire.mf.solver import Channels, channels, prepare, scaled
 __all__ = ["Inputs", "Model", "fitting_mode", "predict", "predict_fx", "predict_fy", "predict_mz", "CHANNELS"]
 
 CHANNELS = ("Fx", "Fy", "Mz", "Mx", "My")
+#: The parameters :func:`mftire.mf.basic.basic` reads (eqs 4.E1-4.E8, the PAC2002 switch)
+_BASIC_KEYS = ("FITTYP", "LFZO", "FNOMIN", "NOMPRES", "LMUV", "LONGVL", "LMUX", "LMUY")
 _INPUTS = ("Fz", "kappa", "alpha", "gamma", "Vx", "P")
 
 
@@ -66,11 +69,28 @@ class Model:
     def __init__(self, p: Mapping[str, float], x: Inputs, mode: Mode, extensions: ExtensionSet | None = None):
         self.pre = prepare(p, x.Fz, x.kappa, x.alpha, x.gamma, 0.0, x.Vx, x.P, None, mode, x.variables or None)
         self.extensions = extensions
+        self._basic: tuple[tuple, object] | None = None  # (values of _BASIC_KEYS, Basic) of the last evaluation
 
     def channels(self, q: Mapping[str, float], want: tuple[str, ...], given: Channels | None = None) -> Channels:
         """Pieces 2 and 3 for parameters ``q``: the channels ``want`` (see :func:`mftire.mf.solver.channels`)."""
         qq, offsets = scaled(q, self.extensions, self.pre)
+        if given is None:
+            given = self._given_basic(qq)
         return channels(qq, self.pre, offsets, want, given)
+
+    def _given_basic(self, qq: Mapping) -> Channels | None:
+        """The basic quantities (eqs 4.E1-4.E8) of the last evaluation when the parameters they read are the
+        same numbers (speed only: a fitter varies none of them).  None (computed afresh) with turn slip, whose
+        spin makes the conditions depend on the parameters, or when one of them is an array (an extension)."""
+        if self.pre.mode.turn_slip:
+            return None
+        key = tuple(qq.get(k) for k in _BASIC_KEYS)
+        if not all(v is None or isinstance(v, (int, float, str)) for v in key):
+            return None
+        if self._basic is None or self._basic[0] != key:
+            with np.errstate(all="ignore"):
+                self._basic = (key, basic(qq, self.pre.mode, self.pre.c))
+        return Channels(b=self._basic[1], c=self.pre.c)
 
     def predict(self, q: Mapping[str, float], channel: str) -> np.ndarray:
         """Model value of ``channel`` (one of :data:`CHANNELS`) [N or N·m]."""
