@@ -56,9 +56,14 @@ def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progre
     :mod:`mftire.parallel`).  With workers, the independent stages overlap: the rig stage starts
     after the FE campaign, the diagnosis and the bootstrap refits as soon as the fit is done; the
     results do not depend on it.
-    Warnings of the steps are silenced inside the run only (global filters are restored).
+    Warnings of the steps are silenced, and BLAS held to one thread, inside the run only (global filters
+    and thread counts are restored).
     """
-    with warnings.catch_warnings():
+    from threadpoolctl import threadpool_limits
+
+    # one BLAS thread in this process and the local workers it starts (forked inside): the steps make
+    # many small SVDs, and idle BLAS threads spinning for work would take the cores from the workers
+    with warnings.catch_warnings(), threadpool_limits(1, user_api="blas"):
         warnings.simplefilter("ignore")
         with (executor or Executor()).session() as ex:
             return _run_demo(output, quick, progress, ex)
