@@ -1,7 +1,8 @@
 """One executor for embarrassingly parallel work: local processes, or a Dask cluster.
 
 Used for the bootstrap refits of the prediction bands (:func:`mftire.fitting.bands.bootstrap_bands`),
-the chunks of an FE campaign (:func:`mftire.fe.sweeps.run_sweeps`) and ``mftire demo``.
+the chunks of an FE campaign (:func:`mftire.fe.sweeps.run_sweeps`), the figures of a comparison
+(:meth:`mftire.compare.core.Comparison.plots`) and ``mftire demo``.
 
 * ``Executor(jobs=1)`` runs every task in this process, one after another (the library default).
 * ``Executor(jobs=N)`` runs them in ``N`` local worker processes
@@ -13,8 +14,8 @@ the chunks of an FE campaign (:func:`mftire.fe.sweeps.run_sweeps`) and ``mftire 
 
 **Sessions.** ``with executor.session() as ex:`` keeps the workers (a process pool, or a Dask
 client) up for several batches, and ``ex.start_map(fn, items)`` starts a batch without waiting for
-it, so that independent stages of a job overlap (``mftire demo`` runs the rig stage and the
-bootstrap refits while this process fits and diagnoses).  Outside a session, or with ``jobs=1``,
+it, so that independent stages of a job overlap (``mftire demo`` runs its rig stage while this
+process fits, then the diagnosis and the bootstrap refits side by side).  Outside a session, or with ``jobs=1``,
 ``start_map`` defers the batch to the moment its results are asked for: the serial order.
 
 **Determinism.** A task is a pure function of its argument: random draws are made before the tasks
