@@ -97,16 +97,20 @@ class KernelUnavailableError(RuntimeError):
 
 def _candidates() -> list[Path]:
     """Where a built library may be: next to this module (installed or built in place),
-    then in the installed distribution (a source checkout that shadows the installation)."""
+    then in every installed distribution of mftire on the path (a source checkout that
+    shadows the installation; its own ``mftire.egg-info``, left by ``pip install .``, lists
+    no library, so the first distribution found is not enough)."""
     found = [Path(__file__).resolve().parent / build.LIBRARY]
     try:
-        from importlib.metadata import PackageNotFoundError, distribution
+        from importlib.metadata import distributions
 
-        dist = distribution("mftire")
-        for f in dist.files or ():
-            if f.as_posix() == "mftire/mf/" + build.LIBRARY:
-                found.append(Path(dist.locate_file(f)).resolve())
-    except (ImportError, PackageNotFoundError, OSError):  # pragma: no cover - no distribution metadata
+        for dist in distributions(name="mftire"):
+            for f in dist.files or ():
+                if f.as_posix() == "mftire/mf/" + build.LIBRARY:
+                    path = Path(dist.locate_file(f)).resolve()
+                    if path not in found:
+                        found.append(path)
+    except (ImportError, OSError):  # pragma: no cover - no distribution metadata
         pass
     return found
 
