@@ -27,8 +27,10 @@ LIBRARY = "_mfkernel.so.1"
 #: vectorise), no trapping, no contraction into fused multiply-adds (each lane rounds as the
 #: scalar C does); no -ffast-math (it would reorder the arithmetic and drop NaN checks, and
 #: the kernel must agree with numpy to 1e-12).
-CFLAGS = ("-O3", "-std=c99", "-fno-math-errno", "-fno-trapping-math", "-ffp-contract=off", "-fvisibility=hidden",
-          "-Wall")  # fmt: skip
+#: -fno-wrapv undoes the -fwrapv of Python's own CFLAGS, which setuptools puts first: with it GCC
+#: cannot vectorise the lane loops (it must allow the lane index to wrap).
+CFLAGS = ("-O3", "-std=c99", "-fno-wrapv", "-fno-math-errno", "-fno-trapping-math", "-ffp-contract=off",
+          "-fvisibility=hidden", "-Wall")  # fmt: skip
 #: The vectorised lane loops (mf_kernel.c, MF_KERNEL_SIMD): `omp simd` loops, AVX-512/AVX2/x86-64
 #: target clones and glibc's vector math library.  GCC on x86-64 Linux; where these flags do not
 #: compile or link, the kernel is built without them (plain scalar loops, same results up to
