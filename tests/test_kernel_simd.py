@@ -11,10 +11,10 @@ tests/test_kernel.py's.
 from __future__ import annotations
 
 import platform
-from pathlib import Path
 import shutil
 import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
