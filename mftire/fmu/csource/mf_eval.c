@@ -94,23 +94,21 @@ MF_FN void flag(Ctx *x, int kind) { x->warnings |= 1UL << kind; }
 void mf_warning_text(const MFParams *p, int kind, char *buf, unsigned long n)
 {
     static const char *const nan_names[] = {"Fz", "kappa", "alpha", "gamma", "phit", "Vx", "omega"};
-    static const struct { int kind; const char *label, *side, *key; } limits[] = {
-        {MF_W_ALPHA_LOW, "Slip angle", "below", "ALPMIN"}, {MF_W_ALPHA_HIGH, "Slip angle", "above", "ALPMAX"},
-        {MF_W_GAMMA_LOW, "Inclination angle", "below", "CAMMIN"},
-        {MF_W_GAMMA_HIGH, "Inclination angle", "above", "CAMMAX"},
-        {MF_W_FZ_HIGH, "Vertical load", "above", "FZMAX"}, {MF_W_FZ_LOW, "Vertical load", "below", "FZMIN"},
-        {MF_W_P_LOW, "Pressure", "below", "PRESMIN"}, {MF_W_P_HIGH, "Pressure", "above", "PRESMAX"},
-        {MF_W_KAPPA_LOW, "Slip ratio", "below", "KPUMIN"}, {MF_W_KAPPA_HIGH, "Slip ratio", "above", "KPUMAX"},
+#define MF_LIMIT(kind, label, side, key) {kind, label, side, #key, offsetof(MFParams, key)}
+    static const struct { int kind; const char *label, *side, *key; size_t at; } limits[] = {
+        MF_LIMIT(MF_W_ALPHA_LOW, "Slip angle", "below", ALPMIN), MF_LIMIT(MF_W_ALPHA_HIGH, "Slip angle", "above", ALPMAX),
+        MF_LIMIT(MF_W_GAMMA_LOW, "Inclination angle", "below", CAMMIN),
+        MF_LIMIT(MF_W_GAMMA_HIGH, "Inclination angle", "above", CAMMAX),
+        MF_LIMIT(MF_W_FZ_HIGH, "Vertical load", "above", FZMAX), MF_LIMIT(MF_W_FZ_LOW, "Vertical load", "below", FZMIN),
+        MF_LIMIT(MF_W_P_LOW, "Pressure", "below", PRESMIN), MF_LIMIT(MF_W_P_HIGH, "Pressure", "above", PRESMAX),
+        MF_LIMIT(MF_W_KAPPA_LOW, "Slip ratio", "below", KPUMIN), MF_LIMIT(MF_W_KAPPA_HIGH, "Slip ratio", "above", KPUMAX),
     };
+#undef MF_LIMIT
     static const struct { int kind; const char *name, *eq; } curv[] = {
         {MF_W_EX, "Ex", "4.E14"}, {MF_W_EY, "Ey", "4.E24"}, {MF_W_EXA, "Exa", "4.E56"},
         {MF_W_EYK, "Eyk", "4.E64"}, {MF_W_ET, "Et", "4.E44"}, {MF_W_EY0, "Ey", "4.E24"},
     };
-    double value[10];
     unsigned k;
-    value[0] = p->ALPMIN; value[1] = p->ALPMAX; value[2] = p->CAMMIN; value[3] = p->CAMMAX;
-    value[4] = p->FZMAX; value[5] = p->FZMIN; value[6] = p->PRESMIN; value[7] = p->PRESMAX;
-    value[8] = p->KPUMIN; value[9] = p->KPUMAX;
     if (n == 0) return;
     buf[0] = '\0';
     if (kind >= MF_W_NAN_FZ && kind <= MF_W_NAN_OMEGA) {
@@ -131,7 +129,7 @@ void mf_warning_text(const MFParams *p, int kind, char *buf, unsigned long n)
     for (k = 0; k < sizeof limits / sizeof limits[0]; k++)
         if (limits[k].kind == kind) {
             snprintf(buf, n, "%s %s the limit %s=%.17g. Values have been saturated.", limits[k].label,
-                     limits[k].side, limits[k].key, value[k]);
+                     limits[k].side, limits[k].key, *(const double *)((const char *)p + limits[k].at));
             return;
         }
     if (kind == MF_W_LOW_SPEED) {
@@ -1197,8 +1195,8 @@ MF_FN void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c, 
     AlignTerms at;
     double z1, Fx0, mux = 0.0, Kxk = 0.0, Fy_comb, Gyk = 0.0, Fx = 0.0, Fy = 0.0;
     double off[2] = {0.0, 0.0}; /* force offsets of the model extensions, as factors of Fz */
-    int need_fx = (want & (MF_WANT_FX | MF_WANT_MZ | MF_WANT_MY | MF_WANT_RAD)) != 0;
-    int need_fy = (want & (MF_WANT_FY | MF_WANT_MZ | MF_WANT_MX | MF_WANT_RAD)) != 0;
+    int need_fx = (want & MF_NEEDS_FX) != 0;
+    int need_fy = (want & MF_NEEDS_FY) != 0;
 #if MF_N_TERMS > 0 || defined(MF_EXT_RUNTIME)
     MFParams q; /* p with the extension terms applied to its scaling factors */
     if (ext->n > 0) {

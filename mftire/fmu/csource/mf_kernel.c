@@ -348,7 +348,7 @@ typedef void (*LaneLoop)(const MFParams *p, int batch_camber, Block *B, int lane
 
 #define MF_WANT_FORCES (MF_WANT_FX | MF_WANT_FY)
 #define MF_LANE_LOOP(NAME, LIMITS, ASTAR, COMBINED, WANT)                                                   \
-    static MF_CLONES void NAME(const MFParams *restrict p, int batch_camber, Block *restrict B, int lanes,                     \
+    static MF_CLONES void NAME(const MFParams *restrict p, int batch_camber, Block *restrict B, int lanes,     \
                                unsigned long *warnings)                                                       \
     {                                                                                                         \
         unsigned long w = 0;                                                                                  \
@@ -380,7 +380,7 @@ static const LaneLoop LANE_LOOPS[2][2][2][2] = {
 };
 
 /* The lanes one point at a time, with everything the lane loops leave out (turn slip, model
- * extensions, the MF 6.2 loaded radius), and the single-point call: mf_evaluate's scalar path
+ * extensions), and the single-point call: mf_evaluate's scalar path
  * (at most kmax updates of the rolling-radius iteration, as mf_evaluate makes for kmax = 100). */
 static void evaluate_scalar(const MFParams *p, const Ctx *mode, const ExtTable *ext, unsigned want, int omega_given,
                             int kmax, Block *B, int lanes, unsigned long *warnings)
@@ -486,8 +486,8 @@ MF_KERNEL_API int mf_kernel_evaluate(const double *params, const int *terms, int
     Ctx mode;
     Block block, *B = &block; /* 23 KiB */
     char msg[256];
-    unsigned want = 0, group;
-    int kmax = 100, k, vector, nb, lanes, radius;
+    unsigned want = 0;
+    int kmax = 100, k, nb, lanes, radius;
     long i, start;
     unsigned long w = 0;
     LaneLoop loop = NULL;
@@ -511,12 +511,10 @@ MF_KERNEL_API int mf_kernel_evaluate(const double *params, const int *terms, int
         if (out[k]) want |= WANT_OF[k];
     for (k = 0; k < MF_N_IN; k++) nan[k] = 0;
 
-    vector = !mode.turn_slip && n_terms == 0;
-    group = (want & ~MF_WANT_FORCES) ? MF_WANT_ALL : MF_WANT_FORCES;
-    if (vector) loop = LANE_LOOPS[mode.limits][mode.alpha_star][mode.combined][group == MF_WANT_ALL];
-
-    /* A single point takes mf_evaluate's scalar path (scalar libm: bit for bit the FMU's numbers). */
-    if (n == 1) loop = NULL;
+    /* the lane loop of the mode and the channel class: not for turn slip or model extensions, and not
+     * for a single point, which takes mf_evaluate's scalar path (scalar libm: the FMU's numbers) */
+    if (!mode.turn_slip && n_terms == 0 && n > 1)
+        loop = LANE_LOOPS[mode.limits][mode.alpha_star][mode.combined][(want & ~MF_WANT_FORCES) != 0];
     /* the rolling radii: for their outputs, the loaded radius and turn slip only (the channels of
      * the lane loops do not read them otherwise) */
     radius = out[O_RE] || out[O_OMEGA] || (want & MF_WANT_RAD) || mode.turn_slip || !loop;
@@ -560,8 +558,8 @@ MF_KERNEL_API int mf_kernel_evaluate(const double *params, const int *terms, int
         }
     }
     /* the curvature warnings of the groups asked for (the lane loops compute classes of groups) */
-    if (!(want & (MF_WANT_FX | MF_WANT_MZ | MF_WANT_MY | MF_WANT_RAD))) w &= ~MF_W_OF_FX;
-    if (!(want & (MF_WANT_FY | MF_WANT_MZ | MF_WANT_MX | MF_WANT_RAD))) w &= ~MF_W_OF_FY;
+    if (!(want & MF_NEEDS_FX)) w &= ~MF_W_OF_FX;
+    if (!(want & MF_NEEDS_FY)) w &= ~MF_W_OF_FY;
     if (!(want & MF_WANT_MZ)) w &= ~MF_W_OF_MZ;
     nan[6] = 0; /* P: INFLPRES silently */
     if (!omega_given) nan[7] = 0; /* omega counted only when given */
