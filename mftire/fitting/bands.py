@@ -98,6 +98,9 @@ class Bands:
         Grid points with their bands (see :meth:`at`), filled by :func:`bootstrap_bands`.
     notes : list of str
         How the bands were made (for reports).
+    calibration : Calibration or None
+        Conformal calibration of the prediction band (see :class:`Calibration`); None: the
+        uncalibrated band (replicate spread and z·σ in quadrature).
     """
 
     base: TirParameters
@@ -112,6 +115,7 @@ class Bands:
     time: float = 0.0
     grid: pd.DataFrame | None = None
     notes: list[str] = field(default_factory=list)
+    calibration: Calibration | None = None
 
     def sigma_for(self, channel: str, sources: np.ndarray | None) -> np.ndarray | float:
         """σ [channel unit] per row for the given source labels (largest σ for unknown sources)."""
@@ -165,12 +169,17 @@ class Bands:
             else:
                 lo = hi = f
             dlo, dhi = np.maximum(f - lo, 0.0), np.maximum(hi - f, 0.0)
-            s = z * self.sigma_for(ch, src)
             out[ch] = f
             out[f"{ch}_lo"] = f - dlo
             out[f"{ch}_hi"] = f + dhi
-            out[f"{ch}_pred_lo"] = f - np.sqrt(dlo**2 + s**2)
-            out[f"{ch}_pred_hi"] = f + np.sqrt(dhi**2 + s**2)
+            if self.calibration is not None and ch in self.calibration.q:
+                w = self.calibration.half_width(ch, f, src, slip_class(points))  # calibrated: q·s(f̂), at least the confidence band
+                out[f"{ch}_pred_lo"] = f - np.maximum(w, dlo)
+                out[f"{ch}_pred_hi"] = f + np.maximum(w, dhi)
+            else:
+                s = z * self.sigma_for(ch, src)
+                out[f"{ch}_pred_lo"] = f - np.sqrt(dlo**2 + s**2)
+                out[f"{ch}_pred_hi"] = f + np.sqrt(dhi**2 + s**2)
         return pd.DataFrame(out, index=points.index)
 
     def coefficient_table(self) -> pd.DataFrame:
@@ -192,9 +201,226 @@ class Bands:
             "level": self.level, "mode": self.mode, "n_requested": self.n_requested,
             "n_replicates": len(self.replicates), "n_failed": self.n_failed, "stages": self.stages,
             "time_s": self.time, "sigma": self.sigma, "notes": self.notes,
+            "calibration": self.calibration.to_dict() if self.calibration is not None else None,
             "coefficients": self.coefficient_table().to_dict(orient="records"),
             "replicates": [{k: float(r.get(k)) for k in self.keys} for r in self.replicates],
         }  # fmt: skip
+
+
+@dataclass
+class Calibration:
+    """Conformal calibration of the prediction band on out-of-fold residuals.
+
+    The data's groups (whole sweeps by default, or the levels of a condition column such as
+    ``Vx_set``) are split into ``folds`` folds, stratified by source and sweep kind; each fold
+    is left out in turn, the model refitted (warm-started, like the replicates) without it and
+    evaluated on it.  Those out-of-fold residuals ``r`` measure what a *new* measurement
+    misses: noise, sweep-to-sweep scatter and the model's lack of fit, with the fit's own
+    absorption of the noise removed.  Per channel and source:
+
+    * per cell (source and slip class: pure longitudinal, pure lateral or combined points, whose
+      errors differ in kind; :func:`slip_class`) a heteroscedastic scale
+      ``s(f̂) = sqrt(a² + (b·f̂)²)`` (a noise floor plus a part
+      proportional to the force, e.g. grip scatter, fitted by non-negative least squares of
+      ``r²`` on ``[1, f̂²]``; ``a`` is kept ≥ 10 % of the RMS residual), and
+    * the split-conformal quantile ``q`` of the scores ``|r| / s(f̂)``: the
+      ``ceil((n + 1)·level)``-th smallest (Vovk et al. 2005; Lei et al. 2018, normalised
+      scores; Barber et al. 2021 for cross-fitting).
+
+    The prediction band is ``f̂ ± q·s(f̂)`` (never narrower than the confidence band).
+
+    Attributes
+    ----------
+    level : float
+    by : list of str
+        Columns whose distinct values are the groups left out together.
+    folds : int
+        Folds used (at most the number of groups).
+    scale : dict
+        ``{channel: {cell: (a, b)}}`` with ``a`` [channel unit], ``b`` [-]; a cell is
+        ``"source|slip class"`` (:func:`slip_class`: longitudinal, lateral, combined) or
+        ``"source|*"`` (all the source's points).
+    q : dict
+        ``{channel: {cell: q}}`` conformal quantiles of the normalised scores.
+    n : dict
+        ``{channel: {cell: points}}`` calibration points.
+    failed : int
+        Fold fits that failed (their points are left out).
+    cv_coverage : dict
+        ``{channel: {source: fraction}}`` cross-validated coverage: each fold's points against
+        the band calibrated on the other folds only (scale and quantile), by a model that did
+        not see them — an honest held-out coverage of the procedure.
+    """
+
+    level: float
+    by: list[str]
+    folds: int
+    scale: dict[str, dict[str, tuple[float, float]]]
+    q: dict[str, dict[str, float]]
+    n: dict[str, dict[str, int]]
+    failed: int = 0
+    cv_coverage: dict[str, dict[str, float]] = field(default_factory=dict)
+
+    def half_width(self, channel: str, f: np.ndarray, sources: np.ndarray | None,
+                   slip: np.ndarray | None = None) -> np.ndarray:
+        """Half-width ``q·s(f̂)`` [channel unit] of the prediction band at model values ``f``, per row
+        for the given source labels and slip classes (:func:`slip_class`).  A (source, slip class) cell
+        without calibration points takes the source's pooled cell; an unknown source, or None, the
+        widest source."""
+        f = np.asarray(f, dtype=float)
+        n = f.shape[0]
+        slip = np.full(n, "*", dtype=object) if slip is None else np.asarray(slip, dtype=object)
+        per_q, per_s = self.q[channel], self.scale[channel]
+        srcs = sorted({c.split("|")[0] for c in per_q})
+
+        def width(src: str) -> np.ndarray:
+            out = np.full(n, np.nan)
+            for cls in set(slip.tolist()):
+                m = slip == cls
+                cell = f"{src}|{cls}" if f"{src}|{cls}" in per_q else f"{src}|*"
+                a, b = per_s[cell]
+                out[m] = per_q[cell] * np.hypot(a, b * f[m])
+            return out
+
+        w = {src: width(src) for src in srcs}
+        widest = np.vstack(list(w.values())).max(axis=0)
+        if sources is None:
+            return widest
+        sources = np.asarray(sources).astype(str)
+        out = widest.copy()
+        for src in srcs:
+            m = sources == src
+            out[m] = w[src][m]
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"level": self.level, "by": self.by, "folds": self.folds, "failed": self.failed,
+                "scale": {c: {s: {"a": v[0], "b": v[1]} for s, v in per.items()} for c, per in self.scale.items()},
+                "q": self.q, "n": self.n, "cv_coverage": self.cv_coverage}
+
+
+#: Tolerances of :func:`slip_class`: |α| below 0.5° is "no side slip", |κ| below 0.01 "no longitudinal slip".
+_ALPHA_TOL = math.radians(0.5)
+_KAPPA_TOL = 0.01
+
+
+def slip_class(points: pd.DataFrame) -> np.ndarray:
+    """Per point ``"longitudinal"`` (|α| < 0.5°), ``"lateral"`` (|κ| < 0.01, α ≠ 0) or ``"combined"``,
+    from the inputs alone (grid points and raw held-out rows alike)."""
+    a = np.abs(points["alpha"].to_numpy(float)) if "alpha" in points else np.zeros(len(points))
+    k = np.abs(points["kappa"].to_numpy(float)) if "kappa" in points else np.zeros(len(points))
+    return np.where(a < _ALPHA_TOL, "longitudinal", np.where(k < _KAPPA_TOL, "lateral", "combined"))
+
+
+def conformal_quantile(scores: np.ndarray, level: float) -> float:
+    """The ``ceil((n + 1)·level)``-th smallest score (the largest when that exceeds ``n``)."""
+    s = np.sort(np.asarray(scores, dtype=float)[np.isfinite(scores)])
+    if s.size == 0:
+        return math.nan
+    k = min(math.ceil((s.size + 1) * level), s.size)
+    return float(s[k - 1])
+
+
+def heteroscedastic_scale(residual: np.ndarray, f: np.ndarray) -> tuple[float, float]:
+    """``(a, b)`` of ``s(f) = sqrt(a² + (b·f)²)``: NNLS of ``r²`` on ``[1, f²]``, ``a ≥ 0.1·RMS(r)``."""
+    from scipy.optimize import nnls
+
+    r2 = np.asarray(residual, dtype=float) ** 2
+    f2 = np.asarray(f, dtype=float) ** 2
+    ok = np.isfinite(r2) & np.isfinite(f2)
+    r2, f2 = r2[ok], f2[ok]
+    rms = math.sqrt(float(np.mean(r2))) if r2.size else 0.0
+    if r2.size < 3 or rms == 0.0:
+        return max(rms, 1e-12), 0.0
+    cs = max(float(np.mean(f2)), 1e-300)  # column scaling for a well-conditioned NNLS
+    coef, _ = nnls(np.column_stack([np.ones_like(f2), f2 / cs]), r2)
+    a = max(math.sqrt(coef[0]), 0.1 * rms)
+    b = math.sqrt(coef[1] / cs)
+    return a, b
+
+
+#: Fewest calibration points of a (source, slip class) cell; smaller cells use the source's pooled cell.
+_MIN_CELL = 40
+
+
+def _fold_ids(table: pd.DataFrame, by: Sequence[str], folds: int, rng: np.random.Generator) -> np.ndarray:
+    """Fold number per row: the groups (distinct ``by`` values) shuffled within each source/kind
+    stratum and dealt round-robin, so every fold holds a share of every stratum."""
+    key = table[list(by)].astype(str).agg("|".join, axis=1) if len(by) > 1 else table[by[0]].astype(str)
+    info = pd.DataFrame({"g": key, "s": table["source"].astype(str) + "|" + table["kind"].astype(str)})
+    first = info.drop_duplicates("g")
+    fold_of: dict[str, int] = {}
+    i = 0
+    for _, grp in first.groupby("s", sort=True):
+        for g in rng.permutation(grp["g"].to_numpy()):
+            if g not in fold_of:
+                fold_of[g] = i % folds
+                i += 1
+    return key.map(fold_of).to_numpy(int)
+
+
+def _strip(table: pd.DataFrame) -> pd.DataFrame:
+    return table.drop(columns=[c for c in table.columns if c in _DERIVED or str(c).startswith("fit_")])
+
+
+def _calibrate(table: pd.DataFrame, fold: np.ndarray, results: list, mode: int, level: float, by: list[str],
+               channels: Sequence[str]) -> Calibration:
+    """:class:`Calibration` from the fold fits (``results[k]``: parameters or an error text)."""
+    chans = [c for c in channels if c in table.columns and table[c].notna().any()]
+    fhat = {c: np.full(len(table), np.nan) for c in chans}
+    failed = 0
+    for k, r in enumerate(results):
+        if isinstance(r, str):
+            failed += 1
+            continue
+        rows = np.nonzero(fold == k)[0]
+        ev = _evaluate(Tyre(r), table.iloc[rows], mode, chans)
+        for c in chans:
+            fhat[c][rows] = ev[c]
+    src = table["source"].astype(str).to_numpy()
+    cls = slip_class(table)
+    scale: dict = {}
+    qs: dict = {}
+    ns: dict = {}
+    for c in chans:
+        y = table[c].to_numpy(float)
+        ok = np.isfinite(y) & np.isfinite(fhat[c])
+        for s in sorted(set(src)):
+            for k in ("*", "longitudinal", "lateral", "combined"):
+                m = ok & (src == s) & ((cls == k) if k != "*" else True)
+                if m.sum() < (5 if k == "*" else _MIN_CELL):
+                    continue
+                r, f = y[m] - fhat[c][m], fhat[c][m]
+                a, b = heteroscedastic_scale(r, f)
+                cell = f"{s}|{k}"
+                scale.setdefault(c, {})[cell] = (a, b)
+                qs.setdefault(c, {})[cell] = conformal_quantile(np.abs(r) / np.hypot(a, b * f), level)
+                ns.setdefault(c, {})[cell] = int(m.sum())
+    cv: dict = {}
+    for c in qs:  # nested: each fold against scale and quantile from the other folds
+        y = table[c].to_numpy(float)
+        ok = np.isfinite(y) & np.isfinite(fhat[c])
+        for s in sorted(set(src)):
+            inside = np.zeros(len(table), bool)
+            used = np.zeros(len(table), bool)
+            for k in ("longitudinal", "lateral", "combined"):
+                cell = f"{s}|{k}" if f"{s}|{k}" in qs[c] else f"{s}|*"
+                if cell not in qs[c]:
+                    continue
+                m = ok & (src == s) & (cls == k) if cell.endswith(k) else ok & (src == s) & (cls == k)
+                mc = ok & (src == s) & ((cls == k) if cell.endswith(k) else True)  # the cell's calibration points
+                for i in range(len(results)):
+                    test, train = m & (fold == i), mc & (fold != i)
+                    if not test.any() or train.sum() < 5:
+                        continue
+                    a, b = heteroscedastic_scale(y[train] - fhat[c][train], fhat[c][train])
+                    q = conformal_quantile(np.abs(y[train] - fhat[c][train]) / np.hypot(a, b * fhat[c][train]),
+                                           level)
+                    inside[test] = np.abs(y[test] - fhat[c][test]) <= q * np.hypot(a, b * fhat[c][test])
+                    used[test] = True
+            if used.any():
+                cv.setdefault(c, {})[s] = float(inside[used].mean())
+    return Calibration(level, by, len(results), scale, qs, ns, failed, cv)
 
 
 def _column_quantiles(mat: np.ndarray, q: tuple[float, float]) -> np.ndarray:
@@ -257,6 +483,11 @@ class _ReplicateFit:
             return str(exc)
 
 
+def _run_job(task: tuple) -> TirParameters | str:
+    fn, sample = task
+    return fn(sample)
+
+
 def _collect(r, reps: list, b: int, n: int, say, t0: float) -> int:
     if isinstance(r, str):
         say(f"replicate {b + 1}/{n} failed: {r}")
@@ -297,6 +528,8 @@ def bootstrap_bands(
     alpha_star: bool = False,
     seed: int | None = 0,
     strata: Sequence[str] = ("source", "kind"),
+    calibrate: int = 5,
+    calibrate_by: str | Sequence[str] = "sweep_id",
     executor: Executor | None = None,
     progress: bool | Callable[[str], None] | None = None,
 ) -> Bands:
@@ -329,6 +562,13 @@ def bootstrap_bands(
         Columns of the grouped data within which sweeps are resampled (default source
         and sweep kind; add ``"Fz_set"`` to keep every load in every replicate when each
         load has several sweeps of a kind).
+    calibrate : int
+        Folds of the conformal calibration of the prediction band (:class:`Calibration`;
+        default 5, 0: the uncalibrated band of replicate spread and z·σ).
+    calibrate_by : str or sequence of str
+        Column(s) whose distinct values are left out together: ``"sweep_id"`` (default:
+        calibrated for a new measurement of conditions like the data's) or a condition such
+        as ``"Vx_set"`` (calibrated for a speed not measured).
     executor : Executor, optional
         Where the replicate fits run (default: in this process; see :mod:`mftire.parallel`).
         The replicates are drawn beforehand from ``seed`` and collected in order, so the
@@ -342,7 +582,8 @@ def bootstrap_bands(
     """
     return start_bootstrap_bands(
         data, template, n, level=level, grid=grid, fit=fit, stages=stages, weights=weights, alpha_star=alpha_star,
-        seed=seed, strata=strata, executor=executor, progress=progress).result()
+        seed=seed, strata=strata, calibrate=calibrate, calibrate_by=calibrate_by, executor=executor,
+        progress=progress).result()
 
 
 def start_bootstrap_bands(
@@ -358,6 +599,8 @@ def start_bootstrap_bands(
     alpha_star: bool = False,
     seed: int | None = 0,
     strata: Sequence[str] = ("source", "kind"),
+    calibrate: int = 5,
+    calibrate_by: str | Sequence[str] = "sweep_id",
     executor: Executor | None = None,
     progress: bool | Callable[[str], None] | None = None,
 ) -> PendingBands:
@@ -379,8 +622,28 @@ def start_bootstrap_bands(
     rng = np.random.default_rng(seed)
     samples = [resample_sweeps(table, rng, strata) for _ in range(n)]  # drawn up front: results do not
     job = _ReplicateFit(fit.parameters, rep_stages, weights, alpha_star)  # depend on the executor
-    pending = (executor or Executor()).start_map(job, samples)
-    return PendingBands(pending, fit, rep_stages, n, level, grid, say, t0)
+    by = [calibrate_by] if isinstance(calibrate_by, str) else list(calibrate_by)
+    missing = [c for c in by if c not in table.columns]
+    if missing:
+        raise MftireInputError(f"calibrate_by: no column {missing} in the grouped data "
+                               f"(e.g. sweep_id, Fz_set, Vx_set, P_set, gamma_set)")
+    fold = None
+    if calibrate:
+        if calibrate < 2:
+            raise MftireInputError(f"calibration needs at least 2 folds, got {calibrate}")
+        n_groups = int(table[by].drop_duplicates().shape[0])
+        k = min(int(calibrate), n_groups)
+        if k < 2:
+            raise MftireInputError(f"calibration needs at least 2 distinct {'/'.join(by)} values, got {n_groups}")
+        fold = _fold_ids(table, by, k, np.random.default_rng(None if seed is None else seed + 1))
+        # the fold fits run every stage the full fit ran (a channel the replicates leave at the full fit still
+        # gets out-of-fold residuals)
+        fold_job = _ReplicateFit(fit.parameters, ",".join(str(s) for s in ran) or "all", weights, alpha_star)
+        samples = [*((job, x) for x in samples), *((fold_job, _strip(table[fold != i])) for i in range(k))]
+    else:
+        samples = [(job, x) for x in samples]
+    pending = (executor or Executor()).start_map(_run_job, samples)
+    return PendingBands(pending, fit, rep_stages, n, level, grid, say, t0, fold, by)
 
 
 @dataclass
@@ -395,6 +658,8 @@ class PendingBands:
     grid: pd.DataFrame | None
     say: Callable[[str], None]
     t0: float
+    fold: np.ndarray | None = None
+    by: list[str] = field(default_factory=list)
 
     def result(self) -> Bands:
         """Wait for the replicates and build the bands."""
@@ -403,8 +668,14 @@ class PendingBands:
         stages_txt = rep_stages if isinstance(rep_stages, str) else ",".join(str(s) for s in rep_stages)
         reps: list[TirParameters] = []
         failed = 0
+        fold_fits: list = []
         for b, r in enumerate(self.pending):
-            failed += _collect(r, reps, b, n, say, t0)
+            if b < n:
+                failed += _collect(r, reps, b, n, say, t0)
+            else:
+                fold_fits.append(r)
+                say(f"calibration fold {len(fold_fits)} {'failed' if isinstance(r, str) else 'done'} "
+                    f"({time.perf_counter() - t0:.1f} s)")
         table = fit.data
         keys = list(dict.fromkeys(fit.identified))
         bands = Bands(base=fit.parameters, replicates=reps, level=level, sigma=_residual_sigma(fit, BAND_CHANNELS),
@@ -416,6 +687,12 @@ class PendingBands:
             "confidence band: pointwise replicate quantiles; prediction band: adds the full fit's robust "
             "residual scatter per channel and source in quadrature (use for held-out measured points)",
         ]
+        if self.fold is not None:
+            bands.calibration = _calibrate(table, self.fold, fold_fits, bands.mode, level, self.by, BAND_CHANNELS)
+            bands.notes[-1] = (
+                f"prediction band: conformal calibration on out-of-fold residuals ({len(fold_fits)} folds of "
+                f"{'/'.join(self.by)} groups, refitted without each fold), heteroscedastic scale "
+                "sqrt(a² + (b·f̂)²) per channel and source, band f̂ ± q·s (use for held-out measured points)")
         if grid is None:
             from mftire.compare.data import assign_families, curve_grid
 
