@@ -28,7 +28,7 @@ from mftire.iotools.jsonutil import jsonable
 from mftire.parallel import Executor
 from mftire.tyre import Tyre
 
-__all__ = ["Comparison", "compare", "write_comparison", "bands_frame"]
+__all__ = ["Comparison", "compare", "compare_models", "write_comparison", "bands_frame"]
 
 
 @dataclass
@@ -51,6 +51,9 @@ class Comparison:
         The tables.
     mode : int
         Evaluation mode of the models.
+    heldout : tuple or None
+        ``(column, values)`` of a condition held out of every fit (e.g. ``("Vx", [22.2])``):
+        marked in every figure.
     """
 
     data: pd.DataFrame
@@ -67,9 +70,13 @@ class Comparison:
     bands: pd.DataFrame | None = None
     mode: int = 111
     notes: list[str] = field(default_factory=list)
+    heldout: tuple | None = None
+    characteristics: pd.DataFrame | None = None
 
     def tables(self) -> dict[str, pd.DataFrame]:
         """Every table by name (what ``compare.json`` holds)."""
+        if self.characteristics is not None:
+            return {"characteristics": self.characteristics}
         return {"summary": self.summary, "curve_errors": self.errors, "stiffness": self.stiffness,
                 "trail_summary": self.trail_summary, "trail_points": self.trail,
                 "free_rolling": self.free_rolling}
@@ -88,16 +95,24 @@ class Comparison:
         other); the files do not depend on it."""
         directory = os.fspath(directory)
         os.makedirs(directory, exist_ok=True)
+        kw = {"dpi": dpi, "heldout": self.heldout}
         jobs = [_Plot(plot_family, (fam, self.data, self.grid, self.grid_predictions,
-                                    os.path.join(directory, f"{fam}.png")), {"bands": self.bands, "dpi": dpi})
+                                    os.path.join(directory, f"{fam}.png")), {"bands": self.bands, **kw})
                 for fam in FAMILIES]  # fmt: skip
-        jobs.append(_Plot(plot_stiffness, (self.stiffness, os.path.join(directory, "stiffness.png")), {"dpi": dpi}))
+        if self.characteristics is not None:  # no data: the model curves (and their trail) only
+            jobs.append(_Plot(plot_trail, (self.trail, self.grid, self.grid_predictions,
+                                           os.path.join(directory, "trail.png")), kw))  # fmt: skip
+            out = (executor or Executor()).map(_run_plot, jobs)
+            return [q for p in out for q in ([p] if isinstance(p, str) else (p or []))]
+        jobs.append(_Plot(plot_stiffness, (self.stiffness, os.path.join(directory, "stiffness.png")), kw))
         jobs.append(_Plot(plot_trail, (self.trail, self.grid, self.grid_predictions,
-                                       os.path.join(directory, "trail.png")), {"dpi": dpi}))  # fmt: skip
-        jobs.append(_Plot(plot_free_rolling, (self.free_rolling, os.path.join(directory, "free_rolling.png")),
-                          {"dpi": dpi}))  # fmt: skip
+                                       os.path.join(directory, "trail.png")), kw))  # fmt: skip
+        jobs.append(_Plot(plot_free_rolling, (self.free_rolling, os.path.join(directory, "free_rolling.png")), kw))
         out = (executor or Executor()).map(_run_plot, jobs)
-        return [p for p in out if p]
+        paths: list[str] = []
+        for p in out:
+            paths.extend([p] if isinstance(p, str) else (p or []))
+        return paths
 
 
 @dataclass(frozen=True)
@@ -109,7 +124,7 @@ class _Plot:
     kwargs: dict
 
 
-def _run_plot(job: _Plot) -> str | None:
+def _run_plot(job: _Plot) -> str | list[str] | None:
     return job.fn(*job.args, **job.kwargs)
 
 
@@ -137,6 +152,7 @@ def compare(
     bands=None,
     alpha_window_deg: float = 2.5,
     n_grid: int = 81,
+    heldout: tuple | None = None,
 ) -> Comparison:
     """Compare MF models with sweep data of any sources.
 
@@ -155,6 +171,9 @@ def compare(
         α window of the stiffness fits [deg].
     n_grid : int
         Points per plotted model curve.
+    heldout : tuple, optional
+        ``(column, values)`` of a condition held out of the fits (``column`` in the sweep schema,
+        ``Fz``, ``Vx``, ``P``, ``gamma``, or its ``*_set`` name; values SI): marked in every figure.
     """
     tyres = load_models(models)
     if "curve_id" not in data.columns:
@@ -171,7 +190,7 @@ def compare(
     comp = Comparison(
         data=data, models=tyres, predictions=preds, grid=grid, grid_predictions=gpreds, errors=errors,
         summary=error_summary(errors), stiffness=stiff, trail=trail, trail_summary=trail_summary(trail, stiff),
-        free_rolling=free, bands=bands_frame(bands, grid), mode=mode,
+        free_rolling=free, bands=bands_frame(bands, grid), mode=mode, heldout=heldout,
     )  # fmt: skip
     comp.notes = [
         f"models evaluated with mode {mode} at the exact operating points of every data row",
@@ -181,6 +200,67 @@ def compare(
     ]
     comp.notes += [f"evaluator: {m}" for m in dict.fromkeys(str(w.message) for w in caught)]
     return comp
+
+
+def compare_models(models: Iterable | Mapping, conditions=None, *, mode: int = 111, n_grid: int = 81) -> Comparison:
+    """Compare MF models without data: their curves over usual or given conditions and a table of
+    slip stiffness, cornering stiffness, peak µ and trail with differences to the first model.
+
+    Parameters
+    ----------
+    models : iterable or mapping
+        ``.tir`` paths or :class:`Tyre` objects (``{name: ...}`` to name them).
+    conditions : Conditions, str or mapping, optional
+        :class:`~mftire.compare.conditions.Conditions`, a ``--conditions`` text
+        (``"loads=3000,4500,speeds=60"``) or its parsed mapping; default the usual conditions of
+        the first model (:func:`~mftire.compare.conditions.usual_conditions`).
+    """
+    from mftire.compare.conditions import (
+        Conditions,
+        characteristics,
+        design_sweeps,
+        parse_conditions,
+        usual_conditions,
+    )
+
+    tyres = load_models(models)
+    if not isinstance(conditions, Conditions):
+        over = parse_conditions(conditions) if isinstance(conditions, str) else conditions
+        conditions = usual_conditions(next(iter(tyres.values())), over)
+    data = prepare_comparison_data(design_sweeps(conditions))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        grid = curve_grid(data, n=n_grid)
+        gpreds = evaluate_models(tyres, grid, mode)
+        table = characteristics(tyres, conditions, mode)
+    empty = pd.DataFrame()
+    comp = Comparison(data=data, models=tyres, predictions={}, grid=grid, grid_predictions=gpreds, errors=empty,
+                      summary=empty, stiffness=empty, trail=empty, trail_summary=empty, free_rolling=empty,
+                      mode=mode, characteristics=table)  # fmt: skip
+    comp.notes = [
+        f"no data: models evaluated with mode {mode} over {len(conditions.combinations())} condition(s) "
+        "(loads × speeds × pressures × cambers)",
+        "Kxk, Kya: the MF outputs at zero slip; peak µ: max |F|/Fz over κ ∈ [−0.3, 0.3] / α ∈ [−15°, 15°]; "
+        "t0: trail t at α = 0.5°; d_*_pct: difference to the first model in % of its value",
+    ]
+    comp.notes += [f"evaluator: {m}" for m in dict.fromkeys(str(w.message) for w in caught)]
+    return comp
+
+
+def _characteristics_markdown(comp: Comparison, pngs: list[str]) -> str:
+    t = comp.characteristics.copy()
+    t["Vx"] = t["Vx"] * 3.6
+    t["P"] = t["P"] / 1e5
+    t["gamma"] = np.degrees(t["gamma"])
+    t = t.rename(columns={"Fz": "Fz [N]", "Vx": "V [km/h]", "P": "P [bar]", "gamma": "γ [deg]", "Kxk": "Kxk [N]",
+                          "Kya": "Kya [N/rad]", "t0": "t0 [m]"})
+    L = ["# MF model comparison (no data)", "",
+         f"Models: {', '.join(f'`{m}` ({t.format})' for m, t in comp.models.items())}; differences to "
+         f"`{next(iter(comp.models))}`.", "", "## Notes", ""] + [f"- {n}" for n in comp.notes] + [""]
+    L += ["## Slip stiffness, cornering stiffness, peak µ and trail", "", _md_table(t, max_rows=200)]
+    if pngs:
+        L += ["## Figures", ""] + [f"![{os.path.basename(p)}]({os.path.basename(p)})" for p in pngs] + [""]
+    return "\n".join(L)
 
 
 # ------------------------------------------------------------------------------------
@@ -260,16 +340,18 @@ def write_comparison(comp: Comparison, directory: str | os.PathLike, plots: bool
     os.makedirs(directory, exist_ok=True)
     pngs = comp.plots(directory) if plots else []
     md = os.path.join(directory, "compare.md")
-    write_text_atomic(md, _markdown(comp, pngs))
+    write_text_atomic(md, _characteristics_markdown(comp, pngs) if comp.characteristics is not None
+                      else _markdown(comp, pngs))
     payload = {
         "models": {m: {"file": getattr(t.parameters, "path", None) and str(t.parameters.path), "fittyp": t.fittyp,
                        "format": t.format} for m, t in comp.models.items()},
         "mode": comp.mode,
         "notes": comp.notes,
-        "sources": comp.sources().to_dict(orient="records"),
+        "sources": comp.sources().to_dict(orient="records") if comp.characteristics is None else [],
         **{k: v.to_dict(orient="records") for k, v in comp.tables().items()},
         "units": {"forces": "N", "moments": "N·m", "angles": "rad (alpha_deg, C_*_deg: deg)", "P_set": "Pa",
-                  "Vx_set": "m/s", "t": "m", "C_Fa": "N/rad", "C_Ma": "N·m/rad", "Kya": "N/rad"},
+                  "Vx_set": "m/s", "t": "m", "C_Fa": "N/rad", "C_Ma": "N·m/rad", "Kya": "N/rad", "Kxk": "N",
+                  "t0": "m", "mu_x_peak": "-", "mu_y_peak": "-", "d_*_pct": "%"},
     }
     js = os.path.join(directory, "compare.json")
     write_text_atomic(js, json.dumps(jsonable(payload), indent=1, allow_nan=False) + "\n")

@@ -1,9 +1,21 @@
-"""Comparison figures (matplotlib, object-oriented API, no pyplot), one per curve family plus summaries.
+"""Comparison figures (matplotlib, object-oriented API, no pyplot): every condition of the data, no truncation.
 
-Encoding, the same in every figure: **colour** = the curve within a panel (load, or
-held slip for combined sweeps), **line style** = MF model, **marker** = data source,
-**shaded band** = bootstrap band of a fitted model (light: prediction band, dark:
-confidence band of the mean curve; see :mod:`mftire.fitting.bands`).
+Each family (braking, cornering, combined, combined_alpha) gets one figure per channel,
+``<family>.png`` for its first channel and ``<family>_<channel>.png`` for the others, made of
+small multiples: one panel per operating condition, **columns = speed**, **rows = the
+other set points** (pressure and camber; load too for combined sweeps).  The stiffness,
+trail and free-rolling figures are small multiples by pressure and camber with one colour
+per speed.
+
+Encoding, the same in every figure: **colour** = the curve within a panel (load, or held
+slip for combined sweeps; speed in the stiffness / free-rolling figures), **line style** =
+MF model, **marker** = data source (open: FE surrogate), **shaded band** = bootstrap band
+of a fitted model (light: prediction band, dark: confidence band of the mean curve; see
+:mod:`mftire.fitting.bands`).  A **held-out** condition (not used in any fit) has a red
+frame and "held out" in its panel title, or in its legend entry.
+
+The ``*_figures`` functions return matplotlib :class:`~matplotlib.figure.Figure` objects
+(tests inspect them); the ``plot_*`` functions write them as PNG.
 """
 
 from __future__ import annotations
@@ -19,17 +31,42 @@ from mftire.compare.data import CURVE_KEYS, FAMILY_CHANNELS
 from mftire.iotools.units import PLOT_UNITS
 from mftire.plotting import subplots
 
-__all__ = ["plot_family", "plot_stiffness", "plot_trail", "plot_free_rolling", "match_band"]
+__all__ = ["plot_family", "plot_stiffness", "plot_trail", "plot_free_rolling", "match_band", "family_figures",
+           "stiffness_figure", "trail_figure", "free_rolling_figure", "Heldout", "MAX_COLUMNS"]
 
 _UNITS = PLOT_UNITS
 _LINESTYLES = ("-", "--", ":", "-.", (0, (5, 1, 1, 1)), (0, (1, 3)))
 _MARKERS = ("o", "s", "^", "v", "D", "P", "X", "<", ">")
 _TITLES = {
-    "braking": "Pure braking: Fx against κ (per speed, colour = load)",
-    "cornering": "Pure cornering: Fy, Mz, Mx against α (colour = load)",
-    "combined": "Combined slip: Fx, Fy, Mz against κ at several α (one load per column)",
-    "combined_alpha": "Combined slip: Fx, Fy, Mz against α at several κ (one load per column)",
+    "braking": "Pure braking: {ch} against κ (colour = load)",
+    "cornering": "Pure cornering: {ch} against α (colour = load)",
+    "combined": "Combined slip: {ch} against κ at held α (colour = α)",
+    "combined_alpha": "Combined slip: {ch} against α at held κ (colour = κ)",
 }
+#: Most panel columns in one row of a figure (more wrap to further rows): keeps every panel readable
+#: at the report's width (1200 px).
+MAX_COLUMNS = 5
+_PANEL_W, _PANEL_H, _LEGEND_W = 3.0, 2.45, 2.3  # inches
+_FONT = 8.5
+_SET_COLUMN = {"Fz": "Fz_set", "Vx": "Vx_set", "P": "P_set", "gamma": "gamma_set"}
+
+
+
+#: A held-out condition: ``(column, values)``, e.g. ``("Vx", [22.22])`` (column of the sweep schema or its
+#: ``*_set`` name, values in SI).
+Heldout = tuple
+
+
+def _held_mask(df: pd.DataFrame, heldout: Heldout | None) -> np.ndarray:
+    """Rows of ``df`` (with set-point columns) at a held-out condition (set points within 3 %)."""
+    if heldout is None or len(df) == 0:
+        return np.zeros(len(df), bool)
+    col, values = heldout
+    col = _SET_COLUMN.get(col, col)
+    if col not in df.columns:
+        return np.zeros(len(df), bool)
+    x = df[col].to_numpy(float)
+    return np.any([np.isclose(x, v, rtol=0.03, atol=1e-6) for v in np.atleast_1d(values)], axis=0)
 
 
 def _style_maps(sources: Sequence[str], models: Sequence[str]) -> tuple[dict, dict]:
@@ -62,6 +99,13 @@ def _series_label(family: str, value: float) -> str:
     return f"κ {value:.3g}"
 
 
+def _distinct_colors(n: int, cmap: str = "viridis") -> list:
+    """``n`` colours far enough apart to tell apart (qualitative up to 10, else a sampled map)."""
+    if n <= 10 and cmap == "tab10":
+        return [colormaps["tab10"](i) for i in range(n)]
+    return [colormaps[cmap](x) for x in np.linspace(0.05, 0.92, max(n, 1))][:n]
+
+
 def match_band(bands: pd.DataFrame | None, curve: Mapping) -> pd.DataFrame | None:
     """Rows of a band table (grid format, see :func:`mftire.compare.data.curve_grid`) for one curve.
 
@@ -85,42 +129,58 @@ def match_band(bands: pd.DataFrame | None, curve: Mapping) -> pd.DataFrame | Non
     return (b[b["curve_id"] == first] if first is not None else b).sort_values("x")
 
 
-def plot_family(
+def _layout(keys: list[tuple], pkeys: list[str]) -> tuple[dict, int, int]:
+    """Panel position per condition: columns = speed levels, rows = the other set points; rows wrap at
+    :data:`MAX_COLUMNS` columns.  Returns ``({key: (row, col)}, n_rows, n_cols)``."""
+    iv = pkeys.index("Vx_set")
+    speeds = sorted({k[iv] for k in keys})
+    rest = sorted({k[:iv] + k[iv + 1:] for k in keys})
+    if len(speeds) <= MAX_COLUMNS:
+        pos = {k: (rest.index(k[:iv] + k[iv + 1:]), speeds.index(k[iv])) for k in keys}
+        return pos, len(rest), max(len(speeds), 1)
+    ordered = sorted(keys, key=lambda k: (k[:iv] + k[iv + 1:], k[iv]))
+    pos = {k: divmod(i, MAX_COLUMNS) for i, k in enumerate(ordered)}
+    return pos, math.ceil(len(ordered) / MAX_COLUMNS), MAX_COLUMNS
+
+
+def _legend_width(handles) -> float:
+    """Width [in] the figure legend needs (its longest label at the legend font)."""
+    return max(_LEGEND_W, 0.4 + 0.062 * max((len(h.get_label()) for h in handles), default=0))
+
+
+def _mark_heldout(ax, title: str) -> None:
+    ax.set_title(title + "\nHELD OUT", fontsize=_FONT, color="tab:red")
+    for sp in ax.spines.values():
+        sp.set_edgecolor("tab:red")
+        sp.set_linewidth(2.0)
+
+
+def family_figures(
     family: str,
     data: pd.DataFrame,
     grid: pd.DataFrame,
     grid_predictions: Mapping[str, pd.DataFrame],
-    path: str,
     bands: pd.DataFrame | None = None,
-    max_panels: int = 8,
-    dpi: int = 90,
-) -> str | None:
-    """One figure for a family: rows = channels, columns = conditions (at most ``max_panels``).
+    heldout: Heldout | None = None,
+) -> list[tuple[str, object]]:
+    """The figures of one family, one per channel: ``[(channel, Figure), ...]`` (empty without curves).
 
-    Parameters
-    ----------
-    family : str
-        ``braking``, ``cornering``, ``combined`` or ``combined_alpha``.
-    data : DataFrame
-        Grouped comparison data (points drawn as markers, one per source).
-    grid, grid_predictions
-        Plotting grid (:func:`~mftire.compare.data.curve_grid`) and each model's
-        channels on it (lines, one style per model).
-    bands : DataFrame, optional
-        Band table in grid format with ``{ch}_lo, {ch}_hi, {ch}_pred_lo, {ch}_pred_hi``.
-    path : str
-        PNG to write.
-
-    Returns
-    -------
-    str or None
-        ``path``, or None when the data hold no curve of the family.
+    Every condition of the data (all speeds, pressures, cambers; loads too for combined
+    sweeps) gets its own panel; see the module docstring for the layout and encoding.
     """
-    channels = [c for c in FAMILY_CHANNELS[family] if c in data.columns and data[c].notna().any()]
     d = data[data["family"] == family]
     gr = grid[grid["family"] == family]
+
+    no_data = not any(c in data.columns and data[c].notna().any() for c in FAMILY_CHANNELS[family])
+
+    def drawn(c: str) -> bool:  # a channel of the data, or (a comparison without data) of the models
+        if c in data.columns and data[c].notna().any():
+            return True
+        return no_data and any(c in p.columns for p in grid_predictions.values())
+
+    channels = [c for c in FAMILY_CHANNELS[family] if drawn(c)]
     if (d.empty and gr.empty) or not channels:
-        return None
+        return []
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
@@ -128,27 +188,27 @@ def plot_family(
     src_all = list(dict.fromkeys(data["source"]))
     models = list(grid_predictions)
     markers, styles = _style_maps(src_all, models)
-    curves = gr.drop_duplicates("curve_id") if len(gr) else d.drop_duplicates("curve_id")
-    panels = list(curves.groupby(pkeys, sort=True))[:max_panels]
+    curves = pd.concat([gr.drop_duplicates("curve_id"), d.drop_duplicates("curve_id")]).drop_duplicates("curve_id")
+    panels = list(curves.groupby(pkeys, sort=True))
+    keys = [k if isinstance(k, tuple) else (k,) for k, _ in panels]
+    pos, nrow, ncol = _layout(keys, pkeys)
     series_vals = sorted(curves[skey].unique())
-    cmap = colormaps["viridis"] if family in ("braking", "cornering") else colormaps["coolwarm"]
-    colors = {v: cmap(x) for v, x in zip(series_vals, np.linspace(0.05, 0.9, max(len(series_vals), 1)),
-                                          strict=False)}
-    ncol, nrow = len(panels), len(channels)
-    wrap = nrow == 1 and ncol > 3  # one channel: panels in rows of three
-    fig_cols, fig_rows = (3, math.ceil(ncol / 3)) if wrap else (ncol, nrow)
-    fig, grid_axes = subplots(fig_rows, fig_cols, figsize=(3.6 * fig_cols + 1.8, 2.8 * fig_rows + 0.6),
-                                  squeeze=False)
-    axes = grid_axes.reshape(1, -1) if wrap else grid_axes
-    for ax in list(axes.flat)[ncol * nrow:]:
-        ax.set_visible(False)
+    cols = _distinct_colors(len(series_vals), "viridis" if family in ("braking", "cornering") else "coolwarm")
+    colors = dict(zip(series_vals, cols, strict=True))
     var = "alpha" if family in ("cornering", "combined_alpha") else "kappa"
     xs = 180 / math.pi if var == "alpha" else 1.0
-    has_band = False
-    for j, (pkey, pcurves) in enumerate(panels):
-        pk = dict(zip(pkeys, pkey if isinstance(pkey, tuple) else (pkey,), strict=True))
-        for i, ch in enumerate(channels):
-            ax = axes[i, j]
+    xlabel = "α [deg]" if var == "alpha" else "κ [-]"
+    out = []
+    for ch in channels:
+        width = _PANEL_W * ncol + _LEGEND_W + 0.055 * max(0, max(len(f"MF: {m}") for m in models) - 24)
+        fig, axes = subplots(nrow, ncol, figsize=(width, _PANEL_H * nrow + 0.7), squeeze=False)
+        used_axes = set()
+        has_band = False
+        for key, (pkey, pcurves) in zip(keys, panels, strict=True):
+            pk = dict(zip(pkeys, key, strict=True))
+            r, c = pos[key]
+            ax = axes[r, c]
+            used_axes.add((r, c))
             for _, cur in pcurves.iterrows():
                 color = colors[cur[skey]]
                 cid = cur["curve_id"]
@@ -160,36 +220,70 @@ def plot_family(
                     has_band = True
                 g = gr[gr["curve_id"] == cid]
                 for m in models:
-                    pred = grid_predictions[m].loc[g.index, ch]
-                    ax.plot(g["x"] * xs, pred, linestyle=styles[m], color=color, lw=1.3)
-                pts = d[(d["curve_id"] == cid) & d[ch].notna()]
-                for src, s in pts.groupby("source", sort=False):
-                    ax.plot(s[var] * xs, s[ch], linestyle="none", marker=markers[src], ms=3.2, color=color,
-                            alpha=0.75, mfc="none" if str(s["origin"].iloc[0]) == "fe" else color)
-            if i == 0:
-                ax.set_title(_cond_title(pk), fontsize=8)
-            if i == nrow - 1:
-                ax.set_xlabel("α [deg]" if var == "alpha" else "κ [-]", fontsize=8)
-            if j == 0 or (wrap and j % 3 == 0):
-                ax.set_ylabel(f"{ch} [{_UNITS[ch]}]", fontsize=8)
-            ax.tick_params(labelsize=7)
+                    ax.plot(g["x"] * xs, grid_predictions[m].loc[g.index, ch], linestyle=styles[m], color=color,
+                            lw=1.3)
+                pts = d[(d["curve_id"] == cid) & d[ch].notna()] if ch in d.columns else d.iloc[:0]
+                for src, sp in pts.groupby("source", sort=False):
+                    ax.plot(sp[var] * xs, sp[ch], linestyle="none", marker=markers[src], ms=3.2, color=color,
+                            alpha=0.75, mfc="none" if str(sp["origin"].iloc[0]) == "fe" else color)
+            title = _cond_title(pk)
+            if _held_mask(pd.DataFrame([pk]), heldout).any():
+                _mark_heldout(ax, title)
+            else:
+                ax.set_title(title, fontsize=_FONT)
+            ax.set_xlabel(xlabel, fontsize=_FONT)
+            ax.set_ylabel(f"{ch} [{_UNITS[ch]}]", fontsize=_FONT)
+            ax.tick_params(labelsize=_FONT - 1)
             ax.grid(True, lw=0.3)
-    handles = [Line2D([], [], color=colors[v], lw=3, label=_series_label(family, v)) for v in series_vals]
-    handles += [Line2D([], [], color="k", linestyle=styles[m], lw=1.3, label=f"MF: {m}") for m in models]
-    used = list(dict.fromkeys(d["source"]))
-    for s in used:
-        fe = str(d.loc[d["source"] == s, "origin"].iloc[0]) == "fe"
-        handles.append(Line2D([], [], color="0.3", marker=markers[s], linestyle="none", mfc="none" if fe else "0.3",
-                              label=f"{'FE' if fe else 'data'}: {s}"))
-    if has_band:
-        handles += [Patch(color="0.5", alpha=0.35, label="confidence band (mean curve)"),
-                    Patch(color="0.5", alpha=0.13, label="prediction band (+ scatter)")]
-    fig.legend(handles=handles, loc="center right", fontsize=7, frameon=False)
-    fig.suptitle(_TITLES[family] + ("" if len(curves.groupby(pkeys)) <= max_panels
-                                    else f" (first {max_panels} conditions)"), fontsize=10)
-    fig.tight_layout(rect=(0, 0, 1 - 1.7 / (3.6 * fig_cols + 1.8), 0.96))
-    _save(fig, path, dpi)
-    return path
+        for r in range(nrow):
+            for c in range(ncol):
+                if (r, c) not in used_axes:
+                    axes[r, c].set_visible(False)
+        handles = [Line2D([], [], color=colors[v], lw=3, label=_series_label(family, v)) for v in series_vals]
+        handles += [Line2D([], [], color="k", linestyle=styles[m], lw=1.3, label=f"MF: {m}") for m in models]
+        for sname in dict.fromkeys(d.loc[d[ch].notna(), "source"] if ch in d.columns else []):
+            fe = str(d.loc[d["source"] == sname, "origin"].iloc[0]) == "fe"
+            handles.append(Line2D([], [], color="0.3", marker=markers[sname], linestyle="none",
+                                  mfc="none" if fe else "0.3", label=f"{'FE' if fe else 'data'}: {sname}"))
+        if has_band:
+            handles += [Patch(color="0.5", alpha=0.35, label="confidence band (mean curve)"),
+                        Patch(color="0.5", alpha=0.13, label="prediction band (new point)")]
+        if heldout is not None:
+            handles.append(Patch(facecolor="none", edgecolor="tab:red", lw=2, label="held-out condition"))
+        fig.legend(handles=handles, loc="center right", fontsize=_FONT, frameon=False)
+        fig.suptitle(_TITLES[family].format(ch=ch) + f": {len(panels)} conditions", fontsize=_FONT + 2)
+        fig.tight_layout(rect=(0, 0, 1 - _legend_width(handles) / width, 0.97))
+        out.append((ch, fig))
+    return out
+
+
+def family_file(family: str, channel: str, first: bool) -> str:
+    """File name of a family figure: ``<family>.png`` for the first channel, else ``<family>_<channel>.png``."""
+    return f"{family}.png" if first else f"{family}_{channel}.png"
+
+
+def plot_family(
+    family: str,
+    data: pd.DataFrame,
+    grid: pd.DataFrame,
+    grid_predictions: Mapping[str, pd.DataFrame],
+    path: str,
+    bands: pd.DataFrame | None = None,
+    dpi: int = 90,
+    heldout: Heldout | None = None,
+) -> list[str]:
+    """Write the family's figures (:func:`family_figures`): ``path`` for its first channel and
+    ``<stem>_<channel>.png`` beside it for the others.  Returns the paths written (empty
+    when the data hold no curve of the family)."""
+    import os
+
+    stem, ext = os.path.splitext(path)
+    written = []
+    for i, (ch, fig) in enumerate(family_figures(family, data, grid, grid_predictions, bands, heldout)):
+        p = path if i == 0 else f"{stem}_{ch}{ext}"
+        _save(fig, p, dpi)
+        written.append(p)
+    return written
 
 
 def _save(fig, path: str, dpi: int) -> None:
@@ -199,18 +293,36 @@ def _save(fig, path: str, dpi: int) -> None:
         fig.savefig(tmp, dpi=dpi, format="png")
 
 
-def _cond_groups(df: pd.DataFrame) -> tuple[list, dict]:
-    keys = sorted({tuple(r) for r in df[["gamma_set", "P_set", "Vx_set"]].to_numpy(float)})
-    cols = colormaps["tab10"](np.arange(len(keys)) % 10)
-    return keys, {k: cols[i] for i, k in enumerate(keys)}
+def _pg_panels(df: pd.DataFrame) -> list[tuple[float, float]]:
+    """(γ, P) panels of the summary figures."""
+    return sorted({(float(a), float(b)) for a, b in df[["gamma_set", "P_set"]].to_numpy(float)})
 
 
-def _cond_label(k) -> str:
-    return f"γ {math.degrees(k[0]):.1f}°, {k[1] / 1e5:.3g} bar, {k[2] * 3.6:.0f} km/h"
+def _pg_title(k) -> str:
+    return f"γ {math.degrees(k[0]):.1f}°, {k[1] / 1e5:.3g} bar"
 
 
-def plot_stiffness(stiffness: pd.DataFrame, path: str, dpi: int = 90) -> str | None:
-    """Cornering and aligning stiffness [per deg] against load: data markers, model lines."""
+def _speed_colors(df: pd.DataFrame) -> dict:
+    speeds = sorted(set(df["Vx_set"].astype(float)))
+    return dict(zip(speeds, _distinct_colors(len(speeds), "plasma"), strict=True))
+
+
+def _speed_label(v: float, heldout: Heldout | None) -> str:
+    held = _held_mask(pd.DataFrame({"Vx_set": [v]}), heldout).any()
+    return f"{v * 3.6:.0f} km/h" + (" (held out)" if held else "")
+
+
+def _panel_axes(n: int, extra_rows: int = 1) -> tuple:
+    ncol = min(n, 3)
+    nrow = math.ceil(n / ncol)
+    width = 4.0 * ncol + _LEGEND_W
+    fig, axes = subplots(nrow * extra_rows, ncol, figsize=(width, 3.1 * nrow * extra_rows + 0.7), squeeze=False)
+    return fig, axes, nrow, ncol, width
+
+
+def stiffness_figure(stiffness: pd.DataFrame, heldout: Heldout | None = None):
+    """Cornering and aligning stiffness [per deg] against load: one pair of panels per pressure and camber,
+    one colour per speed; data markers, model lines.  None without stiffness values."""
     if stiffness.empty or stiffness["C_Fa"].notna().sum() == 0:
         return None
     from matplotlib.lines import Line2D
@@ -218,70 +330,99 @@ def plot_stiffness(stiffness: pd.DataFrame, path: str, dpi: int = 90) -> str | N
     sources = list(dict.fromkeys(stiffness["source"]))
     models = [w for w in dict.fromkeys(stiffness["who"]) if w != "data"]
     markers, styles = _style_maps(sources, models)
-    keys, colors = _cond_groups(stiffness)
-    fig, axes = subplots(1, 2, figsize=(11, 3.8))
-    what = ((axes[0], "C_Fa_deg", "C_Fα = dFy/dα [N/deg]"), (axes[1], "C_Ma_deg", "C_Mα = dMz/dα [N·m/deg]"))
-    for ax, col, lab in what:
-        for (who, src, g0, p0, v0), g in stiffness.groupby(["who", "source", "gamma_set", "P_set", "Vx_set"]):
-            g = g.sort_values("Fz_set")
-            c = colors[(g0, p0, v0)]
-            if who == "data":
-                fe = str(g["origin"].iloc[0]) == "fe"
-                ax.plot(g["Fz_set"], g[col], linestyle="none", marker=markers[src], color=c, mfc="none" if fe else c)
-            else:
-                ax.plot(g["Fz_set"], g[col], linestyle=styles[who], color=c, lw=1.2)
-        ax.set_xlabel("Fz [N]")
-        ax.set_ylabel(lab)
-        ax.grid(True, lw=0.3)
-    handles = [Line2D([], [], color=colors[k], lw=3, label=_cond_label(k)) for k in keys]
+    colors = _speed_colors(stiffness)
+    pgs = _pg_panels(stiffness)
+    fig, axes, nrow, ncol, width = _panel_axes(len(pgs), extra_rows=2)
+    what = (("C_Fa_deg", "C_Fα = dFy/dα [N/deg]"), ("C_Ma_deg", "C_Mα = dMz/dα [N·m/deg]"))
+    for i, pg in enumerate(pgs):
+        r, c = divmod(i, ncol)
+        sub = stiffness[np.isclose(stiffness["gamma_set"], pg[0]) & np.isclose(stiffness["P_set"], pg[1])]
+        for j, (col, lab) in enumerate(what):
+            ax = axes[2 * r + j, c]
+            for (who, src, v0), g in sub.groupby(["who", "source", "Vx_set"]):
+                g = g.sort_values("Fz_set")
+                cc = colors[v0]
+                if who == "data":
+                    fe = str(g["origin"].iloc[0]) == "fe"
+                    ax.plot(g["Fz_set"], g[col], linestyle="none", marker=markers[src], color=cc,
+                            mfc="none" if fe else cc)
+                else:
+                    ax.plot(g["Fz_set"], g[col], linestyle=styles[who], color=cc, lw=1.2)
+            ax.set_title(_pg_title(pg), fontsize=_FONT)
+            ax.set_xlabel("Fz [N]", fontsize=_FONT)
+            ax.set_ylabel(lab, fontsize=_FONT)
+            ax.tick_params(labelsize=_FONT - 1)
+            ax.grid(True, lw=0.3)
+    for k in range(len(pgs), nrow * ncol):
+        r, c = divmod(k, ncol)
+        axes[2 * r, c].set_visible(False)
+        axes[2 * r + 1, c].set_visible(False)
+    handles = [Line2D([], [], color=colors[v], lw=3, label=_speed_label(v, heldout)) for v in colors]
     handles += [Line2D([], [], color="k", linestyle=styles[m], label=f"MF: {m}") for m in models]
     handles += [Line2D([], [], color="0.3", marker=markers[s], linestyle="none", label=f"data: {s}") for s in sources]
-    fig.legend(handles=handles, loc="center right", fontsize=7, frameon=False)
-    fig.suptitle("Cornering and aligning stiffness against load (linear LSQ over |α| ≤ 2.5°)", fontsize=10)
-    fig.tight_layout(rect=(0, 0, 0.8, 0.95))
+    fig.legend(handles=handles, loc="center right", fontsize=_FONT, frameon=False)
+    fig.suptitle("Cornering and aligning stiffness against load (linear LSQ over |α| ≤ 2.5°), colour = speed",
+                 fontsize=_FONT + 2)
+    fig.tight_layout(rect=(0, 0, 1 - _LEGEND_W / width, 0.96))
+    return fig
+
+
+def plot_stiffness(stiffness: pd.DataFrame, path: str, dpi: int = 90, heldout: Heldout | None = None) -> str | None:
+    """Write :func:`stiffness_figure` to ``path``."""
+    fig = stiffness_figure(stiffness, heldout)
+    if fig is None:
+        return None
     _save(fig, path, dpi)
     return path
 
 
-def plot_trail(
-    trail: pd.DataFrame, grid: pd.DataFrame, grid_predictions: Mapping[str, pd.DataFrame], path: str,
-    max_panels: int = 6, dpi: int = 90,
-) -> str | None:
-    """Pneumatic trail against α per condition: data estimate −Mz/Fy (markers), model ``t`` (lines)."""
+def trail_figure(trail: pd.DataFrame, grid: pd.DataFrame, grid_predictions: Mapping[str, pd.DataFrame],
+                 heldout: Heldout | None = None):
+    """Pneumatic trail against α, one panel per condition (all of them): data estimate −Mz/Fy
+    (markers), model ``t`` (lines), colour = load.  None without cornering curves."""
     gr = grid[grid["family"] == "cornering"]
     if trail.empty and gr.empty:
         return None
     from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
 
+    if trail.empty:
+        trail = pd.DataFrame(columns=["source", "origin", "sweep_id", "alpha", "alpha_deg", "t_data", "gamma_set",
+                                      "P_set", "Vx_set", "Fz_set"])
     pts = trail.drop_duplicates(["source", "sweep_id", "alpha"])
     sources = list(dict.fromkeys(pts["source"])) if len(pts) else []
     models = list(grid_predictions)
     markers, styles = _style_maps(sources, models)
-    base = gr if len(gr) else pts
-    panels = list(base.groupby(["gamma_set", "P_set", "Vx_set"], sort=True))[:max_panels]
+    pkeys = ["gamma_set", "P_set", "Vx_set"]
+    base = pd.concat([gr[pkeys + ["Fz_set"]], pts[pkeys + ["Fz_set"]]]) if len(pts) else gr
+    keys = sorted({tuple(k) for k in base[pkeys].to_numpy(float)})
+    pos, nrow, ncol = _layout(keys, pkeys)
     loads = sorted(set(base["Fz_set"]))
-    colors = {v: colormaps["viridis"](x)
-              for v, x in zip(loads, np.linspace(0.05, 0.9, max(len(loads), 1)), strict=False)}
-    fig, axes = subplots(1, len(panels), figsize=(4.2 * len(panels) + 1.8, 3.6), squeeze=False)
-    for ax, (key, _) in zip(axes[0], panels, strict=True):
+    colors = dict(zip(loads, _distinct_colors(len(loads)), strict=True))
+    width = _PANEL_W * ncol + _LEGEND_W
+    fig, axes = subplots(nrow, ncol, figsize=(width, _PANEL_H * nrow + 0.7), squeeze=False)
+    used = set()
+    for key in keys:
+        r, c = pos[key]
+        ax = axes[r, c]
+        used.add((r, c))
 
         def sel(df, key=key):
             return df[np.isclose(df["gamma_set"], key[0]) & np.isclose(df["P_set"], key[1])
                       & np.isclose(df["Vx_set"], key[2])]
 
         yv = []
+        g = sel(gr)
         for m in models:
-            g = sel(gr)
             for fz, gg in g.groupby("Fz_set"):
                 t = grid_predictions[m].loc[gg.index, "t"]
                 ax.plot(np.degrees(gg["x"]), t, linestyle=styles[m], color=colors[fz], lw=1.2)
                 yv.append(t.to_numpy(float))
-        p = sel(pts)
-        for (src, fz), s in p.groupby(["source", "Fz_set"]):
-            fe = str(s["origin"].iloc[0]) == "fe"
-            ax.plot(s["alpha_deg"], s["t_data"], linestyle="none", marker=markers[src], ms=3.2, color=colors[fz],
+        for (src, fz), sp in sel(pts).groupby(["source", "Fz_set"]):
+            fe = str(sp["origin"].iloc[0]) == "fe"
+            ax.plot(sp["alpha_deg"], sp["t_data"], linestyle="none", marker=markers[src], ms=3.2, color=colors[fz],
                     mfc="none" if fe else colors[fz], alpha=0.8)
-            yv.append(s["t_data"].to_numpy(float))
+            yv.append(sp["t_data"].to_numpy(float))
         if yv:
             y = np.concatenate(yv)
             y = y[np.isfinite(y)]
@@ -289,23 +430,45 @@ def plot_trail(
                 lo, hi = np.quantile(y, [0.02, 0.98])
                 pad = 0.1 * (hi - lo) + 1e-4
                 ax.set_ylim(lo - pad, hi + pad)
-        ax.set_title(_cond_label(key), fontsize=8)
-        ax.set_xlabel("α [deg]")
-        ax.set_ylabel("pneumatic trail t [m]")
+        title = _cond_title(dict(zip(pkeys, key, strict=True)))
+        if _held_mask(pd.DataFrame([dict(zip(pkeys, key, strict=True))]), heldout).any():
+            _mark_heldout(ax, title)
+        else:
+            ax.set_title(title, fontsize=_FONT)
+        ax.set_xlabel("α [deg]", fontsize=_FONT)
+        ax.set_ylabel("trail t [m]", fontsize=_FONT)
+        ax.tick_params(labelsize=_FONT - 1)
         ax.grid(True, lw=0.3)
+    for r in range(nrow):
+        for c in range(ncol):
+            if (r, c) not in used:
+                axes[r, c].set_visible(False)
     handles = [Line2D([], [], color=colors[v], lw=3, label=f"Fz {v:.0f} N") for v in loads]
     handles += [Line2D([], [], color="k", linestyle=styles[m], label=f"MF t: {m}") for m in models]
     handles += [Line2D([], [], color="0.3", marker=markers[s], linestyle="none", label=f"−Mz/Fy: {s}")
                 for s in sources]
-    fig.legend(handles=handles, loc="center right", fontsize=7, frameon=False)
-    fig.suptitle("Pneumatic trail against α (data: −Mz/Fy where |Fy| ≥ 10 % of the sweep's peak)", fontsize=10)
-    fig.tight_layout(rect=(0, 0, 1 - 1.7 / (4.2 * len(panels) + 1.8), 0.93))
+    if heldout is not None:
+        handles.append(Patch(facecolor="none", edgecolor="tab:red", lw=2, label="held-out condition"))
+    fig.legend(handles=handles, loc="center right", fontsize=_FONT, frameon=False)
+    fig.suptitle(f"Pneumatic trail against α, {len(keys)} conditions (data: −Mz/Fy where |Fy| ≥ 10 % of the "
+                 "sweep's peak)", fontsize=_FONT + 2)
+    fig.tight_layout(rect=(0, 0, 1 - _LEGEND_W / width, 0.96))
+    return fig
+
+
+def plot_trail(trail: pd.DataFrame, grid: pd.DataFrame, grid_predictions: Mapping[str, pd.DataFrame], path: str,
+               dpi: int = 90, heldout: Heldout | None = None) -> str | None:
+    """Write :func:`trail_figure` to ``path``."""
+    fig = trail_figure(trail, grid, grid_predictions, heldout)
+    if fig is None:
+        return None
     _save(fig, path, dpi)
     return path
 
 
-def plot_free_rolling(free: pd.DataFrame, path: str, dpi: int = 90) -> str | None:
-    """Free-rolling Fx (κ = 0) against load: data markers, model lines, colour per condition."""
+def free_rolling_figure(free: pd.DataFrame, heldout: Heldout | None = None):
+    """Free-rolling Fx (κ = 0) against load: one panel per pressure and camber, one colour per speed;
+    data markers, model lines.  None without free-rolling values."""
     if free.empty:
         return None
     from matplotlib.lines import Line2D
@@ -313,25 +476,42 @@ def plot_free_rolling(free: pd.DataFrame, path: str, dpi: int = 90) -> str | Non
     sources = list(dict.fromkeys(free["source"]))
     models = [m for m in dict.fromkeys(free["model"]) if m]
     markers, styles = _style_maps(sources, models)
-    keys, colors = _cond_groups(free)
-    fig, ax = subplots(figsize=(8, 3.8))
-    for (src, g0, p0, v0), g in free.groupby(["source", "gamma_set", "P_set", "Vx_set"]):
-        c = colors[(g0, p0, v0)]
-        d = g.drop_duplicates("sweep_id").sort_values("Fz_set")
-        fe = str(d["origin"].iloc[0]) == "fe"
-        ax.plot(d["Fz_set"], d["Fx0_data"], linestyle="none", marker=markers[src], color=c, mfc="none" if fe else c)
-        for m in models:
-            gm = g[g["model"] == m].sort_values("Fz_set")
-            ax.plot(gm["Fz_set"], gm["Fx0_model"], linestyle=styles[m], color=c, lw=1.2)
-    ax.set_xlabel("Fz [N]")
-    ax.set_ylabel("Fx at κ = 0 [N]")
-    ax.grid(True, lw=0.3)
-    handles = [Line2D([], [], color=colors[k], lw=3, label=_cond_label(k)) for k in keys]
+    colors = _speed_colors(free)
+    pgs = _pg_panels(free)
+    fig, axes, nrow, ncol, width = _panel_axes(len(pgs))
+    for i, pg in enumerate(pgs):
+        ax = axes[divmod(i, ncol)]
+        sub = free[np.isclose(free["gamma_set"], pg[0]) & np.isclose(free["P_set"], pg[1])]
+        for (src, v0), g in sub.groupby(["source", "Vx_set"]):
+            cc = colors[v0]
+            dd = g.drop_duplicates("sweep_id").sort_values("Fz_set")
+            fe = str(dd["origin"].iloc[0]) == "fe"
+            ax.plot(dd["Fz_set"], dd["Fx0_data"], linestyle="none", marker=markers[src], color=cc,
+                    mfc="none" if fe else cc)
+            for m in models:
+                gm = g[g["model"] == m].sort_values("Fz_set")
+                ax.plot(gm["Fz_set"], gm["Fx0_model"], linestyle=styles[m], color=cc, lw=1.2)
+        ax.set_title(_pg_title(pg), fontsize=_FONT)
+        ax.set_xlabel("Fz [N]", fontsize=_FONT)
+        ax.set_ylabel("Fx at κ = 0 [N]", fontsize=_FONT)
+        ax.tick_params(labelsize=_FONT - 1)
+        ax.grid(True, lw=0.3)
+    for k in range(len(pgs), nrow * ncol):
+        axes[divmod(k, ncol)].set_visible(False)
+    handles = [Line2D([], [], color=colors[v], lw=3, label=_speed_label(v, heldout)) for v in colors]
     handles += [Line2D([], [], color="k", linestyle=styles[m], label=f"MF: {m}") for m in models]
     handles += [Line2D([], [], color="0.3", marker=markers[s], linestyle="none", label=f"data: {s}") for s in sources]
-    fig.legend(handles=handles, loc="center right", fontsize=7, frameon=False)
-    fig.suptitle("Free-rolling Fx (κ = 0) per condition", fontsize=10)
-    fig.tight_layout(rect=(0, 0, 0.68, 0.93))
+    fig.legend(handles=handles, loc="center right", fontsize=_FONT, frameon=False)
+    fig.suptitle("Free-rolling Fx (κ = 0) against load, colour = speed", fontsize=_FONT + 2)
+    fig.tight_layout(rect=(0, 0, 1 - _LEGEND_W / width, 0.93))
+    return fig
+
+
+def plot_free_rolling(free: pd.DataFrame, path: str, dpi: int = 90, heldout: Heldout | None = None) -> str | None:
+    """Write :func:`free_rolling_figure` to ``path``."""
+    fig = free_rolling_figure(free, heldout)
+    if fig is None:
+        return None
     _save(fig, path, dpi)
     return path
 
