@@ -242,13 +242,30 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _one_line_warning(prefix: str):
-    """``warnings.showwarning`` replacement: one line, no source line."""
+class _OneLineWarnings:
+    """``warnings.showwarning`` replacement: one line, no source line, and each distinct message
+    printed once; :meth:`repeats` prints how often the repeated ones came (``(×N in all)``)."""
 
-    def show(message, category, filename, lineno, file=None, line=None) -> None:
-        print(f"{prefix}: warning: {message}", file=sys.stderr if file is None else file)
+    def __init__(self, prefix: str) -> None:
+        self.prefix = prefix
+        self.counts: dict[str, int] = {}
 
-    return show
+    def __call__(self, message, category, filename, lineno, file=None, line=None) -> None:
+        text = str(message)
+        self.counts[text] = self.counts.get(text, 0) + 1
+        if self.counts[text] == 1:
+            print(f"{self.prefix}: warning: {text}", file=sys.stderr if file is None else file)
+
+    def repeats(self) -> None:
+        for text, n in self.counts.items():
+            if n > 1:
+                print(f"{self.prefix}: warning (×{n} in all): {text}", file=sys.stderr)
+
+
+def _one_line_warning(prefix: str) -> _OneLineWarnings:
+    """``warnings.showwarning`` replacement: one line, no source line, each message once (see
+    :class:`_OneLineWarnings`)."""
+    return _OneLineWarnings(prefix)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -257,9 +274,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     prefix = f"mftire {args.command}"
+    shown = _one_line_warning(prefix)
     try:
         with warnings.catch_warnings():
-            warnings.showwarning = _one_line_warning(prefix)
+            warnings.showwarning = shown
             rc = int(args.func(args) or 0)
         sys.stdout.flush()
         return rc
@@ -271,6 +289,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"{prefix}: interrupted", file=sys.stderr)
         return 130
+    finally:
+        shown.repeats()
 
 
 def _broken_pipe() -> int:

@@ -100,7 +100,7 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
 
     out = os.fspath(output)
     os.makedirs(out, exist_ok=True)
-    step = _Steps(9, progress)
+    step = _Steps(9, progress)  # fmt: skip
 
     step("FE-surrogate campaign of the default tyre" + (" (quick grid)" if quick else ""))
     fe_tyre = load_tyre(None)
@@ -127,8 +127,6 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
     # with workers, the diagnosis goes to the first free one and the bootstrap refits (they need only the
     # fit) queue behind it: as many busy processes as workers, the diagnosis (which the rest waits for) first
     diag_pending = executor.start_map(_diagnose_task, [(meas, fitted, 49 if quick else 99)])
-    bands_pending = start_bootstrap_bands(None, template, n=4 if quick else 12, fit=fit, stages="1,2,3", seed=0,
-                                          executor=executor)  # fmt: skip
 
     step("diagnosis of the measured residual")
     diag = diag_pending.result()[0]
@@ -137,6 +135,19 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
     if extended is not None:
         extended.name = "MF 6.1 + " + diag.effect.name
         write_tir(extended.parameters, os.path.join(out, "extended.tir"))
+    # the bands are made without the held-out condition (fit warm-started from the full fit), so that the
+    # held-out points test them honestly; the bootstrap refits run while the FMU is written
+    heldout = None
+    held_rows = pd.Series(False, index=both.index)
+    if diag.holdout is not None and diag.train is not None and len(diag.train) == len(meas):
+        heldout = (diag.holdout["column"], list(diag.holdout["values"]))
+        # the diagnosis keeps the measured rows in order (its table is the campaign with sweep columns added)
+        held_rows = pd.Series(False, index=both.index)
+        held_rows.iloc[len(fe):] = ~diag.train
+    band_fit = fit_tir(both[~held_rows.to_numpy()], fit.parameters, weights="fe=1,measured=4", progress=False) \
+        if held_rows.any() else fit
+    bands_pending = start_bootstrap_bands(None, template, n=4 if quick else 12, fit=band_fit, stages="1,2,3", seed=0,
+                                          calibrate=5, executor=executor)  # fmt: skip
 
     step("FMU of the " + ("extended" if extended is not None else "fitted") + " model")
     fmu_info: dict = {}
@@ -149,19 +160,17 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
     except Exception as exc:  # noqa: BLE001 - the report says why there is no FMU
         fmu_info = {"error": str(exc)}
 
-    step("bootstrap bands over sweeps")
-    heldout_rows = diag.data is not None and diag.train is not None
+    step("bootstrap bands over sweeps, calibrated on out-of-fold sweeps")
     bands = bands_pending.result()
     coverage = None
-    if heldout_rows:
-        held = diag.data[~diag.train]
-        coverage = coverage_table(bands, held.assign(source="measured"))
+    if held_rows.any():
+        coverage = coverage_table(bands, meas[~diag.train].assign(source="measured"))
 
     step("curve comparison: MF against FE against measured")
     models = {"MF fit": fitted}
     if extended is not None:
         models["MF + " + diag.effect.name] = extended
-    comp = compare(models, both, bands=bands)
+    comp = compare(models, both, bands=bands, heldout=heldout)
     fig_dir = os.path.join(out, "figures")
     os.makedirs(fig_dir, exist_ok=True)
     plots = comp.plots(fig_dir, executor=executor)
@@ -179,10 +188,17 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
         "fitted_coefficients": len(dict.fromkeys(fit.identified)), "not_identified": len(fit.not_identified),
         **_diagnosis_numbers(diag),
     }  # fmt: skip
+    summary["band_level"] = bands.level
     if coverage is not None and len(coverage):
         last = coverage.iloc[-1]
-        summary["band_level"] = bands.level
         summary["heldout_inside_prediction_band"] = float(last["inside_prediction"])
+        for r in coverage.itertuples(index=False):
+            if r.channel != "all":
+                summary[f"heldout_{r.channel}_inside_prediction_band"] = float(r.inside_prediction)
+    if bands.calibration is not None:
+        for ch, per in bands.calibration.cv_coverage.items():
+            if "measured" in per:
+                summary[f"cv_{ch}_inside_prediction_band"] = per["measured"]
     summary["rig"] = {k: rig.summary[k] for k in ("cause", "effect", "heldout_load_N")}
     summary["rig"].update({k: v for k, v in rig.summary.items() if k.startswith("heldout_") and "rms" in k})
     rep.add_numbers("summary", summary)
@@ -213,10 +229,17 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
                            "(mftire.diagnosis.profile)")  # fmt: skip
             rep.add_figure(p, caption=caption)
     rep.add_heading("Uncertainty")
-    rep.add_text(f"Bootstrap over sweeps, {len(bands.replicates)} replicates, level {bands.level:g}: "
-                 "prediction bands (replicate spread plus residual scatter).")  # fmt: skip
+    rep.add_text(f"Bootstrap over sweeps, {len(bands.replicates)} replicates, level {bands.level:g}, of a fit without "
+                 "the held-out condition: confidence band of the mean curve; prediction band calibrated "
+                 "(split conformal, heteroscedastic scale per channel, source and slip class) on out-of-fold "
+                 "sweeps. " + " ".join(bands.notes))  # fmt: skip
     if coverage is not None:
         rep.add_table(coverage, caption="held-out measured points inside the bands", key="band_coverage")
+    if bands.calibration is not None:
+        rep.add_table(pd.DataFrame([{"channel": ch, "source": src, "inside_prediction": v, "nominal": bands.level}
+                                    for ch, per in bands.calibration.cv_coverage.items() for src, v in per.items()]),
+                      caption="cross-validated coverage: each fold of sweeps against the band calibrated on the "
+                              "others, by a model fitted without it", key="band_cv_coverage")  # fmt: skip
     _rig_section(rep, rig, out)
     rep.add_heading("Outputs")
     rep.add_numbers("files", {"fitted_tir": "fitted.tir", "extended_tir": "extended.tir" if extended else None,
@@ -225,9 +248,38 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
                               "rig_diagnosis": "rig_diagnosis/diagnosis.md"})  # fmt: skip
     html, js = rep.write(os.path.join(out, "report.html"), os.path.join(out, "report.json"))
     _headline(comp, diag, os.path.join(out, "headline.png"))
+    summary["run_time_s"] = time.perf_counter() - step.t0
     if progress:
-        print(f"done: {html}\n      {js}", flush=True)
+        print(headline_text(summary, diag, html, js), flush=True)
     return summary
+
+
+def headline_text(summary: dict, diag, html: str, js: str) -> str:
+    """The demo's closing lines: held-out errors before and after, the cause, the band coverage, the run time."""
+    L = [f"done in {summary['run_time_s']:.1f} s"]
+    if diag.holdout is not None and diag.errors:
+        col, vals = diag.holdout["column"], diag.holdout["values"]
+        where = ", ".join(f"{v * 3.6:.0f} km/h" if col == "Vx" else f"{v:g}" for v in vals)
+        L.append(f"  held-out {col} = {where}: RMS error in % of peak, MF fit -> MF + {summary.get('effect')}")
+        for e in diag.errors:
+            L.append(f"    {e.channel}: {e.rms_pct_before:.2f} % -> {e.rms_pct_after:.2f} %")
+    L.append(f"  cause: {summary.get('cause')} (effect {summary.get('effect')})")
+    lvl = 100 * summary.get("band_level", 0.95)
+    held = [f"{k.split('_')[1]} {100 * v:.1f} %" for k, v in summary.items()
+            if k.startswith("heldout_") and k.endswith("_inside_prediction_band") and k.count("_") == 4]
+    cv = [f"{k.split('_')[1]} {100 * v:.1f} %" for k, v in summary.items() if k.startswith("cv_")]
+    if held:
+        L.append(f"  {lvl:g} % prediction band, held-out points inside: " + ", ".join(held))
+    if cv:
+        L.append("    cross-validated over sweeps (measured): " + ", ".join(cv))
+    rig = summary.get("rig", {})
+    if rig:
+        L.append(f"  rig run: cause {rig.get('cause')}, held-out load {rig.get('heldout_load_N', 0):.0f} N: "
+                 + ", ".join(f"{ch} {rig[f'heldout_{ch}_rms_pct_before']:.2f} -> "
+                             f"{rig[f'heldout_{ch}_rms_pct_after']:.2f} %" for ch in ("Fx", "Fy")
+                             if f"heldout_{ch}_rms_pct_before" in rig))
+    L.append(f"  report: {html}\n          {js}")
+    return "\n".join(L)
 
 
 def _diagnosis_numbers(diag) -> dict:
@@ -387,20 +439,27 @@ def _headline(comp, diag, path: str) -> None:
     import numpy as np
     held = diag.data[~diag.train]
     braking = held[np.abs(held["alpha"].to_numpy(float)) < 1e-9]
-    fig, ax = subplots(figsize=(7.5, 4.5), constrained_layout=True)
-    for i, (lf, g) in enumerate(braking.groupby("load_fraction")):
+    from matplotlib.lines import Line2D
+
+    fig, ax = subplots(figsize=(8.5, 4.8), constrained_layout=True)
+    handles = []
+    for i, (fz, g) in enumerate(braking.groupby(braking["Fz"].round(-2))):
         g = g.sort_values("kappa")
         c = f"C{i}"
-        ax.plot(g["kappa"], g["Fx"], ".", color=c, ms=5, label=f"measured {lf:.1f} LI" if i == 0 else None)
-        ax.plot(g["kappa"], g["Fx"] - g["residual_Fx"], "--", color=c, label="MF 6.1 fit" if i == 0 else None)
-        ax.plot(g["kappa"], g["Fx"] - g["residual_after_Fx"], "-", color=c,
-                label=f"MF + {diag.effect.name}" if i == 0 else None)  # fmt: skip
+        ax.plot(g["kappa"], g["Fx"], ".", color=c, ms=5)
+        ax.plot(g["kappa"], g["Fx"] - g["residual_Fx"], "--", color=c)
+        ax.plot(g["kappa"], g["Fx"] - g["residual_after_Fx"], "-", color=c)
+        lf = f", {float(g['load_fraction'].iloc[0]):.2g} × LI" if "load_fraction" in g else ""
+        handles.append(Line2D([], [], color=c, lw=3, label=f"Fz ≈ {fz:.0f} N{lf}"))
+    handles += [Line2D([], [], color="k", marker=".", linestyle="none", label="measured (held out)"),
+                Line2D([], [], color="k", linestyle="--", label="MF 6.1 fit"),
+                Line2D([], [], color="k", linestyle="-", label=f"MF + {diag.effect.name}")]
     v = diag.holdout["values"][0]
     ax.set_title(f"held-out braking at {v * 3.6:.0f} km/h: measured, MF fit, MF with the diagnosed effect")
     ax.set_xlabel("κ [-]")
     ax.set_ylabel("Fx [N]")
     ax.grid(alpha=0.3)
-    ax.legend()
+    ax.legend(handles=handles, fontsize=8)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=110)
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import warnings
 
 import numpy as np
@@ -147,8 +148,9 @@ def test_cli_errors(tmp_path, capsys):
     rc = main(["compare", "--tir", str(TIR), "--data", str(tmp_path / "missing.csv"), "--output", str(tmp_path)])
     assert rc == 2
     assert "missing.csv" in capsys.readouterr().err
-    rc = main(["compare", "--tir", str(TIR), "--output", str(tmp_path)])
-    assert rc == 2
+    rc = main(["compare", "--tir", str(TIR), "--fe", str(tmp_path / "nofe.csv"), "--conditions", "loads=1",
+               "--output", str(tmp_path / "c")])
+    assert rc == 2 and "--conditions is for a comparison without data" in capsys.readouterr().err
 
 
 def test_figures_drawn_on_workers_are_the_serial_ones(tmp_path, self_comparison):
@@ -160,3 +162,155 @@ def test_figures_drawn_on_workers_are_the_serial_ones(tmp_path, self_comparison)
     assert [p.replace("pooled", "serial") for p in pooled] == serial and len(serial) >= 4
     for a, b in zip(serial, pooled, strict=True):  # the same files, byte for byte
         assert open(a, "rb").read() == open(b, "rb").read(), a
+
+
+# ------------------------------------------------------------------------------------
+# figures: every condition, labelled axes, held-out condition marked (issue 26)
+# ------------------------------------------------------------------------------------
+
+
+def _visible_axes(fig):
+    return [ax for ax in fig.axes if ax.get_visible()]
+
+
+@pytest.fixture(scope="module")
+def many_conditions():
+    """Two loads x three speeds x two pressures: 6 conditions per pure family, 12 per combined family
+    (braking, cornering and combined sweeps at α = ±4° of the model itself)."""
+    from mftire.compare.conditions import Conditions, design_sweeps
+    from mftire.compare.models import evaluate_at
+
+    F0 = with_defaults(read_tir(TIR))["FNOMIN"]
+    design = design_sweeps(Conditions((0.6 * F0, 1.2 * F0), (10.0, 20.0, 30.0), (2.0e5, 2.6e5), (0.0,)), n=31)
+    df = pd.concat([design, evaluate_at(load(TIR), design, channels=("Fx", "Fy", "Mz", "Mx"))], axis=1)
+    df["source"], df["origin"] = "rig", "measured"
+    return compare([TIR], df, heldout=("Vx", [20.0]))
+
+
+def test_family_figures_show_every_condition_with_labels(many_conditions):
+    from mftire.compare.data import FAMILY_CHANNELS
+    from mftire.compare.plots import _panel_keys, family_figures
+
+    comp = many_conditions
+    for family in ("braking", "cornering", "combined"):
+        d = comp.data[comp.data["family"] == family]
+        pkeys, skey = _panel_keys(family)
+        n_cond = len(d.groupby(pkeys))
+        assert n_cond == (6 if family in ("braking", "cornering") else 12)
+        n_held = len(d[np.isclose(d["Vx_set"], 20.0)].groupby(pkeys))
+        figs = family_figures(family, comp.data, comp.grid, comp.grid_predictions, heldout=comp.heldout)
+        assert [ch for ch, _ in figs] == list(FAMILY_CHANNELS[family])  # one figure per channel
+        for ch, fig in figs:
+            axes = _visible_axes(fig)
+            assert len(axes) == n_cond  # every condition has its panel, nothing truncated
+            titles = [ax.get_title() for ax in axes]
+            assert len(set(titles)) == n_cond
+            assert sum("HELD OUT" in t for t in titles) == n_held
+            for ax in axes:
+                assert ax.get_xlabel() in ("κ [-]", "α [deg]")
+                assert ax.get_ylabel().startswith(ch) and ax.get_ylabel().endswith("]")
+                assert ax.lines  # curves drawn in every panel
+            legend = [t.get_text() for t in fig.legends[0].get_texts()]
+            for v in d[skey].unique():  # every series (load or held slip) named in the legend
+                assert sum(t.startswith(("Fz", "α", "κ")) for t in legend) == d[skey].nunique(), (v, legend)
+            assert "held-out condition" in legend and any(t.startswith("MF: ") for t in legend)
+            w, h = fig.get_size_inches()
+            assert w <= 3.0 * 5 + 4.5  # at most five panels in a row: readable at the report's width
+
+
+def test_summary_figures_show_every_condition_with_labels(many_conditions):
+    from mftire.compare.plots import free_rolling_figure, stiffness_figure, trail_figure
+
+    comp = many_conditions
+    speeds = sorted(comp.data["Vx_set"].unique())
+    for fig in (stiffness_figure(comp.stiffness, comp.heldout), free_rolling_figure(comp.free_rolling, comp.heldout)):
+        axes = _visible_axes(fig)
+        assert len(axes) in (2, 4)  # one panel (pair) per pressure
+        for ax in axes:
+            assert ax.get_xlabel() == "Fz [N]" and ax.get_ylabel().endswith("]")
+        legend = [t.get_text() for t in fig.legends[0].get_texts()]
+        speed_labels = [t for t in legend if "km/h" in t]
+        assert len(speed_labels) == len(speeds)  # one colour per speed, every speed named
+        assert sum("(held out)" in t for t in speed_labels) == 1
+    fig = trail_figure(comp.trail, comp.grid, comp.grid_predictions, comp.heldout)
+    axes = _visible_axes(fig)
+    assert len(axes) == 6 and sum("HELD OUT" in ax.get_title() for ax in axes) == 2
+    assert all(ax.get_ylabel() == "trail t [m]" and ax.get_xlabel() == "α [deg]" for ax in axes)
+
+
+def test_plots_write_one_file_per_family_channel(tmp_path, many_conditions):
+    paths = [os.path.basename(p) for p in many_conditions.plots(tmp_path)]
+    assert paths == ["braking.png", "cornering.png", "cornering_Mz.png", "cornering_Mx.png", "combined.png",
+                     "combined_Fy.png", "combined_Mz.png", "stiffness.png", "trail.png", "free_rolling.png"]
+
+
+# ------------------------------------------------------------------------------------
+# compare without data (issue 26)
+# ------------------------------------------------------------------------------------
+
+
+def test_compare_models_without_data():
+    from mftire.compare import compare_models
+    from mftire.tyre import Tyre
+
+    p = read_tir(TIR)
+    p.set("LMUY", 1.1)
+    comp = compare_models({"base": TIR, "muy+10%": Tyre(p, name="muy")}, "loads=3000,5000,speeds=40,80")
+    t = comp.characteristics
+    assert len(t) == 2 * 4 and set(t["Fz"]) == {3000.0, 5000.0}
+    assert np.allclose(sorted(set(t["Vx"])), [40 / 3.6, 80 / 3.6])
+    base = t[t["model"] == "base"]
+    assert (base[[c for c in t.columns if c.startswith("d_")]].abs().to_numpy() < 1e-12).all()
+    muy = t[t["model"] == "muy+10%"]
+    assert ((muy["d_mu_y_peak_pct"] > 9.0) & (muy["d_mu_y_peak_pct"] < 11.0)).all()  # lateral friction +10 %
+    assert (muy["d_Kya_pct"].abs() < 1e-9).all() and (muy["d_Kxk_pct"].abs() < 1e-9).all()
+    # the numbers are the model's own at each condition
+    tyre = load(TIR)
+    r = base.iloc[0]
+    out = tyre.evaluate(np.array([r["Fz"]]), 0.0, 0.0, 0.0, Vx=np.array([r["Vx"]]), P=np.array([r["P"]]))
+    assert r["Kya"] == pytest.approx(float(out["Kya"][0]), rel=1e-12)
+    assert r["Kxk"] == pytest.approx(float(out["Kxk"][0]), rel=1e-12)
+    assert 0.8 < r["mu_x_peak"] < 2.0 and 0.005 < r["t0"] < 0.1
+    # the figures: model curves over every condition
+    from mftire.compare.plots import family_figures
+
+    figs = family_figures("braking", comp.data, comp.grid, comp.grid_predictions)
+    assert len(figs) == 1 and len(_visible_axes(figs[0][1])) == 2  # two speeds, one panel each
+
+
+@pytest.mark.parametrize("spec, message", [
+    ("", "empty"), ("loads=", "no value"), ("loads=3000,,4000", "empty value"), ("3000", "before any key"),
+    ("lods=3000", "did you mean loads"), ("loads=3kN", "not a number"), ("loads=-100", "out of range"),
+    ("speeds=-5", "out of range"), ("pressures=0", "out of range"), ("cambers=30", "out of range"),
+    ("loads=1000,loads=2000", "given twice"),
+])  # fmt: skip
+def test_conditions_syntax_errors(spec, message):
+    from mftire.compare.conditions import parse_conditions
+    from mftire.errors import MftireInputError
+
+    with pytest.raises(MftireInputError, match=message):
+        parse_conditions(spec)
+
+
+def test_conditions_parse_to_si():
+    from mftire.compare.conditions import parse_conditions
+
+    c = parse_conditions("loads=3000, 4500,speeds=36,72,pressures=2.2,cambers=-2,0")
+    assert c["loads"] == (3000.0, 4500.0)
+    assert c["speeds"] == pytest.approx((10.0, 20.0))
+    assert c["pressures"] == pytest.approx((2.2e5,))
+    assert c["cambers"] == pytest.approx((math.radians(-2), 0.0))
+
+
+def test_cli_compare_without_data(tmp_path, capsys):
+    out = tmp_path / "nodata"
+    assert main(["compare", "--tir", str(TIR), str(TIR), "--conditions", "loads=4000,speeds=60",
+                 "--output", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "no data, 1 condition(s)" in printed and "Kxk" in printed
+    js = json.loads((out / "compare.json").read_text())
+    assert len(js["characteristics"]) == 2
+    assert (out / "braking.png").exists() and (out / "cornering_Mz.png").exists()
+    assert "Slip stiffness, cornering stiffness, peak µ and trail" in (out / "compare.md").read_text()
+    assert main(["compare", "--tir", str(TIR), "--conditions", "speeds=fast", "--output", str(tmp_path / "x")]) == 2
+    assert "not a number" in capsys.readouterr().err

@@ -10,7 +10,6 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     from mftire.compare.core import compare, write_comparison
     from mftire.compare.data import load_comparison_data
     from mftire.errors import MftireInputError
-
     from mftire.iotools.output import OutputPlan
 
     if not args.data and not args.fe:

@@ -162,11 +162,12 @@ def characteristics(models: Mapping[str, Tyre], conditions: Conditions, mode: in
     rows = []
     for fz, vx, p, g in conditions.combinations():
         for name, t in models.items():
-            def ev(k, a, name=name, t=t):
+            def ev(k, a, t=t, fz=fz, vx=vx, p=p, g=g):
                 k, a = np.broadcast_arrays(np.atleast_1d(np.asarray(k, float)), np.atleast_1d(np.asarray(a, float)))
                 n = k.size
                 return t.evaluate(np.full(n, fz), k, a, np.full(n, g), Vx=np.full(n, vx), P=np.full(n, p),
                                   mode=mode)
+
             zero = ev(0.0, 0.0)
             fx = ev(kap, 0.0)["Fx"]
             fy = ev(0.0, alp)["Fy"]

@@ -204,7 +204,7 @@ def family_figures(
         fig, axes = subplots(nrow, ncol, figsize=(width, _PANEL_H * nrow + 0.7), squeeze=False)
         used_axes = set()
         has_band = False
-        for key, (pkey, pcurves) in zip(keys, panels, strict=True):
+        for key, (_, pcurves) in zip(keys, panels, strict=True):
             pk = dict(zip(pkeys, key, strict=True))
             r, c = pos[key]
             ax = axes[r, c]

@@ -409,7 +409,9 @@ def plot_profiles(result, outdir: str) -> list[str]:
                 ax.plot(grid, law - 1.0 + shift, "-", label=f"fitted law: {term.form.name}")
             else:
                 ax.plot(grid, law * float(np.mean(lam) / np.mean(base)), "-", label=f"fitted law: {term.form.name}")
-        ax.set_xlabel(var)
+        from mftire.iotools.units import axis_label
+
+        ax.set_xlabel(axis_label(var))
         ax.set_ylabel(f"{f.factor} per sweep [-]")
         ax.set_title(f"{f.factor} ({f.family}): spread {f.spread:.3g}, p(noise) {f.chi2_p:.1e}")
         ax.grid(True, alpha=0.3)

@@ -7,10 +7,12 @@ import os
 from dataclasses import asdict
 
 import numpy as np
+from matplotlib import colormaps
 
 from mftire.diagnosis.diagnose import DiagnosisResult
 from mftire.iotools.atomic import atomic_path, write_text_atomic
 from mftire.iotools.tir import write_tir
+from mftire.iotools.units import PLOT_UNITS, axis_label
 from mftire.plotting import subplots
 
 EXTENDED_TIR = "extended.tir"
@@ -168,13 +170,17 @@ def _binned(x: np.ndarray, y: np.ndarray, n: int = 15):
 def _figures(result: DiagnosisResult, outdir: str) -> None:
     df = result.data
     ranking = result.ranking
-    fig, ax = subplots(figsize=(8, 0.35 * max(len(ranking), 4) + 1.2), constrained_layout=True)
-    names = [f"{r.variable} ({r.channel})" for r in ranking][::-1]
-    scores = [r.score for r in ranking][::-1]
-    colors = ["tab:red" if r.significant else "tab:gray" for r in ranking][::-1]
-    ax.barh(names, scores, color=colors)
-    ax.set_xlabel("share of residual variance explained beyond the MF inputs (CV)")
-    ax.set_title("candidates (red: significant)")
+    from matplotlib.patches import Patch
+
+    fig, ax = subplots(figsize=(8, 0.35 * max(len(ranking), 4) + 1.4), constrained_layout=True)
+    by_score = sorted(ranking, key=lambda r: r.score)  # highest score on top
+    ax.barh([f"{r.variable} ({r.channel})" for r in by_score], [r.score for r in by_score],
+            color=["tab:red" if r.significant else "tab:gray" for r in by_score])
+    ax.set_xlabel("score: share of the residual variance explained beyond the MF inputs (CV) [-]")
+    ax.set_ylabel("candidate variable (channel)")
+    ax.set_title("candidates, sorted by score")
+    ax.legend(handles=[Patch(color="tab:red", label="significant (permutation test)"),
+                       Patch(color="tab:gray", label="not significant")], fontsize=8, loc="lower right")
     with atomic_path(os.path.join(outdir, "ranking.png")) as tmp:
         fig.savefig(tmp, format="png", dpi=100)
 
@@ -192,8 +198,8 @@ def _figures(result: DiagnosisResult, outdir: str) -> None:
             ax.plot(x, ya, ".", ms=2, alpha=0.3, color="tab:orange")
             ax.plot(*_binned(x, ya), "s-", color="tab:orange", label="after (binned mean)")
         ax.axhline(0, color="k", lw=0.8)
-        ax.set_xlabel(r.variable)
-        ax.set_ylabel(f"{r.channel} data − model")
+        ax.set_xlabel(axis_label(r.variable))
+        ax.set_ylabel(f"{r.channel} data − model [{PLOT_UNITS[r.channel]}]")
         ax.set_title(f"residual of {r.channel} against {r.variable} (score {r.score:.2f})")
         ax.legend()
         with atomic_path(os.path.join(outdir, f"residual_vs_{r.variable}.png")) as tmp:
@@ -205,21 +211,49 @@ def _figures(result: DiagnosisResult, outdir: str) -> None:
     chans = [c.channel for c in result.errors]
     if not chans:
         return
-    sweeps = list(dict.fromkeys(test["sweep_id"]))[:6]
-    fig, axes = subplots(len(chans), 1, figsize=(9, 3.2 * len(chans)), constrained_layout=True, squeeze=False)
-    for ax, ch in zip(axes[:, 0], chans, strict=True):
-        for i, sid in enumerate(sweeps):
-            g = test[test["sweep_id"] == sid]
-            xcol = "kappa" if g["kappa"].std() > g["alpha"].std() else "alpha"
-            x = g[xcol].to_numpy(float) * (np.degrees(1) if xcol == "alpha" else 1)
-            color = f"C{i}"
-            ax.plot(x, g[ch], ".", color=color, ms=4)
-            ax.plot(x, g[ch] - g[f"residual_{ch}"], "--", color=color, lw=1)
-            ax.plot(x, g[ch] - g[f"residual_after_{ch}"], "-", color=color, lw=1.2)
-        ax.set_ylabel(ch)
-        ax.set_title(f"held-out sweeps: points data, dashed before, solid after ({ch})")
+    from matplotlib.lines import Line2D
+
+    sweeps = list(dict.fromkeys(test["sweep_id"]))  # every held-out sweep
+    xcols = {sid: ("kappa" if test.loc[test["sweep_id"] == sid, "kappa"].std() >= test.loc[test["sweep_id"] == sid,
+                                                                                                  "alpha"].std()
+                   else "alpha") for sid in sweeps}  # fmt: skip
+    xvars = sorted(set(xcols.values()))  # one column of panels per swept variable
+    fig, axes = subplots(len(chans), len(xvars), figsize=(6.5 * len(xvars) + 2.6, 3.4 * len(chans)),
+                         constrained_layout=True, squeeze=False)
+    colors = [colormaps["viridis"](x) for x in np.linspace(0.05, 0.92, max(len(sweeps), 1))] if len(sweeps) > 10 \
+        else [f"C{i}" for i in range(len(sweeps))]
+    labels = {}
+    for i, ch in enumerate(chans):
+        for j, xcol in enumerate(xvars):
+            ax = axes[i, j]
+            for k, sid in enumerate(sweeps):
+                if xcols[sid] != xcol:
+                    continue
+                g = test[test["sweep_id"] == sid].sort_values(xcol)
+                x = g[xcol].to_numpy(float) * (np.degrees(1) if xcol == "alpha" else 1)
+                ax.plot(x, g[ch], ".", color=colors[k], ms=4)
+                ax.plot(x, g[ch] - g[f"residual_{ch}"], "--", color=colors[k], lw=1)
+                ax.plot(x, g[ch] - g[f"residual_after_{ch}"], "-", color=colors[k], lw=1.2)
+                labels[k] = _sweep_label(g, sid)
+            ax.set_xlabel("α [deg]" if xcol == "alpha" else "κ [-]")
+            ax.set_ylabel(f"{ch} [{PLOT_UNITS[ch]}]")
+            ax.set_title(f"held-out sweeps: {ch} against {'α' if xcol == 'alpha' else 'κ'}")
+            ax.grid(alpha=0.3)
+    handles = [Line2D([], [], color=colors[k], lw=3, label=labels[k]) for k in sorted(labels)]
+    handles += [Line2D([], [], color="k", marker=".", linestyle="none", label="data (held out)"),
+                Line2D([], [], color="k", linestyle="--", label="model before (MF fit)"),
+                Line2D([], [], color="k", linestyle="-", label="model after (MF + effect)")]
+    fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False)
     with atomic_path(os.path.join(outdir, "curves_before_after.png")) as tmp:
         fig.savefig(tmp, format="png", dpi=100)
+
+
+def _sweep_label(g, sid) -> str:
+    """Legend text of a held-out sweep: its load, speed and pressure (set points when present)."""
+    def v(col, setcol):
+        return float(g[setcol].iloc[0]) if setcol in g else float(g[col].median())
+    return (f"sweep {sid}: Fz {v('Fz', 'Fz_set'):.0f} N, {v('Vx', 'Vx_set') * 3.6:.0f} km/h, "
+            f"{v('P', 'P_set') / 1e5:.3g} bar")
 
 
 def write_report(result: DiagnosisResult, outdir: str | os.PathLike) -> dict:

@@ -173,7 +173,8 @@ class Bands:
             out[f"{ch}_lo"] = f - dlo
             out[f"{ch}_hi"] = f + dhi
             if self.calibration is not None and ch in self.calibration.q:
-                w = self.calibration.half_width(ch, f, src, slip_class(points))  # calibrated: q·s(f̂), at least the confidence band
+                # calibrated: q·s(f̂), never narrower than the confidence band
+                w = self.calibration.half_width(ch, f, src, slip_class(points))
                 out[f"{ch}_pred_lo"] = f - np.maximum(w, dlo)
                 out[f"{ch}_pred_hi"] = f + np.maximum(w, dhi)
             else:

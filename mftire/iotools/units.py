@@ -24,6 +24,7 @@ __all__ = [
     "SI_UNITS",
     "DIMENSIONS",
     "PLOT_UNITS",
+    "axis_label",
     "UNITS",
     "normalise_unit",
     "is_known_unit",
@@ -73,8 +74,20 @@ DIMENSIONS: dict[str, str] = {
     "Rl": "length",
     "omega": "angular_speed",
 }
-#: Axis-label spelling of the SI unit of each column (``N·m`` for moments).
-PLOT_UNITS: dict[str, str] = {c: ("N·m" if u == "Nm" else u) for c, u in SI_UNITS.items()}
+#: Axis-label spelling of the SI unit of each column (``N·m`` for moments), plus the derived quantities the
+#: diagnosis and the comparison plot (slip speed, load deviation, friction energy, set points, ...).
+PLOT_UNITS: dict[str, str] = {
+    **{c: ("N·m" if u == "Nm" else u) for c, u in SI_UNITS.items()},
+    "Vs": "m/s", "Fz_dev": "N", "sign_alpha": "-", "sign_kappa": "-", "sweep_dir": "-", "sequence": "-",
+    "energy": "J", "t": "m", "Mzr": "N·m", "Kya": "N/rad", "Kxk": "N", "temperature": "°C",
+    "Fz_set": "N", "P_set": "Pa", "Vx_set": "m/s", "gamma_set": "rad", "ET": "s",
+}  # fmt: skip
+
+
+def axis_label(name: str) -> str:
+    """``"name [unit]"`` for a quantity of :data:`PLOT_UNITS`, else ``"name [unit of the data]"``."""
+    unit = PLOT_UNITS.get(name)
+    return f"{name} [{unit}]" if unit is not None else f"{name} [unit of the data]"
 
 _PI = Fraction(math.pi)  # the float pi, exactly
 _DEG = _PI / 180
