@@ -21,7 +21,8 @@ from mftire._lazy import lazy_names
 # imported on first use (see mftire._lazy)
 __getattr__, __dir__ = lazy_names(
     __name__, {"Comparison": "mftire.compare.core", "bands_frame": "mftire.compare.core",
-     "compare": "mftire.compare.core", "compare_models": "mftire.compare.core", "write_comparison": "mftire.compare.core",
+     "compare": "mftire.compare.core", "compare_models": "mftire.compare.core",
+     "write_comparison": "mftire.compare.core",
      "curve_grid": "mftire.compare.data", "load_comparison_data": "mftire.compare.data",
      "prepare_comparison_data": "mftire.compare.data", "evaluate_at": "mftire.compare.models",
      "load_models": "mftire.compare.models", "curve_errors": "mftire.compare.tables",
