@@ -15,6 +15,11 @@ def test_reduced_demo_runs_the_whole_loop(tmp_path, capsys):
     assert main(["demo", "--output", str(out), "--quick"]) == 0
     printed = capsys.readouterr().out
     assert "[9/9" in printed  # progress shown step by step
+    # the closing summary: held-out errors before and after, the cause, the band coverage, the run time
+    tail = printed[printed.index("done in "):]
+    assert re.search(r"held-out Vx = \d+ km/h", tail) and re.search(r"Fx: \d+\.\d\d % -> \d+\.\d\d %", tail)
+    assert "cause: Vs" in tail and "prediction band, held-out points inside: Fx " in tail
+    assert "cross-validated over sweeps (measured): Fx " in tail and "rig run: cause TS" in tail
     for name in ("fitted.tir", "extended.tir", "tyre.fmu", "report.html", "report.json", "headline.png",
                  "fe_sweeps.csv", "measured_sweeps.csv", "diagnosis/diagnosis.json", "rig_sweeps.csv",
                  "rig_fitted.tir", "rig_run.png", "rig_diagnosis/diagnosis.json", "rig_diagnosis/extended.tir"):
@@ -30,6 +35,10 @@ def test_reduced_demo_runs_the_whole_loop(tmp_path, capsys):
     assert s["cause"] == "Vs"
     assert s["heldout_Fx_rms_pct_after"] <= 0.5 * s["heldout_Fx_rms_pct_before"]
     assert 0.8 <= s["heldout_inside_prediction_band"] <= 1.0
+    for ch in ("Fx", "Fy", "Mz", "Mx", "My"):  # per channel: held-out points and the cross-validated coverage
+        assert 0.5 <= s[f"heldout_{ch}_inside_prediction_band"] <= 1.0
+        assert 0.6 <= s[f"cv_{ch}_inside_prediction_band"] <= 1.0
+    assert s["run_time_s"] > 0 and "band_cv_coverage" in doc["tables"]
     # every table of the page is in the JSON
     assert {"fit_stages", "diagnosis_ranking", "band_coverage"} <= set(doc["tables"])
     # the third source: the simulated raw rig run, imported, fitted and diagnosed (issue 12)

@@ -86,7 +86,7 @@ G_DROP = 0.25
 T_OPT = 85.0
 T_WIDTH = 40.0
 TITLE = ("SIMULATED rig data (not measured): mftire validation/make_rig_file.py, MF 6.1 "
-         "MagicFormula61_Parameters.tir with tread-temperature dependent grip, 100 Hz, SAE axes")  # fmt: skip
+         "tirfiles/MF61_255-55R20_mfeval-jl.tir with tread-temperature dependent grip, 100 Hz, SAE axes")  # fmt: skip
 
 
 @dataclass

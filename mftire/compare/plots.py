@@ -46,8 +46,8 @@ _TITLES = {
 #: Most panel columns in one row of a figure (more wrap to further rows): keeps every panel readable
 #: at the report's width (1200 px).
 MAX_COLUMNS = 5
-_PANEL_W, _PANEL_H, _LEGEND_W = 3.0, 2.45, 2.3  # inches
-_FONT = 8.5
+_PANEL_W, _PANEL_H, _LEGEND_W = 2.9, 2.5, 2.4  # inches
+_FONT = 10.0
 _SET_COLUMN = {"Fz": "Fz_set", "Vx": "Vx_set", "P": "P_set", "gamma": "gamma_set"}
 
 
@@ -145,7 +145,16 @@ def _layout(keys: list[tuple], pkeys: list[str]) -> tuple[dict, int, int]:
 
 def _legend_width(handles) -> float:
     """Width [in] the figure legend needs (its longest label at the legend font)."""
-    return max(_LEGEND_W, 0.4 + 0.062 * max((len(h.get_label()) for h in handles), default=0))
+    return max(_LEGEND_W, 0.8 + 0.078 * max((len(h.get_label()) for h in handles), default=0))
+
+
+def _finish(fig, handles, panels_width: float, top: float) -> None:
+    """Legend on the right (the figure widened to hold it), tight layout of the panels beside it."""
+    lw = _legend_width(handles)
+    w = panels_width + lw
+    fig.set_size_inches(w, fig.get_size_inches()[1])
+    fig.legend(handles=handles, loc="center right", fontsize=_FONT, frameon=False)
+    fig.tight_layout(rect=(0, 0, 1 - lw / w, top))
 
 
 def _mark_heldout(ax, title: str) -> None:
@@ -200,7 +209,7 @@ def family_figures(
     xlabel = "α [deg]" if var == "alpha" else "κ [-]"
     out = []
     for ch in channels:
-        width = _PANEL_W * ncol + _LEGEND_W + 0.055 * max(0, max(len(f"MF: {m}") for m in models) - 24)
+        width = _PANEL_W * ncol + _LEGEND_W
         fig, axes = subplots(nrow, ncol, figsize=(width, _PANEL_H * nrow + 0.7), squeeze=False)
         used_axes = set()
         has_band = False
@@ -250,9 +259,8 @@ def family_figures(
                         Patch(color="0.5", alpha=0.13, label="prediction band (new point)")]
         if heldout is not None:
             handles.append(Patch(facecolor="none", edgecolor="tab:red", lw=2, label="held-out condition"))
-        fig.legend(handles=handles, loc="center right", fontsize=_FONT, frameon=False)
         fig.suptitle(_TITLES[family].format(ch=ch) + f": {len(panels)} conditions", fontsize=_FONT + 2)
-        fig.tight_layout(rect=(0, 0, 1 - _legend_width(handles) / width, 0.97))
+        _finish(fig, handles, _PANEL_W * ncol, 0.97)
         out.append((ch, fig))
     return out
 
@@ -360,10 +368,9 @@ def stiffness_figure(stiffness: pd.DataFrame, heldout: Heldout | None = None):
     handles = [Line2D([], [], color=colors[v], lw=3, label=_speed_label(v, heldout)) for v in colors]
     handles += [Line2D([], [], color="k", linestyle=styles[m], label=f"MF: {m}") for m in models]
     handles += [Line2D([], [], color="0.3", marker=markers[s], linestyle="none", label=f"data: {s}") for s in sources]
-    fig.legend(handles=handles, loc="center right", fontsize=_FONT, frameon=False)
     fig.suptitle("Cornering and aligning stiffness against load (linear LSQ over |α| ≤ 2.5°), colour = speed",
                  fontsize=_FONT + 2)
-    fig.tight_layout(rect=(0, 0, 1 - _LEGEND_W / width, 0.96))
+    _finish(fig, handles, width - _LEGEND_W, 0.96)
     return fig
 
 
@@ -449,10 +456,9 @@ def trail_figure(trail: pd.DataFrame, grid: pd.DataFrame, grid_predictions: Mapp
                 for s in sources]
     if heldout is not None:
         handles.append(Patch(facecolor="none", edgecolor="tab:red", lw=2, label="held-out condition"))
-    fig.legend(handles=handles, loc="center right", fontsize=_FONT, frameon=False)
     fig.suptitle(f"Pneumatic trail against α, {len(keys)} conditions (data: −Mz/Fy where |Fy| ≥ 10 % of the "
                  "sweep's peak)", fontsize=_FONT + 2)
-    fig.tight_layout(rect=(0, 0, 1 - _LEGEND_W / width, 0.96))
+    _finish(fig, handles, width - _LEGEND_W, 0.96)
     return fig
 
 
@@ -501,9 +507,8 @@ def free_rolling_figure(free: pd.DataFrame, heldout: Heldout | None = None):
     handles = [Line2D([], [], color=colors[v], lw=3, label=_speed_label(v, heldout)) for v in colors]
     handles += [Line2D([], [], color="k", linestyle=styles[m], label=f"MF: {m}") for m in models]
     handles += [Line2D([], [], color="0.3", marker=markers[s], linestyle="none", label=f"data: {s}") for s in sources]
-    fig.legend(handles=handles, loc="center right", fontsize=_FONT, frameon=False)
     fig.suptitle("Free-rolling Fx (κ = 0) against load, colour = speed", fontsize=_FONT + 2)
-    fig.tight_layout(rect=(0, 0, 1 - _LEGEND_W / width, 0.93))
+    _finish(fig, handles, width - _LEGEND_W, 0.93)
     return fig
 
 
