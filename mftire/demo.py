@@ -140,7 +140,7 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
     heldout = None
     held_rows = pd.Series(False, index=both.index)
     if diag.holdout is not None and diag.train is not None and len(diag.train) == len(meas):
-        heldout = (diag.holdout["column"], list(diag.holdout["values"]))
+        heldout = (diag.holdout["column"], list(diag.holdout["values"]), "measured")
         # the diagnosis keeps the measured rows in order (its table is the campaign with sweep columns added)
         held_rows = pd.Series(False, index=both.index)
         held_rows.iloc[len(fe):] = ~diag.train
@@ -443,14 +443,15 @@ def _headline(comp, diag, path: str) -> None:
 
     fig, ax = subplots(figsize=(8.5, 4.8), constrained_layout=True)
     handles = []
-    for i, (fz, g) in enumerate(braking.groupby(braking["Fz"].round(-2))):
+    by = next(c for c in ("load_fraction", "Fz_set", "sweep_id") if c in braking.columns)
+    for i, (_, g) in enumerate(braking.groupby(by)):  # one curve per load
         g = g.sort_values("kappa")
         c = f"C{i}"
         ax.plot(g["kappa"], g["Fx"], ".", color=c, ms=5)
         ax.plot(g["kappa"], g["Fx"] - g["residual_Fx"], "--", color=c)
         ax.plot(g["kappa"], g["Fx"] - g["residual_after_Fx"], "-", color=c)
-        lf = f", {float(g['load_fraction'].iloc[0]):.2g} × LI" if "load_fraction" in g else ""
-        handles.append(Line2D([], [], color=c, lw=3, label=f"Fz ≈ {fz:.0f} N{lf}"))
+        lf = f"{float(g['load_fraction'].iloc[0]):.2g} × LI, " if "load_fraction" in g else ""
+        handles.append(Line2D([], [], color=c, lw=3, label=f"{lf}Fz ≈ {g['Fz'].mean():.0f} N"))
     handles += [Line2D([], [], color="k", marker=".", linestyle="none", label="measured (held out)"),
                 Line2D([], [], color="k", linestyle="--", label="MF 6.1 fit"),
                 Line2D([], [], color="k", linestyle="-", label=f"MF + {diag.effect.name}")]

@@ -172,8 +172,9 @@ def compare(
     n_grid : int
         Points per plotted model curve.
     heldout : tuple, optional
-        ``(column, values)`` of a condition held out of the fits (``column`` in the sweep schema,
-        ``Fz``, ``Vx``, ``P``, ``gamma``, or its ``*_set`` name; values SI): marked in every figure.
+        ``(column, values)`` or ``(column, values, source)`` of a condition held out of the fits
+        (``column`` in the sweep schema, ``Fz``, ``Vx``, ``P``, ``gamma``, or its ``*_set`` name;
+        values SI; with a source, only that source's data are held out): marked in every figure.
     """
     tyres = load_models(models)
     if "curve_id" not in data.columns:

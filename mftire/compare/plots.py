@@ -52,16 +52,24 @@ _SET_COLUMN = {"Fz": "Fz_set", "Vx": "Vx_set", "P": "P_set", "gamma": "gamma_set
 
 
 
-#: A held-out condition: ``(column, values)``, e.g. ``("Vx", [22.22])`` (column of the sweep schema or its
-#: ``*_set`` name, values in SI).
+#: A held-out condition: ``(column, values)`` or ``(column, values, source)``, e.g. ``("Vx", [22.22],
+#: "measured")`` (column of the sweep schema or its ``*_set`` name, values in SI; with a source, only the
+#: panels holding that source's data at the condition are marked).
 Heldout = tuple
+
+
+def _panel_held(key: Mapping, sources, heldout: Heldout | None) -> bool:
+    """Whether a panel (set points ``key``, data ``sources`` in it) shows the held-out condition."""
+    if heldout is None or not _held_mask(pd.DataFrame([dict(key)]), heldout).any():
+        return False
+    return len(heldout) < 3 or heldout[2] in set(sources)
 
 
 def _held_mask(df: pd.DataFrame, heldout: Heldout | None) -> np.ndarray:
     """Rows of ``df`` (with set-point columns) at a held-out condition (set points within 3 %)."""
     if heldout is None or len(df) == 0:
         return np.zeros(len(df), bool)
-    col, values = heldout
+    col, values = heldout[0], heldout[1]
     col = _SET_COLUMN.get(col, col)
     if col not in df.columns:
         return np.zeros(len(df), bool)
@@ -236,7 +244,7 @@ def family_figures(
                     ax.plot(sp[var] * xs, sp[ch], linestyle="none", marker=markers[src], ms=3.2, color=color,
                             alpha=0.75, mfc="none" if str(sp["origin"].iloc[0]) == "fe" else color)
             title = _cond_title(pk)
-            if _held_mask(pd.DataFrame([pk]), heldout).any():
+            if _panel_held(pk, d.loc[d["curve_id"].isin(pcurves["curve_id"]), "source"], heldout):
                 _mark_heldout(ax, title)
             else:
                 ax.set_title(title, fontsize=_FONT)
@@ -317,7 +325,8 @@ def _speed_colors(df: pd.DataFrame) -> dict:
 
 def _speed_label(v: float, heldout: Heldout | None) -> str:
     held = _held_mask(pd.DataFrame({"Vx_set": [v]}), heldout).any()
-    return f"{v * 3.6:.0f} km/h" + (" (held out)" if held else "")
+    who = f": {heldout[2]}" if heldout is not None and len(heldout) > 2 else ""
+    return f"{v * 3.6:.0f} km/h" + (f" (held out{who})" if held else "")
 
 
 def _panel_axes(n: int, extra_rows: int = 1) -> tuple:
@@ -438,7 +447,7 @@ def trail_figure(trail: pd.DataFrame, grid: pd.DataFrame, grid_predictions: Mapp
                 pad = 0.1 * (hi - lo) + 1e-4
                 ax.set_ylim(lo - pad, hi + pad)
         title = _cond_title(dict(zip(pkeys, key, strict=True)))
-        if _held_mask(pd.DataFrame([dict(zip(pkeys, key, strict=True))]), heldout).any():
+        if _panel_held(dict(zip(pkeys, key, strict=True)), sel(pts)["source"], heldout):
             _mark_heldout(ax, title)
         else:
             ax.set_title(title, fontsize=_FONT)
