@@ -38,7 +38,7 @@ def test_reduced_demo_runs_the_whole_loop(tmp_path, capsys):
     for ch in ("Fx", "Fy", "Mz", "Mx", "My"):  # per channel: held-out points and the cross-validated coverage
         assert 0.5 <= s[f"heldout_{ch}_inside_prediction_band"] <= 1.0
         assert 0.6 <= s[f"cv_{ch}_inside_prediction_band"] <= 1.0
-    assert s["run_time_s"] > 0 and "band_cv_coverage" in doc["tables"]
+    assert "band_cv_coverage" in doc["tables"]
     # every table of the page is in the JSON
     assert {"fit_stages", "diagnosis_ranking", "band_coverage"} <= set(doc["tables"])
     # the third source: the simulated raw rig run, imported, fitted and diagnosed (issue 12)
