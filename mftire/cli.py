@@ -262,6 +262,16 @@ class _OneLineWarnings:
                 print(f"{self.prefix}: warning (×{n} in all): {text}", file=sys.stderr)
 
 
+def _own_warnings() -> tuple[type[Warning], ...]:
+    """mftire's own warning classes (shown one line each by the CLI, whatever the warning filters)."""
+    from mftire.errors import MftireWarning
+    from mftire.iotools.tir import TirWarning
+    from mftire.mf.inputs import MFLimitWarning
+    from mftire.mf.pac2002 import PAC2002Warning
+
+    return (MftireWarning, TirWarning, MFLimitWarning, PAC2002Warning)
+
+
 def _one_line_warning(prefix: str) -> _OneLineWarnings:
     """``warnings.showwarning`` replacement: one line, no source line, each message once (see
     :class:`_OneLineWarnings`)."""
@@ -278,6 +288,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         with warnings.catch_warnings():
             warnings.showwarning = shown
+            for category in _own_warnings():  # every one reaches `shown`, which prints each once with its count
+                warnings.simplefilter("always", category)
             rc = int(args.func(args) or 0)
         sys.stdout.flush()
         return rc

@@ -314,3 +314,16 @@ def test_cli_compare_without_data(tmp_path, capsys):
     assert "Slip stiffness, cornering stiffness, peak µ and trail" in (out / "compare.md").read_text()
     assert main(["compare", "--tir", str(TIR), "--conditions", "speeds=fast", "--output", str(tmp_path / "x")]) == 2
     assert "not a number" in capsys.readouterr().err
+
+
+def test_cli_prints_a_repeated_warning_once_with_its_count(capsys):
+    from mftire.cli import _one_line_warning
+
+    shown = _one_line_warning("mftire diagnose")
+    for _ in range(5):
+        shown(UserWarning("Ex over limit"), UserWarning, "x.py", 1)
+    shown(UserWarning("other"), UserWarning, "x.py", 2)
+    shown.repeats()
+    err = capsys.readouterr().err.splitlines()
+    assert err == ["mftire diagnose: warning: Ex over limit", "mftire diagnose: warning: other",
+                   "mftire diagnose: warning (×5 in all): Ex over limit"]

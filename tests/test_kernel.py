@@ -173,6 +173,7 @@ def _both(tyre: Tyre, **kw):
     return out
 
 
+@pytest.mark.filterwarnings("ignore::mftire.mf.inputs.MFLimitWarning")  # inputs beyond the limits on purpose
 @pytest.mark.parametrize("mode", MODES)
 @pytest.mark.parametrize("name", list(FILES))
 def test_kernel_agrees_with_numpy(name, mode):
@@ -199,6 +200,7 @@ def _every_file() -> list[Path]:
     return out
 
 
+@pytest.mark.filterwarnings("ignore::mftire.mf.inputs.MFLimitWarning")  # inputs beyond the limits on purpose
 @pytest.mark.parametrize("mode", (111, 221, 110, 212))
 @pytest.mark.parametrize("path", _every_file(), ids=lambda p: p.name)
 def test_kernel_agrees_on_every_shipped_file(path, mode):

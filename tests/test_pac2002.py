@@ -302,6 +302,7 @@ def _symmetric() -> dict:
 SYM = _symmetric()
 
 
+@pytest.mark.filterwarnings("ignore::mftire.mf.inputs.MFLimitWarning")  # inputs beyond the limits on purpose
 @settings(max_examples=60, deadline=None)
 @given(
     Fz=st.floats(4000.0, 60000.0),
@@ -327,6 +328,7 @@ def test_symmetric_tyre_is_mirror_symmetric(Fz, kappa, alpha, gamma):
 PAC2002_FILES = [HMMWV, *sorted(p for p in WILD.glob("*.tir") if read_tir(p).format == "PAC2002")]
 
 
+@pytest.mark.filterwarnings("ignore::mftire.mf.inputs.MFLimitWarning")  # inputs beyond the limits on purpose
 @settings(max_examples=40, deadline=None)
 @given(
     which=st.integers(0, len(PAC2002_FILES) - 1),

@@ -392,6 +392,7 @@ _FRAGMENTS = st.sampled_from([
 ])
 
 
+@pytest.mark.filterwarnings("ignore::mftire.iotools.tir.TirWarning")  # fuzzed text: warnings expected
 @settings(max_examples=300, deadline=None)
 @given(st.one_of(
     st.lists(_FRAGMENTS, max_size=12).map("\n".join),
