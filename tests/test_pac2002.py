@@ -329,6 +329,7 @@ PAC2002_FILES = [HMMWV, *sorted(p for p in WILD.glob("*.tir") if read_tir(p).for
 
 
 @pytest.mark.filterwarnings("ignore::mftire.mf.inputs.MFLimitWarning")  # inputs beyond the limits on purpose
+@pytest.mark.filterwarnings("ignore::mftire.errors.MftireTirWarning")  # wild files: sections missing on purpose
 @settings(max_examples=40, deadline=None)
 @given(
     which=st.integers(0, len(PAC2002_FILES) - 1),
