@@ -377,6 +377,7 @@ def rig_stage(output: str | os.PathLike, quick: bool = False, pair_step: int | N
     axs[0].set_ylabel("Fz [kN]")
     axs[1].plot(r["ET"], np.degrees(r["alpha"]), lw=0.3, label="α [deg]")
     axs[1].plot(r["ET"], 100 * r["kappa"], lw=0.3, label="κ [%]")
+    axs[1].set_ylabel("slip: α [deg], κ [%]")
     axs[1].legend(loc="upper right", fontsize=8)
     for c in ("TSTI", "TSTC", "TSTO"):
         axs[2].plot(r["ET"], r[c], lw=0.5, label=c)

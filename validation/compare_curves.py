@@ -58,8 +58,10 @@ def main() -> None:
     bands = bootstrap_bands(rig, tmpl, n=args.replicates, fit=fit, progress=True)
     cov = coverage_table(bands, held)
 
-    data = prepare_comparison_data(pd.concat([rig, fe], ignore_index=True))
-    comp = compare({"template": default_tir(), "fitted": fitted}, data, bands=bands)
+    # the held-out loads are drawn too (their own source label), framed in red in every figure
+    data = prepare_comparison_data(pd.concat([rig, held.assign(source="rig, held out"), fe], ignore_index=True))
+    comp = compare({"template": default_tir(), "fitted": fitted}, data, bands=bands,
+                   heldout=("Fz", [0.75 * F0, 1.25 * F0], "rig, held out"))
     paths = write_comparison(comp, args.output)
     print(comp.summary.to_string(index=False))
     print(cov.to_string(index=False))
