@@ -256,7 +256,11 @@ def family_figures(
             for c in range(ncol):
                 if (r, c) not in used_axes:
                     axes[r, c].set_visible(False)
-        handles = [Line2D([], [], color=colors[v], lw=3, label=_series_label(family, v)) for v in series_vals]
+        held_series = _held_mask(pd.DataFrame({skey: series_vals}), heldout) if skey == "Fz_set" else []
+        handles = [Line2D([], [], color=colors[v], lw=3,
+                          label=_series_label(family, v) + (" (held out)" if len(held_series) and held_series[i]
+                                                            else ""))
+                   for i, v in enumerate(series_vals)]  # fmt: skip
         handles += [Line2D([], [], color="k", linestyle=styles[m], lw=1.3, label=f"MF: {m}") for m in models]
         for sname in dict.fromkeys(d.loc[d[ch].notna(), "source"] if ch in d.columns else []):
             fe = str(d.loc[d["source"] == sname, "origin"].iloc[0]) == "fe"
@@ -265,7 +269,7 @@ def family_figures(
         if has_band:
             handles += [Patch(color="0.5", alpha=0.35, label="confidence band (mean curve)"),
                         Patch(color="0.5", alpha=0.13, label="prediction band (new point)")]
-        if heldout is not None:
+        if any("HELD OUT" in ax.get_title() for ax in fig.axes):
             handles.append(Patch(facecolor="none", edgecolor="tab:red", lw=2, label="held-out condition"))
         fig.suptitle(_TITLES[family].format(ch=ch) + f": {len(panels)} conditions", fontsize=_FONT + 2)
         _finish(fig, handles, _PANEL_W * ncol, 0.97)
