@@ -60,3 +60,56 @@ def test_default_keys_and_bad_png(tmp_path):
     bad.write_bytes(b"not a png")
     with pytest.raises(ValueError):
         rep.add_figure(bad)
+
+
+# ------------------------------------------------------------------------------------
+# diagnosis figures (issue 26): sorted ranking, labelled axes with units, a legend, every held-out sweep
+# ------------------------------------------------------------------------------------
+
+
+def test_ranking_figure_sorted_and_labelled():
+    from types import SimpleNamespace
+
+    from mftire.diagnosis.report import ranking_figure
+
+    ranking = [SimpleNamespace(variable=v, channel="Fx", score=s, significant=s > 0.3)
+               for v, s in (("Vx", 0.5), ("Vs", 0.7), ("Fz_dev", -0.01), ("sequence", 0.2))]
+    fig = ranking_figure(ranking)
+    ax = fig.axes[0]
+    names = [t.get_text() for t in ax.get_yticklabels()]
+    assert names == ["Fz_dev (Fx)", "sequence (Fx)", "Vx (Fx)", "Vs (Fx)"]  # bottom to top: highest on top
+    widths = [p.get_width() for p in ax.patches]
+    assert widths == sorted(widths)
+    assert ax.get_xlabel().endswith("[-]") and ax.get_ylabel()
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["significant (permutation test)",
+                                                                  "not significant"]
+
+
+def test_before_after_figure_shows_every_heldout_sweep_with_units():
+    from types import SimpleNamespace
+
+    from mftire.diagnosis.report import before_after_figure
+
+    rows = []
+    for sid in range(8):  # eight held-out sweeps (no "first six" any more)
+        k = np.linspace(-0.3, 0.0, 7)
+        rows.append(pd.DataFrame({"sweep_id": sid, "kappa": k, "alpha": 0.0, "Fz": 3000.0 + 100 * sid, "Vx": 22.2,
+                                  "P": 2.2e5, "Fx": 1e4 * k, "residual_Fx": 50.0, "residual_after_Fx": 5.0}))
+    df = pd.concat(rows, ignore_index=True)
+    result = SimpleNamespace(effect=object(), train=np.zeros(len(df), bool), data=df,
+                             errors=[SimpleNamespace(channel="Fx")])
+    fig = before_after_figure(result)
+    ax = fig.axes[0]
+    assert ax.get_xlabel() == "κ [-]" and ax.get_ylabel() == "Fx [N]"
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert sum(t.startswith("sweep ") for t in legend) == 8
+    assert {"data (held out)", "model before (MF fit)", "model after (MF + effect)"} <= set(legend)
+    assert len(ax.lines) == 3 * 8
+
+
+def test_axis_labels_carry_units_from_the_unit_table():
+    from mftire.iotools.units import PLOT_UNITS, axis_label
+
+    assert axis_label("Vs") == "Vs [m/s]" and axis_label("Mz") == "Mz [N·m]" and axis_label("energy") == "energy [J]"
+    assert axis_label("TSTC") == "TSTC [unit of the data]"
+    assert PLOT_UNITS["Fz_dev"] == "N"

@@ -167,9 +167,8 @@ def _binned(x: np.ndarray, y: np.ndarray, n: int = 15):
     return xs, ys
 
 
-def _figures(result: DiagnosisResult, outdir: str) -> None:
-    df = result.data
-    ranking = result.ranking
+def ranking_figure(ranking):
+    """Bar chart of the candidates' scores, highest on top (red: significant)."""
     from matplotlib.patches import Patch
 
     fig, ax = subplots(figsize=(8, 0.35 * max(len(ranking), 4) + 1.4), constrained_layout=True)
@@ -181,36 +180,19 @@ def _figures(result: DiagnosisResult, outdir: str) -> None:
     ax.set_title("candidates, sorted by score")
     ax.legend(handles=[Patch(color="tab:red", label="significant (permutation test)"),
                        Patch(color="tab:gray", label="not significant")], fontsize=8, loc="lower right")
-    with atomic_path(os.path.join(outdir, "ranking.png")) as tmp:
-        fig.savefig(tmp, format="png", dpi=100)
+    return fig
 
-    for r in ranking[:3]:
-        if r.variable not in df.columns or f"residual_{r.channel}" not in df.columns:
-            continue
-        x = df[r.variable].to_numpy(float)
-        fig, ax = subplots(figsize=(7, 4.5), constrained_layout=True)
-        y = df[f"residual_{r.channel}"].to_numpy(float)
-        ax.plot(x, y, ".", ms=2, alpha=0.3, color="tab:blue")
-        ax.plot(*_binned(x, y), "o-", color="tab:blue", label="before (binned mean)")
-        after = f"residual_after_{r.channel}"
-        if after in df.columns and result.effect is not None and r is ranking[0]:
-            ya = df[after].to_numpy(float)
-            ax.plot(x, ya, ".", ms=2, alpha=0.3, color="tab:orange")
-            ax.plot(*_binned(x, ya), "s-", color="tab:orange", label="after (binned mean)")
-        ax.axhline(0, color="k", lw=0.8)
-        ax.set_xlabel(axis_label(r.variable))
-        ax.set_ylabel(f"{r.channel} data − model [{PLOT_UNITS[r.channel]}]")
-        ax.set_title(f"residual of {r.channel} against {r.variable} (score {r.score:.2f})")
-        ax.legend()
-        with atomic_path(os.path.join(outdir, f"residual_vs_{r.variable}.png")) as tmp:
-            fig.savefig(tmp, format="png", dpi=100)
 
+def before_after_figure(result: DiagnosisResult):
+    """Every held-out sweep: data, the model before (dashed) and after (solid) per channel, against the
+    swept slip; None without an effect or held-out rows."""
     if result.effect is None or result.train is None:
-        return
+        return None
+    df = result.data
     test = df[~result.train]
     chans = [c.channel for c in result.errors]
-    if not chans:
-        return
+    if not chans or test.empty:
+        return None
     from matplotlib.lines import Line2D
 
     sweeps = list(dict.fromkeys(test["sweep_id"]))  # every held-out sweep
@@ -244,8 +226,40 @@ def _figures(result: DiagnosisResult, outdir: str) -> None:
                 Line2D([], [], color="k", linestyle="--", label="model before (MF fit)"),
                 Line2D([], [], color="k", linestyle="-", label="model after (MF + effect)")]
     fig.legend(handles=handles, loc="outside right center", fontsize=8, frameon=False)
-    with atomic_path(os.path.join(outdir, "curves_before_after.png")) as tmp:
-        fig.savefig(tmp, format="png", dpi=100)
+    return fig
+
+
+def _figures(result: DiagnosisResult, outdir: str) -> None:
+    df = result.data
+    ranking = result.ranking
+    with atomic_path(os.path.join(outdir, "ranking.png")) as tmp:
+        ranking_figure(ranking).savefig(tmp, format="png", dpi=100)
+
+    for r in ranking[:3]:
+        if r.variable not in df.columns or f"residual_{r.channel}" not in df.columns:
+            continue
+        x = df[r.variable].to_numpy(float)
+        fig, ax = subplots(figsize=(7, 4.5), constrained_layout=True)
+        y = df[f"residual_{r.channel}"].to_numpy(float)
+        ax.plot(x, y, ".", ms=2, alpha=0.3, color="tab:blue")
+        ax.plot(*_binned(x, y), "o-", color="tab:blue", label="before (binned mean)")
+        after = f"residual_after_{r.channel}"
+        if after in df.columns and result.effect is not None and r is ranking[0]:
+            ya = df[after].to_numpy(float)
+            ax.plot(x, ya, ".", ms=2, alpha=0.3, color="tab:orange")
+            ax.plot(*_binned(x, ya), "s-", color="tab:orange", label="after (binned mean)")
+        ax.axhline(0, color="k", lw=0.8)
+        ax.set_xlabel(axis_label(r.variable))
+        ax.set_ylabel(f"{r.channel} data − model [{PLOT_UNITS[r.channel]}]")
+        ax.set_title(f"residual of {r.channel} against {r.variable} (score {r.score:.2f})")
+        ax.legend()
+        with atomic_path(os.path.join(outdir, f"residual_vs_{r.variable}.png")) as tmp:
+            fig.savefig(tmp, format="png", dpi=100)
+
+    fig = before_after_figure(result)
+    if fig is not None:
+        with atomic_path(os.path.join(outdir, "curves_before_after.png")) as tmp:
+            fig.savefig(tmp, format="png", dpi=100)
 
 
 def _sweep_label(g, sid) -> str:
