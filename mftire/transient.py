@@ -511,7 +511,8 @@ def guard_inputs(flat: Mapping[str, float], inputs: Mapping[str, float],
     """The transient model's input guard (the FMU's ``mt_guard_inputs``, same rules).
 
     A non-finite input (NaN, ±Inf) is replaced by its last good value ``held[name]``; a finite value
-    beyond :data:`INPUT_BOUNDS` is saturated to the bound.  ``held`` is updated with the values used.
+    beyond :data:`INPUT_BOUNDS` is saturated to the bound; |x| < 1e-30 is 0 (silently).  ``held`` is
+    updated with the values used.
     Returns the values to use and the names of the inputs replaced or saturated.
     """
     out, bad = {}, []
@@ -522,6 +523,8 @@ def guard_inputs(flat: Mapping[str, float], inputs: Mapping[str, float],
             hi *= flat["FZMAX"] if flat.get("FZMAX", 0.0) > 0.0 else flat["FNOMIN"]
         elif name == "P":
             hi *= flat["PRESMAX"] if flat.get("PRESMAX", 0.0) > 0.0 else flat["INFLPRES"]
+        if abs(x) < 1e-30:
+            x = 0.0 * x  # tiny and subnormal: 0 (1/x would overflow; P = 0: INFLPRES)
         if not math.isfinite(x):
             x = held[name]
             bad.append(name)

@@ -56,12 +56,15 @@ class FMUTyre:
         import fmpy
         from fmpy.fmi2 import FMU2Slave
 
+        from mftire.fmu.host import make_callbacks
+
         md = fmpy.read_model_description(str(fmu))
         self._unzip = fmpy.extract(str(fmu))
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
         self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=self._unzip, modelIdentifier=md.coSimulation.modelIdentifier,
                              instanceName="tyre")  # fmt: skip
-        self.fmu.instantiate()
+        self.messages: list = []  #: (status, category, message) logged by the FMU
+        self.fmu.instantiate(callbacks=make_callbacks(self.messages))
         self.fmu.setupExperiment(startTime=0.0)
         self.fmu.enterInitializationMode()
         self.fmu.exitInitializationMode()
@@ -197,8 +200,9 @@ def table(rows: list[dict]) -> str:
              "|---|---|---|---|---|---|---|"]  # fmt: skip
     for r in rows:
         case = "stop from 30 m/s" if r["case"] == "stop" else "parked, 20 % slope"
-        lines.append(f"| {case} | {r['coupling']} | {r['T_brake']:.0f} | {r['h_ms']:g} | "
-                     f"{'yes' if r['locked'] else 'no'} | {r['travel'] * 1e3:.2f} | {r['drift'] * 1e3:.4f} |")  # fmt: skip
+        lock = "yes" if r["locked"] else "no"
+        lines.append(f"| {case} | {r['coupling']} | {r['T_brake']:.0f} | {r['h_ms']:g} | {lock} | "
+                     f"{r['travel'] * 1e3:.2f} | {r['drift'] * 1e3:.4f} |")  # fmt: skip
     return "\n".join(lines)
 
 

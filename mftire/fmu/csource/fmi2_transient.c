@@ -35,6 +35,7 @@ typedef struct {
     MTInputs inputs;
     MTInputs held; /* last good inputs (mt_guard_inputs) */
     unsigned guard_count[MT_N_INPUTS];
+    unsigned nonfinite_count;
     double x[2];
     MTKin kin;
     MTOutputs out;
@@ -67,6 +68,7 @@ static void reset(Instance *ins)
     ins->inputs = MT_INPUT_START;
     ins->held = MT_INPUT_START;
     memset(ins->guard_count, 0, sizeof ins->guard_count);
+    ins->nonfinite_count = 0;
     ins->x[0] = MT_STATE_START[0];
     ins->x[1] = MT_STATE_START[1];
     ins->use_mode = MT_USEMODE_START;
@@ -117,6 +119,9 @@ static int update_out(Instance *ins, unsigned want)
     if (update_kin(ins)) return 1;
     rc = mt_outputs(&ins->params, ins->use_mode, &ins->kin, ins->x, ins->out_want, &ins->out, on_warning, ins);
     if (rc != MF_OK) return bad_code(ins, rc);
+    if (ins->out.nonfinite && (ins->debug_logging || ++ins->nonfinite_count <= WARN_REPEAT))
+        fmi2_logf(&ins->base, fmi2Warning, "logStatusWarning", "t=%.17g: %u output(s) not finite, set to 0", ins->time,
+                  ins->out.nonfinite);
     ins->out_have = ins->out_want;
     ins->out_ok = 1;
     return 0;

@@ -117,6 +117,19 @@ int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2
     if (want & MF_WANT_FY) out->ss.Fy -= k->w * k->zero.Fy;
     if (want & MF_WANT_MZ) out->ss.Mz -= k->w * k->zero.Mz;
     if (want & MF_WANT_MY) out->ss.My *= k->My_sign; /* rolling resistance opposes the rolling direction */
+    /* last line: no output is ever non-finite (fields of groups not wanted hold earlier, guarded values) */
+    out->nonfinite = 0;
+    {
+        double *o = (double *)&out->ss;
+        size_t i, n = sizeof out->ss / sizeof(double);
+        for (i = 0; i < n; i++)
+            if (!isfinite(o[i])) {
+                o[i] = 0.0;
+                out->nonfinite++;
+            }
+        if (!isfinite(out->kappa_t)) { out->kappa_t = 0.0; out->nonfinite++; }
+        if (!isfinite(out->alpha_t)) { out->alpha_t = 0.0; out->nonfinite++; }
+    }
     return MF_OK;
 }
 
@@ -232,6 +245,7 @@ unsigned mt_guard_inputs(const MFParams *p, MTInputs *in, MTInputs *held)
         double lo = MT_LO[i], hi = MT_HI[i];
         if (i == 0) hi *= p->FZMAX > 0.0 ? p->FZMAX : p->FNOMIN;
         if (i == 5) hi *= p->PRESMAX > 0.0 ? p->PRESMAX : p->INFLPRES;
+        if (fabs(*x) < 1e-30) *x = 0.0 * *x; /* tiny and subnormal: 0 (1/x would overflow; P = 0: INFLPRES) */
         if (!isfinite(*x)) {
             *x = *g; /* last good value */
             bad |= 1u << i;

@@ -49,6 +49,7 @@ typedef struct {
 typedef struct {
     MFOutputs ss;  /* Fx, Fy, Mz, My corrected for the low-speed model */
     double kappa_t, alpha_t;
+    unsigned nonfinite; /* outputs of the last mt_outputs that were not finite and are set to 0 (to log) */
 } MTOutputs;
 
 /*
@@ -76,7 +77,8 @@ const char *mt_input_name(unsigned i);
 /*
  * Outputs at the state x: one steady-state evaluation at the transient slips, of the channel groups want
  * (MF_WANT_*; MF_WANT_ALL: every output).  The fields of groups not wanted are left untouched; kappa_t,
- * alpha_t, Fz and Re are always set.  k must hold the offsets of want & MT_OFFSETS (mt_kinematics).
+ * alpha_t, Fz and Re are always set.  A field that is not finite (known case: Mz, Mzr at Fz = 0 with turn
+ * slip, where the Python evaluator gives NaN too) is set to 0 and counted in out->nonfinite.  k must hold the offsets of want & MT_OFFSETS (mt_kinematics).
  */
 int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2], unsigned want,
                MTOutputs *out, mf_warning_fn warn, void *ctx);
