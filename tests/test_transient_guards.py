@@ -181,8 +181,9 @@ def test_quarter_car_stop_and_hold_at_10_ms(fmu_path, tyre):
             assert m["travel"] < 0.025  # issue 23: today 0.6 m back and forth with the wheel locked
             assert m["drift"] < 1e-3
             assert m["Vmax_after"] < 0.5
-        # FMU = Python mirror up to the stop (after it, the brake's stick decisions amplify rounding)
-        before = a["t"] < qc.metrics(a)["t_stop"] - 0.2
+        # FMU = Python mirror down to 3 m/s (below, the wheel-spin mode at 10 ms steps and the brake's stick
+        # decisions amplify rounding differences)
+        before = a["V"] > 3.0
         np.testing.assert_allclose(a["x"][before], b["x"][before], atol=1e-6)
         np.testing.assert_allclose(a["Fx"][before], b["Fx"][before], atol=1.0)  # N, of 3-5 kN
     slope = qc.QuarterCar(V0=0.0, t_brake=0.0, ramp=0.0, grade=0.2, t_end=4.0)
