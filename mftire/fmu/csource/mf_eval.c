@@ -634,7 +634,7 @@ MF_FN double fy_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *
 
 /* ------------------------------------------------------------------ aligning.py */
 
-/* acos(x + 0i) of a real x as C99 cacos gives it, as (re, im), with real arithmetic only (MSVC has no
+/* acos(x + 0i) of a real x as the C99 complex acos gives it, as (re, im), with real arithmetic only (MSVC has no
  * C99 complex): (acos x, -0) for |x| <= 1, (0, -acosh x) above 1, (pi, -acosh(-x)) below -1, NaN for NaN. */
 MF_FN void acos_real(double x, double *re, double *im)
 {
@@ -740,7 +740,7 @@ MF_FN void aligning_terms(const MFParams *p, Ctx *m, const Cond *c, const Basic 
 }
 
 /* Dr*cos(Cr*u) with a possibly complex Cr = Cr_re + i*Cr_im, real part: Re cos(x + iy) = cos(x)*cosh(y)
- * (the real part of C99 ccos, which computes it as this product). */
+ * (the real part of the C99 complex cosine, computed as this product). */
 MF_FN double residual(double Dr, double Cr_re, double Cr_im, double u, double factor)
 {
     if (Cr_im == 0.0) return Dr * cos(Cr_re * u) * factor;
