@@ -5,6 +5,8 @@ brake torque is ramped to 3,000 N·m (the wheel locks) or to 1,200 N·m (it does
 the stop.  The tyre is coupled in two ways, with the same fixed-step master:
 
 * ``fmu``: the transient FMU (``mftire export-fmu --transient``) in Co-Simulation through fmpy;
+* ``libcosim``: the same FMU in the Open Simulation Platform's co-simulation engine (``libcosimpy``,
+  when installed: an override manipulator sets the inputs, a last-value observer reads the outputs);
 * ``python``: :class:`mftire.transient.TransientStepper`, the Python mirror of its ``fmi2DoStep``.
 
 The master is what a co-simulation master does at a communication step h: set the tyre's inputs
@@ -83,6 +85,49 @@ class FMUTyre:
         self.fmu.terminate()
         self.fmu.freeInstance()
         shutil.rmtree(self._unzip, ignore_errors=True)
+
+
+class CosimTyre:
+    """The transient FMU in the Open Simulation Platform's co-simulation engine (``libcosimpy``, optional):
+    the master sets the inputs with an override manipulator, steps the execution and reads the outputs with
+    a last-value observer."""
+
+    def __init__(self, fmu: str | Path, h: float) -> None:
+        import fmpy
+        from libcosimpy.CosimExecution import CosimExecution
+        from libcosimpy.CosimManipulator import CosimManipulator
+        from libcosimpy.CosimObserver import CosimObserver
+        from libcosimpy.CosimSlave import CosimLocalSlave
+
+        md = fmpy.read_model_description(str(fmu))
+        self.vr = {v.name: v.valueReference for v in md.modelVariables}
+        self.ex = CosimExecution.from_step_size(step_size=int(round(h * 1e9)))  # nanoseconds
+        self.slave = CosimLocalSlave(fmu_path=str(fmu), instance_name="tyre")
+        self.i = self.ex.add_local_slave(local_slave=self.slave)
+        self.man = CosimManipulator.create_override()
+        self.obs = CosimObserver.create_last_value()
+        self.ex.add_manipulator(manipulator=self.man)
+        self.ex.add_observer(observer=self.obs)
+        self._in = [self.vr[k] for k in ("Fz", "Vx", "omega")]
+        self._out = [self.vr[k] for k in ("Fx", "Re", "u")]
+
+    def step(self, t: float, h: float, Fz: float, Vx: float, omega: float) -> tuple[float, float, float]:
+        self.man.slave_real_values(self.i, self._in, [Fz, Vx, omega])
+        self.ex.step()
+        Fx, Re, u = self.obs.last_real_values(self.i, self._out)
+        return Fx, Re, u
+
+    def close(self) -> None:
+        self.ex.stop()
+
+
+def cosim_available() -> bool:
+    """Whether ``libcosimpy`` (the Open Simulation Platform's libcosim for Python) is importable."""
+    try:
+        import libcosimpy.CosimExecution  # noqa: F401
+    except (ImportError, OSError):
+        return False
+    return True
 
 
 class PythonTyre:
@@ -167,8 +212,9 @@ def free_rolling_radius(tyre, Fz: float, V: float) -> float:
     return V / om
 
 
-def campaign(tir: Path, steps=(1e-3, 10e-3), hold_steps=(1e-3, 2e-3, 5e-3, 10e-3), couplings=("fmu", "python"),
-             t_end: float = 10.0, workdir: Path | None = None) -> tuple[list[dict], dict]:  # fmt: skip
+def campaign(tir: Path, steps=(1e-3, 10e-3), hold_steps=(1e-3, 2e-3, 5e-3, 10e-3),
+             couplings=("fmu", "libcosim", "python"), t_end: float = 10.0,
+             workdir: Path | None = None) -> tuple[list[dict], dict]:  # fmt: skip
     """All cases: (rows of the table, time series by case)."""
     from mftire.tyre import load
 
@@ -178,13 +224,17 @@ def campaign(tir: Path, steps=(1e-3, 10e-3), hold_steps=(1e-3, 2e-3, 5e-3, 10e-3
     rows, series = [], {}
     with tempfile.TemporaryDirectory() as tmp:
         fmu = export(tir, Path(workdir or tmp))
-        make = {"fmu": lambda: FMUTyre(fmu), "python": lambda: PythonTyre(tyre)}
+        make = {
+            "fmu": lambda h: FMUTyre(fmu),
+            "libcosim": lambda h: CosimTyre(fmu, h),
+            "python": lambda h: PythonTyre(tyre),
+        }
         cases = [("stop", T, h) for T in (3000.0, 1200.0) for h in steps]
         cases += [("slope", 1200.0, h) for h in hold_steps]
         for how in couplings:
             for kind, T, h in cases:
                 c = car if kind == "stop" else QuarterCar(V0=0.0, t_brake=0.0, ramp=0.0, grade=0.2, t_end=t_end)
-                block = make[how]()
+                block = make[how](h)
                 try:
                     res = run(block, c, T, h, Re0)
                 finally:
@@ -239,7 +289,12 @@ def main(argv=None) -> int:
     ap.add_argument("--steps", default="1,10", help="communication steps of the stops [ms]")
     a = ap.parse_args(argv)
     steps = tuple(float(s) * 1e-3 for s in a.steps.split(","))
-    rows, series = campaign(a.tir, steps=steps)
+    couplings = ("fmu", "libcosim", "python") if cosim_available() else ("fmu", "python")
+    if cosim_available():
+        from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+
+        log_output_level(CosimLogLevel.ERROR)
+    rows, series = campaign(a.tir, steps=steps, couplings=couplings)
     print(table(rows))
     plot(series, a.output)
     print(f"wrote {a.output}")
