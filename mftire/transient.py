@@ -16,15 +16,16 @@ ISO axes, because Kya < 0).
 
 State equations (Pacejka 2012 §7.2.1, contact-point lag ``dv/dt + |Vx|·v/sigma = slip
 velocity``; §7.2.2/§7.3, the relaxation length follows the slope of the force characteristic,
-so the carcass deflection stays within peak force / carcass stiffness), with a deflection
+so the carcass deflection stays within sliding force / carcass stiffness), with a deflection
 limiter (mftire addition, inactive below the limits)::
 
     du/dt = r_x·(-Vsx - A_x·u/sigma_kappa),   Vsx = Vx - omega·Re      (slip velocity, eq 2.5)
     dv/dt = r_y·( Vsy - A_y·v/sigma_alpha),   Vsy = Vy                 (eq 2.12, ISO sign)
     A_x = |Vx| + G·|Vsx|·max(0, |u|/(sigma_kappa·K_lim) - 1)²
-    r_x = 1/max(sech²(kappa'/kappa_s), TR_SIGMA_MIN/sigma_kappa),  kappa_s = mu_x·Fz/Kxk
+    r_x = 1/max(sech²(kappa'/kappa_s), TR_SIGMA_MIN/sigma_kappa),  kappa_s = mu_x·Fz·|sin(pi/2·C_x)|/Kxk
 
-The carcass deflection is u_c = sigma_kappa·kappa_s·tanh(kappa'/kappa_s) (|u_c| < mu_x·Fz/C_x),
+The carcass deflection is u_c = sigma_kappa·kappa_s·tanh(kappa'/kappa_s) (|u_c| < F_sl/C_x, F_sl the sliding
+force D_x·sin(pi/2·C_x), the Magic Formula's asymptote, Pacejka 2012 §4.3.2),
 its rate du_c/dt = -Vsx - A_x·kappa' (the lag of the linear model); the slip state relaxes with
 the local relaxation length sigma_kappa·sech²(kappa'/kappa_s).  Lateral likewise.
 
@@ -75,7 +76,7 @@ CONSTANTS: tuple[tuple[str, float, str, str], ...] = (
     ("TR_TANALPHA_LIM", 1.0, "-", "Transient |tan alpha| = |v/sigma_alpha| beyond which the limiter acts"),
     ("TR_LIM_GAIN", 100.0, "-", "Gain of the deflection limiter (slip overshoot ~ 1/sqrt(gain))"),
     ("TR_SIGMA_MIN", 1e-3, "m", "Lower bound of the relaxation lengths (lift-off, Fz = 0)"),
-    ("TR_SAT", 1.0, "-", "Factor on the saturation slip mu*Fz/K of the carcass deflection (0: linear relaxation)"),
+    ("TR_SAT", 1.0, "-", "Factor on the saturation slip F_slide/K of the carcass deflection (0: linear relaxation)"),
     ("TR_CS_STEP", 1e-4, "s", "Largest internal step of the Co-Simulation integrator (non-linear range)"),
 )
 
@@ -147,16 +148,22 @@ class Kinematics:
     Vsy: np.ndarray  #: lateral slip velocity [m/s]
     sigx: np.ndarray  #: relaxation length sigma_kappa [m]
     sigy: np.ndarray  #: relaxation length sigma_alpha [m]
-    slx: np.ndarray  #: slip where the longitudinal deflection saturates, mu_x·Fz/Kxk (0: none) [-]
-    sly: np.ndarray  #: tan(alpha) where the lateral deflection saturates, mu_y·Fz/|Kya| (0: none) [-]
+    slx: np.ndarray  #: slip where the longitudinal deflection saturates, sliding force / Kxk (0: none) [-]
+    sly: np.ndarray  #: tan(alpha) where the lateral deflection saturates, sliding force / |Kya| (0: none) [-]
     w: np.ndarray  #: low-speed weight (1 at standstill, 0 from VXLOW) [-]
     My_sign: np.ndarray  #: smooth sign of the rolling-resistance moment [-]
     zero: dict  #: steady-state outputs at zero slip (offsets, Re, sigma)
     args: dict  #: evaluator arguments except the slips
 
 
+def _sliding(C: float) -> float:
+    """Sliding force over peak force: the Magic Formula's asymptote y_a = D·sin(pi/2·C) over D (Pacejka 2012
+    §4.3.2), for 0 < C < 2; 1 otherwise."""
+    return abs(math.sin(0.5 * math.pi * C)) if 0.0 < C < 2.0 else 1.0
+
+
 def _sat_slip(mu, Fz, K) -> np.ndarray:
-    """Slip at which the carcass deflection saturates: peak force mu·Fz over the slip stiffness |K|
+    """Slip at which the carcass deflection saturates: force mu·Fz over the slip stiffness |K|
     (0 where not positive and finite: no saturation)."""
     with np.errstate(all="ignore"):
         q = np.abs(np.asarray(mu, dtype=float)) * np.asarray(Fz, dtype=float) / np.abs(np.asarray(K, dtype=float))
@@ -282,8 +289,10 @@ class TransientTyre:
         r = np.minimum(absVx / vxlow, 1.0)
         w = 0.5 * (1.0 + np.cos(np.pi * r))  # low-speed weight (cosine, as MFeval's VXLOW reduction)
         My_sign = np.sin(0.5 * np.pi * np.clip(Vx / vxlow, -1.0, 1.0))
-        slx = c["TR_SAT"] * _sat_slip(zero["mux"], zero["Fz"], zero["Kxk"])  # peak force over slip stiffness
-        sly = c["TR_SAT"] * _sat_slip(zero["muy"], zero["Fz"], zero["Kya"])
+        # sliding force D·|sin(pi/2·C)| (the asymptote of the Magic Formula, Pacejka 2012 §4.3.2) over the slip
+        # stiffness; C = PCX1·LCX (eq 4.E11), PCY1·LCY (eq 4.E21)
+        slx = c["TR_SAT"] * _sat_slip(zero["mux"] * _sliding(p["PCX1"] * p["LCX"]), zero["Fz"], zero["Kxk"])
+        sly = c["TR_SAT"] * _sat_slip(zero["muy"] * _sliding(p["PCY1"] * p["LCY"]), zero["Fz"], zero["Kya"])
         return Kinematics(Vx=Vx, Vsx=Vsx, Vsy=Vy, sigx=sigx, sigy=sigy, slx=slx, sly=sly, w=w, My_sign=My_sign,
                           zero=zero, args=args)  # fmt: skip
 
@@ -470,11 +479,20 @@ def step_exact(model: TransientTyre, kin: Kinematics, u: float, v: float, h: flo
     return un, vn
 
 
+def _r_flat(s0: float, s1: float, sig, qs, smin: float) -> bool:
+    """Whether the slope factor r stays within CS_LINEAR_TOL along the monotone path from s0 to s1 (r depends
+    on |s| only and is smallest, 1, at 0: a path through 0 includes r = 1)."""
+    r0 = float(_slope_factor(s0 / float(sig), qs, smin))
+    r1 = float(_slope_factor(s1 / float(sig), qs, smin))
+    lo = min(r0, r1) if s0 * s1 > 0.0 else float(_slope_factor(0.0, qs, smin))
+    return max(r0, r1) - lo <= CS_LINEAR_TOL * lo
+
+
 def advance(model: TransientTyre, kin: Kinematics, u: float, v: float, H: float) -> tuple[float, float]:
     """Advance ``(u, v)`` by ``H`` with the inputs held: the FMU's Co-Simulation step.
 
     One exponential step (:func:`step_exact`) when it stays in the linear range: the limiter idle
-    over the step and the slope factors at the end within :data:`CS_LINEAR_TOL` of those at the start.
+    over the step and the slope factors along the step within :data:`CS_LINEAR_TOL` of each other.
     Else ``ceil(H/TR_CS_STEP)`` equal sub-steps.  Every (sub-)step is stable for any length.
     A result that is not finite (cannot happen with guarded inputs) keeps the state.
     """
@@ -487,9 +505,7 @@ def advance(model: TransientTyre, kin: Kinematics, u: float, v: float, H: float)
     ulim, vlim = float(kin.sigx) * c["TR_KAPPA_LIM"], float(kin.sigy) * c["TR_TANALPHA_LIM"]
     if max(abs(u), abs(un)) <= ulim and max(abs(v), abs(vn)) <= vlim:
         smx, smy = c["TR_SIGMA_MIN"] / float(kin.sigx), c["TR_SIGMA_MIN"] / float(kin.sigy)
-        r0x, r1x = (float(_slope_factor(q / float(kin.sigx), kin.slx, smx)) for q in (u, un))
-        r0y, r1y = (float(_slope_factor(q / float(kin.sigy), kin.sly, smy)) for q in (v, vn))
-        if abs(r1x - r0x) <= CS_LINEAR_TOL * r0x and abs(r1y - r0y) <= CS_LINEAR_TOL * r0y:
+        if _r_flat(u, un, kin.sigx, kin.slx, smx) and _r_flat(v, vn, kin.sigy, kin.sly, smy):
             return (un, vn) if math.isfinite(un) and math.isfinite(vn) else (u, v)
     n = max(int(math.ceil(H / c["TR_CS_STEP"] - 1e-9)), 1)
     x0 = (u, v)

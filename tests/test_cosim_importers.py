@@ -1,9 +1,9 @@
 """A second FMU importer (issue 23): the Open Simulation Platform's libcosim (``libcosimpy``).
 
-When ``libcosimpy`` is installed (a test extra on Linux, Python >= 3.11), the steady-state FMU in libcosim
-gives ``Tyre.evaluate``'s numbers, and the quarter-car stop with the wheel locked at 10 ms steps through
-libcosim equals the one through fmpy (to rounding: libcosim's steps are integer nanoseconds).  Skipped where libcosimpy does not install (fmpy is the
-importer of every other test).
+When ``libcosimpy`` is installed (a test extra on Linux x86_64, Python >= 3.11), the steady-state FMU in
+libcosim gives ``Tyre.evaluate``'s numbers, and the quarter-car stop with the wheel locked at 10 ms steps
+through libcosim equals the one through fmpy (to rounding: libcosim's steps are integer nanoseconds).
+Skipped where libcosimpy does not install (fmpy is the importer of every other test).
 """
 
 from __future__ import annotations

@@ -9,12 +9,20 @@
 
 static double nan_to(double x, double fill) { return isnan(x) ? fill : x; }
 
-/* Slip at which the carcass deflection saturates: peak force mu*Fz over the slip stiffness |K| (0 where not
- * positive and finite: no saturation). */
+/* Slip at which the carcass deflection saturates: force mu*Fz over the slip stiffness |K| (0 where not positive
+ * and finite: no saturation). */
 static double sat_slip(double mu, double Fz, double K)
 {
     double q = fabs(mu) * Fz / fabs(K);
     return (isfinite(q) && q > 0.0) ? q : 0.0;
+}
+
+/* Sliding force over peak force: the Magic Formula's asymptote D*sin(pi/2*C) over D (Pacejka 2012 §4.3.2), for
+ * 0 < C < 2; 1 otherwise. */
+static double sliding(double C)
+{
+    const double PI = 3.14159265358979323846;
+    return (C > 0.0 && C < 2.0) ? fabs(sin(0.5 * PI * C)) : 1.0;
 }
 
 /* 1/max(sech^2(q/qs), smin): how much faster than the linear lag the slip state q relaxes where the
@@ -66,8 +74,10 @@ int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned 
     k->Vsy = Vy;
     k->sigx = k->zero.sigmax > p->TR_SIGMA_MIN ? k->zero.sigmax : p->TR_SIGMA_MIN; /* Besselink 2010 eq 19 */
     k->sigy = k->zero.sigmay > p->TR_SIGMA_MIN ? k->zero.sigmay : p->TR_SIGMA_MIN; /* Besselink 2010 eq 19 */
-    k->slx = p->TR_SAT * sat_slip(k->zero.mux, k->zero.Fz, k->zero.Kxk); /* peak force over slip stiffness */
-    k->sly = p->TR_SAT * sat_slip(k->zero.muy, k->zero.Fz, k->zero.Kya);
+    /* sliding force D*|sin(pi/2*C)| (the asymptote of the Magic Formula, Pacejka 2012 §4.3.2) over the slip
+     * stiffness; C = PCX1*LCX (eq 4.E11), PCY1*LCY (eq 4.E21) */
+    k->slx = p->TR_SAT * sat_slip(k->zero.mux * sliding(p->PCX1 * p->LCX), k->zero.Fz, k->zero.Kxk);
+    k->sly = p->TR_SAT * sat_slip(k->zero.muy * sliding(p->PCY1 * p->LCY), k->zero.Fz, k->zero.Kya);
     q = Vx / vxlow;
     q = q > 1.0 ? 1.0 : (q < -1.0 ? -1.0 : q);
     /* smooth sign of the rolling direction; sin(+-PI/2) is exactly +-1 in double */
@@ -188,9 +198,19 @@ void mt_step(const MFParams *p, const MTKin *k, double x[2], double h)
     x[0] = u;
 }
 
+/* Does the slope factor stay within MT_CS_LINEAR_TOL along the monotone path from s0 to s1?  r depends on
+ * |s| only and is smallest, 1, at 0: a path through 0 includes r = 1. */
+static int r_flat(double s0, double s1, double sig, double qs, double smin)
+{
+    double r0 = slope_factor(s0 / sig, qs, smin), r1 = slope_factor(s1 / sig, qs, smin), lo, hi;
+    lo = s0 * s1 > 0.0 ? (r0 < r1 ? r0 : r1) : slope_factor(0.0, qs, smin);
+    hi = r0 > r1 ? r0 : r1;
+    return hi - lo <= MT_CS_LINEAR_TOL * lo;
+}
+
 void mt_advance(const MFParams *p, const MTKin *k, double x[2], double H)
 {
-    double h, y[2], r0x, r1x, r0y, r1y, smx, smy;
+    double h, y[2], smx, smy;
     long n, i;
     if (!(H > 0.0)) return;
     y[0] = x[0];
@@ -202,11 +222,7 @@ void mt_advance(const MFParams *p, const MTKin *k, double x[2], double H)
         fabs(x[1]) <= k->sigy * p->TR_TANALPHA_LIM && fabs(y[1]) <= k->sigy * p->TR_TANALPHA_LIM) {
         smx = p->TR_SIGMA_MIN / k->sigx;
         smy = p->TR_SIGMA_MIN / k->sigy;
-        r0x = slope_factor(x[0] / k->sigx, k->slx, smx);
-        r1x = slope_factor(y[0] / k->sigx, k->slx, smx);
-        r0y = slope_factor(x[1] / k->sigy, k->sly, smy);
-        r1y = slope_factor(y[1] / k->sigy, k->sly, smy);
-        if (fabs(r1x - r0x) <= MT_CS_LINEAR_TOL * r0x && fabs(r1y - r0y) <= MT_CS_LINEAR_TOL * r0y) {
+        if (r_flat(x[0], y[0], k->sigx, k->slx, smx) && r_flat(x[1], y[1], k->sigy, k->sly, smy)) {
             if (isfinite(y[0]) && isfinite(y[1])) { /* one exponential step: exact for the linear lag */
                 x[0] = y[0];
                 x[1] = y[1];

@@ -34,7 +34,7 @@ typedef struct {
 typedef struct {
     double Vx, Vsx, Vsy;  /* forward velocity, slip velocities [m/s] */
     double sigx, sigy;    /* relaxation lengths [m] */
-    double slx, sly;      /* slips where the carcass deflection saturates: TR_SAT*mu*Fz/|K| (0: linear) [-] */
+    double slx, sly;      /* slips where the carcass deflection saturates: TR_SAT*F_slide/|K| (0: linear) [-] */
     double w;             /* low-speed weight: 1 at standstill, 0 from VXLOW */
     double My_sign;       /* smooth sign of the rolling-resistance moment */
     MFInputs ev;          /* evaluator inputs (slips set per evaluation) */
