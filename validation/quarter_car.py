@@ -252,32 +252,37 @@ def table(rows: list[dict]) -> str:
         case = "stop from 30 m/s" if r["case"] == "stop" else "parked, 20 % slope"
         lock = "yes" if r["locked"] else "no"
         lines.append(f"| {case} | {r['coupling']} | {r['T_brake']:.0f} | {r['h_ms']:g} | {lock} | "
-                     f"{r['travel'] * 1e3:.2f} | {r['drift'] * 1e3:.4f} |")  # fmt: skip
+                     f"{r['travel'] * 1e3:.2f} | {r['drift'] * 1e3:.2g} |")  # fmt: skip
     return "\n".join(lines)
 
 
 def plot(series: dict, path: Path) -> None:
+    """Position after the stop [mm] and Fx around the stop, both brakes, every step size (FMU through fmpy)."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(10, 6.5))
+    fig = Figure(figsize=(11, 6.5))
     axs = fig.subplots(2, 2)
     for (kind, how, T, h), res in series.items():
         if kind != "stop" or how != "fmu":
             continue
         m = metrics(res)
         i = 0 if T > 2000 else 1
-        sel = res["t"] >= m["t_stop"] - 0.5
-        lab = f"{h * 1e3:g} ms"
-        axs[0, i].plot(res["t"][sel], (res["x"][sel] - m["x_stop"]) * 1e3, label=lab)
-        axs[1, i].plot(res["t"][sel], res["Fx"][sel], label=lab)
-        axs[0, i].set_title(f"brake {T:.0f} N·m ({'locks' if m['locked'] else 'does not lock'})")
+        sel = (res["t"] >= m["t_stop"] - 0.3) & (res["t"] <= m["t_stop"] + 2.0)
+        lab = f"{h * 1e3:g} ms: travel {m['travel'] * 1e3:.1f} mm"
+        axs[0, i].plot(res["t"][sel] - m["t_stop"], (res["x"][sel] - m["x_stop"]) * 1e3, label=lab)
+        axs[1, i].plot(res["t"][sel] - m["t_stop"], res["Fx"][sel], label=f"{h * 1e3:g} ms")
+        axs[0, i].set_title(f"brake ramped to {T:.0f} N·m")
     for ax in axs[0]:
         ax.set_ylabel("x - x(stop) [mm]")
-        ax.legend()
+        ax.set_ylim(-40, 30)
+        ax.axhline(-25, color="0.6", lw=0.8, ls="--")
+        ax.axhline(25, color="0.6", lw=0.8, ls="--")
+        ax.legend(loc="lower right")
     for ax in axs[1]:
         ax.set_ylabel("Fx [N]")
-        ax.set_xlabel("t [s]")
-    fig.suptitle("Quarter car on the transient tyre FMU: the stop and the hold")
+        ax.set_xlabel("t - t(stop) [s]")
+        ax.legend(loc="lower right")
+    fig.suptitle("Quarter car (400 kg, 1.2 kg·m²) from 30 m/s on the transient tyre FMU (fmpy, Co-Simulation)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
 
