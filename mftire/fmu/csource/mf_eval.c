@@ -484,6 +484,23 @@ MF_FN double kxk(const MFParams *p, double Fz, double dfz, double dpi)
            p->LKX; /* eq 4.E15 */
 }
 
+/* Longitudinal friction coefficient mu_x (eq 4.E13; 0 at Fz = 0). */
+MF_FN double mu_x(const MFParams *p, const Cond *c, const Basic *b)
+{
+    double dfz = b->dfz, dpi = b->dpi;
+    if (c->Fz == 0.0) return 0.0;
+    return (p->PDX1 + p->PDX2 * dfz) * (1.0 + p->PPX3 * dpi + p->PPX4 * sq(dpi)) * (1.0 - p->PDX3 * sq(c->gamma)) *
+           b->LMUX_star; /* eq 4.E13 */
+}
+
+/* Lateral friction coefficient mu_y at the camber gamma_star (eq 4.E23). */
+MF_FN double mu_y(const MFParams *p, const Basic *b, double gamma_star)
+{
+    double dfz = b->dfz, dpi = b->dpi;
+    return (p->PDY1 + p->PDY2 * dfz) * (1.0 + p->PPY3 * dpi + p->PPY4 * sq(dpi)) * (1.0 - p->PDY3 * sq(gamma_star)) *
+           b->LMUY_star; /* eq 4.E23 */
+}
+
 /* Pure longitudinal force: Fx0 [N], mux [-], Kxk [N]. */
 MF_FN void fx0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double z1, double *Fx0_out,
                 double *mux_out, double *Kxk_out)
@@ -491,9 +508,7 @@ MF_FN void fx0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double 
     double Fz = c->Fz, dfz = b->dfz, dpi = b->dpi;
     double Cx, mux, Dx, Kxk, Bx, SHx, SVx, kappax, Ex, Bk, Fx0;
     Cx = p->PCX1 * p->LCX; /* eq 4.E11 */
-    mux = (p->PDX1 + p->PDX2 * dfz) * (1.0 + p->PPX3 * dpi + p->PPX4 * sq(dpi)) * (1.0 - p->PDX3 * sq(c->gamma)) *
-          b->LMUX_star; /* eq 4.E13 */
-    if (Fz == 0.0) mux = 0.0;
+    mux = mu_x(p, c, b); /* eq 4.E13 */
     Dx = mux * Fz * z1; /* eq 4.E12 */
     Kxk = kxk(p, Fz, dfz, dpi); /* eq 4.E15 */
     Bx = Kxk / (Cx * Dx + MF_EPSILON * sign_nonzero(Dx)); /* eq 4.E16 */
@@ -594,8 +609,7 @@ MF_FN void fy0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double 
 
     alphay = b->alpha_star + SHy; /* eq 4.E20 */
     Cy = p->PCY1 * p->LCY; /* eq 4.E21 */
-    muy = (p->PDY1 + p->PDY2 * dfz) * (1.0 + p->PPY3 * dpi + p->PPY4 * sq(dpi)) * (1.0 - p->PDY3 * sq(gamma_star)) *
-          b->LMUY_star; /* eq 4.E23 */
+    muy = mu_y(p, b, gamma_star); /* eq 4.E23 */
     Dy = muy * Fz * zeta2; /* eq 4.E22 */
     Ey = (p->PEY1 + p->PEY2 * dfz) *
          (1.0 + p->PEY5 * sq(gamma_star) - (p->PEY3 + p->PEY4 * gamma_star) * sign_nonzero(alphay)) * p->LEY;
@@ -1267,6 +1281,16 @@ MF_FN void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c, 
             lat.Kya = kya(p, c->Fz, b.Fz0p, b.dpi, b.gamma_star, z3); /* eq 4.E25 */
         }
         relaxation(p, c, Kxk, lat.Kya, &out->Cx, &out->Cy, &out->sigmax, &out->sigmay);
+        /* the slip stiffnesses and friction coefficients too (cheap; the transient model's sliding limit) */
+        if (!need_fx) {
+            out->Kxk = Kxk;
+            out->mux = mu_x(p, c, &b);
+        }
+        if (!need_fy) {
+            double muy = mu_y(p, &b, b.gamma_star);
+            out->Kya = lat.Kya;
+            out->muy = m->limits ? fabs(muy) : muy;
+        }
     }
 }
 

@@ -44,7 +44,7 @@ int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned 
     double Fz = nan_to(in->Fz, 0.0), Vx = nan_to(in->Vx, 0.0), Vy = nan_to(in->Vy, 0.0);
     double omega = nan_to(in->omega, 0.0), yaw = nan_to(in->yawRate, 0.0);
     double vxlow = p->VXLOW, absVx = fabs(Vx), vfloor, Vev, r, q;
-    unsigned want = MF_WANT_RELAX | MF_WANT_FX | MF_WANT_FY; /* sigma; mu and K for the saturation slips */
+    unsigned want = MF_WANT_RELAX; /* sigma; mu and K for the saturation slips */
     int rc, i;
     r = absVx / vxlow < 1.0 ? absVx / vxlow : 1.0;
     /* low-speed weight (cosine, as MFeval's VXLOW reduction); from VXLOW on exactly 0.5 * (1 + cos(PI)) = 0 */
