@@ -31,7 +31,7 @@ static double sliding(double C)
 static double slope_factor(double q, double qs, double smin)
 {
     double t, s;
-    if (!(qs > 0.0)) return 1.0 / (1.0 > smin ? 1.0 : smin);
+    if (!(qs > 0.0) || q == 0.0) return 1.0 / (1.0 > smin ? 1.0 : smin); /* sech^2(0) = 1 */
     t = exp(-2.0 * fabs(q / qs));
     s = 4.0 * t / ((1.0 + t) * (1.0 + t));
     return 1.0 / (s > smin ? s : smin);
@@ -186,11 +186,11 @@ static double step1(double s, double sig, double A, double r, double f, double h
     return y;
 }
 
-void mt_step(const MFParams *p, const MTKin *k, double x[2], double h)
+/* The step of mt_step with the rates A and slope factors r of lag() at x given. */
+static void step_lag(const MFParams *p, const MTKin *k, double x[2], double h, const double A[2], const double r[2])
 {
-    double dc[2], A[2], r[2], u, ex, ey;
+    double u, ex, ey;
     int hx, hy;
-    lag(p, k, x, dc, A, r);
     hx = equilibrium(-k->Vsx, k->sigx, p->TR_KAPPA_LIM, fabs(k->Vx), k->Vsx, p->TR_LIM_GAIN, &ex);
     hy = equilibrium(k->Vsy, k->sigy, p->TR_TANALPHA_LIM, fabs(k->Vx), k->Vsy, p->TR_LIM_GAIN, &ey);
     u = step1(x[0], k->sigx, A[0], r[0], -k->Vsx, h, hx, ex);
@@ -198,11 +198,18 @@ void mt_step(const MFParams *p, const MTKin *k, double x[2], double h)
     x[0] = u;
 }
 
+void mt_step(const MFParams *p, const MTKin *k, double x[2], double h)
+{
+    double dc[2], A[2], r[2];
+    lag(p, k, x, dc, A, r);
+    step_lag(p, k, x, h, A, r);
+}
+
 /* Does the slope factor stay within MT_CS_LINEAR_TOL along the monotone path from s0 to s1?  r depends on
  * |s| only and is smallest, 1, at 0: a path through 0 includes r = 1. */
-static int r_flat(double s0, double s1, double sig, double qs, double smin)
+static int r_flat(double s0, double r0, double s1, double sig, double qs, double smin)
 {
-    double r0 = slope_factor(s0 / sig, qs, smin), r1 = slope_factor(s1 / sig, qs, smin), lo, hi;
+    double r1 = slope_factor(s1 / sig, qs, smin), lo, hi;
     lo = s0 * s1 > 0.0 ? (r0 < r1 ? r0 : r1) : slope_factor(0.0, qs, smin);
     hi = r0 > r1 ? r0 : r1;
     return hi - lo <= MT_CS_LINEAR_TOL * lo;
@@ -210,19 +217,20 @@ static int r_flat(double s0, double s1, double sig, double qs, double smin)
 
 void mt_advance(const MFParams *p, const MTKin *k, double x[2], double H)
 {
-    double h, y[2], smx, smy;
+    double h, y[2], smx, smy, dc[2], A[2], r0[2];
     long n, i;
     if (!(H > 0.0)) return;
+    lag(p, k, x, dc, A, r0);
     y[0] = x[0];
     y[1] = x[1];
-    mt_step(p, k, y, H);
+    step_lag(p, k, y, H, A, r0); /* = mt_step(p, k, y, H) */
     /* the frozen step moves each state monotonically from x to y: the limiter is idle over the step when
      * both ends are within the limit */
     if (fabs(x[0]) <= k->sigx * p->TR_KAPPA_LIM && fabs(y[0]) <= k->sigx * p->TR_KAPPA_LIM &&
         fabs(x[1]) <= k->sigy * p->TR_TANALPHA_LIM && fabs(y[1]) <= k->sigy * p->TR_TANALPHA_LIM) {
         smx = p->TR_SIGMA_MIN / k->sigx;
         smy = p->TR_SIGMA_MIN / k->sigy;
-        if (r_flat(x[0], y[0], k->sigx, k->slx, smx) && r_flat(x[1], y[1], k->sigy, k->sly, smy)) {
+        if (r_flat(x[0], r0[0], y[0], k->sigx, k->slx, smx) && r_flat(x[1], r0[1], y[1], k->sigy, k->sly, smy)) {
             if (isfinite(y[0]) && isfinite(y[1])) { /* one exponential step: exact for the linear lag */
                 x[0] = y[0];
                 x[1] = y[1];
