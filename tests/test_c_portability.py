@@ -84,7 +84,8 @@ def _sources(fmu: Path, where: Path) -> Path:
 
 
 def _compile(argv: list[str], src: Path) -> str:
-    res = subprocess.run([*argv, "-I", str(src), *sorted(map(str, src.glob("*.c")))], capture_output=True, text=True)
+    units = portable.translation_units(src)
+    res = subprocess.run([*argv, "-I", str(src), *units], capture_output=True, text=True)
     assert res.returncode == 0, res.stderr[-3000:]
     return res.stderr
 

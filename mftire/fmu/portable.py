@@ -67,12 +67,26 @@ def windows_platform(platform_dir: str) -> str:
     return "x86_64-windows" if "-" in platform_dir else "win64"
 
 
+#: The FMU's single translation unit, when its sources have one (it includes the other .c files).
+UNITY = "fmu.c"
+
+
+def translation_units(src_dir: Path) -> list[str]:
+    """The ``.c`` files the FMU's binary is compiled from: the single translation unit when there is one,
+    else every ``.c`` of ``src_dir``."""
+    src_dir = Path(src_dir)
+    if (src_dir / UNITY).is_file():
+        return [str(src_dir / UNITY)]
+    return sorted(str(p) for p in src_dir.glob("*.c"))
+
+
 def compile_windows_dll(src_dir: Path, out_path: Path) -> None:
-    """Compile every ``.c`` in ``src_dir`` into the DLL ``out_path`` with MinGW-w64 (RuntimeError on failure)."""
+    """Compile the FMU's sources in ``src_dir`` into the DLL ``out_path`` with MinGW-w64 (RuntimeError on
+    failure)."""
     cc = mingw_compiler()
     if cc is None:
         raise RuntimeError(f"{MINGW} not found")
-    c_files = sorted(str(p) for p in Path(src_dir).glob("*.c"))
+    c_files = translation_units(src_dir)
     cmd = [cc, *MINGW_CFLAGS, "-I", str(src_dir), *c_files, "-o", str(out_path)]
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     if res.returncode != 0:
