@@ -28,8 +28,8 @@ EVALUATE_OPTIONAL = ("phit", "Vx", "P", "omega")
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     import pandas as pd
 
+    from mftire.iotools.loaders import read_numeric_csv
     from mftire.iotools.output import OutputPlan
-    from mftire.iotools.tables import read_numeric_csv
     from mftire.tyre import Tyre
 
     OutputPlan([args.tir, args.input], args.force).file(args.output, stdout=True)
@@ -236,9 +236,9 @@ def build_parser() -> argparse.ArgumentParser:
     from mftire.compare import cli as compare_cli
 
     compare_cli.add_parser(sub)
-    from mftire.iotools import rig_cli
+    from mftire.segmentation import cli as import_cli
 
-    rig_cli.add_parser(sub)
+    import_cli.add_parser(sub)
     return parser
 
 

@@ -87,14 +87,14 @@ def _diagnose_task(args: tuple) -> Any:
 
 
 def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: Executor) -> dict:
-    from mftire.compare.core import compare
+    from mftire.compare.comparison import compare
     from mftire.diagnosis.report import write_report
     from mftire.fe.config import load_tyre
     from mftire.fe.programmes import programme
-    from mftire.fe.sweeps import campaign
+    from mftire.fe.slip_sweeps import campaign
     from mftire.fe.template import mf_template
     from mftire.fitting.bands import coverage_table, start_bootstrap_bands
-    from mftire.fitting.core import fit_tir
+    from mftire.fitting.fitter import fit_tir
     from mftire.report_html import HtmlReport
     from mftire.tyre import Tyre
 
@@ -256,7 +256,7 @@ class RigStage:
 
     summary: dict
     import_report: Any  #: :class:`mftire.iotools.rig.RigReport` of the whole file
-    fit: Any  #: :class:`mftire.fitting.core.FitResult` of the rig sweeps
+    fit: Any  #: :class:`mftire.fitting.fitter.FitResult` of the rig sweeps
     diagnosis: Any  #: :class:`mftire.diagnosis.diagnose.DiagnosisResult`
     diagnosis_doc: dict
 
@@ -280,7 +280,7 @@ def rig_stage(output: str | os.PathLike, quick: bool = False, pair_step: int | N
     from mftire.data import default_tir, rig_run
     from mftire.diagnosis.diagnose import diagnose
     from mftire.diagnosis.report import write_report
-    from mftire.fitting.core import fit_tir
+    from mftire.fitting.fitter import fit_tir
     from mftire.iotools.rig import read_ttc, segment, write_sweeps
     from mftire.iotools.tir import read_tir
     from mftire.plotting import subplots

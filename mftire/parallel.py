@@ -1,8 +1,8 @@
 """One executor for embarrassingly parallel work: local processes, or a Dask cluster.
 
 Used for the bootstrap refits of the prediction bands (:func:`mftire.fitting.bands.bootstrap_bands`),
-the chunks of an FE campaign (:func:`mftire.fe.sweeps.run_sweeps`), the figures of a comparison
-(:meth:`mftire.compare.core.Comparison.plots`) and ``mftire demo``.
+the chunks of an FE campaign (:func:`mftire.fe.slip_sweeps.run_sweeps`), the figures of a comparison
+(:meth:`mftire.compare.comparison.Comparison.plots`) and ``mftire demo``.
 
 * ``Executor(jobs=1)`` runs every task in this process, one after another (the library default).
 * ``Executor(jobs=N)`` runs them in ``N`` local worker processes

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from mftire.cli import main
 from mftire.fitting.bands import band_coverage, bootstrap_bands, coverage_table, resample_sweeps
-from mftire.fitting.core import fit_tir
+from mftire.fitting.fitter import fit_tir
 from mftire.fitting.synthetic import synthetic_sweeps
 from mftire.iotools.sweeps import group_sweeps
 from mftire.iotools.tir import read_tir

@@ -8,7 +8,7 @@ tables.  What "once" means here:
 * the column aliases (other names of schema columns) are defined only in
   :mod:`mftire.iotools.sweeps`; the fitter's column check derives from them, and the
   TYDEX channel keys are among them;
-* the shared loaders are in :mod:`mftire.iotools.tables`; ``cli.py`` defines no reader
+* the shared loaders are in :mod:`mftire.iotools.loaders`; ``cli.py`` defines no reader
   and holds no resource path (the default ``.tir`` is :func:`mftire.data.default_tir`);
 * the columns that are never model variables are one set for comparison and diagnosis.
 """

@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 from mftire.cli import main
 from mftire.data import rig_run
 from mftire.errors import MftireInputError
-from mftire.fitting.data import load_sweep_files
+from mftire.fitting.weights import load_sweep_files
 from mftire.iotools.rig import (
     SAE_TO_ISO,
     TTC_CHANNELS,

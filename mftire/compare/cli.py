@@ -7,7 +7,7 @@ import os
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
-    from mftire.compare.core import compare, write_comparison
+    from mftire.compare.comparison import compare, write_comparison
     from mftire.compare.data import load_comparison_data
     from mftire.errors import MftireInputError
 

@@ -32,8 +32,8 @@ import pandas as pd
 
 from mftire.errors import MftireInputError
 from mftire.iotools.columns import CURVE_COLUMNS, GROUPING_COLUMNS, NOT_VARIABLES
+from mftire.iotools.loaders import load_sweep_files, prepare_table
 from mftire.iotools.sweeps import group_sweeps, read_sweep_csv
-from mftire.iotools.tables import load_sweep_files, prepare_table
 
 __all__ = [
     "FAMILIES",

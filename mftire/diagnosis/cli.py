@@ -10,8 +10,8 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     from mftire.diagnosis.diagnose import diagnose
     from mftire.diagnosis.holdout import parse_holdout
     from mftire.diagnosis.report import write_report
+    from mftire.iotools.loaders import load_sweep_files
     from mftire.iotools.output import OutputPlan
-    from mftire.iotools.tables import load_sweep_files
     from mftire.tyre import load
 
     OutputPlan([*args.data, args.tir], args.force).folder(args.output, REPORT_FILES)

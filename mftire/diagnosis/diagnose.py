@@ -50,7 +50,7 @@ from mftire.diagnosis.ranking import (
     rank_candidates,
 )
 from mftire.errors import MftireInputError
-from mftire.fitting.data import noise_std
+from mftire.fitting.weights import noise_std
 from mftire.iotools.sweeps import MEASURED_COLUMNS
 from mftire.tyre import Tyre, TyreLike, as_tyre
 

@@ -26,7 +26,7 @@ def _tyre(args: argparse.Namespace):
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from mftire.fe.sweeps import sweep, write_csv_atomic
+    from mftire.fe.slip_sweeps import sweep, write_csv_atomic
     from mftire.iotools.output import OutputPlan
 
     OutputPlan([args.tyre], args.force).file(args.output)
@@ -46,7 +46,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def _cmd_campaign(args: argparse.Namespace) -> int:
-    from mftire.fe.sweeps import campaign, write_csv_atomic
+    from mftire.fe.slip_sweeps import campaign, write_csv_atomic
     from mftire.iotools.output import OutputPlan
     from mftire.parallel import Executor
 
@@ -67,7 +67,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
 def _read_tables(paths: list[str]) -> pd.DataFrame:
     import pandas as pd
 
-    from mftire.iotools.tables import read_numeric_csv
+    from mftire.iotools.loaders import read_numeric_csv
 
     df = pd.concat([read_numeric_csv(str(p), ()) for p in paths], ignore_index=True)
     for col in ("Fz", "kappa", "Vx", "Fx"):
@@ -77,7 +77,7 @@ def _read_tables(paths: list[str]) -> pd.DataFrame:
 
 
 def _cmd_identify(args: argparse.Namespace) -> int:
-    from mftire.fe.identify import identify_velocity_law
+    from mftire.fe.friction_identify import identify_velocity_law
     from mftire.iotools.output import OutputPlan
 
     if args.output:

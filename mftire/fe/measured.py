@@ -27,8 +27,8 @@ import numpy as np
 import pandas as pd
 
 from mftire.fe.config import TyreConfig
-from mftire.fe.solver import solve
-from mftire.fe.sweeps import COMBINED_ALPHAS_DEG, Condition, _rows_for, free_rolling, solve_points
+from mftire.fe.rolling_contact import solve
+from mftire.fe.slip_sweeps import COMBINED_ALPHAS_DEG, Condition, _rows_for, free_rolling, solve_points
 from mftire.parallel import Executor
 
 CHANNELS = ("Fx", "Fy", "Mz", "Mx", "My")

@@ -3,7 +3,7 @@
 :func:`bootstrap_bands` answers "how well do the data pin the fitted curves down, and
 where should a new measurement fall?":
 
-1. **Full fit** (:func:`~mftire.fitting.core.fit_tir`) gives the curve f̂(x).
+1. **Full fit** (:func:`~mftire.fitting.fitter.fit_tir`) gives the curve f̂(x).
 2. **Bootstrap over sweeps.** Whole sweeps (the unit of a measurement, whose points
    share drift, temperature and wear) are resampled with replacement, *stratified by
    source and sweep kind*, so every replicate keeps each source's pure longitudinal,
@@ -55,7 +55,7 @@ import pandas as pd
 from scipy import stats
 
 from mftire.errors import MftireInputError
-from mftire.fitting.core import FitResult, fit_tir
+from mftire.fitting.fitter import FitResult, fit_tir
 from mftire.iotools.jsonutil import jsonable
 from mftire.iotools.tir import TirParameters
 from mftire.parallel import Executor, Pending
@@ -305,7 +305,7 @@ def bootstrap_bands(
     Parameters
     ----------
     data : DataFrame, path or sequence
-        Sweep data as for :func:`~mftire.fitting.core.fit_tir` (ignored when ``fit`` is given,
+        Sweep data as for :func:`~mftire.fitting.fitter.fit_tir` (ignored when ``fit`` is given,
         whose ``data`` is resampled).
     template : TirParameters or path
         Template of the full fit (used only when ``fit`` is None).
@@ -428,7 +428,7 @@ class PendingBands:
 def _heldout_table(heldout) -> pd.DataFrame:
     if isinstance(heldout, pd.DataFrame):
         return heldout
-    from mftire.fitting.data import load_sweep_files
+    from mftire.fitting.weights import load_sweep_files
 
     paths = [heldout] if isinstance(heldout, (str, os.PathLike)) else list(heldout)
     return load_sweep_files(paths)[0]

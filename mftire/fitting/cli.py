@@ -8,7 +8,7 @@ import sys
 
 def _cmd_fit(args: argparse.Namespace) -> int:
     from mftire.errors import MftireInputError
-    from mftire.fitting.core import fit_tir
+    from mftire.fitting.fitter import fit_tir
     from mftire.iotools.tir import write_tir
 
     _check_outputs(args)
@@ -32,7 +32,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
                          f"RMS {s.rms_start:.4g} -> {s.rms:.4g}")
     lines.extend(f"  note: {m}" for m in result.messages)
     if args.report:
-        from mftire.fitting.report import write_report
+        from mftire.fitting.fit_report import write_report
 
         paths = write_report(result, args.report)
         lines.append(f"  report: {paths['report']}, {paths['metrics']}, {len(paths['plots'])} plot(s)")

@@ -12,7 +12,7 @@ x = s + SH (Pacejka 2012 eq 4.E9 / 4.E19):
 
 Per-sweep values are combined over the loads (regression on dfz) into the nominal
 coefficients (PDX1, PDX2, PKX1, PKX2, PCX1, PEX1, PVX1, ...).  Every estimate is a
-proposal: :mod:`mftire.fitting.core` keeps it only when it lowers the stage's cost.
+proposal: :mod:`mftire.fitting.fitter` keeps it only when it lowers the stage's cost.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 ``.tir`` tyre property files (:mod:`~mftire.iotools.tir`, re-exported here), the sweep
 table (:mod:`~mftire.iotools.sweeps`: schema, column aliases, validation, grouping),
-TYDEX (:mod:`~mftire.iotools.tydex`), the shared loaders (:mod:`~mftire.iotools.tables`),
+TYDEX (:mod:`~mftire.iotools.tydex`), the shared loaders (:mod:`~mftire.iotools.loaders`),
 the unit table (:mod:`~mftire.iotools.units`), the label columns
 (:mod:`~mftire.iotools.columns`) and atomic writes (:mod:`~mftire.iotools.atomic`).
 """

@@ -3,7 +3,7 @@
 One table serves the ``.tir`` reader (``[UNITS]`` section, :mod:`mftire.iotools.tir`),
 the sweep-table conversions (:mod:`mftire.iotools.sweeps`), the TYDEX reader and writer
 (:mod:`mftire.iotools.tydex`) and the column checks of the fitter
-(:mod:`mftire.iotools.tables`).  Factors are exact rationals (:class:`fractions.Fraction`),
+(:mod:`mftire.iotools.loaders`).  Factors are exact rationals (:class:`fractions.Fraction`),
 so a reader can convert with one correct rounding; ``float(factor)`` is the float factor.
 
 Names are looked up after :func:`normalise_unit` (lower case; brackets, blanks, ``*``,

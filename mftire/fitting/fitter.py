@@ -5,7 +5,7 @@ problem solved with :func:`scipy.optimize.least_squares` (trust-region reflectiv
 
 * residual of row i: ``sqrt(w_i) * (model_i - measured_i) / sigma`` where ``w_i`` is the
   row's source weight and ``sigma`` [channel unit] the channel's noise standard
-  deviation estimated from the data (:func:`mftire.fitting.data.noise_std`, floored
+  deviation estimated from the data (:func:`mftire.fitting.weights.noise_std`, floored
   at 0.1 % of the channel's peak for noise-free simulation data);
 * robust ``soft_l1`` loss with ``f_scale = 3`` (three noise standard deviations):
   residuals beyond 3σ (gross outliers) count linearly, not quadratically;
@@ -42,10 +42,10 @@ from threadpoolctl import threadpool_limits
 
 from mftire.errors import MftireInputError
 from mftire.fitting import derivatives, initial
-from mftire.fitting.data import load_sweep_files, noise_std, parse_weights, prepare_table, row_weights
 from mftire.fitting.identify import DataLevels, data_levels, split_identified
 from mftire.fitting.model import Inputs, Model, fitting_mode, predict
 from mftire.fitting.stages import FITTED_KEYS, STAGES, Coefficient, Stage, resolve_stages
+from mftire.fitting.weights import load_sweep_files, noise_std, parse_weights, prepare_table, row_weights
 from mftire.iotools.sweeps import group_sweeps
 from mftire.iotools.tir import TirParameters, read_tir
 from mftire.mf.extensions import SECTION, ExtensionSet, parse_section

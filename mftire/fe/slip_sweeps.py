@@ -28,7 +28,7 @@ from scipy.optimize import newton
 from mftire.errors import MftireInputError
 from mftire.fe import carcass as cc
 from mftire.fe.config import TyreConfig, check_operating_range
-from mftire.fe.solver import solve
+from mftire.fe.rolling_contact import solve
 from mftire.iotools.atomic import write_text_atomic
 from mftire.parallel import Executor
 

@@ -2,7 +2,7 @@
 
 The sweep table itself (schema, validation, grouping) lives in
 :mod:`mftire.iotools.sweeps`, the shared loaders (:func:`load_sweep_files`,
-:func:`prepare_table`, :func:`check_columns`) in :mod:`mftire.iotools.tables`
+:func:`prepare_table`, :func:`check_columns`) in :mod:`mftire.iotools.loaders`
 (re-exported here); this module adds what fitting needs on top of them:
 
 * :func:`parse_weights` / :func:`row_weights` turn ``"fe=1,measured=5"`` into per-row
@@ -21,7 +21,7 @@ import pandas as pd
 from scipy import stats
 
 from mftire.errors import MftireInputError
-from mftire.iotools.tables import check_columns, load_sweep_files, prepare_table
+from mftire.iotools.loaders import check_columns, load_sweep_files, prepare_table
 
 __all__ = [
     "check_columns",
