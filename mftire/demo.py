@@ -255,7 +255,7 @@ class RigStage:
     """What :func:`rig_stage` produced."""
 
     summary: dict
-    import_report: Any  #: :class:`mftire.iotools.rig.RigReport` of the whole file
+    import_report: Any  #: :class:`mftire.segmentation.rig_segments.RigReport` of the whole file
     fit: Any  #: :class:`mftire.fitting.fitter.FitResult` of the rig sweeps
     diagnosis: Any  #: :class:`mftire.diagnosis.diagnose.DiagnosisResult`
     diagnosis_doc: dict
@@ -281,9 +281,10 @@ def rig_stage(output: str | os.PathLike, quick: bool = False, pair_step: int | N
     from mftire.diagnosis.diagnose import diagnose
     from mftire.diagnosis.report import write_report
     from mftire.fitting.fitter import fit_tir
-    from mftire.iotools.rig import read_ttc, segment, write_sweeps
+    from mftire.iotools.rig import read_ttc, write_sweeps
     from mftire.iotools.tir import read_tir
     from mftire.plotting import subplots
+    from mftire.segmentation.rig_segments import segment
     from mftire.tyre import Tyre
 
     out = os.fspath(output)

@@ -13,10 +13,10 @@ from mftire.fitting import fit_tir, fitter
 from mftire.fitting.model import Inputs, fitting_mode, predict
 from mftire.fitting.stages import FITTED_KEYS, STAGES
 from mftire.fitting.synthetic import synthetic_sweeps
-from mftire.iotools.sweeps import group_sweeps
 from mftire.iotools.tir import read_tir
 from mftire.mf.extensions import ExtensionSet
 from mftire.parameters import with_defaults
+from mftire.segmentation.grouping import group_sweeps
 
 
 @pytest.fixture(scope="module")

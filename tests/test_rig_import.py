@@ -23,14 +23,13 @@ from mftire.fitting.weights import load_sweep_files
 from mftire.iotools.rig import (
     SAE_TO_ISO,
     TTC_CHANNELS,
-    import_rig,
     parse_map_options,
     read_column_map,
     read_ttc,
-    segment,
     to_iso,
     write_ttc,
 )
+from mftire.segmentation.rig_segments import import_rig, segment
 
 ROOT = Path(__file__).resolve().parent.parent
 RAW = Path(rig_run())  # the shipped simulated run (mftire/data, made by validation/make_rig_file.py)

@@ -12,17 +12,14 @@ from hypothesis import strategies as st
 
 from mftire.errors import MftireInputError
 from mftire.iotools.sweeps import (
-    cluster_1d,
     convert_from_si,
     convert_to_si,
-    group_sweeps,
     read_sweep_csv,
-    summarize_sweeps,
-    sweep_kind,
     to_schema,
     unit_factor,
     validate_sweeps,
 )
+from mftire.segmentation.grouping import cluster_1d, group_sweeps, summarize_sweeps, sweep_kind
 
 
 def _lateral(fz: float, n: int = 25, gamma: float = 0.0, **extra: float) -> pd.DataFrame:

@@ -46,11 +46,11 @@ from mftire.fitting.identify import DataLevels, data_levels, split_identified
 from mftire.fitting.model import Inputs, Model, fitting_mode, predict
 from mftire.fitting.stages import FITTED_KEYS, STAGES, Coefficient, Stage, resolve_stages
 from mftire.fitting.weights import load_sweep_files, noise_std, parse_weights, prepare_table, row_weights
-from mftire.iotools.sweeps import group_sweeps
 from mftire.iotools.tir import TirParameters, read_tir
 from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
 from mftire.mf.modes import Mode
 from mftire.parameters import with_defaults
+from mftire.segmentation.grouping import group_sweeps
 from mftire.tyre import Tyre
 
 __all__ = ["StageResult", "FitResult", "fit_tir", "LOSS", "F_SCALE", "CONDITION_KEYS"]

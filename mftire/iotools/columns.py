@@ -10,7 +10,7 @@ from mftire.iotools.sweeps import MEASURED_COLUMNS, OPTIONAL_INPUT_COLUMNS, REQU
 
 __all__ = ["GROUPING_COLUMNS", "CURVE_COLUMNS", "LABEL_COLUMNS", "NOT_VARIABLES"]
 
-#: Columns :func:`mftire.iotools.sweeps.group_sweeps` adds: set points and sweep labels.
+#: Columns :func:`mftire.segmentation.grouping.group_sweeps` adds: set points and sweep labels.
 GROUPING_COLUMNS: tuple[str, ...] = ("Fz_set", "gamma_set", "P_set", "Vx_set", "sweep_id", "kind", "sweep_var",
                                      "kappa_set", "alpha_set", "sweep_dir", "direction")  # fmt: skip
 #: Columns the comparison adds on top (see :mod:`mftire.compare.data`).

@@ -1,4 +1,4 @@
-"""``mftire import RAW --output SWEEPS.csv``: the command line of :mod:`mftire.iotools.rig`.
+"""``mftire import RAW --output SWEEPS.csv``: the command line of :mod:`mftire.segmentation.rig_segments`.
 
 Kept apart from the importer so that registering the command (``mftire --help``) does
 not load pandas.
@@ -27,7 +27,8 @@ def _parse_signs(items: Sequence[str] | None) -> dict[str, float]:
 
 def _cmd_import(args: argparse.Namespace) -> int:
     from mftire.iotools.atomic import write_text_atomic
-    from mftire.iotools.rig import import_rig, parse_map_options
+    from mftire.iotools.rig import parse_map_options
+    from mftire.segmentation.rig_segments import import_rig
 
     columns = parse_map_options(args.map or [])
     warm: str | float = args.warmup
