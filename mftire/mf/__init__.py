@@ -19,7 +19,7 @@ pressure changes", Vehicle System Dynamics 48:S1):
 ``solver``         assembles the 30 output channels
 ``family``         model codes: MF 5.2 family (FITTYP 6, PAC2002), PAC2002 marker
 ``pac2002``        PAC2002 (Adams MF-Tyre 5.2): its differences from MF 5.2
-``usedkeys``       the ``.tir`` keys the evaluator reads (for tolerant reading)
+``usedkeys``       generates :mod:`mftire.iotools.evaluator_keys` (the ``.tir`` keys read)
 =================  ========================================================
 
 The reference for numerical agreement is MFeval 4.0 (M. Furlan Tassara).  Where it
