@@ -291,7 +291,8 @@ def rig_stage(output: str | os.PathLike, quick: bool = False, pair_step: int | N
     t0 = time.perf_counter()
     path = rig_run()
     raw = read_ttc(path)
-    table, imp = segment(raw, points_per_sweep=RIG_POINTS_PER_SWEEP, name=os.path.basename(path))
+    table, imp = segment(raw, points_per_sweep=RIG_POINTS_PER_SWEEP, name=os.path.basename(path), keep_dropped=False)
+    table = table.drop(columns=["fit_row", "drop_reason"])  # sweep rows only: the demo's tables as before
     step = pair_step or RIG_PAIR_STEP[1 if quick else 0]
     sweeps = table[(table["sweep_id"] // 2) % step == 0].reset_index(drop=True).assign(source="rig")
     write_sweeps(sweeps, os.path.join(out, "rig_sweeps.csv"))

@@ -33,7 +33,7 @@ import pandas as pd
 from mftire.errors import MftireInputError
 from mftire.iotools.columns import CURVE_COLUMNS, GROUPING_COLUMNS, NOT_VARIABLES
 from mftire.iotools.loaders import load_sweep_files, prepare_table
-from mftire.iotools.sweeps import read_sweep_csv
+from mftire.iotools.sweeps import fit_rows, read_sweep_csv
 from mftire.segmentation.grouping import group_sweeps
 
 __all__ = [
@@ -128,7 +128,7 @@ def prepare_comparison_data(table: pd.DataFrame) -> pd.DataFrame:
         ``kind``, ``sweep_var``, ``kappa_set``, ``alpha_set``) and ``family``, ``var``
         (swept column), ``held`` (held slip, rounded), ``curve_id``.
     """
-    df = table.copy()
+    df = fit_rows(table).copy()  # rows kept for the diagnosis only (fit_row False) are not sweeps
     if "source" not in df.columns:
         df["source"] = "data"
     df["source"] = df["source"].astype(str)

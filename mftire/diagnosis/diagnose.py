@@ -51,7 +51,7 @@ from mftire.diagnosis.ranking import (
 )
 from mftire.errors import MftireInputError
 from mftire.fitting.weights import noise_std
-from mftire.iotools.sweeps import MEASURED_COLUMNS
+from mftire.iotools.sweeps import MEASURED_COLUMNS, fit_rows
 from mftire.tyre import Tyre, TyreLike, as_tyre
 
 
@@ -346,7 +346,9 @@ def _diagnose(
     tyre = as_tyre(tyre)
     if progress is None:
         progress = sys.stderr.isatty()
-    df = with_sweeps(data.reset_index(drop=True))
+    # the sweep rows; rows an importer kept outside the sweeps (fit_row False: warm-up, load ramps) are
+    # left out until the candidates use them (issue 21)
+    df = with_sweeps(fit_rows(data).reset_index(drop=True))
     chans, not_measured = measured_channels(df, channels or MEASURED_COLUMNS)
     if not chans:
         raise MftireInputError("no measured channel (Fx, Fy, Mz, Mx, My) with data to diagnose"

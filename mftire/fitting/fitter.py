@@ -46,6 +46,7 @@ from mftire.fitting.identify import DataLevels, data_levels, split_identified
 from mftire.fitting.model import Inputs, Model, fitting_mode, predict
 from mftire.fitting.stages import FITTED_KEYS, STAGES, Coefficient, Stage, resolve_stages
 from mftire.fitting.weights import load_sweep_files, noise_std, parse_weights, prepare_table, row_weights
+from mftire.iotools.sweeps import fit_rows
 from mftire.iotools.tir import TirParameters, read_tir
 from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
 from mftire.mf.modes import Mode
@@ -592,6 +593,7 @@ def _as_table(data) -> tuple[pd.DataFrame, int, list[str]]:
             messages.append(f"{r['name']}: {r['n_dropped_nonpositive_fz']} rows with Fz <= 0 dropped")
     if "source" not in table.columns:
         table["source"] = "data"
+    table = fit_rows(table)  # rows an importer kept for the diagnosis only (fit_row False) are not fitted
     return table.reset_index(drop=True), n_nan, messages
 
 

@@ -16,7 +16,8 @@ GROUPING_COLUMNS: tuple[str, ...] = ("Fz_set", "gamma_set", "P_set", "Vx_set", "
 #: Columns the comparison adds on top (see :mod:`mftire.compare.data`).
 CURVE_COLUMNS: tuple[str, ...] = ("family", "var", "held", "curve_id")
 #: Bookkeeping columns of loaders, campaigns and fits.
-LABEL_COLUMNS: tuple[str, ...] = ("source", "file", "origin", "load_fraction", "meas_no", "weight")
+LABEL_COLUMNS: tuple[str, ...] = ("source", "file", "origin", "load_fraction", "meas_no", "weight", "fit_row",
+                                  "drop_reason")  # fmt: skip
 #: Columns that are never a model-extension variable (nor a diagnosis candidate): the MF
 #: inputs (``omega`` included), the measured channels and every label above.
 NOT_VARIABLES: frozenset[str] = frozenset({*REQUIRED_COLUMNS, *OPTIONAL_INPUT_COLUMNS, "omega", *MEASURED_COLUMNS,

@@ -53,6 +53,8 @@ __all__ = [
     "to_schema",
     "read_sweep_csv",
     "validate_sweeps",
+    "FIT_ROW",
+    "fit_rows",
 ]
 
 #: Operating-condition inputs every sweep table must have (SI).
@@ -61,6 +63,26 @@ REQUIRED_COLUMNS: tuple[str, ...] = ("Fz", "kappa", "alpha", "gamma", "Vx", "P")
 OPTIONAL_INPUT_COLUMNS: tuple[str, ...] = ("phit",)
 #: Measured channels; a table holds any subset.
 MEASURED_COLUMNS: tuple[str, ...] = ("Fx", "Fy", "Mz", "Mx", "My")
+
+#: Boolean column of imported rig tables (:func:`mftire.segmentation.rig_segments.segment`):
+#: True on the rows of the sweeps a fit uses, False on rows kept only for the diagnosis
+#: (warm-up, load ramps and other transitions, dwells), with their ``drop_reason``.
+FIT_ROW = "fit_row"
+
+
+def fit_rows(df: pd.DataFrame) -> pd.DataFrame:
+    """The rows a fit (and a comparison) uses: those with ``fit_row`` True, or all rows without that column.
+
+    A ``fit_row`` column read back from CSV holds ``True``/``False`` (bool) or text; both
+    are understood.  The index is kept.
+    """
+    if FIT_ROW not in df.columns:
+        return df
+    flag = df[FIT_ROW]
+    if flag.dtype != bool:
+        flag = flag.astype(str).str.strip().str.lower().isin(("true", "1", "1.0", "yes"))
+    return df if bool(flag.all()) else df[flag.to_numpy()]
+
 
 # The unit table (names, exact SI factors, SI unit and dimension of each column) lives in
 # mftire.iotools.units; re-exported here for the readers and users of the sweep table.

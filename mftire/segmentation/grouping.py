@@ -157,6 +157,13 @@ def _split_runs(
     swept one, the other stays held; when the held slip leaves its level too, a new run
     starts. A slip only counts as having left its level when ``patience`` consecutive
     rows are out of it, so single noisy samples do not split a sweep.
+
+    The level test alone finds a boundary late when the next sweep starts inside the held
+    level (a braking sweep from kappa = 0 after a cornering sweep at kappa = 0: its first
+    points are also "kappa held at 0"); :func:`_start_of_next_sweep` moves such a
+    boundary back to where the swept slip of the run before stopped moving.  Finally a
+    run is split where its swept slip jumps back (:func:`_reset_rows`): the same sweep
+    measured again.
     """
     n = kappa.size
     run = np.zeros(n, dtype=int)
@@ -165,9 +172,12 @@ def _split_runs(
     def out_of_level(x: list[float], i: int, ref: float, tol: float) -> bool:
         return all(abs(v - ref) > tol for v in x[i : i + patience])
 
+    k_arr, a_arr = kappa, alpha
     kappa, alpha = kappa.tolist(), alpha.tolist()  # row by row: Python floats are faster than numpy scalars
     k_sum, a_sum, count = kappa[0], alpha[0], 1
     held = "both"
+    starts: list[int] = [0]
+    swept: list[str | None] = []  # the swept slip of each finished run (None: not known)
     for i in range(1, n):
         k_ref, a_ref = k_sum / count, a_sum / count
         k_out = out_of_level(kappa, i, k_ref, kappa_tol)
@@ -184,6 +194,8 @@ def _split_runs(
         else:
             new_run = (held == "alpha" and a_out) or (held == "kappa" and k_out)
         if new_run:
+            swept.append({"kappa": "alpha", "alpha": "kappa"}.get(held))
+            starts.append(i)
             r += 1
             k_sum, a_sum, count, held = kappa[i], alpha[i], 1, "both"
         else:
@@ -198,7 +210,83 @@ def _split_runs(
                 a_sum += a_ref
             count += 1
         run[i] = r
-    return run
+    swept.append({"kappa": "alpha", "alpha": "kappa"}.get(held))
+    slips = {"kappa": (k_arr, kappa_tol), "alpha": (a_arr, alpha_tol)}
+    # boundaries found late: move them back (one run at a time, in order)
+    for r_new in range(1, len(starts)):
+        var = swept[r_new - 1]
+        if var is None:
+            continue
+        x, tol = slips[var]
+        b = _start_of_next_sweep(x, starts[r_new - 1], starts[r_new], tol, patience)
+        run[b : starts[r_new]] = r_new
+        starts[r_new] = b
+    # resets of the swept slip inside a run: a repeated sweep
+    out = run.copy()
+    extra = 0
+    ends = [*starts[1:], n]
+    for r_old, (s, e) in enumerate(zip(starts, ends, strict=True)):
+        out[s:e] = r_old + extra
+        var = swept[r_old]
+        if var is None or e - s < 2 * patience:
+            continue
+        x, tol = slips[var]
+        for b in _reset_rows(x[s:e], tol, patience):
+            extra += 1
+            out[s + b : e] = r_old + extra
+    return out
+
+
+def _start_of_next_sweep(x: np.ndarray, s: int, i: int, tol: float, patience: int) -> int:
+    """First row of the run that the level test started at row ``i`` (run before it from row ``s``).
+
+    ``x`` is the slip swept in the run before.  In the new run ``x`` is held, so rows
+    before ``i`` where ``x`` already stands still at the new run's level belong to the
+    new run, except the row that reached that level by an ordinary step of the sweep
+    (its last point: a sweep that ends where the next one starts).  A row reached by a
+    jump (a step beyond three typical steps and twice ``tol``) starts the new run.
+    """
+    level = float(np.median(x[i : i + patience]))
+    steps = np.abs(np.diff(x[s : i + 1]))
+    moving = steps[steps > tol]
+    typical = float(np.median(moving)) if moving.size else 0.0
+    still = min(tol, 0.25 * typical) if typical > 0 else tol
+    j = i
+    while j - 1 > s and abs(x[j - 1] - level) <= tol and abs(x[j] - x[j - 1]) <= still:
+        j -= 1
+    if j == i or j - 1 < s:
+        return i
+    arrival = abs(x[j] - x[j - 1])
+    if arrival > max(2 * tol, 3 * typical):
+        return j  # jumped to the new level: the new sweep starts here
+    return j + 1  # the sweep's own last point stays with it
+
+
+def _reset_rows(x: np.ndarray, tol: float, patience: int) -> list[int]:
+    """Rows (within one run) where the swept slip jumps back to repeat the sweep.
+
+    A reset is a step against the sweep's direction just before it, larger than three
+    typical steps and twice ``tol``, with at least ``patience`` rows on either side.  A
+    turning point (the sweep reversing step by step) is not a reset, nor is a gap in a
+    sweep (a large step in its own direction).
+    """
+    d = np.diff(x)
+    steps = np.abs(d)
+    moving = steps[steps > tol]
+    if moving.size < 2:
+        return []
+    typical = float(np.median(moving))
+    big = np.flatnonzero(steps > max(3 * typical, 2 * tol))
+    out, last = [], 0
+    for k in big:
+        b = int(k) + 1
+        before = d[:k][np.abs(d[:k]) > tol]
+        if before.size == 0 or np.sign(before[-1]) == np.sign(d[k]):
+            continue
+        if b - last >= patience and x.size - b >= patience:
+            out.append(b)
+            last = b
+    return out
 
 
 def _merge_short_runs(run: np.ndarray, min_points: int) -> np.ndarray:

@@ -132,6 +132,7 @@ def segment(
     min_dwell_s: float = 0.3,
     warmup: str | float | None = "auto",
     points_per_sweep: int | None = None,
+    keep_dropped: bool = True,
     name: str = "",
 ) -> tuple[pd.DataFrame, RigReport]:
     """Cut a continuous SI/ISO time series (from :func:`read_ttc` / :func:`read_columns`) into sweeps.
@@ -142,11 +143,22 @@ def segment(
     ``min_sweep_points`` rows; the swept slip standing still (within a tenth of its
     tolerance over 0.1 s) for ``min_dwell_s`` or longer is a dwell, not part of a sweep.
 
+    Rows left out of the sweeps (warm-up, load ramps and other transitions, short holds,
+    free rolling, dwells, turning points) stay in the table with ``keep_dropped=True``
+    (default) as rows with ``fit_row`` False and their ``drop_reason``, in time order
+    with the sweep rows: a fit ignores them (:func:`mftire.iotools.sweeps.fit_rows`), the
+    diagnosis may use them (a thermal effect shows most in the warm-up).  With
+    ``points_per_sweep`` they are binned too, into bins of as many raw rows as a sweep
+    point has on average.  Rows with a non-finite input or Fz <= 0 are not kept.
+
     Returns
     -------
     (DataFrame, RigReport)
         The sweep table (schema columns, extra channels, sweep labels, ``row_first``,
-        ``row_last``) and the report.
+        ``row_last``, ``fit_row`` (bool), ``drop_reason`` ("" on sweep rows)) and the
+        report.  Left-out rows have ``sweep_id`` -1, ``sweep_dir`` 0, ``kind``,
+        ``sweep_var`` and ``direction`` ``"none"``, the set points of their segment (NaN
+        between segments) and NaN ``kappa_set``/``alpha_set``.
     """
     missing = [c for c in REQUIRED_COLUMNS if c not in df.columns]
     if missing:
@@ -228,7 +240,9 @@ def segment(
         raise MftireInputError(f"warmup must be 'auto', 'none' or a number of seconds, got {warmup!r}")
     auto_warm = warmup == "auto"
     first_long = True
+    seg_all = np.full(n, -1, dtype=int)  # segment of every row, kept or dropped (-1: between segments)
     for k_seg, (s0, e0, cd) in enumerate(seg_rows):
+        seg_all[s0:e0] = k_seg
         entry: dict[str, Any] = {"row_first": s0, "row_last": e0 - 1, "t_start": float(t[s0]),
                                  "t_end": float(t[e0 - 1]), "n_rows": e0 - s0}  # fmt: skip
         for j, c in enumerate(_CONDITIONS):
@@ -366,10 +380,62 @@ def segment(
     rep.n_sweeps = int(first.size)
     rep.directions = {str(k): int(v) for k, v in first.value_counts().items()}
     rep.n_points = len(base)
+    base["fit_row"] = True
+    base["drop_reason"] = ""
+    if keep_dropped:
+        rows_per_point = max(1, int(round(kept_rows.size / max(len(base), 1))))
+        left = _left_out_rows(df, keep, reason, seg_all, rep, rows_per_point if points_per_sweep else 1)
+        if len(left):
+            base = pd.concat([base, left], ignore_index=True, sort=False)
+            base = base.sort_values("row_first", kind="stable").reset_index(drop=True)
     # no attrs on the table: pandas deep-copies them on every column access, which slows every
     # later step (fit, diagnosis); the report holds what they held
     base.attrs = {}
     return base, rep
+
+
+def _left_out_rows(df: pd.DataFrame, keep: np.ndarray, reason: np.ndarray, seg_all: np.ndarray, rep: RigReport,
+                   rows_per_point: int) -> pd.DataFrame:
+    """The rows :func:`segment` leaves out of the sweeps, labelled, as ``fit_row`` False rows.
+
+    Contiguous rows with one reason are averaged in bins of ``rows_per_point`` rows (1:
+    every row), in time order.
+    """
+    inputs = df[list(REQUIRED_COLUMNS)].to_numpy(float)
+    ok = ~keep & np.isfinite(inputs).all(axis=1) & (df["Fz"].to_numpy(float) > 0)
+    rows = np.flatnonzero(ok)
+    if rows.size == 0:
+        return pd.DataFrame()
+    why = reason[rows].astype(str)
+    new_run = np.r_[True, (np.diff(rows) > 1) | (why[1:] != why[:-1])]
+    run = np.cumsum(new_run) - 1
+    pos = np.arange(rows.size) - np.flatnonzero(new_run)[run]
+    part = df.iloc[rows].reset_index(drop=True)
+    part["row_first"] = rows
+    part["row_last"] = rows
+    part["_seg"] = seg_all[rows]
+    part["drop_reason"] = np.where(why == "", "other", why)
+    if rows_per_point > 1:
+        part["_bin"] = run * (rows.size + 1) + pos // rows_per_point
+        num = [c for c in part.columns if c not in ("_bin", "_seg", "row_first", "row_last")
+               and pd.api.types.is_numeric_dtype(part[c])]
+        other = [c for c in part.columns if c not in num and c not in ("_bin", "row_first", "row_last")]
+        g = part.groupby("_bin", sort=True)
+        agg = g[num].mean()
+        agg["row_first"] = g["row_first"].min()
+        agg["row_last"] = g["row_last"].max()
+        agg = agg.join(g[other].first())
+        part = agg.reset_index(drop=True)
+    segs = part["_seg"].to_numpy()
+    for c in _CONDITIONS:
+        lv = np.array([np.nan] + [entry[c] for entry in rep.segments], dtype=float)
+        part[_SET_NAMES[c]] = lv[segs + 1]
+    part["sweep_id"] = -1
+    part["sweep_dir"] = 0
+    part["kind"] = part["sweep_var"] = part["direction"] = "none"
+    part["kappa_set"] = part["alpha_set"] = np.nan
+    part["fit_row"] = False
+    return part.drop(columns="_seg")
 
 
 def import_rig(
