@@ -149,7 +149,9 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from mftire.parallel import Executor
 
     OutputPlan((), args.force).folder(args.output, OUTPUT_NAMES)
-    run_demo(args.output, quick=args.quick, progress=True, executor=Executor.from_args(args))
+    from mftire.cli_options import progress_of
+
+    run_demo(args.output, quick=args.quick, progress=progress_of(args), executor=Executor.from_args(args))
     return 0
 
 
@@ -219,6 +221,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_parallel_options(p, "the FE campaign chunks and the bootstrap refits")
     add_force_option(p)
+    from mftire.cli_options import add_quiet_option
+
+    add_quiet_option(p)
     p.set_defaults(func=_cmd_demo)
 
     from mftire.fe import cli as fe_cli

@@ -30,24 +30,14 @@ import pandas as pd
 from mftire.iotools.atomic import atomic_path
 from mftire.iotools.tir import write_tir
 from mftire.parallel import Executor
-
-
-class _Steps:
-    def __init__(self, total: int, enabled: bool) -> None:
-        self.total, self.enabled, self.i, self.t0 = total, enabled, 0, time.perf_counter()
-
-    def __call__(self, msg: str) -> None:
-        self.i += 1
-        if self.enabled:
-            print(f"[{self.i}/{self.total} {time.perf_counter() - self.t0:5.1f} s] {msg}", flush=True)
-
+from mftire.progress import Progress
 
 #: Files and folders the demo writes into its output folder.
 OUTPUT_NAMES = ("fe_sweeps.csv", "measured_sweeps.csv", "fitted.tir", "extended.tir", "tyre.fmu", "report.html",
                 "report.json", "headline.png", "rig_sweeps.csv", "rig_fitted.tir", "rig_run.png")
 
 
-def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progress: bool = True,
+def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progress: bool | None = None,
              executor: Executor | None = None) -> dict:
     """Run the demo; returns a summary dict (also in ``output/report.json``).
 
@@ -86,7 +76,7 @@ def _diagnose_task(args: tuple) -> Any:
         return diagnose(data, tyre, progress=False, n_perm=n_perm)
 
 
-def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: Executor) -> dict:
+def _run_demo(output: str | os.PathLike, quick: bool, progress: bool | None, executor: Executor) -> dict:
     from mftire.compare.comparison import compare
     from mftire.diagnosis.report import write_report
     from mftire.fe.config import load_tyre
@@ -100,7 +90,7 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
 
     out = os.fspath(output)
     os.makedirs(out, exist_ok=True)
-    step = _Steps(9, progress)
+    step = Progress("mftire demo", progress, total=9).step
 
     step("FE-surrogate campaign of the default tyre" + (" (quick grid)" if quick else ""))
     fe_tyre = load_tyre(None)
@@ -128,7 +118,7 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
     # fit) queue behind it: as many busy processes as workers, the diagnosis (which the rest waits for) first
     diag_pending = executor.start_map(_diagnose_task, [(meas, fitted, 49 if quick else 99)])
     bands_pending = start_bootstrap_bands(None, template, n=4 if quick else 12, fit=fit, stages="1,2,3", seed=0,
-                                          executor=executor)  # fmt: skip
+                                          executor=executor, progress=False)  # fmt: skip
 
     step("diagnosis of the measured residual")
     diag = diag_pending.result()[0]
@@ -225,7 +215,7 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
                               "rig_diagnosis": "rig_diagnosis/diagnosis.md"})  # fmt: skip
     html, js = rep.write(os.path.join(out, "report.html"), os.path.join(out, "report.json"))
     _headline(comp, diag, os.path.join(out, "headline.png"))
-    if progress:
+    if progress is not False:
         print(f"done: {html}\n      {js}", flush=True)
     return summary
 

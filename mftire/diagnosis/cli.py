@@ -18,7 +18,9 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     tyre = load(args.tir)
     data, _ = load_sweep_files(args.data)
     holdout = parse_holdout(args.holdout) if args.holdout else None
-    result = diagnose(data, tyre, holdout, n_perm=args.permutations, seed=args.seed)
+    from mftire.cli_options import progress_of
+
+    result = diagnose(data, tyre, holdout, n_perm=args.permutations, seed=args.seed, progress=progress_of(args))
     doc = write_report(result, args.output)
     print(doc["summary"])
     for ch, c in ((doc.get("holdout") or {}).get("channels") or {}).items():
@@ -47,5 +49,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     from mftire.iotools.output import add_force_option
 
     add_force_option(p)
+    from mftire.cli_options import add_quiet_option
+
+    add_quiet_option(p)
     p.set_defaults(func=_cmd_diagnose)
     return p

@@ -54,7 +54,9 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     tyre = _tyre(args)
     out = Path(args.output)
     t0 = time.perf_counter()
-    table, free = campaign(tyre, quick=args.quick, executor=Executor.from_args(args))
+    from mftire.cli_options import progress_of
+
+    table, free = campaign(tyre, quick=args.quick, executor=Executor.from_args(args), progress=progress_of(args))
     write_csv_atomic(table, out / "sweeps.csv")
     write_csv_atomic(free, out / "free_rolling.csv")
     counts = table["kind"].value_counts().to_dict()
@@ -134,6 +136,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
     add_parallel_options(c, "the chunks of slip points")
     add_force_option(c)
+    from mftire.cli_options import add_quiet_option
+
+    add_quiet_option(c)
     c.set_defaults(func=_cmd_campaign)
 
     i = sub.add_parser("identify", help="identify the velocity part of the friction law from braking curves (ch. 5)",

@@ -59,6 +59,7 @@ from mftire.fitting.fitter import FitResult, fit_tir
 from mftire.iotools.jsonutil import jsonable
 from mftire.iotools.tir import TirParameters
 from mftire.parallel import Executor, Pending
+from mftire.progress import reporter
 from mftire.tyre import Tyre
 
 __all__ = ["Bands", "bootstrap_bands", "start_bootstrap_bands", "PendingBands", "band_coverage", "coverage_table",
@@ -333,8 +334,9 @@ def bootstrap_bands(
         Where the replicate fits run (default: in this process; see :mod:`mftire.parallel`).
         The replicates are drawn beforehand from ``seed`` and collected in order, so the
         bands are bit for bit the same whatever the executor.
-    progress : bool or callable
-        Progress messages (per replicate).
+    progress : bool or callable, optional
+        Progress lines per replicate on stderr (default: only when stderr is a terminal;
+        see :mod:`mftire.progress`), or a callable that takes each message.
 
     Returns
     -------
@@ -368,8 +370,7 @@ def start_bootstrap_bands(
         raise MftireInputError(f"band level must be between 0 and 1, got {level}")
     if n < 2:
         raise MftireInputError(f"--bands needs at least 2 replicates, got {n}")
-    say = progress if callable(progress) else (
-        (lambda m: print(f"mftire bands: {m}", flush=True)) if progress else (lambda m: None))
+    say = reporter(progress, "mftire bands")
     t0 = time.perf_counter()
     if fit is None:
         fit = fit_tir(data, template, stages=stages, weights=weights, alpha_star=alpha_star, progress=False)

@@ -16,8 +16,10 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
     load(args.template)  # a broken template is an error, a suspicious one warns (mftire.iotools.tir_checks)
     fixed = [k.strip() for k in (args.fix or "").split(",") if k.strip()]
+    from mftire.cli_options import progress_of
+
     result = fit_tir(args.data, args.template, stages=args.stages, weights=args.weights,
-                     alpha_star=args.alpha_star, fixed=fixed)
+                     alpha_star=args.alpha_star, fixed=fixed, progress=progress_of(args))
     data = result.data
     if not any(s.status == "fitted" or (s.channel in data.columns and data[s.channel].notna().any())
                for s in result.stages):
@@ -62,14 +64,13 @@ def _bands(args: argparse.Namespace, result) -> list[str]:
     """``--bands N``: bootstrap bands written next to the report (or the fitted .tir)."""
     import os
 
+    from mftire.cli_options import progress_of
     from mftire.fitting.bands import bootstrap_bands, coverage_table, write_bands
     from mftire.parallel import Executor
 
     bands = bootstrap_bands(None, args.template, n=args.bands, level=args.band_level, fit=result,
                             weights=args.weights, alpha_star=args.alpha_star, seed=args.seed,
-                            executor=Executor.from_args(args),
-                            progress=None if not sys.stderr.isatty() else
-                            (lambda m: print(f"\rmftire fit: bands: {m}\x1b[K", end="", file=sys.stderr, flush=True)))
+                            executor=Executor.from_args(args), progress=progress_of(args))
     cov = coverage_table(bands, args.heldout) if args.heldout else None
     directory = args.report or os.path.dirname(os.path.abspath(args.output))
     paths = write_bands(bands, directory, cov)
@@ -118,5 +119,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     from mftire.iotools.output import add_force_option
 
     add_force_option(p)
+    from mftire.cli_options import add_quiet_option
+
+    add_quiet_option(p)
     p.set_defaults(func=_cmd_fit)
     return p

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -51,6 +50,7 @@ from mftire.iotools.tir import TirParameters, read_tir
 from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
 from mftire.mf.modes import Mode
 from mftire.parameters import with_defaults
+from mftire.progress import Progress, reporter
 from mftire.segmentation.grouping import group_sweeps
 from mftire.tyre import Tyre
 
@@ -190,13 +190,8 @@ class FitResult:
 # ------------------------------------------------------------------------------------
 
 
-def _progress_printer(progress: bool | Callable[[str], None] | None) -> Callable[[str], None]:
-    if callable(progress):
-        return progress
-    show = sys.stderr.isatty() if progress is None else bool(progress)
-    if not show:
-        return lambda msg: None
-    return lambda msg: print(f"mftire fit: {msg}", file=sys.stderr, flush=True)
+def _progress_printer(progress: bool | Callable[[str], None] | Progress | None) -> Progress:
+    return reporter(progress, "mftire fit")
 
 
 # ------------------------------------------------------------------------------------
