@@ -1,6 +1,6 @@
 """Map a candidate variable to model extensions, fit them, and choose one.
 
-An effect is a law of :data:`LAWS`: MF scaling factors times a form of
+An effect is a law of :data:`EFFECTS_FOR`: MF scaling factors times a form of
 :mod:`mftire.mf.extensions` in the candidate's variable (or the standard pressure terms).
 Each is fitted by bounded least squares on the
 training data (gross outliers removed; each channel on the rows where it is a primary

@@ -14,7 +14,7 @@ The sweep table itself (schema, validation, grouping) lives in
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
@@ -119,10 +119,3 @@ def noise_std(y: np.ndarray, x: np.ndarray, groups: np.ndarray | None = None) ->
     if d.size == 0:
         return 0.0
     return float(stats.median_abs_deviation(d, scale="normal") / np.sqrt(6.0))
-
-
-def iter_groups(labels: np.ndarray) -> Iterable[np.ndarray]:
-    """Row indices of each distinct label."""
-    order = np.argsort(labels, kind="stable")
-    bounds = np.flatnonzero(np.diff(labels[order])) + 1
-    return np.split(order, bounds)
