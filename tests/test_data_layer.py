@@ -123,10 +123,10 @@ def test_column_aliases_are_defined_once():
                 where.add(path)
     assert where == {"mftire/iotools/sweeps.py"}
     # the fitter's column check is derived from them, and every TYDEX key of a schema column is an alias
-    assert {a for a, _ in loaders._OTHER_NAMES.items()} == {a for al in sweeps._ALIASES.values() for a in al}
+    assert {a for a, _ in loaders._OTHER_NAMES.items()} == {a for al in sweeps.COLUMN_ALIASES.values() for a in al}
     for col, keys in tydex.TYDEX_CHANNELS.items():
-        if col in sweeps._ALIASES:
-            assert all(k.lower() in sweeps._ALIASES[col] or k.lower() == col.lower() for k in keys), col
+        if col in sweeps.COLUMN_ALIASES:
+            assert all(k.lower() in sweeps.COLUMN_ALIASES[col] or k.lower() == col.lower() for k in keys), col
 
 
 def test_check_columns_names_aliases_and_unit_suffixes():

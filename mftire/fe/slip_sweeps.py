@@ -125,7 +125,7 @@ class Condition:
     gamma: float = 0.0
 
 
-def _rows_for(kind: str, n_kappa: int, n_alpha: int, alphas_comb: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
+def rows_for(kind: str, n_kappa: int, n_alpha: int, alphas_comb: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
     """(kappa, alpha) points of one sweep of the given kind."""
     if kind == "braking":
         k = kappa_grid(n_kappa)
@@ -174,7 +174,7 @@ def run_sweeps(
     })[FREE_ROLLING_COLUMNS]
     pieces = []
     for kind, c in jobs:
-        kap, alp = _rows_for(kind, n_kappa, n_alpha, combined_alphas_deg)
+        kap, alp = rows_for(kind, n_kappa, n_alpha, combined_alphas_deg)
         w_free, _ = lookup[(c.Fz, c.V, c.P, c.gamma)]
         pieces.append(pd.DataFrame({
             "Fz": c.Fz, "kappa": kap, "alpha": alp, "gamma": c.gamma, "Vx": c.V, "P": c.P,

@@ -111,7 +111,7 @@ import pandas as pd
 from mftire.errors import MftireInputError
 from mftire.iotools.atomic import atomic_path
 from mftire.iotools.sweeps import (
-    _ALIASES,
+    COLUMN_ALIASES,
     DIMENSIONS,
     MEASURED_COLUMNS,
     REQUIRED_COLUMNS,
@@ -287,7 +287,7 @@ def _no_duplicates(path: str, line: int, names: Sequence[str], what: str) -> Non
 def _target_of(name: str) -> str | None:
     """Schema column a rig channel name stands for, from the column aliases of the sweep schema."""
     low = name.strip().lower()
-    for target, aliases in _ALIASES.items():
+    for target, aliases in COLUMN_ALIASES.items():
         if low == target.lower() or low in aliases:
             return target
     return None

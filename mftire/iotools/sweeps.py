@@ -55,6 +55,7 @@ __all__ = [
     "validate_sweeps",
     "FIT_ROW",
     "fit_rows",
+    "COLUMN_ALIASES",
 ]
 
 #: Operating-condition inputs every sweep table must have (SI).
@@ -142,9 +143,9 @@ def to_schema(df: pd.DataFrame, mapping: Mapping[str, tuple[str, str]]) -> pd.Da
 # Validation
 # ----------------------------------------------------------------------------------------
 
-# lower-case column names that usually mean a schema quantity, with the unit they usually
-# carry (None: the same as the schema, only the name differs).
-_ALIASES: dict[str, dict[str, str | None]] = {
+#: Lower-case column names that usually mean a schema quantity, with the unit they usually
+#: carry (None: the same as the schema, only the name differs).  The one table of column aliases.
+COLUMN_ALIASES: dict[str, dict[str, str | None]] = {
     "alpha": {"sa": "deg", "slipangle": "deg", "slip_angle": "deg", "slipangl": "deg",
               "alpha_deg": "deg", "sa_deg": "deg", "alpha_rad": None, "alfa": None},
     "kappa": {"sl": None, "sr": None, "slipratio": None, "slip_ratio": None, "longslip": None,
@@ -169,13 +170,13 @@ _ALIASES: dict[str, dict[str, str | None]] = {
 
 def find_column(columns, column: str) -> str | None:
     """The name among ``columns`` that holds schema ``column`` in its SI unit: the column
-    itself, a different letter case of it, or an alias of :data:`_ALIASES` that differs in
+    itself, a different letter case of it, or an alias of :data:`COLUMN_ALIASES` that differs in
     name only (``fz`` for ``Fz``, ``slip_ratio`` for ``kappa``; not ``sa``, usually in
     degrees).  None when there is none; a :class:`MftireInputError` when several match."""
     names = [str(c) for c in columns]
     if column in names:
         return column
-    same_unit = {a for a, unit in _ALIASES.get(column, {}).items() if unit is None} | {column.lower()}
+    same_unit = {a for a, unit in COLUMN_ALIASES.get(column, {}).items() if unit is None} | {column.lower()}
     hits = [n for n in names if n.lower() in same_unit]
     if len(hits) > 1:
         raise MftireInputError(f"columns {', '.join(map(repr, hits))} all look like {column}: keep one")
@@ -184,7 +185,7 @@ def find_column(columns, column: str) -> str | None:
 
 def _alias_hint(df: pd.DataFrame, column: str) -> str:
     """A sentence suggesting how an existing column could become schema ``column``."""
-    aliases = _ALIASES.get(column, {})
+    aliases = COLUMN_ALIASES.get(column, {})
     for c in df.columns:
         name = str(c)
         low = name.lower()

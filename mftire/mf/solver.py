@@ -392,9 +392,9 @@ def evaluate_arrays(
     names = output_names(channels)
     if not isinstance(mode, Mode) and kernel.use_kernel(backend):
         check_fittyp(p)
-        if mode not in _CHECKED_MODES:
+        if mode not in CHECKED_MODES:
             Mode.from_code(mode)  # raises for a bad mode, as prepare()
-            _CHECKED_MODES.add(mode)
+            CHECKED_MODES.add(mode)
         out = kernel.evaluate(p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, ext, variables, names)
         if out is not None:
             return out
@@ -405,4 +405,5 @@ def evaluate_arrays(
 
 
 _channels = channels
-_CHECKED_MODES: set = set()  # useMode codes Mode.from_code accepted
+#: useMode codes Mode.from_code accepted (the point path of Tyre.evaluate skips the check for them).
+CHECKED_MODES: set = set()

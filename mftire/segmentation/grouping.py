@@ -56,7 +56,7 @@ def cluster_1d(values: Any, rel_tol: float = 0.0, abs_tol: float = 0.0) -> np.nd
     return labels
 
 
-def _set_point(values: np.ndarray, kind: str) -> float:
+def set_point(values: np.ndarray, kind: str) -> float:
     """Representative set point of one cluster.
 
     Exact when all values are equal (simulation data). Otherwise the median, replaced by
@@ -432,7 +432,7 @@ def group_sweeps(
             labels = cluster_1d(x, rel_tol=p_tol)
         else:
             labels = cluster_1d(x, rel_tol=vx_tol, abs_tol=vx_abs_tol)
-        centres = {lab: _set_point(x[labels == lab], kind) for lab in np.unique(labels)}
+        centres = {lab: set_point(x[labels == lab], kind) for lab in np.unique(labels)}
         out[set_col] = np.array([centres[lab] for lab in labels], dtype=float)
         keys = np.column_stack([keys, labels])
 

@@ -30,7 +30,7 @@ from mftire.iotools.rig import (
     write_sweeps,
 )
 from mftire.iotools.sweeps import REQUIRED_COLUMNS
-from mftire.segmentation.grouping import _set_point, cluster_1d, sweep_kind
+from mftire.segmentation.grouping import cluster_1d, set_point, sweep_kind
 
 __all__ = ["RigReport", "segment", "import_rig"]
 
@@ -198,7 +198,7 @@ def segment(
             ids, counts = np.unique(cl, return_counts=True)
             big = ids[counts >= max(1, int(min_segment_s * fs * 0.5))]
             kind = "angle" if c == "gamma" else "rel"
-            centres = np.array([_set_point(s[steady][cl == i], kind) for i in big])
+            centres = np.array([set_point(s[steady][cl == i], kind) for i in big])
             if centres.size:
                 order = np.argsort(centres)
                 centres = centres[order]
