@@ -13,7 +13,7 @@ Vx       m/s    forward speed of the wheel centre
 P        Pa     inflation pressure
 phit     1/m    turn slip (optional, 0 when absent)
 Fx, Fy   N      measured forces (any subset)
-Mx,My,Mz N*m    measured moments (any subset)
+Mx,My,Mz N·m    measured moments (any subset)
 ======== ====== ==================================================
 
 Any other column (run id, time, temperature, file, ...) is carried through untouched.
@@ -355,7 +355,7 @@ def validate_sweeps(
     df : DataFrame
         Table in the sweep schema (see module docstring): SI columns ``Fz`` [N],
         ``kappa`` [-], ``alpha`` [rad], ``gamma`` [rad], ``Vx`` [m/s], ``P`` [Pa],
-        optional ``phit`` [1/m], and any of ``Fx, Fy`` [N], ``Mz, Mx, My`` [N*m].
+        optional ``phit`` [1/m], and any of ``Fx, Fy`` [N], ``Mz, Mx, My`` [N·m].
     name : str
         Name of the data set (e.g. the file), used in error messages and the report.
     source : str, optional

@@ -30,9 +30,9 @@ INFLPRES    P            Pa
 FZW, FZ     Fz           N
 FXW, FX     Fx           N
 FYW, FY     Fy           N
-MXW, MX     Mx           N*m
-MYW, MY     My           N*m
-MZW, MZ     Mz           N*m
+MXW, MX     Mx           N·m
+MYW, MY     My           N·m
+MZW, MZ     Mz           N·m
 MEASNUMB    meas_no      -
 RUNTIME     time         s
 TYREDEFL    deflection   m
@@ -114,6 +114,8 @@ _KEY_TO_COLUMN: dict[str, tuple[str, int]] = {
 _MODEL_BLOCKS = {"MODELDEFINITION", "MODELPARAMETERS", "MODELCOEFFICIENTS", "MODELCHANNELS",
                  "MODELOUTPUTS", "MODELEND"}
 _KNOWN_BLOCKS = {"HEADER", "COMMENTS", "CONSTANTS", "MEASURCHANNELS", "MEASURDATA", "END"}
+#: Unit names as TYDEX files write them, where they differ from mftire's one spelling.
+_TYDEX_SPELLING = {"N·m": "Nm"}
 _NA_TOKENS = ["NOTAVAIL", "NaN", "nan", "NAN", "N/A", "NA", "-"]
 _DEFAULT_CUTS = (10, 40, 50)
 _NUMBER_RE = re.compile(r"NOTAVAIL|[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
@@ -590,7 +592,7 @@ def write_tydex(
     for col, (key, comment) in _WRITE_NAMES.items():
         if col not in df.columns:
             continue
-        unit = units.get(col, SI_UNITS[col])
+        unit = units.get(col) or _TYDEX_SPELLING.get(SI_UNITS[col], SI_UNITS[col])
         values = pd.to_numeric(df[col], errors="raise").to_numpy(dtype=float)
         if DIMENSIONS[col] != "count":
             values = convert_from_si(values, unit, col)

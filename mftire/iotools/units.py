@@ -42,9 +42,9 @@ SI_UNITS: dict[str, str] = {
     "phit": "1/m",
     "Fx": "N",
     "Fy": "N",
-    "Mz": "Nm",
-    "Mx": "Nm",
-    "My": "Nm",
+    "Mz": "N·m",
+    "Mx": "N·m",
+    "My": "N·m",
     "meas_no": "-",
     "time": "s",
     "deflection": "m",
@@ -73,8 +73,8 @@ DIMENSIONS: dict[str, str] = {
     "Rl": "length",
     "omega": "angular_speed",
 }
-#: Axis-label spelling of the SI unit of each column (``N·m`` for moments).
-PLOT_UNITS: dict[str, str] = {c: ("N·m" if u == "Nm" else u) for c, u in SI_UNITS.items()}
+#: Axis-label spelling of the SI unit of each column: the same one spelling as :data:`SI_UNITS`.
+PLOT_UNITS: dict[str, str] = dict(SI_UNITS)
 
 _PI = Fraction(math.pi)  # the float pi, exactly
 _DEG = _PI / 180
