@@ -162,7 +162,7 @@ def build_parser() -> argparse.ArgumentParser:
         __version__ = version("mftire")
     except PackageNotFoundError:  # a source tree that is not installed
         __version__ = "unknown"
-    from mftire.iotools.output import add_force_option
+    from mftire.cli_options import add_force_option
 
     parser = argparse.ArgumentParser(
         prog="mftire", description=__doc__.splitlines()[0],
@@ -217,7 +217,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--output", default="demo_out", help="output directory (default demo_out)")
     p.add_argument("--quick", action="store_true", help="reduced grids (a test run)")
-    from mftire.parallel import add_parallel_options
+    from mftire.cli_options import add_parallel_options
 
     add_parallel_options(p, "the FE campaign chunks and the bootstrap refits")
     add_force_option(p)

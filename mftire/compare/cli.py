@@ -52,7 +52,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--alpha-window", type=float, default=2.5, metavar="DEG",
                    help="|alpha| window of the stiffness fits in degrees (default 2.5)")
     p.add_argument("--no-plots", action="store_true", help="tables only")
-    from mftire.iotools.output import add_force_option
+    from mftire.cli_options import add_force_option
 
     add_force_option(p)
     p.set_defaults(func=_cmd_compare)

@@ -46,7 +46,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--holdout", help="held-out condition, COLUMN=V1[,V2...] in SI (e.g. Vx=16.67); default automatic")
     p.add_argument("--permutations", type=int, default=99, help="permutations of the significance test (default 99)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the permutation test (default 0)")
-    from mftire.iotools.output import add_force_option
+    from mftire.cli_options import add_force_option
 
     add_force_option(p)
     from mftire.cli_options import add_quiet_option

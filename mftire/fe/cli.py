@@ -107,7 +107,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     fe = subparsers.add_parser("fe", help="FE-surrogate rolling-contact model (brush model, van der Steen friction)",
                                description="FE-surrogate steady-state rolling-contact model.")
     sub = fe.add_subparsers(dest="fe_command", required=True)
-    from mftire.iotools.output import add_force_option
+    from mftire.cli_options import add_force_option
 
     tyre_help = "tyre file (TOML) or 'default' (the shipped 205/55 R16 tyre)"
 
@@ -132,7 +132,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     c.add_argument("--tyre", default="default", help=tyre_help)
     c.add_argument("--output", required=True, help="output directory (sweeps.csv, free_rolling.csv)")
     c.add_argument("--quick", action="store_true", help="reduced grid (for tests)")
-    from mftire.parallel import add_parallel_options
+    from mftire.cli_options import add_parallel_options
 
     add_parallel_options(c, "the chunks of slip points")
     add_force_option(c)

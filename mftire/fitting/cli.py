@@ -111,12 +111,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--heldout", nargs="+", metavar="DATA",
                    help="held-out measured sweeps: report the fraction of their points inside the bands")
     p.add_argument("--seed", type=int, default=0, help="random seed of the bootstrap (default 0)")
-    from mftire.parallel import add_parallel_options
+    from mftire.cli_options import add_parallel_options
 
     add_parallel_options(p, "the bootstrap refits of --bands")
     p.add_argument("--fix", metavar="KEYS", help="coefficients held at their template values, "
                    "comma-separated (e.g. PPX1,PPX2,PPX3,PPX4 to fit without pressure terms)")
-    from mftire.iotools.output import add_force_option
+    from mftire.cli_options import add_force_option
 
     add_force_option(p)
     from mftire.cli_options import add_quiet_option
