@@ -11,6 +11,8 @@ Small pure functions in the spirit of pvlib's ``ivtools``:
 ``fitter``         :func:`fit_tir`, :class:`FitResult`, :class:`StageResult`
 ``fit_report``     report.md, metrics.json and one PNG per sweep family
 ``synthetic``      synthetic sweeps from a ``.tir`` (tests, benchmark)
+``derivatives``    algorithmic derivatives of the channels for the exact Jacobian
+``bands``          bootstrap confidence and prediction bands over sweeps
 ``cli``            ``mftire fit``
 =================  ================================================================
 """
