@@ -427,12 +427,15 @@ class PendingBands:
 
 
 def _heldout_table(heldout) -> pd.DataFrame:
+    """The held-out sweep rows (rows an importer kept outside the sweeps, ``fit_row`` False, are left out)."""
+    from mftire.iotools.sweeps import fit_rows
+
     if isinstance(heldout, pd.DataFrame):
-        return heldout
+        return fit_rows(heldout)
     from mftire.fitting.weights import load_sweep_files
 
     paths = [heldout] if isinstance(heldout, (str, os.PathLike)) else list(heldout)
-    return load_sweep_files(paths)[0]
+    return fit_rows(load_sweep_files(paths)[0])
 
 
 def coverage_table(bands: Bands, heldout, channels: Sequence[str] = BAND_CHANNELS,
