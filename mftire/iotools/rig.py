@@ -81,6 +81,10 @@ Segmentation (:func:`mftire.segmentation.rig_segments.segment`)
 6. Optional down-sampling to ``points_per_sweep`` binned means (equal-count bins in
    time order) of every numeric column; ``row_first``/``row_last`` give the source
    rows (0-based data rows of the raw file; TTC file line = row + 4) of every point.
+7. "Dropped" means left out of the sweeps, not out of the table: those rows stay, in
+   time order, with ``fit_row`` False and their ``drop_reason`` (the sweep rows have
+   ``fit_row`` True); a fit uses only the ``fit_row`` rows
+   (:func:`mftire.iotools.sweeps.fit_rows`), the diagnosis may use all of them.
 
 The output carries the columns of :func:`~mftire.segmentation.grouping.group_sweeps`
 (``sweep_id``, ``Fz_set``, ``gamma_set``, ``P_set``, ``Vx_set``, ``kind``,
