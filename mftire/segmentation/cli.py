@@ -42,8 +42,9 @@ def _cmd_import(args: argparse.Namespace) -> int:
     if args.report:
         write_text_atomic(args.report, json.dumps(rep.to_dict(), indent=1, default=float) + "\n")
     print(str(rep))
-    print(f"mftire import: wrote {args.output} ({len(table)} points, {rep.n_sweeps} sweeps, {rep.seconds:.1f} s)",
-          file=sys.stdout)
+    left = len(table) - rep.n_points
+    print(f"mftire import: wrote {args.output} ({rep.n_points} points in {rep.n_sweeps} sweeps, {left} rows outside "
+          f"the sweeps kept with fit_row = False, {rep.seconds:.1f} s)", file=sys.stdout)
     return 0
 
 
