@@ -21,7 +21,7 @@ from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
 from mftire.mf.family import MODEL_CODES, PAC2002_CODE
 from mftire.mf.kernel import FlatParameters
 from mftire.mf.solver import (
-    CHECKED_MODES,
+    _CHECKED_MODES,
     OUTPUT_NAMES,
     OUTPUT_UNITS,
     UnsupportedModelError,
@@ -214,7 +214,7 @@ class Tyre:
             and type(Vx) in _OPTIONAL
             and type(P) in _OPTIONAL
             and type(omega) in _OPTIONAL
-            and mode in CHECKED_MODES
+            and mode in _CHECKED_MODES
             and (
                 backend == "kernel"
                 if backend is not None and backend != "auto"

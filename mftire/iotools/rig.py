@@ -624,7 +624,7 @@ def read_columns(
         dim = _dimension_of(target, unit if unit else None)
         if dim is not None:
             if not unit and dim not in ("ratio", "count"):
-                unit = {"angle": "rad", "speed": "m/s", "pressure": "Pa", "force": "N", "moment": "N·m",
+                unit = {"angle": "rad", "speed": "m/s", "pressure": "Pa", "force": "N", "moment": "N.m",
                         "curvature": "1/m", "time": "s"}.get(dim, "")  # fmt: skip
             x = _convert(p, unit_line_no if fu else header_line, s.column, x, unit, dim)
         out[target] = s.sign * x

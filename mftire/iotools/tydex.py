@@ -98,7 +98,7 @@ _MODEL_BLOCKS = {"MODELDEFINITION", "MODELPARAMETERS", "MODELCOEFFICIENTS", "MOD
                  "MODELOUTPUTS", "MODELEND"}
 _KNOWN_BLOCKS = {"HEADER", "COMMENTS", "CONSTANTS", "MEASURCHANNELS", "MEASURDATA", "END"}
 #: Unit names as TYDEX files write them, where they differ from mftire's one spelling.
-_TYDEX_SPELLING = {"N·m": "Nm"}
+_TYDEX_SPELLING = {"N.m": "Nm"}
 _NA_TOKENS = ["NOTAVAIL", "NaN", "nan", "NAN", "N/A", "NA", "-"]
 _DEFAULT_CUTS = (10, 40, 50)
 _NUMBER_RE = re.compile(r"NOTAVAIL|[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")

@@ -42,9 +42,9 @@ SI_UNITS: dict[str, str] = {
     "phit": "1/m",
     "Fx": "N",
     "Fy": "N",
-    "Mz": "N·m",
-    "Mx": "N·m",
-    "My": "N·m",
+    "Mz": "N.m",
+    "Mx": "N.m",
+    "My": "N.m",
     "meas_no": "-",
     "time": "s",
     "deflection": "m",
@@ -73,8 +73,9 @@ DIMENSIONS: dict[str, str] = {
     "Rl": "length",
     "omega": "angular_speed",
 }
-#: Axis-label spelling of the SI unit of each column: the same one spelling as :data:`SI_UNITS`.
-PLOT_UNITS: dict[str, str] = dict(SI_UNITS)
+#: Axis-label form of the SI unit of each column: the unit names of :data:`SI_UNITS` (the FMI/SI names the
+#: model spec uses, ``N.m``), with the product dot printed as ``·`` (``N·m``).
+PLOT_UNITS: dict[str, str] = {c: u.replace(".", "·") for c, u in SI_UNITS.items()}
 
 _PI = Fraction(math.pi)  # the float pi, exactly
 _DEG = _PI / 180

@@ -16,7 +16,7 @@ from mftire.mf.basic import Basic
 from mftire.mf.family import is_mf52, is_pac2002
 from mftire.mf.inputs import EPSILON, Conditions
 from mftire.mf.lateral import PureLateral, fy0
-from mftire.mf.longitudinal import clip_curvature, sign_nonzero
+from mftire.mf.longitudinal import _clip_curvature, _sign_nonzero
 from mftire.mf.modes import Mode
 
 
@@ -36,7 +36,7 @@ class AligningTerms:
     Kya_prime: np.ndarray  #: eq 4.E39 [N/rad]
 
 
-def trail_mf(Dt, Ct, Bt, Et, alpha, alpha_prime) -> np.ndarray:
+def _trail_mf(Dt, Ct, Bt, Et, alpha, alpha_prime) -> np.ndarray:
     """Pneumatic trail t(alpha) = Dt·cos(Ct·atan(Bt·a − Et·(Bt·a − atan(Bt·a))))·cos(alpha') [m]."""
     Ba = Bt * alpha
     return Dt * np.cos(Ct * np.arctan(Ba - Et * (Ba - np.arctan(Ba)))) * np.cos(alpha_prime)  # eq 4.E33/4.E73
@@ -63,7 +63,7 @@ def aligning_terms(
         Fz = c.Fz
 
     SHt = p["QHZ1"] + p["QHZ2"] * dfz + (p["QHZ3"] + p["QHZ4"] * dfz) * gamma_star  # eq 4.E35
-    Kya_prime = lat.Kya + EPSILON * sign_nonzero(lat.Kya)  # eq 4.E39
+    Kya_prime = lat.Kya + EPSILON * _sign_nonzero(lat.Kya)  # eq 4.E39
     SHf = lat.SHy + lat.SVy / Kya_prime  # eq 4.E38
     alphar = alpha_star + SHf  # eq 4.E37
     alphat = alpha_star + SHt  # eq 4.E34
@@ -96,7 +96,7 @@ def aligning_terms(
     Et = (p["QEZ1"] + p["QEZ2"] * dfz + p["QEZ3"] * dfz**2) * (
         1.0 + (p["QEZ4"] + p["QEZ5"] * gamma_star) * (2.0 / np.pi) * np.arctan(Bt * Ct * alphat)
     )
-    Et = clip_curvature(Et, "Et", "4.E44", mode)  # eq 4.E44
+    Et = _clip_curvature(Et, "Et", "4.E44", mode)  # eq 4.E44
 
     if mode.turn_slip:
         zeta0 = 0.0
@@ -154,7 +154,7 @@ def mz0(p: dict, mode: Mode, c: Conditions, b: Basic, a: AligningTerms) -> tuple
     """
     no_ts = dataclasses.replace(mode, turn_slip=False)
     lat0 = fy0(p, no_ts, c, b, np.zeros_like(c.Fz), turn_slip=False)  # Fy0 at gamma = phi = 0
-    t0 = trail_mf(a.Dt, a.Ct, a.Bt, a.Et, a.alphat, b.alpha_prime) * c.smooth  # eq 4.E33
+    t0 = _trail_mf(a.Dt, a.Ct, a.Bt, a.Et, a.alphat, b.alpha_prime) * c.smooth  # eq 4.E33
     Mzr0 = np.real(a.Dr * np.cos(a.Cr * np.arctan(a.Br * a.alphar)) * np.cos(b.alpha_prime)) * c.smooth  # 4.E36
     return -t0 * lat0.Fy0 + Mzr0, t0, Mzr0  # eqs 4.E32, 4.E31
 
@@ -208,7 +208,7 @@ def mz_combined(
     Fy_prime = Gyk * lat0.Fy0  # eq 4.E74; Gyk does not depend on muy or zeta2
     # MFeval departure: t is multiplied by LFZO, as TNO's solver does (not in PAC2002).
     lfzo = 1.0 if is_pac2002(p) else p["LFZO"]
-    t = trail_mf(a.Dt, a.Ct, a.Bt, a.Et, alphat_eq, b.alpha_prime) * lfzo  # eq 4.E73
+    t = _trail_mf(a.Dt, a.Ct, a.Bt, a.Et, alphat_eq, b.alpha_prime) * lfzo  # eq 4.E73
     t = t * c.smooth
     Mzr = np.real(Mzr) * c.smooth
     if is_pac2002(p) and lat is not None:

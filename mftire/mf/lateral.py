@@ -10,7 +10,7 @@ from mftire.mf import turnslip
 from mftire.mf.basic import Basic
 from mftire.mf.family import is_mf52
 from mftire.mf.inputs import EPSILON, Conditions
-from mftire.mf.longitudinal import clip_curvature, sign_nonzero
+from mftire.mf.longitudinal import _clip_curvature, _sign_nonzero
 from mftire.mf.modes import Mode
 
 
@@ -72,14 +72,14 @@ def fy0(
     else:
         Kyg0 = Fz * (p["PKY6"] + p["PKY7"] * dfz) * (1.0 + p["PPY5"] * dpi) * p["LKYC"]  # eq 4.E30
 
-    sKya = sign_nonzero(Kya)
+    sKya = _sign_nonzero(Kya)
     if turn_slip:
         # Lateral shift due to spin (eqs 4.80–4.89).
         R0 = p["UNLOADED_RADIUS"]
         # MFeval departure (after IPG CarMaker): Kya0 is Kya at zero camber.
         Kya0 = _kya(p, Fz, Fz0p, dpi, 0.0, zeta3)
         Kya_prime = Kya + EPSILON * sKya  # eq 4.E39
-        Kya0_prime = Kya0 + EPSILON * sign_nonzero(Kya0)
+        Kya0_prime = Kya0 + EPSILON * _sign_nonzero(Kya0)
         CHyp = p["PHYP1"]  # eq 4.85
         DHyp = (p["PHYP2"] + p["PHYP3"] * dfz) * np.sign(c.Vx)  # eq 4.86
         EHyp = p["PHYP4"]  # eq 4.87
@@ -118,11 +118,11 @@ def fy0(
     Dy = muy * Fz * zeta2  # eq 4.E22
     Ey = (
         (p["PEY1"] + p["PEY2"] * dfz)
-        * (1.0 + p["PEY5"] * gamma_star**2 - (p["PEY3"] + p["PEY4"] * gamma_star) * sign_nonzero(alphay))
+        * (1.0 + p["PEY5"] * gamma_star**2 - (p["PEY3"] + p["PEY4"] * gamma_star) * _sign_nonzero(alphay))
         * p["LEY"]
     )
-    Ey = clip_curvature(Ey, "Ey", "4.E24", mode)  # eq 4.E24
-    By = Kya / (Cy * Dy + EPSILON * sign_nonzero(Dy))  # eq 4.E26
+    Ey = _clip_curvature(Ey, "Ey", "4.E24", mode)  # eq 4.E24
+    By = Kya / (Cy * Dy + EPSILON * _sign_nonzero(Dy))  # eq 4.E26
     Ba = By * alphay
     Fy0 = Dy * np.sin(Cy * np.arctan(Ba - Ey * (Ba - np.arctan(Ba)))) + SVy  # eq 4.E19
     if mode.alpha_star:
@@ -158,7 +158,7 @@ def fy_combined(
     )  # eq 4.E67
     SVyk = DVyk * np.sin(p["RVY5"] * np.arctan(p["RVY6"] * c.kappa)) * p["LVYKA"]  # eq 4.E66
     SHyk = p["RHY1"] + p["RHY2"] * dfz  # eq 4.E65
-    Eyk = clip_curvature(p["REY1"] + p["REY2"] * dfz, "Eyk", "4.E64", mode)  # eq 4.E64
+    Eyk = _clip_curvature(p["REY1"] + p["REY2"] * dfz, "Eyk", "4.E64", mode)  # eq 4.E64
     Cyk = p["RCY1"]  # eq 4.E63
     Byk = (
         (p["RBY1"] + p["RBY4"] * gamma_star**2) * np.cos(np.arctan(p["RBY2"] * (alpha_star - p["RBY3"]))) * p["LYKA"]

@@ -59,7 +59,7 @@ from typing import Any
 
 import numpy as np
 
-from mftire.mf.aligning import AligningTerms, trail_mf
+from mftire.mf.aligning import AligningTerms, _trail_mf
 from mftire.mf.basic import Basic
 from mftire.mf.family import PAC2002_CODE
 from mftire.mf.inputs import Conditions
@@ -222,6 +222,6 @@ def mz0(
 
     Returns ``(Mz0 [N·m], t0 [m], Mzr0 [N·m])``.
     """
-    t0 = trail_mf(a.Dt, a.Ct, a.Bt, a.Et, a.alphat, b.alpha_prime) * c.smooth  # eq 4.E33
+    t0 = _trail_mf(a.Dt, a.Ct, a.Bt, a.Et, a.alphat, b.alpha_prime) * c.smooth  # eq 4.E33
     Mzr0 = np.real(a.Dr * np.cos(a.Cr * np.arctan(a.Br * a.alphar))) * c.smooth  # eq 4.E36
     return -t0 * lat.Fy0 + Mzr0, t0, Mzr0  # eqs 4.E32, 4.E31

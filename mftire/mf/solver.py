@@ -44,9 +44,9 @@ OUTPUT_NAMES: tuple[str, ...] = kernel.OUTPUTS
 
 #: Units of the outputs.
 OUTPUT_UNITS: dict[str, str] = {
-    "Fx": "N", "Fy": "N", "Fz": "N", "Mx": "N·m", "My": "N·m", "Mz": "N·m", "kappa": "-", "alpha": "rad",
+    "Fx": "N", "Fy": "N", "Fz": "N", "Mx": "N.m", "My": "N.m", "Mz": "N.m", "kappa": "-", "alpha": "rad",
     "gamma": "rad", "phit": "1/m", "Vx": "m/s", "P": "Pa", "Re": "m", "rho": "m", "2a": "m", "t": "m",
-    "mux": "-", "muy": "-", "omega": "rad/s", "Rl": "m", "2b": "m", "Mzr": "N·m", "Cx": "N/m", "Cy": "N/m",
+    "mux": "-", "muy": "-", "omega": "rad/s", "Rl": "m", "2b": "m", "Mzr": "N.m", "Cx": "N/m", "Cy": "N/m",
     "Cz": "N/m", "Kya": "N/rad", "sigmax": "m", "sigmay": "m", "instKya": "N/rad", "Kxk": "N",
 }  # fmt: skip
 
@@ -392,9 +392,9 @@ def evaluate_arrays(
     names = output_names(channels)
     if not isinstance(mode, Mode) and kernel.use_kernel(backend):
         check_fittyp(p)
-        if mode not in CHECKED_MODES:
+        if mode not in _CHECKED_MODES:
             Mode.from_code(mode)  # raises for a bad mode, as prepare()
-            CHECKED_MODES.add(mode)
+            _CHECKED_MODES.add(mode)
         out = kernel.evaluate(p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, ext, variables, names)
         if out is not None:
             return out
@@ -405,5 +405,4 @@ def evaluate_arrays(
 
 
 _channels = channels
-#: useMode codes Mode.from_code accepted (the point path of Tyre.evaluate skips the check for them).
-CHECKED_MODES: set = set()
+_CHECKED_MODES: set = set()  # useMode codes Mode.from_code accepted
