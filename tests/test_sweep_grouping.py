@@ -139,3 +139,16 @@ def test_grouping_property_any_order(names, noise, seed):
     names = kept
     table, starts = _table([_CATALOGUE[n]() for n in names], noise=noise, seed=seed)
     np.testing.assert_array_equal(_found_starts(table), starts, err_msg=" -> ".join(names))
+
+
+def test_comparison_free_rolling_reads_each_braking_sweeps_own_zero_slip_point():
+    # issue 26.1 end to end: the FE order braking, cornering, combined from alpha = 0 at one condition; Fx(kappa = 0)
+    # of every braking curve in the comparison is the FE's own free-rolling value, not an extrapolation from -0.024
+    from mftire.compare.data import prepare_comparison_data
+    from mftire.compare.tables import free_rolling_table
+
+    table, starts = _table(ORDERS["fe_campaign"])
+    table["Fx"] = np.where(table["kappa"] == 0.0, -16.9, 5.0e4 * table["kappa"] - 16.9)  # Fx0 = -16.9 N
+    free = free_rolling_table(prepare_comparison_data(table.assign(source="fe")), {})
+    assert len(free) == 2  # the braking sweep and the combined sweep at alpha = 0
+    np.testing.assert_allclose(free["Fx0_data"], -16.9, atol=1e-9)
