@@ -7,7 +7,7 @@ from :mod:`mftire.transient` and the steady-state table of
 :mod:`mftire.fmu.variables`) generates the XML, the GUID and the C headers
 (``mf_params.h`` with the transient constants ``TR_*`` as tunable parameters, and
 ``mt_model_gen.h``).  The C model is ``csource/mf_transient.c`` (the equations of
-``mftire/transient/slip_dynamics.py``) on top of the steady-state evaluator ``mf_eval.c``, wrapped
+``mftire/transient.py``) on top of the steady-state evaluator ``mf_eval.c``, wrapped
 by ``csource/fmi2_transient.c`` (and ``csource/fmi2_common.c``, shared with the steady-state FMU).
 """
 

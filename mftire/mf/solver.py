@@ -44,9 +44,9 @@ OUTPUT_NAMES: tuple[str, ...] = kernel.OUTPUTS
 
 #: Units of the outputs.
 OUTPUT_UNITS: dict[str, str] = {
-    "Fx": "N", "Fy": "N", "Fz": "N", "Mx": "N.m", "My": "N.m", "Mz": "N.m", "kappa": "-", "alpha": "rad",
+    "Fx": "N", "Fy": "N", "Fz": "N", "Mx": "N*m", "My": "N*m", "Mz": "N*m", "kappa": "-", "alpha": "rad",
     "gamma": "rad", "phit": "1/m", "Vx": "m/s", "P": "Pa", "Re": "m", "rho": "m", "2a": "m", "t": "m",
-    "mux": "-", "muy": "-", "omega": "rad/s", "Rl": "m", "2b": "m", "Mzr": "N.m", "Cx": "N/m", "Cy": "N/m",
+    "mux": "-", "muy": "-", "omega": "rad/s", "Rl": "m", "2b": "m", "Mzr": "N*m", "Cx": "N/m", "Cy": "N/m",
     "Cz": "N/m", "Kya": "N/rad", "sigmax": "m", "sigmay": "m", "instKya": "N/rad", "Kxk": "N",
 }  # fmt: skip
 
