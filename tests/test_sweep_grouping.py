@@ -152,3 +152,10 @@ def test_comparison_free_rolling_reads_each_braking_sweeps_own_zero_slip_point()
     free = free_rolling_table(prepare_comparison_data(table.assign(source="fe")), {})
     assert len(free) == 2  # the braking sweep and the combined sweep at alpha = 0
     np.testing.assert_allclose(free["Fx0_data"], -16.9, atol=1e-9)
+
+
+def test_fine_sweep_ending_at_the_next_sweeps_level_keeps_its_points():
+    # steps (0.1 deg) finer than the level tolerance (0.5 deg): the sweep's last points near alpha = 0 stay with it
+    fine = _sweep(0.0, np.linspace(-12.0, 0.0, 121) * DEG)
+    table, starts = _table([fine, braking()])
+    np.testing.assert_array_equal(_found_starts(table), starts)

@@ -248,9 +248,9 @@ def _start_of_next_sweep(x: np.ndarray, s: int, i: int, tol: float, patience: in
     """
     level = float(np.median(x[i : i + patience]))
     steps = np.abs(np.diff(x[s : i + 1]))
-    moving = steps[steps > tol]
-    typical = float(np.median(moving)) if moving.size else 0.0
-    still = min(tol, 0.25 * typical) if typical > 0 else tol
+    moving = steps[steps > 0]
+    typical = float(np.median(moving)) if moving.size else 0.0  # the sweep's step (finer than tol or not)
+    still = min(tol, 0.25 * typical)
     j = i
     while j - 1 > s and abs(x[j - 1] - level) <= tol and abs(x[j] - x[j - 1]) <= still:
         j -= 1
