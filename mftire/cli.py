@@ -28,8 +28,8 @@ EVALUATE_OPTIONAL = ("phit", "Vx", "P", "omega")
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     import pandas as pd
 
+    from mftire.iotools.loaders import read_numeric_csv
     from mftire.iotools.output import OutputPlan
-    from mftire.iotools.tables import read_numeric_csv
     from mftire.tyre import Tyre
 
     OutputPlan([args.tir, args.input], args.force).file(args.output, stdout=True)
@@ -160,7 +160,9 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from mftire.parallel import Executor
 
     OutputPlan((), args.force).folder(args.output, OUTPUT_NAMES)
-    run_demo(args.output, quick=args.quick, progress=True, executor=Executor.from_args(args))
+    from mftire.cli_options import progress_of
+
+    run_demo(args.output, quick=args.quick, progress=progress_of(args), executor=Executor.from_args(args))
     return 0
 
 
@@ -171,7 +173,7 @@ def build_parser() -> argparse.ArgumentParser:
         __version__ = version("mftire")
     except PackageNotFoundError:  # a source tree that is not installed
         __version__ = "unknown"
-    from mftire.iotools.output import add_force_option
+    from mftire.cli_options import add_force_option
 
     parser = argparse.ArgumentParser(
         prog="mftire", description=__doc__.splitlines()[0],
@@ -228,10 +230,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--output", default="demo_out", help="output directory (default demo_out)")
     p.add_argument("--quick", action="store_true", help="reduced grids (a test run)")
-    from mftire.parallel import add_parallel_options
+    from mftire.cli_options import add_parallel_options
 
     add_parallel_options(p, "the FE campaign chunks and the bootstrap refits")
     add_force_option(p)
+    from mftire.cli_options import add_quiet_option
+
+    add_quiet_option(p)
     p.set_defaults(func=_cmd_demo)
 
     from mftire.fe import cli as fe_cli
@@ -249,9 +254,9 @@ def build_parser() -> argparse.ArgumentParser:
     from mftire.compare import cli as compare_cli
 
     compare_cli.add_parser(sub)
-    from mftire.iotools import rig_cli
+    from mftire.segmentation import cli as import_cli
 
-    rig_cli.add_parser(sub)
+    import_cli.add_parser(sub)
     return parser
 
 
