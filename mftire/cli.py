@@ -70,10 +70,15 @@ def _cmd_convert(args: argparse.Namespace) -> int:
 
 def _cmd_info(args: argparse.Namespace) -> int:
     if args.fmu:
+        from mftire.fmu.build import find_compiler
         from mftire.fmu.portable import build_info
 
+        try:
+            cc = " ".join(find_compiler())
+        except MftireError as exc:
+            cc = f"none ({exc})"
         print("FMU export on this machine (mftire export-fmu):")
-        for key, value in build_info().items():
+        for key, value in build_info(cc).items():
             print(f"  {key + ':':16} {value}")
         if args.tir is None:
             return 0

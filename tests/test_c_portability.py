@@ -150,7 +150,7 @@ def test_windows_dll_shipped_when_mingw_present(fmus):
             assert dlls == []
         else:
             assert dlls == [f"binaries/{'x86_64-windows' if kind == 'fmi3' else 'win64'}/" + Path(dlls[0]).name]
-    info = portable.build_info()
+    info = portable.build_info("cc")
     assert info["Windows DLL"].startswith("yes" if portable.mingw_compiler() else "no")
 
 

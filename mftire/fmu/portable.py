@@ -111,14 +111,10 @@ def version_tuple(v: str) -> tuple[int, ...]:
     return tuple(int(x) for x in v.split("_", 1)[1].split("."))
 
 
-def build_info() -> dict[str, str]:
-    """What an FMU export on this machine produces (``mftire info --fmu``)."""
-    from mftire.fmu.build import find_compiler
-
-    try:
-        cc = " ".join(find_compiler())
-    except Exception as exc:  # noqa: BLE001 - reported, not raised
-        cc = f"none ({exc})"
+def build_info(compiler: str) -> dict[str, str]:
+    """What an FMU export on this machine produces (``mftire info --fmu``); ``compiler``: the C compiler
+    :func:`mftire.fmu.build.find_compiler` finds, or why there is none."""
+    cc = compiler
     pins = glibc_pin_header()
     floor = ".".join(map(str, GLIBC_FLOOR))
     mingw = mingw_compiler()
