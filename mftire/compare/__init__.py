@@ -6,7 +6,7 @@
 ``tables``     RMS / peak errors per curve, stiffness vs load, trail vs α, free rolling
 ``plots``      one figure per family (+ stiffness, trail, free rolling), bands drawn
 ``conditions`` a comparison without data: conditions, ``--conditions`` syntax, difference table
-``core``       :func:`compare`, :func:`compare_models`, :class:`Comparison`, :func:`write_comparison`
+``comparison`` :func:`compare`, :func:`compare_models`, :class:`Comparison`, :func:`write_comparison`
 ``cli``        ``mftire compare``
 =============  ====================================================================
 
@@ -20,9 +20,9 @@ from mftire._lazy import lazy_names
 
 # imported on first use (see mftire._lazy)
 __getattr__, __dir__ = lazy_names(
-    __name__, {"Comparison": "mftire.compare.core", "bands_frame": "mftire.compare.core",
-     "compare": "mftire.compare.core", "compare_models": "mftire.compare.core",
-     "write_comparison": "mftire.compare.core",
+    __name__, {"Comparison": "mftire.compare.comparison", "bands_frame": "mftire.compare.comparison",
+     "compare": "mftire.compare.comparison", "compare_models": "mftire.compare.comparison",
+     "write_comparison": "mftire.compare.comparison",
      "curve_grid": "mftire.compare.data", "load_comparison_data": "mftire.compare.data",
      "prepare_comparison_data": "mftire.compare.data", "evaluate_at": "mftire.compare.models",
      "load_models": "mftire.compare.models", "curve_errors": "mftire.compare.tables",

@@ -3,7 +3,7 @@
 One table serves the ``.tir`` reader (``[UNITS]`` section, :mod:`mftire.iotools.tir`),
 the sweep-table conversions (:mod:`mftire.iotools.sweeps`), the TYDEX reader and writer
 (:mod:`mftire.iotools.tydex`) and the column checks of the fitter
-(:mod:`mftire.iotools.tables`).  Factors are exact rationals (:class:`fractions.Fraction`),
+(:mod:`mftire.iotools.loaders`).  Factors are exact rationals (:class:`fractions.Fraction`),
 so a reader can convert with one correct rounding; ``float(factor)`` is the float factor.
 
 Names are looked up after :func:`normalise_unit` (lower case; brackets, blanks, ``*``,
@@ -43,9 +43,9 @@ SI_UNITS: dict[str, str] = {
     "phit": "1/m",
     "Fx": "N",
     "Fy": "N",
-    "Mz": "Nm",
-    "Mx": "Nm",
-    "My": "Nm",
+    "Mz": "N.m",
+    "Mx": "N.m",
+    "My": "N.m",
     "meas_no": "-",
     "time": "s",
     "deflection": "m",
@@ -74,10 +74,11 @@ DIMENSIONS: dict[str, str] = {
     "Rl": "length",
     "omega": "angular_speed",
 }
-#: Axis-label spelling of the SI unit of each column (``N·m`` for moments), plus the derived quantities the
+#: Axis-label form of the SI unit of each column: the unit names of :data:`SI_UNITS` (the FMI/SI names the
+#: model spec uses, ``N.m``), with the product dot printed as ``·`` (``N·m``); plus the derived quantities the
 #: diagnosis and the comparison plot (slip speed, load deviation, friction energy, set points, ...).
 PLOT_UNITS: dict[str, str] = {
-    **{c: ("N·m" if u == "Nm" else u) for c, u in SI_UNITS.items()},
+    **{c: u.replace(".", "·") for c, u in SI_UNITS.items()},
     "Vs": "m/s", "Fz_dev": "N", "sign_alpha": "-", "sign_kappa": "-", "sweep_dir": "-", "sequence": "-",
     "energy": "J", "t": "m", "Mzr": "N·m", "Kya": "N/rad", "Kxk": "N", "temperature": "°C",
     "Fz_set": "N", "P_set": "Pa", "Vx_set": "m/s", "gamma_set": "rad", "ET": "s",
