@@ -29,9 +29,9 @@ import numpy as np
 import pandas as pd
 
 from mftire.fitting.bands import bootstrap_bands, coverage_table
-from mftire.fitting.core import fit_tir
+from mftire.fitting.fitter import fit_tir
 from mftire.fitting.synthetic import synthetic_sweeps
-from mftire.iotools.sweeps import group_sweeps
+from mftire.segmentation.grouping import group_sweeps
 from mftire.iotools.tir import read_tir
 from mftire.parameters import with_defaults
 
