@@ -31,9 +31,9 @@ import pandas as pd
 from mftire.fitting.bands import bootstrap_bands, coverage_table
 from mftire.fitting.fitter import fit_tir
 from mftire.fitting.synthetic import synthetic_sweeps
-from mftire.segmentation.grouping import group_sweeps
 from mftire.iotools.tir import read_tir
 from mftire.parameters import with_defaults
+from mftire.segmentation.grouping import group_sweeps
 
 TIR = Path(__file__).resolve().parents[1] / "tests" / "data" / "tir" / "mfeval" / "MagicFormula61_Paramerters.tir"
 CHANNELS = ("Fx", "Fy")

@@ -143,12 +143,14 @@ def _layout(keys: list[tuple], pkeys: list[str]) -> tuple[dict, int, int]:
     iv = pkeys.index("Vx_set")
     speeds = sorted({k[iv] for k in keys})
     rest = sorted({k[:iv] + k[iv + 1:] for k in keys})
-    if len(speeds) <= MAX_COLUMNS:
+    if 1 < len(speeds) <= MAX_COLUMNS:
         pos = {k: (rest.index(k[:iv] + k[iv + 1:]), speeds.index(k[iv])) for k in keys}
-        return pos, len(rest), max(len(speeds), 1)
+        return pos, len(rest), len(speeds)
+    # one speed (a column of panels would be tall and narrow) or more speeds than columns: rows of panels
+    ncol = MAX_COLUMNS if len(speeds) > 1 else min(len(keys), 3)
     ordered = sorted(keys, key=lambda k: (k[:iv] + k[iv + 1:], k[iv]))
-    pos = {k: divmod(i, MAX_COLUMNS) for i, k in enumerate(ordered)}
-    return pos, math.ceil(len(ordered) / MAX_COLUMNS), MAX_COLUMNS
+    pos = {k: divmod(i, ncol) for i, k in enumerate(ordered)}
+    return pos, math.ceil(len(ordered) / ncol), ncol
 
 
 def _legend_width(handles) -> float:
