@@ -19,9 +19,12 @@ from pathlib import Path
 from mftire.errors import MftireError
 from mftire.fmu import variables as vt
 from mftire.mf import pac2002
+from mftire.mf.cheaders import C_DIR
 from mftire.mf.family import PAC2002_CODE
 
-CSOURCE = Path(__file__).parent / "csource"
+#: The C model (``mf_eval.c``, ``mf_transient.c``: :mod:`mftire.mf`'s ``c/``) and the FMI wrappers (``c/`` here).
+MODEL_C = C_DIR
+WRAPPER_C = Path(__file__).parent / "c"
 
 #: Hand-written C sources shipped in every FMU (besides the wrapper and generated headers).
 CORE_SOURCES = ("mf_eval.c", "mf_eval.h", "mf_model.c", "mf_model.h")
@@ -42,6 +45,15 @@ LIBS = ("-lm",)
 
 class FMUExportError(MftireError):
     """The FMU could not be built (no C compiler, compile error, unusable .tir)."""
+
+
+def read_source(name: str) -> str:
+    """The text of the hand-written C file ``name``: an FMI wrapper (:data:`WRAPPER_C`) or a file of the
+    C model (:data:`MODEL_C`)."""
+    for d in (WRAPPER_C, MODEL_C):
+        if (d / name).is_file():
+            return (d / name).read_text(encoding="utf-8")
+    raise FileNotFoundError(f"C source {name!r} is in neither {WRAPPER_C} nor {MODEL_C}")
 
 
 def _fmpy_c_code() -> Path:

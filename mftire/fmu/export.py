@@ -1,6 +1,6 @@
 """Export a ``.tir`` tyre as a self-contained FMU (FMI 2.0 ME + CS, or FMI 3.0).
 
-The FMU carries the Magic Formula as C code (``mftire/fmu/csource``), compiled
+The FMU carries the Magic Formula as C code (``mftire/mf/c``, wrapped by ``mftire/fmu/c``), compiled
 here with the system C compiler; no Python is needed to use it.  Layout::
 
     modelDescription.xml
@@ -22,7 +22,6 @@ from mftire.errors import MftireError
 from mftire.fmu import variables as vt
 from mftire.fmu.build import (  # noqa: F401 (re-exported)
     CORE_SOURCES,
-    CSOURCE,
     FMI2_COMMON_SOURCES,
     FMI_HEADERS,
     FMUExportError,
@@ -33,6 +32,7 @@ from mftire.fmu.build import (  # noqa: F401 (re-exported)
     find_compiler,
     model_identifier_for,
     package_fmu,
+    read_source,
 )
 from mftire.mf.extensions import ExtensionSet
 from mftire.mf.family import PAC2002_CODE
@@ -55,9 +55,9 @@ def generate_sources(
         raise FMUExportError(f"the model extensions cannot be exported: {exc}") from None
     files: dict[str, str] = {}
     for name in CORE_SOURCES + (FMI2_COMMON_SOURCES if fmi_version == 2 else ()):
-        files[name] = (CSOURCE / name).read_text(encoding="utf-8")
+        files[name] = read_source(name)
     wrapper = f"fmi{fmi_version}_model.c"
-    files[wrapper] = (CSOURCE / wrapper).read_text(encoding="utf-8")
+    files[wrapper] = read_source(wrapper)
     files["mf_params.h"] = vt.params_header(variables, extensions)
     files["mf_ext_gen.h"] = vt.extension_header(variables, extensions)
     files["mf_model_gen.h"] = vt.model_header(variables, model_identifier, fmi_version)

@@ -6,9 +6,9 @@ transient slips out.  One variable table (:func:`transient_variable_table`, buil
 from :mod:`mftire.transient` and the steady-state table of
 :mod:`mftire.fmu.variables`) generates the XML, the GUID and the C headers
 (``mf_params.h`` with the transient constants ``TR_*`` as tunable parameters, and
-``mt_model_gen.h``).  The C model is ``csource/mf_transient.c`` (the equations of
+``mt_model_gen.h``).  The C model is ``mftire/mf/c/mf_transient.c`` (the equations of
 ``mftire/transient.py``) on top of the steady-state evaluator ``mf_eval.c``, wrapped
-by ``csource/fmi2_transient.c`` (and ``csource/fmi2_common.c``, shared with the steady-state FMU).
+by ``mftire/fmu/c/fmi2_transient.c`` (and ``fmi2_common.c``, shared with the steady-state FMU).
 """
 
 from __future__ import annotations
@@ -22,7 +22,6 @@ from xml.sax.saxutils import quoteattr
 from mftire.fmu import variables as vt
 from mftire.fmu.build import (
     CFLAGS,
-    CSOURCE,
     FMI2_COMMON_SOURCES,
     FMI_HEADERS,
     LIBS,
@@ -33,6 +32,7 @@ from mftire.fmu.build import (
     find_compiler,
     model_identifier_for,
     package_fmu,
+    read_source,
 )
 from mftire.transient import CONSTANTS, INPUTS, STATES, TRANSIENT_OUTPUTS, input_defaults
 
@@ -58,7 +58,7 @@ _CONST_UNIT = {"s": "s", "m": "m", "-": None}
 #: C member of MTOutputs for each output name.
 _STEADY_FIELD = {name: field for name, field, _, _ in vt.OUTPUTS}
 
-#: The channel group of ``mf_evaluate_want`` (``MF_WANT_<group>`` of ``csource/mf_eval.h``) each output
+#: The channel group of ``mf_evaluate_want`` (``MF_WANT_<group>`` of ``mftire/mf/c/mf_eval.h``) each output
 #: needs: the FMU evaluates only the groups of the outputs read (lazy outputs, ``fmi2_transient.c``).
 OUTPUT_GROUPS: dict[str, str] = {
     "Fx": "FX", "mux": "FX", "Kxk": "FX", "Fy": "FY", "muy": "FY", "Kya": "FY", "Mz": "MZ", "t": "MZ",
@@ -176,7 +176,7 @@ def transient_model_header(variables: list[vt.Variable], model_identifier: str) 
         else:
             off = "0"
         want = output_group(v.name) if v.kind == "output" else "0"
-        lines.append(f"    {{{kinds[v.kind]}, {fixed}, {want}, {off}}}, /* {v.vr} {vt._c_comment(v.name)} */")
+        lines.append(f"    {{{kinds[v.kind]}, {fixed}, {want}, {off}}}, /* {v.vr} {vt.c_comment(v.name)} */")
     lines += ["};", "", "static const char *const MT_VAR_NAMES[MT_N_VARS] = {"]
     lines += [f"    {vt.c_string(v.name)}," for v in by_vr]
     lines += ["};", "", "static const MTInputs MT_INPUT_START = {"]
@@ -254,7 +254,7 @@ def generate_transient_sources(
 ) -> tuple[list[vt.Variable], dict[str, str]]:
     """The variable table and every file of ``sources/`` of the transient FMU."""
     variables = transient_variable_table(flat, use_mode)
-    files = {name: (CSOURCE / name).read_text(encoding="utf-8") for name in TRANSIENT_SOURCES}
+    files = {name: read_source(name) for name in TRANSIENT_SOURCES}
     files["mf_params.h"] = vt.params_header(variables, None)
     files["mf_ext_gen.h"] = vt.extension_header(variables, None)  # no extension terms (refused above)
     files["mt_model_gen.h"] = transient_model_header(variables, model_identifier)

@@ -1,6 +1,6 @@
 """The compiled array kernel behind :meth:`mftire.Tyre.evaluate` (and :func:`mftire.mf.solver.evaluate_arrays`).
 
-One C call evaluates a whole batch with the FMU's C model (``mftire/fmu/csource``:
+One C call evaluates a whole batch with the C model (``mftire/mf/c``:
 ``mf_kernel.c`` includes ``mf_eval.c``, the one C copy of the equations, and adds the
 loop over the arrays with the batch semantics of the numpy evaluator).  The numpy modules
 of :mod:`mftire.mf` stay the readable reference; ``tests/test_kernel.py`` proves that the
