@@ -35,8 +35,9 @@ pytestmark = needs_c_compiler
 
 #: FMU output name -> Python evaluator channel
 CHANNEL = {"Fz_out": "Fz", "a2": "2a", "b2": "2b"}
-OUTPUTS = ("Fx", "Fy", "Fz_out", "Mx", "My", "Mz", "Re", "Rl", "rho", "a2", "b2", "t", "Mzr", "mux", "muy",
-           "Kxk", "Kya", "sigmax", "sigmay")  # fmt: skip
+#: in the order of MFeval's output matrix (mftire.mf.spec.OUTPUTS)
+OUTPUTS = ("Fx", "Fy", "Fz_out", "Mx", "My", "Mz", "Re", "rho", "a2", "t", "mux", "muy", "Rl", "b2", "Mzr",
+           "Kya", "sigmax", "sigmay", "Kxk")  # fmt: skip
 FORCES = {"Fx", "Fy", "Fz_out", "Kxk", "Kya"}
 MOMENTS = {"Mx", "My", "Mz", "Mzr"}
 LENGTHS = {"Re", "Rl", "rho", "a2", "b2", "t", "sigmax", "sigmay"}

@@ -34,6 +34,7 @@ from mftire.fmu.build import (  # noqa: F401 (re-exported)
     package_fmu,
     read_source,
 )
+from mftire.mf import cheaders
 from mftire.mf.extensions import ExtensionSet
 from mftire.mf.family import PAC2002_CODE
 
@@ -60,6 +61,7 @@ def generate_sources(
     files[wrapper] = read_source(wrapper)
     files["mf_params.h"] = vt.params_header(variables, extensions)
     files["mf_ext_gen.h"] = vt.extension_header(variables, extensions)
+    files["mf_spec_gen.h"] = cheaders.spec_header()
     files["mf_model_gen.h"] = vt.model_header(variables, model_identifier, fmi_version)
     c_code = _fmpy_c_code()
     for h in FMI_HEADERS[fmi_version]:

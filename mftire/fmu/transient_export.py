@@ -34,6 +34,7 @@ from mftire.fmu.build import (
     package_fmu,
     read_source,
 )
+from mftire.mf import cheaders, spec
 from mftire.transient import CONSTANTS, INPUTS, STATES, TRANSIENT_OUTPUTS, input_defaults
 
 
@@ -58,16 +59,12 @@ _CONST_UNIT = {"s": "s", "m": "m", "-": None}
 #: C member of MTOutputs for each output name.
 _STEADY_FIELD = {name: field for name, field, _, _ in vt.OUTPUTS}
 
-#: The channel group of ``mf_evaluate_want`` (``MF_WANT_<group>`` of ``mftire/mf/c/mf_eval.h``) each output
+#: The channel group of ``mf_evaluate_want`` (``MF_WANT_<group>``, :data:`mftire.mf.spec.GROUPS`) each output
 #: needs: the FMU evaluates only the groups of the outputs read (lazy outputs, ``fmi2_transient.c``).
-OUTPUT_GROUPS: dict[str, str] = {
-    "Fx": "FX", "mux": "FX", "Kxk": "FX", "Fy": "FY", "muy": "FY", "Kya": "FY", "Mz": "MZ", "t": "MZ",
-    "Mzr": "MZ", "Mx": "MX", "My": "MY", "Rl": "RAD", "rho": "RAD", "a2": "PATCH", "b2": "PATCH",
-    "sigmax": "RELAX", "sigmay": "RELAX",
-}  # fmt: skip
+OUTPUT_GROUPS: dict[str, str] = {o.fmu: o.group for o in spec.OUTPUTS if o.fmu and o.group}
 
 #: Outputs every evaluation sets (no channel group): the transient slips, the load used and Re.
-UNGROUPED_OUTPUTS = ("kappa_t", "alpha_t", "Fz_out", "Re")
+UNGROUPED_OUTPUTS = ("kappa_t", "alpha_t", *(o.fmu for o in spec.OUTPUTS if o.fmu and not o.group))
 
 
 def output_group(name: str) -> str:
@@ -257,6 +254,7 @@ def generate_transient_sources(
     files = {name: read_source(name) for name in TRANSIENT_SOURCES}
     files["mf_params.h"] = vt.params_header(variables, None)
     files["mf_ext_gen.h"] = vt.extension_header(variables, None)  # no extension terms (refused above)
+    files["mf_spec_gen.h"] = cheaders.spec_header()
     files["mt_model_gen.h"] = transient_model_header(variables, model_identifier)
     c_code = _fmpy_c_code()
     for h in FMI_HEADERS[2]:

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from xml.sax.saxutils import quoteattr
 
 from mftire.errors import MftireInputError
-from mftire.mf import cheaders
+from mftire.mf import cheaders, spec
 from mftire.mf.cheaders import c_comment, c_string
 from mftire.mf.extensions import (
     MAX_EXTERNAL,
@@ -94,28 +94,11 @@ INPUTS: tuple[tuple[str, str, str | None, str, str | float], ...] = (
     ("muRoad", "muRoad", None, "Road friction factor, multiplies LMUX and LMUY", 1.0),
 )
 
-#: Outputs: (name, C field of MFOutputs, unit, description).  The output load is
-#: ``Fz_out`` because FMI variable names are unique and ``Fz`` is the input.
-OUTPUTS: tuple[tuple[str, str, str | None, str], ...] = (
-    ("Fx", "Fx", "N", "Longitudinal force"),
-    ("Fy", "Fy", "N", "Lateral force"),
-    ("Fz_out", "Fz", "N", "Vertical load used (negative input set to 0)"),
-    ("Mx", "Mx", "N.m", "Overturning moment"),
-    ("My", "My", "N.m", "Rolling-resistance moment"),
-    ("Mz", "Mz", "N.m", "Self-aligning moment"),
-    ("Re", "Re", "m", "Effective rolling radius"),
-    ("Rl", "Rl", "m", "Loaded radius"),
-    ("rho", "rho", "m", "Tyre vertical deflection"),
-    ("a2", "a2", "m", "Contact patch length 2a"),
-    ("b2", "b2", "m", "Contact patch width 2b"),
-    ("t", "t", "m", "Pneumatic trail"),
-    ("Mzr", "Mzr", "N.m", "Residual aligning moment"),
-    ("mux", "mux", None, "Longitudinal friction coefficient"),
-    ("muy", "muy", None, "Lateral friction coefficient"),
-    ("Kxk", "Kxk", "N", "Longitudinal slip stiffness dFx0/dkappa"),
-    ("Kya", "Kya", "N/rad", "Cornering stiffness dFy0/dalpha"),
-    ("sigmax", "sigmax", "m", "Longitudinal relaxation length"),
-    ("sigmay", "sigmay", "m", "Lateral relaxation length"),
+#: Outputs: (name, C field of MFOutputs, unit, description), the outputs of :data:`mftire.mf.spec.OUTPUTS`
+#: the FMU publishes.  The output load is ``Fz_out`` because FMI variable names are unique and ``Fz`` is
+#: the input.
+OUTPUTS: tuple[tuple[str, str, str | None, str], ...] = tuple(
+    (o.fmu, o.field, None if o.unit == "-" else o.unit, o.description) for o in spec.OUTPUTS if o.fmu and o.field
 )
 
 

@@ -27,8 +27,8 @@ static double mf_ext_var(int k, const MFParams *p, const Cond *c, const double *
     case 4: return c->Vx; /* Vx */
     case 5: return c->P; /* P */
     case 6: return fabs(c->Vx) * sqrt(c->kappa * c->kappa + tan(c->alpha) * tan(c->alpha)); /* Vs */
-    case 7: return (c->Fz - p->LFZO * p->FNOMIN) / (p->LFZO * p->FNOMIN); /* dfz */
-    case 8: return (c->P - p->NOMPRES) / p->NOMPRES; /* dpi */
+    case 7: return mf_dfz(p, c->Fz); /* dfz */
+    case 8: return mf_dpi(p, c->P); /* dpi */
     case 9: return (double)((c->alpha > 0.0) - (c->alpha < 0.0)); /* sign_alpha */
     case 10: return (double)((c->kappa > 0.0) - (c->kappa < 0.0)); /* sign_kappa */
     default: return data[k - 11];
