@@ -52,6 +52,10 @@ DEFAULT_USE_MODE = 111
 #: Parameters whose change means a different model: ``fixed`` (set before initialisation only).
 FIXED_PARAMETERS = frozenset({"FITTYP"})
 
+#: ``.tir`` keys that are not FMU parameters: ``USE_MODE`` is the ADAMS mode switch of the file; the FMU
+#: has one mode variable, the integer parameter ``useMode`` (its start value is the export's ``use_mode``).
+NOT_PARAMETERS = frozenset({"USE_MODE"})
+
 _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 #: FMI unit name -> (SI base-unit exponents kg, m, s, rad) for every unit the table uses.
@@ -207,15 +211,17 @@ def variable_table(
     out.append(
         Variable(
             "useMode", len(out), "mode", "Integer", "parameter", "tunable", int(use_mode), None,
-            "Three-digit mode: hundreds 1 limit checks / 2 none; tens 1 / 2 alpha-star; "
-            "units 0 pure slip / 1 combined / 2 combined + turn slip",
+            "The one mode switch of the FMU (the file's USE_MODE is not a parameter): three digits, "
+            "hundreds 1 limit checks / 2 none; tens 1 / 2 alpha-star; units 0 pure slip / 1 combined / "
+            "2 combined + turn slip",
             "",
         )
     )  # fmt: skip
-    standard = {p.key: p for p in PARAMETERS if p.unit != "str"}
+    standard = {p.key: p for p in PARAMETERS if p.unit != "str" and p.key not in NOT_PARAMETERS}
     keys = list(standard) + [
-        k for k in flat if k not in standard and k not in ext_keys and _IDENT.match(k) and _number(flat[k])
-    ]
+        k for k in flat if k not in standard and k not in NOT_PARAMETERS and k not in ext_keys and _IDENT.match(k)
+        and _number(flat[k])
+    ]  # fmt: skip
     for key in keys:
         row = standard.get(key)
         unit = _PARAM_UNIT[row.unit] if row else None
@@ -358,7 +364,8 @@ def _log_categories() -> list[str]:
         "  <LogCategories>",
         '    <Category name="logStatusWarning" description="Limit checks, NaN inputs, clipped curvature factors"/>',
         '    <Category name="logStatusError" description="Invalid calls, modes or parameters"/>',
-        '    <Category name="logAll" description="Every warning (no repetition limit)"/>',
+        '    <Category name="logAll" description="Warnings and errors (each kind of warning at most once per 1000'
+        ' evaluations, with the count of the others)"/>',
         "  </LogCategories>",
     ]
 

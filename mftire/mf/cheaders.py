@@ -232,7 +232,7 @@ def spec_signature() -> str:
 def spec_header() -> str:
     """``mf_spec_gen.h``: :mod:`mftire.mf.spec` for the C model (groups, warning kinds and texts,
     the kernel's outputs and inputs, the model families)."""
-    from mftire.mf.spec import FAMILIES, GROUPS, KERNEL_INPUTS, OUTPUTS, WARNINGS
+    from mftire.mf.spec import FAMILIES, GROUPS, KERNEL_INPUTS, OUTPUTS, PARAMETER_BOUNDS, WARNINGS
 
     def ident(name: str) -> str:
         return "".join(ch if ch.isalnum() else "_" for ch in name).upper()
@@ -274,6 +274,15 @@ def spec_header() -> str:
         limit = f"MF_SPEC_PIDX({w.limit})" if w.limit else "-1"
         inp = c_string(w.input) if w.input else "NULL"
         lines.append(f"    {{{c_string(c_format(w.text, w.limit))}, {limit}, {inp}}}, \\")
+    lines += ["}", ""]
+    lines += [
+        "/* Parameters with a physical bound (MFParams index, bound, 1: strict >, 0: >=, name). */",
+        "typedef struct { int index; double bound; int strict; const char *name; } MFParamBound;",
+        "#define MF_SPEC_PARAMETER_BOUNDS { \\",
+    ]
+    for key, rule in PARAMETER_BOUNDS:
+        op, value = rule.split()
+        lines.append(f"    {{MF_SPEC_PIDX({key}), {float(value)!r}, {int(op == '>')}, {c_string(key)}}}, \\")
     lines += ["}", ""]
     codes = ", ".join(repr(float(c)) for c in dict.fromkeys(f.code for f in FAMILIES))
     names = ", ".join(f"{f.name} ({f.code:g})" for f in FAMILIES)

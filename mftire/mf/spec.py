@@ -15,6 +15,7 @@ plus its equation.
 * :data:`KERNEL_INPUTS`: the inputs of the array kernel, in its order.
 * :data:`WARNINGS`: the warning kinds (``MF_W_<name>``) in the order the numpy path issues them,
   with their texts.
+* :data:`PARAMETER_BOUNDS`: parameters with a physical bound.
 * :data:`FAMILIES`: the model codes (``p["FITTYP"]``) the evaluator handles.
 * :data:`BUILTIN_VARIABLES`: the variables a model-extension term may read that the evaluator
   derives itself, with their Python and C expressions.
@@ -176,6 +177,13 @@ FAMILIES: tuple[Family, ...] = (
 )
 
 
+#: Parameters with a physical bound, refused outside it (the FMU's tunable parameters at every set; the
+#: ``.tir`` checks of :mod:`mftire.iotools.tir_checks` refuse the same in a file): (key, "> 0" or ">= 0").
+PARAMETER_BOUNDS: tuple[tuple[str, str], ...] = (
+    ("FNOMIN", "> 0"), ("UNLOADED_RADIUS", "> 0"), ("WIDTH", ">= 0"), ("RIM_RADIUS", ">= 0"),
+)
+
+
 @dataclass(frozen=True)
 class BuiltinVariable:
     """A variable a model-extension term may read that the evaluator derives from its own inputs.
@@ -214,6 +222,7 @@ BUILTIN_VARIABLES: tuple[BuiltinVariable, ...] = (
 
 
 __all__ = [
-    "BUILTIN_VARIABLES", "FAMILIES", "GROUPS", "KERNEL_INPUTS", "OUTPUTS", "PAC2002_CODE", "WARNINGS",
+    "BUILTIN_VARIABLES", "FAMILIES", "GROUPS", "KERNEL_INPUTS", "OUTPUTS", "PAC2002_CODE", "PARAMETER_BOUNDS",
+    "WARNINGS",
     "BuiltinVariable", "Family", "Group", "Output", "WarningKind",
 ]  # fmt: skip

@@ -1,36 +1,61 @@
 /*
- * mf_model.c -- instance state shared by the FMI 2.0 and 3.0 wrappers.
+ * mf_model.c -- the steady-state tyre behind the FMI wrappers (fmu_model.h): mf_eval.c at the
+ * importer's inputs, no continuous states.
  *
  * All variables are addressed through the value-reference table generated into
  * mf_model_gen.h from the Python variable table (mftire/fmu/variables.py).
  * Outputs are evaluated lazily: setting an input or a parameter marks the
  * instance dirty, reading an output evaluates once.
  */
+#ifdef MF_FMU_UNITY /* a part of fmu.c (alone, for an importer that compiles every .c: nothing) */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
+#include "fmu_model.h"
 #include "mf_model.h"
 #include "mf_model_gen.h"
 
-const char *mf_model_var_name(unsigned vr) { return vr < MF_N_VARS ? MF_VAR_NAMES[vr] : "?"; }
-unsigned mf_model_n_vars(void) { return MF_N_VARS; }
-const char *mf_model_guid(void) { return MF_GUID; }
-int mf_model_is_output(unsigned vr) { return vr < MF_N_VARS && MF_VARS[vr].kind == MF_K_OUTPUT; }
+/* Counters of the input/output guards: 9 inputs, MF_MAX_DATA data inputs, the outputs. */
+#define MF_GUARD_SLOTS (9 + MF_MAX_DATA + 1)
 
-unsigned mf_model_input_vrs(unsigned *vrs)
+struct FMModel {
+    MFParams params;
+    MFInputs inputs;
+    MFOutputs outputs;
+    int use_mode;
+    double time;
+    int dirty;                /* inputs or parameters changed since the last evaluation */
+    int initialized;          /* after ExitInitializationMode */
+    unsigned long evals;      /* evaluations so far (the clock of the warning rate limit) */
+    FMWarnSlot warn[MF_W_COUNT];
+    FMWarnSlot guard[MF_GUARD_SLOTS]; /* input guards (9 inputs, data, outputs) */
+    fm_log_fn log;
+    void *host;               /* the wrapper's instance */
+};
+
+static int update(FMModel *m);
+
+static const char *fm_guid(void) { return MF_GUID; }
+static size_t fm_size(void) { return sizeof(FMModel); }
+static unsigned fm_n_states(void) { return 0; }
+static int fm_is_unknown(unsigned vr) { return vr < MF_N_VARS && MF_VARS[vr].kind == MF_K_OUTPUT; }
+static void fm_set_time(FMModel *m, double t) { m->time = t; }
+static double fm_time(const FMModel *m) { return m->time; }
+
+static unsigned fm_dependencies(unsigned *vrs, unsigned room)
 {
     unsigned vr, n = 0;
     for (vr = 0; vr < MF_N_VARS; vr++)
         if (MF_VARS[vr].kind == MF_K_INPUT) {
-            if (vrs && n < 64) vrs[n] = vr;
+            if (vrs && n < room) vrs[n] = vr;
             n++;
         }
     return n;
 }
 
-void mf_model_logf(MFModel *m, int status, const char *category, const char *fmt, ...)
+static void logf_(FMModel *m, int status, const char *category, const char *fmt, ...)
 {
     char buf[512];
     va_list ap;
@@ -38,10 +63,10 @@ void mf_model_logf(MFModel *m, int status, const char *category, const char *fmt
     va_start(ap, fmt);
     vsnprintf(buf, sizeof buf, fmt, ap);
     va_end(ap);
-    m->log(m, status, category, buf);
+    m->log(m->host, status, category, buf);
 }
 
-void mf_model_reset(MFModel *m)
+static void fm_reset(FMModel *m)
 {
     m->params = MF_PARAM_START;
     m->inputs = MF_INPUT_START;
@@ -50,39 +75,81 @@ void mf_model_reset(MFModel *m)
     m->time = 0.0;
     m->dirty = 1;
     m->initialized = 0;
-    memset(m->warn_count, 0, sizeof m->warn_count);
-    memset(m->guard_count, 0, sizeof m->guard_count);
+    m->evals = 0;
+    memset(m->warn, 0, sizeof m->warn);
+    memset(m->guard, 0, sizeof m->guard);
 }
 
-void mf_model_init(MFModel *m, mf_log_fn log, void *host)
+static void fm_init(FMModel *m, fm_log_fn log, void *host)
 {
     memset(m, 0, sizeof *m);
     m->log = log;
     m->host = host;
-    mf_model_reset(m);
+    fm_reset(m);
 }
 
-int mf_model_validate(MFModel *m)
+/* A warning through the rate limit of fmu_model.h (slot: its kind or guard). */
+static void limited_warning(FMModel *m, FMWarnSlot *slot, const char *message)
 {
-    char msg[256];
-    if (mf_check_fittyp(&m->params, msg, sizeof msg) != MF_OK ||
-        mf_check_mode(m->use_mode, msg, sizeof msg) != MF_OK) {
-        mf_model_logf(m, MF_STATUS_ERROR, "logStatusError", "%s", msg);
-        return MF_STATUS_ERROR;
-    }
-    return MF_STATUS_OK;
+    unsigned long skipped;
+    if (!fm_warn_due(slot, m->evals, &skipped)) return;
+    if (skipped)
+        logf_(m, FM_WARNING, "logStatusWarning", "t=%.17g: %s (%lu more since the last message, not logged: one "
+              "message per kind per %lu evaluations)", m->time, message, skipped, FM_WARN_EVERY);
+    else
+        logf_(m, FM_WARNING, "logStatusWarning", "t=%.17g: %s", m->time, message);
 }
 
 static void on_warning(void *ctx, int kind, const char *message)
 {
-    MFModel *m = (MFModel *)ctx;
-    unsigned n = ++m->warn_count[kind];
-    if (m->debug_logging || n <= MF_WARN_REPEAT)
-        mf_model_logf(m, MF_STATUS_WARNING, "logStatusWarning", "t=%.17g: %s", m->time, message);
-    if (!m->debug_logging && n == MF_WARN_REPEAT)
-        mf_model_logf(m, MF_STATUS_WARNING, "logStatusWarning",
-                      "this warning has been logged %d times and is now muted (enable debug logging to see all)",
-                      MF_WARN_REPEAT);
+    FMModel *m = (FMModel *)ctx;
+    if (kind >= 0 && kind < MF_W_COUNT) limited_warning(m, &m->warn[kind], message);
+}
+
+/* Whether the model refuses the parameter value (writing why into msg): any non-finite value, the bounds of
+ * mftire.mf.spec.PARAMETER_BOUNDS, a FITTYP that names no model family the evaluator handles. */
+static int check_parameter(const FMModel *m, const double *slot, double value, char *msg, unsigned long n)
+{
+    static const MFParamBound bounds[] = MF_SPEC_PARAMETER_BOUNDS;
+    unsigned k;
+    int index = (int)(slot - (const double *)&m->params);
+    if (!isfinite(value)) {
+        snprintf(msg, n, "%g: a parameter must be finite", value);
+        return 1;
+    }
+    for (k = 0; k < sizeof bounds / sizeof bounds[0]; k++)
+        if (bounds[k].index == index && (bounds[k].strict ? !(value > bounds[k].bound) : !(value >= bounds[k].bound))) {
+            snprintf(msg, n, "%s = %g must be %s %g", bounds[k].name, value, bounds[k].strict ? ">" : ">=",
+                     bounds[k].bound);
+            return 1;
+        }
+    if (slot == &m->params.FITTYP) {
+        MFParams trial = m->params;
+        trial.FITTYP = value;
+        return mf_check_fittyp(&trial, msg, n) != MF_OK;
+    }
+    return 0;
+}
+
+static int fm_exit_initialization(FMModel *m)
+{
+    char msg[256];
+    unsigned vr;
+    if (mf_check_fittyp(&m->params, msg, sizeof msg) != MF_OK || mf_check_mode(m->use_mode, msg, sizeof msg) != MF_OK) {
+        logf_(m, FM_ERROR, "logStatusError", "%s", msg);
+        return FM_ERROR;
+    }
+    for (vr = 0; vr < MF_N_VARS; vr++)
+        if (MF_VARS[vr].kind == MF_K_PARAM) {
+            const double *slot = (const double *)((const char *)&m->params + MF_VARS[vr].offset);
+            if (check_parameter(m, slot, *slot, msg, sizeof msg)) {
+                logf_(m, FM_ERROR, "logStatusError", "%s: %s", MF_VAR_NAMES[vr], msg);
+                return FM_ERROR;
+            }
+        }
+    if (update(m) != FM_OK) return FM_ERROR; /* outputs are valid straight after initialisation */
+    m->initialized = 1;
+    return FM_OK;
 }
 
 /* ------------------------------------------------------------------ input and output guards
@@ -118,22 +185,16 @@ static void on_warning(void *ctx, int kind, const char *message)
 #define MF_GUARD_MU_MIN 1e-3
 #define MF_GUARD_TINY 1e-30
 #define MF_GUARD_DATA 1e12
-#define MF_N_PUBLISHED 19 /* MFOutputs members the FMU publishes (Fx .. sigmay) */
 
-static void guard_log(MFModel *m, unsigned slot, const char *name, double x, double to, const char *why)
+static void guard_log(FMModel *m, unsigned slot, const char *name, double x, double to, const char *why)
 {
-    unsigned n = slot < MF_GUARD_SLOTS ? ++m->guard_count[slot] : MF_WARN_REPEAT + 1;
-    if (m->debug_logging || n <= MF_WARN_REPEAT)
-        mf_model_logf(m, MF_STATUS_WARNING, "logStatusWarning", "t=%.17g: input '%s' = %.17g %s %.17g.", m->time,
-                      name, x, why, to);
-    if (!m->debug_logging && n == MF_WARN_REPEAT)
-        mf_model_logf(m, MF_STATUS_WARNING, "logStatusWarning",
-                      "this warning has been logged %d times and is now muted (enable debug logging to see all)",
-                      MF_WARN_REPEAT);
+    char text[256];
+    snprintf(text, sizeof text, "input '%s' = %.17g %s %.17g.", name, x, why, to);
+    limited_warning(m, &m->guard[slot < MF_GUARD_SLOTS ? slot : MF_GUARD_SLOTS - 1], text);
 }
 
 /* Saturate x (NaN passes through for the evaluator to replace) to [lo, hi]; |x| < 1e-30 is 0. */
-static double guard_clip(MFModel *m, unsigned slot, const char *name, double x, double lo, double hi)
+static double guard_clip(FMModel *m, unsigned slot, const char *name, double x, double lo, double hi)
 {
     if (fabs(x) < MF_GUARD_TINY) x = 0.0 * x; /* keeps the sign of zero; subnormals overflow 1/x */
     if (x < lo) {
@@ -147,7 +208,7 @@ static double guard_clip(MFModel *m, unsigned slot, const char *name, double x, 
     return x;
 }
 
-static void guard_inputs(MFModel *m, MFInputs *in)
+static void guard_inputs(FMModel *m, MFInputs *in)
 {
     const MFParams *p = &m->params;
     double kmax = fmax(10.0, 2.0 * fmax(fabs(p->KPUMIN), fabs(p->KPUMAX)));
@@ -180,31 +241,32 @@ static void guard_inputs(MFModel *m, MFInputs *in)
     (void)k;
 }
 
-static void guard_outputs(MFModel *m)
+static void guard_outputs(FMModel *m)
 {
-    static const char *const names[] = {"Fx", "Fy", "Fz", "Mx", "My", "Mz", "Re", "Rl", "rho", "a2", "b2", "t",
-                                        "Mzr", "mux", "muy", "Kxk", "Kya", "sigmax", "sigmay", "omega", "Cx", "Cy",
-                                        "Cz"};
     double *o = (double *)&m->outputs;
-    unsigned i, n = sizeof m->outputs / sizeof(double);
-    for (i = 0; i < n; i++)
-        if (!isfinite(o[i]) && i >= MF_N_PUBLISHED) {
-            o[i] = 0.0; /* internal (omega, Cx, Cy, Cz): not an FMU output */
-        } else if (!isfinite(o[i])) {
-            unsigned c = ++m->guard_count[MF_GUARD_SLOTS - 1];
-            if (m->debug_logging || c <= MF_WARN_REPEAT)
-                mf_model_logf(m, MF_STATUS_WARNING, "logStatusWarning", "t=%.17g: output '%s' = %g is not finite; "
-                              "set to 0.", m->time, i < sizeof names / sizeof names[0] ? names[i] : "?", o[i]);
-            o[i] = 0.0;
+    unsigned i, vr, n = sizeof m->outputs / sizeof(double);
+    for (vr = 0; vr < MF_N_VARS; vr++)
+        if (MF_VARS[vr].kind == MF_K_OUTPUT) {
+            double *y = (double *)((char *)&m->outputs + MF_VARS[vr].offset);
+            if (!isfinite(*y)) {
+                char text[160];
+                snprintf(text, sizeof text, "output '%s' = %g is not finite; set to 0.", MF_VAR_NAMES[vr], *y);
+                limited_warning(m, &m->guard[MF_GUARD_SLOTS - 1], text);
+                *y = 0.0;
+            }
         }
+    for (i = 0; i < n; i++)
+        if (!isfinite(o[i])) o[i] = 0.0; /* members that are not FMU outputs (omega, Cx, Cy, Cz) */
 }
 
-int mf_model_update(MFModel *m)
+/* Evaluate if the inputs, parameters or mode changed. */
+static int update(FMModel *m)
 {
     char msg[256];
     int rc;
     MFInputs in;
-    if (!m->dirty) return MF_STATUS_OK;
+    if (!m->dirty) return FM_OK;
+    m->evals++;
     in = m->inputs;
     guard_inputs(m, &in);
     rc = mf_evaluate(&m->params, m->use_mode, &in, &m->outputs, on_warning, m);
@@ -212,95 +274,107 @@ int mf_model_update(MFModel *m)
     if (rc != MF_OK) {
         if (rc == MF_BAD_MODE) mf_check_mode(m->use_mode, msg, sizeof msg);
         else mf_check_fittyp(&m->params, msg, sizeof msg);
-        mf_model_logf(m, MF_STATUS_ERROR, "logStatusError", "%s", msg);
-        return MF_STATUS_ERROR;
+        logf_(m, FM_ERROR, "logStatusError", "%s", msg);
+        return FM_ERROR;
     }
     m->dirty = 0;
-    return MF_STATUS_OK;
+    return FM_OK;
 }
 
-int mf_model_get_real(MFModel *m, unsigned vr, double *value)
+static int fm_get_real(FMModel *m, unsigned vr, double *value)
 {
     const MFVarInfo *v;
     if (vr >= MF_N_VARS) goto bad;
     v = &MF_VARS[vr];
     switch (v->kind) {
-    case MF_K_TIME: *value = m->time; return MF_STATUS_OK;
-    case MF_K_INPUT: *value = *(const double *)((const char *)&m->inputs + v->offset); return MF_STATUS_OK;
-    case MF_K_PARAM: *value = *(const double *)((const char *)&m->params + v->offset); return MF_STATUS_OK;
+    case MF_K_TIME: *value = m->time; return FM_OK;
+    case MF_K_INPUT: *value = *(const double *)((const char *)&m->inputs + v->offset); return FM_OK;
+    case MF_K_PARAM: *value = *(const double *)((const char *)&m->params + v->offset); return FM_OK;
     case MF_K_OUTPUT:
-        if (mf_model_update(m) != MF_STATUS_OK) return MF_STATUS_ERROR;
+        if (update(m) != FM_OK) return FM_ERROR;
         *value = *(const double *)((const char *)&m->outputs + v->offset);
-        return MF_STATUS_OK;
+        return FM_OK;
     default: break;
     }
 bad:
-    mf_model_logf(m, MF_STATUS_ERROR, "logStatusError", "value reference %u is not a Real variable", vr);
-    return MF_STATUS_ERROR;
+    logf_(m, FM_ERROR, "logStatusError", "value reference %u is not a Real variable", vr);
+    return FM_ERROR;
 }
 
-int mf_model_set_real(MFModel *m, unsigned vr, double value)
+static int fm_set_real(FMModel *m, unsigned vr, double value)
 {
     const MFVarInfo *v;
+    char msg[256];
     if (vr >= MF_N_VARS) goto bad;
     v = &MF_VARS[vr];
     if (v->kind == MF_K_INPUT) {
         *(double *)((char *)&m->inputs + v->offset) = value;
         m->dirty = 1;
-        return MF_STATUS_OK;
+        return FM_OK;
     }
     if (v->kind == MF_K_PARAM) {
         double *slot = (double *)((char *)&m->params + v->offset);
         if (v->fixed && m->initialized) {
-            mf_model_logf(m, MF_STATUS_ERROR, "logStatusError",
-                          "%s is a fixed parameter: it can only be set before initialisation", MF_VAR_NAMES[vr]);
-            return MF_STATUS_ERROR;
+            logf_(m, FM_ERROR, "logStatusError", "%s is a fixed parameter: it can only be set before initialisation",
+                  MF_VAR_NAMES[vr]);
+            return FM_ERROR;
         }
-        if (slot == &m->params.FITTYP) {
-            MFParams trial = m->params;
-            char msg[256];
-            trial.FITTYP = value;
-            if (mf_check_fittyp(&trial, msg, sizeof msg) != MF_OK) {
-                mf_model_logf(m, MF_STATUS_ERROR, "logStatusError", "%s", msg);
-                return MF_STATUS_ERROR;
-            }
+        if (check_parameter(m, slot, value, msg, sizeof msg)) { /* refused: the parameter keeps its value */
+            logf_(m, FM_ERROR, "logStatusError", "%s: %s", MF_VAR_NAMES[vr], msg);
+            return FM_ERROR;
         }
         *slot = value;
         m->dirty = 1;
-        return MF_STATUS_OK;
+        return FM_OK;
     }
     if (v->kind == MF_K_OUTPUT || v->kind == MF_K_TIME) {
-        mf_model_logf(m, MF_STATUS_ERROR, "logStatusError", "%s cannot be set (causality %s)", MF_VAR_NAMES[vr],
-                      v->kind == MF_K_OUTPUT ? "output" : "independent");
-        return MF_STATUS_ERROR;
+        logf_(m, FM_ERROR, "logStatusError", "%s cannot be set (causality %s)", MF_VAR_NAMES[vr],
+              v->kind == MF_K_OUTPUT ? "output" : "independent");
+        return FM_ERROR;
     }
 bad:
-    mf_model_logf(m, MF_STATUS_ERROR, "logStatusError", "value reference %u is not a Real variable", vr);
-    return MF_STATUS_ERROR;
+    logf_(m, FM_ERROR, "logStatusError", "value reference %u is not a Real variable", vr);
+    return FM_ERROR;
 }
 
-int mf_model_get_int(MFModel *m, unsigned vr, int *value)
+static int fm_get_int(FMModel *m, unsigned vr, int *value)
 {
     if (vr == MF_VR_USEMODE) {
         *value = m->use_mode;
-        return MF_STATUS_OK;
+        return FM_OK;
     }
-    mf_model_logf(m, MF_STATUS_ERROR, "logStatusError", "value reference %u is not an Integer variable", vr);
-    return MF_STATUS_ERROR;
+    logf_(m, FM_ERROR, "logStatusError", "value reference %u is not an Integer variable", vr);
+    return FM_ERROR;
 }
 
-int mf_model_set_int(MFModel *m, unsigned vr, int value)
+static int fm_set_int(FMModel *m, unsigned vr, int value)
 {
     char msg[256];
     if (vr != MF_VR_USEMODE) {
-        mf_model_logf(m, MF_STATUS_ERROR, "logStatusError", "value reference %u is not an Integer variable", vr);
-        return MF_STATUS_ERROR;
+        logf_(m, FM_ERROR, "logStatusError", "value reference %u is not an Integer variable", vr);
+        return FM_ERROR;
     }
     if (mf_check_mode(value, msg, sizeof msg) != MF_OK) {
-        mf_model_logf(m, MF_STATUS_ERROR, "logStatusError", "%s", msg);
-        return MF_STATUS_ERROR;
+        logf_(m, FM_ERROR, "logStatusError", "%s", msg);
+        return FM_ERROR;
     }
     m->use_mode = value;
     m->dirty = 1;
-    return MF_STATUS_OK;
+    return FM_OK;
 }
+
+/* ------------------------------------------------------------------ no continuous states */
+
+static int fm_get_states(FMModel *m, double *x) { (void)m, (void)x; return FM_OK; }
+static int fm_set_states(FMModel *m, const double *x) { (void)m, (void)x; return FM_OK; }
+static int fm_get_derivatives(FMModel *m, double *dx) { (void)m, (void)dx; return FM_OK; }
+static void fm_get_nominals(double *xn) { (void)xn; }
+
+/* Co-Simulation: the inputs are held over the step; the outputs at its end are those of the inputs. */
+static int fm_do_step(FMModel *m, double t, double h)
+{
+    m->time = t + h;
+    return update(m);
+}
+
+#endif /* MF_FMU_UNITY */

@@ -24,6 +24,12 @@
 extern "C" {
 #endif
 
+/* Storage of the model's functions: empty (external) by default; an FMU, one translation unit, defines it
+ * `static` so that only the FMI functions are external symbols (mftire/fmu/c/fmu_model.h). */
+#ifndef MF_API
+#define MF_API
+#endif
+
 /* Room for the external variables of the model extensions (mftire.mf.extensions.MAX_EXTERNAL). */
 #define MF_MAX_DATA 4
 
@@ -49,7 +55,7 @@ typedef struct {
 } MFOutputs;
 
 /* The human-readable text of warning kind `kind` (for the limits: the file's limit value). */
-void mf_warning_text(const MFParams *p, int kind, char *buf, unsigned long n);
+MF_API void mf_warning_text(const MFParams *p, int kind, char *buf, unsigned long n);
 
 /* Called once per distinct warning of an evaluation (kind, human-readable text). */
 typedef void (*mf_warning_fn)(void *ctx, int kind, const char *message);
@@ -60,23 +66,23 @@ typedef void (*mf_warning_fn)(void *ctx, int kind, const char *message);
 #define MF_BAD_FITTYP 2
 
 /* Check a three-digit useMode; on failure write a message to msg (size n). */
-int mf_check_mode(int use_mode, char *msg, unsigned long n);
+MF_API int mf_check_mode(int use_mode, char *msg, unsigned long n);
 
 /* Check that FITTYP is one the evaluator handles (MF_SPEC_FAMILIES). */
-int mf_check_fittyp(const MFParams *p, char *msg, unsigned long n);
+MF_API int mf_check_fittyp(const MFParams *p, char *msg, unsigned long n);
 
 /*
  * Evaluate one operating point.  Returns MF_OK, or MF_BAD_MODE / MF_BAD_FITTYP
  * (then *out is untouched).  warn may be NULL.
  */
-int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *out,
+MF_API int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOutputs *out,
                 mf_warning_fn warn, void *ctx);
 
 /*
  * mf_evaluate for the channel groups of want only (MF_WANT_* bits; Fz, Re and omega always):
  * the fields of *out that no wanted group sets are left untouched.
  */
-int mf_evaluate_want(const MFParams *p, int use_mode, const MFInputs *in, unsigned want, MFOutputs *out,
+MF_API int mf_evaluate_want(const MFParams *p, int use_mode, const MFInputs *in, unsigned want, MFOutputs *out,
                      mf_warning_fn warn, void *ctx);
 
 #ifdef __cplusplus

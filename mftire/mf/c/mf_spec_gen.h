@@ -89,6 +89,15 @@ typedef struct { const char *format; int limit; const char *input; } MFWarningSp
     {"Ey over limit (>1), eq 4.E24; clipped to 1.", -1, NULL}, \
 }
 
+/* Parameters with a physical bound (MFParams index, bound, 1: strict >, 0: >=, name). */
+typedef struct { int index; double bound; int strict; const char *name; } MFParamBound;
+#define MF_SPEC_PARAMETER_BOUNDS { \
+    {MF_SPEC_PIDX(FNOMIN), 0.0, 1, "FNOMIN"}, \
+    {MF_SPEC_PIDX(UNLOADED_RADIUS), 0.0, 1, "UNLOADED_RADIUS"}, \
+    {MF_SPEC_PIDX(WIDTH), 0.0, 0, "WIDTH"}, \
+    {MF_SPEC_PIDX(RIM_RADIUS), 0.0, 0, "RIM_RADIUS"}, \
+}
+
 /* The model codes (FITTYP) the evaluator handles: MF 5.2 (6), MF 6.1 (61), MF 6.2 (62), PAC2002 (2002), MF-Tyre 5.0 (2002). */
 #define MF_SPEC_FAMILIES {6.0, 61.0, 62.0, 2002.0}
 #define MF_SPEC_N_FAMILIES 4

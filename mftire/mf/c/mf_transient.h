@@ -56,26 +56,26 @@ typedef struct {
  * the rolling offsets of the groups `offsets` & MT_OFFSETS.  Offsets not computed are set to 0 (they are
  * multiplied by w = 0, or not used).  Returns MF_OK or an mf_evaluate code.
  */
-int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned offsets, MTKin *k,
+MF_API int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned offsets, MTKin *k,
                   mf_warning_fn warn, void *ctx);
 
 /* State derivatives dx = (du/dt, dv/dt) at the state x = (u, v). */
-void mt_rates(const MFParams *p, const MTKin *k, const double x[2], double dx[2]);
+MF_API void mt_rates(const MFParams *p, const MTKin *k, const double x[2], double dx[2]);
 
 /*
  * Outputs at the state x: one steady-state evaluation at the transient slips, of the channel groups want
  * (MF_WANT_*; MF_WANT_ALL: every output).  The fields of groups not wanted are left untouched; kappa_t,
  * alpha_t, Fz and Re are always set.  k must hold the offsets of want & MT_OFFSETS (mt_kinematics).
  */
-int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2], unsigned want,
+MF_API int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2], unsigned want,
                MTOutputs *out, mf_warning_fn warn, void *ctx);
 
 /* One exponential-Euler step of length h (leak rates frozen at the start of the step). */
-void mt_step(const MFParams *p, const MTKin *k, double x[2], double h);
+MF_API void mt_step(const MFParams *p, const MTKin *k, double x[2], double h);
 
 /* Advance the state by H with the inputs held (Co-Simulation step): one exact step mt_step(H) while the
  * deflection limiter stays inactive, else ceil(H / TR_CS_STEP) equal sub-steps of mt_step. */
-void mt_advance(const MFParams *p, const MTKin *k, double x[2], double H);
+MF_API void mt_advance(const MFParams *p, const MTKin *k, double x[2], double H);
 
 #ifdef __cplusplus
 }
