@@ -409,3 +409,18 @@ def evaluate_arrays(
 
 _channels = channels
 _CHECKED_MODES: set = set()  # useMode codes Mode.from_code accepted
+
+
+def valid_mode(mode) -> bool:
+    """Whether ``mode`` is a valid three-digit ``useMode`` given as an ``int`` (checked once per code, then
+    remembered): the latency path of :meth:`mftire.Tyre.evaluate` serves any valid mode from its first call."""
+    if mode in _CHECKED_MODES:
+        return True
+    if type(mode) is not int:
+        return False
+    try:
+        Mode.from_code(mode)
+    except MftireError:
+        return False
+    _CHECKED_MODES.add(mode)
+    return True
