@@ -244,7 +244,9 @@ static void guard_inputs(FMModel *m, MFInputs *in)
 static void guard_outputs(FMModel *m)
 {
     double *o = (double *)&m->outputs;
-    unsigned i, vr, n = sizeof m->outputs / sizeof(double);
+    unsigned i, vr, n = sizeof m->outputs / sizeof(double), bad = 0;
+    for (i = 0; i < n; i++) bad |= !isfinite(o[i]);
+    if (!bad) return; /* the usual case: no look-up of the names */
     for (vr = 0; vr < MF_N_VARS; vr++)
         if (MF_VARS[vr].kind == MF_K_OUTPUT) {
             double *y = (double *)((char *)&m->outputs + MF_VARS[vr].offset);
