@@ -144,8 +144,9 @@ def test_c_includes_go_down_the_layers():
     fmu_dir = ROOT / "mftire" / "fmu" / "c"
     mf_files = {p.name for p in C_DIR.glob("*.[ch]")} | {p.name for p in (C_DIR / "kernel").glob("*.h")}
     fmu_files = {p.name for p in fmu_dir.glob("*.[ch]")}
-    fmu_generated = {"mf_model_gen.h", "mt_model_gen.h", "fmi2Functions.h", "fmi2FunctionTypes.h",
-                     "fmi2TypesPlatform.h", "fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h"}  # fmt: skip
+    fmu_generated = {"mf_model_gen.h", "mt_model_gen.h"} | {
+        f"fmi{v}{h}" for v in (2, 3) for h in ("Functions.h", "FunctionTypes.h", "TypesPlatform.h", "PlatformTypes.h")
+    }
     for path in C_DIR.glob("*.[ch]"):
         for name in re.findall(r'#include "([^"]+)"', path.read_text(encoding="utf-8")):
             assert name in mf_files, (path.name, name)

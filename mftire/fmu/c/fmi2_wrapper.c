@@ -85,8 +85,7 @@ static fmi2Status unsupported(fmi2Component c, const char *fn)
 /* A call in a state where the standard does not allow it: an error (the instance stays usable). */
 static fmi2Status wrong_state(fmi2Component c, const char *fn)
 {
-    static const char *const names[] = {"instantiated", "initialization mode", "running (step complete / "
-                                        "continuous-time mode)", "terminated", "error"};
+    static const char *const names[] = {"instantiated", "initialization mode", "running", "terminated", "error"};
     wlogf(INS, fmi2Error, "logStatusError", "%s is not allowed in state '%s'", fn, names[INS->state]);
     return fmi2Error;
 }

@@ -13,7 +13,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "fmu_model.h"
+#include "fmu_common.h"
 #include "mf_model.h"
 #include "mf_model_gen.h"
 
@@ -55,16 +55,7 @@ static unsigned fm_dependencies(unsigned *vrs, unsigned room)
     return n;
 }
 
-static void logf_(FMModel *m, int status, const char *category, const char *fmt, ...)
-{
-    char buf[512];
-    va_list ap;
-    if (!m->log) return;
-    va_start(ap, fmt);
-    vsnprintf(buf, sizeof buf, fmt, ap);
-    va_end(ap);
-    m->log(m->host, status, category, buf);
-}
+#define logf_(m, status, category, ...) fm_logf((m)->log, (m)->host, status, category, __VA_ARGS__)
 
 static void fm_reset(FMModel *m)
 {
@@ -88,16 +79,10 @@ static void fm_init(FMModel *m, fm_log_fn log, void *host)
     fm_reset(m);
 }
 
-/* A warning through the rate limit of fmu_model.h (slot: its kind or guard). */
+/* A warning through the rate limit (slot: its kind or guard). */
 static void limited_warning(FMModel *m, FMWarnSlot *slot, const char *message)
 {
-    unsigned long skipped;
-    if (!fm_warn_due(slot, m->evals, &skipped)) return;
-    if (skipped)
-        logf_(m, FM_WARNING, "logStatusWarning", "t=%.17g: %s (%lu more since the last message, not logged: one "
-              "message per kind per %lu evaluations)", m->time, message, skipped, FM_WARN_EVERY);
-    else
-        logf_(m, FM_WARNING, "logStatusWarning", "t=%.17g: %s", m->time, message);
+    fm_warn(m->log, m->host, slot, m->evals, m->time, message);
 }
 
 static void on_warning(void *ctx, int kind, const char *message)
@@ -106,29 +91,9 @@ static void on_warning(void *ctx, int kind, const char *message)
     if (kind >= 0 && kind < MF_W_COUNT) limited_warning(m, &m->warn[kind], message);
 }
 
-/* Whether the model refuses the parameter value (writing why into msg): any non-finite value, the bounds of
- * mftire.mf.spec.PARAMETER_BOUNDS, a FITTYP that names no model family the evaluator handles. */
 static int check_parameter(const FMModel *m, const double *slot, double value, char *msg, unsigned long n)
 {
-    static const MFParamBound bounds[] = MF_SPEC_PARAMETER_BOUNDS;
-    unsigned k;
-    int index = (int)(slot - (const double *)&m->params);
-    if (!isfinite(value)) {
-        snprintf(msg, n, "%g: a parameter must be finite", value);
-        return 1;
-    }
-    for (k = 0; k < sizeof bounds / sizeof bounds[0]; k++)
-        if (bounds[k].index == index && (bounds[k].strict ? !(value > bounds[k].bound) : !(value >= bounds[k].bound))) {
-            snprintf(msg, n, "%s = %g must be %s %g", bounds[k].name, value, bounds[k].strict ? ">" : ">=",
-                     bounds[k].bound);
-            return 1;
-        }
-    if (slot == &m->params.FITTYP) {
-        MFParams trial = m->params;
-        trial.FITTYP = value;
-        return mf_check_fittyp(&trial, msg, n) != MF_OK;
-    }
-    return 0;
+    return fm_check_parameter(&m->params, slot, value, msg, n);
 }
 
 static int fm_exit_initialization(FMModel *m)

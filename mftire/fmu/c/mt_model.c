@@ -22,7 +22,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "fmu_model.h"
+#include "fmu_common.h"
 #include "mf_transient.h"
 #include "mt_model_gen.h"
 
@@ -66,29 +66,14 @@ static unsigned fm_dependencies(unsigned *vrs, unsigned room)
     return n;
 }
 
-static void logf_(FMModel *m, int status, const char *category, const char *fmt, ...)
-{
-    char buf[512];
-    va_list ap;
-    if (!m->log) return;
-    va_start(ap, fmt);
-    vsnprintf(buf, sizeof buf, fmt, ap);
-    va_end(ap);
-    m->log(m->host, status, category, buf);
-}
+#define logf_(m, status, category, ...) fm_logf((m)->log, (m)->host, status, category, __VA_ARGS__)
 
 static void on_warning(void *ctx, int kind, const char *message)
 {
     FMModel *m = (FMModel *)ctx;
-    unsigned long skipped;
     if (kind == MF_W_LOW_SPEED || kind < 0 || kind >= MF_W_COUNT) return; /* the transient model replaces
                                                                                MFeval's low-speed mode */
-    if (!fm_warn_due(&m->warn[kind], m->evals, &skipped)) return;
-    if (skipped)
-        logf_(m, FM_WARNING, "logStatusWarning", "t=%.17g: %s (%lu more since the last message, not logged: one "
-              "message per kind per %lu evaluations)", m->time, message, skipped, FM_WARN_EVERY);
-    else
-        logf_(m, FM_WARNING, "logStatusWarning", "t=%.17g: %s", m->time, message);
+    fm_warn(m->log, m->host, &m->warn[kind], m->evals, m->time, message);
 }
 
 static void fm_reset(FMModel *m)
@@ -157,33 +142,14 @@ static void store(FMModel *m, double *dst, double value)
     m->kin_ok = m->out_ok = 0;
 }
 
-/* Whether the model refuses the parameter value (writing why into msg): any non-finite value, the bounds of
- * mftire.mf.spec.PARAMETER_BOUNDS, a FITTYP that names no model family, a non-positive TR_CS_STEP or VXLOW. */
+/* Whether the model refuses the parameter value (fm_check_parameter), or a non-positive TR_CS_STEP or VXLOW. */
 static int check_parameter(const FMModel *m, const double *slot, double value, char *msg, unsigned long n)
 {
-    static const MFParamBound bounds[] = MF_SPEC_PARAMETER_BOUNDS;
-    unsigned k;
-    int index = (int)(slot - (const double *)&m->params);
-    if (!isfinite(value)) {
-        snprintf(msg, n, "%g: a parameter must be finite", value);
-        return 1;
-    }
-    for (k = 0; k < sizeof bounds / sizeof bounds[0]; k++)
-        if (bounds[k].index == index && (bounds[k].strict ? !(value > bounds[k].bound) : !(value >= bounds[k].bound))) {
-            snprintf(msg, n, "%s = %g must be %s %g", bounds[k].name, value, bounds[k].strict ? ">" : ">=",
-                     bounds[k].bound);
-            return 1;
-        }
     if ((slot == &m->params.TR_CS_STEP || slot == &m->params.VXLOW) && !(value > 0.0)) {
         snprintf(msg, n, "%g: TR_CS_STEP and VXLOW must be positive", value);
         return 1;
     }
-    if (slot == &m->params.FITTYP) {
-        MFParams trial = m->params;
-        trial.FITTYP = value;
-        return mf_check_fittyp(&trial, msg, n) != MF_OK;
-    }
-    return 0;
+    return fm_check_parameter(&m->params, slot, value, msg, n);
 }
 
 static int fm_exit_initialization(FMModel *m)
