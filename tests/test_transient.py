@@ -498,3 +498,20 @@ def test_model_extensions_refused(tmp_path):
         TransientTyre(tyre)
     with pytest.raises(FMUExportError, match="MFTIRE_EXTENSIONS"):
         export_fmu(tyre, tmp_path / "x.fmu", transient=True)
+
+
+@needs_c_compiler
+def test_repeated_warnings_are_rate_limited_per_step(fmu_path):
+    """A wheel spinning at standstill raises KPUMAX every step: one message per 1000 steps with the count of
+    the others, also with debug logging on (tools on the FMI Library always switch it on)."""
+    messages = []
+    s = _slave(fmu_path, "spin", messages)
+    s.fmu.setDebugLogging(True, [])
+    s.set({"Fz": FZ, "Vx": 0.0, "Vy": 0.05, "omega": 30.0})
+    for k in range(2600):
+        s.fmu.doStep(k * 0.01, 0.01)
+        s.get(["Fx"])
+    s.close()
+    kpumax = [m for _, _, m in messages if "KPUMAX" in m]
+    assert len(kpumax) in (2, 3), kpumax[:4]  # at its first step, 1000 and 2000 steps later
+    assert "999 more since the last message" in kpumax[1] and "more since" not in kpumax[0]

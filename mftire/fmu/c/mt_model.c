@@ -38,7 +38,7 @@ struct FMModel {
     int use_mode;
     double time;
     int initialized;
-    unsigned long evals; /* evaluations so far (the clock of the warning rate limit) */
+    unsigned long evals; /* output and derivative evaluations so far (the clock of the warning rate limit) */
     FMWarnSlot warn[MF_W_COUNT];
     fm_log_fn log;
     void *host;
@@ -113,7 +113,6 @@ static int update_kin(FMModel *m)
 {
     int rc;
     if (m->kin_ok && !(m->out_want & MT_OFFSETS & ~m->kin.offsets)) return 0;
-    m->evals++;
     rc = mt_kinematics(&m->params, m->use_mode, &m->inputs, m->out_want, &m->kin, on_warning, m);
     if (rc != MF_OK) return bad_code(m, rc);
     m->kin_ok = 1;
@@ -126,6 +125,7 @@ static int update_out(FMModel *m, unsigned want)
     int rc;
     m->out_want |= want;
     if (m->out_ok && !(m->out_want & ~m->out_have)) return 0;
+    m->evals++; /* the clock of the warning rate limit: output evaluations and derivative evaluations */
     if (update_kin(m)) return 1;
     rc = mt_outputs(&m->params, m->use_mode, &m->kin, m->x, m->out_want, &m->out, on_warning, m);
     if (rc != MF_OK) return bad_code(m, rc);
@@ -284,6 +284,7 @@ static int fm_get_states(FMModel *m, double *x)
 
 static int fm_get_derivatives(FMModel *m, double *dx)
 {
+    m->evals++;
     if (update_kin(m)) return FM_ERROR;
     mt_rates(&m->params, &m->kin, m->x, dx);
     return FM_OK;
