@@ -232,7 +232,7 @@ def spec_signature() -> str:
 def spec_header() -> str:
     """``mf_spec_gen.h``: :mod:`mftire.mf.spec` for the C model (groups, warning kinds and texts,
     the kernel's outputs and inputs, the model families)."""
-    from mftire.mf.spec import FAMILIES, GROUPS, KERNEL_INPUTS, OUTPUTS, PARAMETER_BOUNDS, WARNINGS
+    from mftire.mf.spec import FAMILIES, GROUPS, KERNEL_INPUTS, OUTPUTS, PAC2002_CODE, PARAMETER_BOUNDS, WARNINGS
 
     def ident(name: str) -> str:
         return "".join(ch if ch.isalnum() else "_" for ch in name).upper()
@@ -291,6 +291,7 @@ def spec_header() -> str:
         f"#define MF_SPEC_FAMILIES {{{codes}}}",
         f"#define MF_SPEC_N_FAMILIES {len(dict.fromkeys(f.code for f in FAMILIES))}",
         f"#define MF_SPEC_FAMILY_NAMES {c_string(names)}",
+        f"#define MF_SPEC_PAC2002_CODE {PAC2002_CODE!r} /* PAC2002: no FITTYP in the file; the evaluator's own code */",
         "",
         "/* The array kernel (mf_kernel.c): its inputs, and its outputs in the order of mftire.mf.spec.OUTPUTS. */",
         f"#define MF_N_IN {len(KERNEL_INPUTS)} /* {', '.join(KERNEL_INPUTS)} */",

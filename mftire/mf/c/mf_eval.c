@@ -58,8 +58,8 @@ MF_FN double mf_dpi(const MFParams *p, double P) { return (P - p->NOMPRES) / p->
 
 /* ------------------------------------------------------------------ family.py (PAC2002) */
 
-/* Internal model code of a PAC2002 file (no FITTYP in the file), mftire.mf.family. */
-#define MF_PAC2002_CODE 2002.0
+/* Internal model code of a PAC2002 file (no FITTYP in the file): mftire.mf.spec.PAC2002_CODE. */
+#define MF_PAC2002_CODE MF_SPEC_PAC2002_CODE
 
 /* The MF 5.2 equation family: FITTYP 6 and PAC2002. */
 MF_FN int is_mf52(const MFParams *p) { return p->FITTYP == 6.0 || p->FITTYP == MF_PAC2002_CODE; }

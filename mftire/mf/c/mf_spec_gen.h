@@ -102,6 +102,7 @@ typedef struct { int index; double bound; int strict; const char *name; } MFPara
 #define MF_SPEC_FAMILIES {6.0, 61.0, 62.0, 2002.0}
 #define MF_SPEC_N_FAMILIES 4
 #define MF_SPEC_FAMILY_NAMES "MF 5.2 (6), MF 6.1 (61), MF 6.2 (62), PAC2002 (2002), MF-Tyre 5.0 (2002)"
+#define MF_SPEC_PAC2002_CODE 2002.0 /* PAC2002: no FITTYP in the file; the evaluator's own code */
 
 /* The array kernel (mf_kernel.c): its inputs, and its outputs in the order of mftire.mf.spec.OUTPUTS. */
 #define MF_N_IN 12 /* Fz, kappa, alpha, gamma, phit, Vx, P, omega, data0, data1, data2, data3 */
