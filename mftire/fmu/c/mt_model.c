@@ -26,9 +26,22 @@
 #include "mf_transient.h"
 #include "mt_model_gen.h"
 
+/* The input guard of the transient model (mt_guard_inputs of mf_transient.c: non-finite inputs hold their last
+ * good value, inputs beyond their physical bounds are saturated), where the model provides it. */
+#if defined(MT_N_INPUTS)
+#define MT_HAS_GUARD 1
+#else
+#define MT_HAS_GUARD 0
+#endif
+
 struct FMModel {
     MFParams params;
     MTInputs inputs;
+#if MT_HAS_GUARD
+    MTInputs held;                  /* last good inputs (mt_guard_inputs) */
+    FMWarnSlot guard[MT_N_INPUTS];  /* the guard's warnings, per input */
+    FMWarnSlot nonfinite;           /* outputs set to 0 by mt_outputs */
+#endif
     double x[2];
     MTKin kin;
     MTOutputs out;
@@ -80,6 +93,11 @@ static void fm_reset(FMModel *m)
 {
     m->params = MT_PARAM_START;
     m->inputs = MT_INPUT_START;
+#if MT_HAS_GUARD
+    m->held = MT_INPUT_START;
+    memset(m->guard, 0, sizeof m->guard);
+    memset(&m->nonfinite, 0, sizeof m->nonfinite);
+#endif
     m->x[0] = MT_STATE_START[0];
     m->x[1] = MT_STATE_START[1];
     m->use_mode = MT_USEMODE_START;
@@ -112,8 +130,22 @@ static int bad_code(FMModel *m, int rc)
 static int update_kin(FMModel *m)
 {
     int rc;
+    MTInputs in;
     if (m->kin_ok && !(m->out_want & MT_OFFSETS & ~m->kin.offsets)) return 0;
-    rc = mt_kinematics(&m->params, m->use_mode, &m->inputs, m->out_want, &m->kin, on_warning, m);
+    in = m->inputs;
+#if MT_HAS_GUARD
+    {
+        unsigned i, bad = mt_guard_inputs(&m->params, &in, &m->held); /* the model's guard, before the states */
+        char text[160];
+        for (i = 0; i < MT_N_INPUTS; i++)
+            if (bad & (1u << i)) {
+                snprintf(text, sizeof text, "input '%s' not finite or out of range: the last good value or the "
+                         "bound is used", mt_input_name(i));
+                fm_warn(m->log, m->host, &m->guard[i], m->evals, m->time, text);
+            }
+    }
+#endif
+    rc = mt_kinematics(&m->params, m->use_mode, &in, m->out_want, &m->kin, on_warning, m);
     if (rc != MF_OK) return bad_code(m, rc);
     m->kin_ok = 1;
     return 0;
@@ -129,6 +161,13 @@ static int update_out(FMModel *m, unsigned want)
     if (update_kin(m)) return 1;
     rc = mt_outputs(&m->params, m->use_mode, &m->kin, m->x, m->out_want, &m->out, on_warning, m);
     if (rc != MF_OK) return bad_code(m, rc);
+#if MT_HAS_GUARD
+    if (m->out.nonfinite) {
+        char text[96];
+        snprintf(text, sizeof text, "%u output(s) not finite, set to 0", m->out.nonfinite);
+        fm_warn(m->log, m->host, &m->nonfinite, m->evals, m->time, text);
+    }
+#endif
     m->out_have = m->out_want;
     m->out_ok = 1;
     return 0;
