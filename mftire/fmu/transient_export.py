@@ -61,7 +61,7 @@ _CONST_UNIT = {"s": "s", "m": "m", "-": None}
 _STEADY_FIELD = {name: field for name, field, _, _ in vt.OUTPUTS}
 
 #: The channel group of ``mf_evaluate_want`` (``MF_WANT_<group>``, :data:`mftire.mf.spec.GROUPS`) each output
-#: needs: the FMU evaluates only the groups of the outputs read (lazy outputs, ``fmi2_transient.c``).
+#: needs: the FMU evaluates only the groups of the outputs read (lazy outputs, ``mt_model.c``).
 OUTPUT_GROUPS: dict[str, str] = {o.fmu: o.group for o in spec.OUTPUTS if o.fmu and o.group}
 
 #: Outputs every evaluation sets (no channel group): the transient slips, the load used and Re.
