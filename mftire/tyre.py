@@ -21,7 +21,7 @@ from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
 from mftire.mf.family import MODEL_CODES, PAC2002_CODE
 from mftire.mf.kernel import FlatParameters
 from mftire.mf.solver import (
-    _CHECKED_MODES,
+    CHECKED_MODES,
     OUTPUT_NAMES,
     OUTPUT_UNITS,
     UnsupportedModelError,
@@ -215,7 +215,7 @@ class Tyre:
             and type(Vx) in _OPTIONAL
             and type(P) in _OPTIONAL
             and type(omega) in _OPTIONAL
-            and (mode in _CHECKED_MODES or valid_mode(mode))
+            and (mode in CHECKED_MODES or valid_mode(mode))
             and (
                 backend == "kernel"
                 if backend is not None and backend != "auto"

@@ -193,8 +193,8 @@ def test_calls_with_mode_and_pressure_take_the_latency_path_from_the_first(monke
     tyre = load(REFERENCE_TYRES["MF61"])
     tyre.evaluate(4000.0, 0.0, 0.0)  # the backend is chosen at the first evaluation of the process
     refs = {mode: tyre.evaluate(np.array(4000.0), -0.1, 0.05, Vx=20.0, P=2.1e5, mode=mode) for mode in (221, 212)}
-    saved = set(solver._CHECKED_MODES)
-    solver._CHECKED_MODES.difference_update({221, 212})
+    saved = set(solver.CHECKED_MODES)
+    solver.CHECKED_MODES.difference_update({221, 212})
 
     def boom(*args, **kw):
         raise AssertionError("the array path was called")
@@ -208,7 +208,7 @@ def test_calls_with_mode_and_pressure_take_the_latency_path_from_the_first(monke
         with pytest.raises(MftireInputError):  # an invalid mode: the general path's error
             tyre.evaluate(4000.0, -0.1, 0.05, mode=311)
     finally:
-        solver._CHECKED_MODES.update(saved)
+        solver.CHECKED_MODES.update(saved)
 
 
 def test_result_is_an_mfresult_of_numpy_scalars():

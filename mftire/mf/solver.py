@@ -395,9 +395,9 @@ def evaluate_arrays(
     names = output_names(channels)
     if not isinstance(mode, Mode) and kernel.use_kernel(backend):
         check_fittyp(p)
-        if mode not in _CHECKED_MODES:
+        if mode not in CHECKED_MODES:
             Mode.from_code(mode)  # raises for a bad mode, as prepare()
-            _CHECKED_MODES.add(mode)
+            CHECKED_MODES.add(mode)
         out = kernel.evaluate(p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, ext, variables, names)
         if out is not None:
             return out
@@ -408,13 +408,15 @@ def evaluate_arrays(
 
 
 _channels = channels
-_CHECKED_MODES: set = set()  # useMode codes Mode.from_code accepted
+#: The useMode codes found valid so far (:func:`valid_mode` adds to it; the latency path of
+#: :meth:`mftire.Tyre.evaluate` reads it before calling the check).
+CHECKED_MODES: set = set()
 
 
 def valid_mode(mode) -> bool:
     """Whether ``mode`` is a valid three-digit ``useMode`` given as an ``int`` (checked once per code, then
     remembered): the latency path of :meth:`mftire.Tyre.evaluate` serves any valid mode from its first call."""
-    if mode in _CHECKED_MODES:
+    if mode in CHECKED_MODES:
         return True
     if type(mode) is not int:
         return False
@@ -422,5 +424,5 @@ def valid_mode(mode) -> bool:
         Mode.from_code(mode)
     except MftireError:
         return False
-    _CHECKED_MODES.add(mode)
+    CHECKED_MODES.add(mode)
     return True

@@ -52,9 +52,10 @@ GROUPS: tuple[Group, ...] = (
     Group("MY", 16, ("My",), ("Fx",), "My", "My"),
     Group("RAD", 32, ("Fx", "Fy"), ("Fx", "Fy"), None, "rho, Rl, Cz"),
     Group("PATCH", 64, (), (), None, "2a, 2b"),
-    # the C needs the slip stiffnesses only; numpy computes them with the forces (and so do the
-    # kernel's calls, for the same warnings)
-    Group("RELAX", 128, ("Fx", "Fy"), (), None, "Cx, Cy, sigmax, sigmay"),
+    # the C needs the slip stiffnesses and the friction coefficients only (it gives Kxk, Kya, mux, muy too, not the
+    # forces: the transient kinematics); numpy computes them with the forces (and so do the kernel's calls, for the
+    # same warnings)
+    Group("RELAX", 128, ("Fx", "Fy"), (), None, "Cx, Cy, sigmax, sigmay; Kxk, Kya, mux, muy (slip stiffnesses and mu)"),
 )
 
 

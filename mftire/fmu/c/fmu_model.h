@@ -18,7 +18,7 @@
 #include <stddef.h>
 
 /* Every function of the interface is static (unused ones are no warning: a wrapper needs not call all). */
-#if defined(__GNUC__)
+#if defined(__GNUC__) || defined(__clang__)
 #define FM_FN static __attribute__((unused))
 #else
 #define FM_FN static

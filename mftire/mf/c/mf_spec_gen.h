@@ -10,7 +10,7 @@
 #define MF_WANT_MY 16u /* My (needs the whole Fx) */
 #define MF_WANT_RAD 32u /* rho, Rl, Cz (needs the whole Fx, Fy) */
 #define MF_WANT_PATCH 64u /* 2a, 2b */
-#define MF_WANT_RELAX 128u /* Cx, Cy, sigmax, sigmay */
+#define MF_WANT_RELAX 128u /* Cx, Cy, sigmax, sigmay; Kxk, Kya, mux, muy (slip stiffnesses and mu) */
 #define MF_WANT_ALL 255u
 /* The groups whose channels need the whole longitudinal / lateral force computed. */
 #define MF_NEEDS_FX (MF_WANT_FX | MF_WANT_MZ | MF_WANT_MY | MF_WANT_RAD)
