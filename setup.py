@@ -1,6 +1,6 @@
 """Build of the compiled array kernel (everything else is in pyproject.toml).
 
-The kernel (mftire/fmu/csource/mf_kernel.c, the FMU's C model looped over arrays) is a
+The kernel (mftire/mf/c/mf_kernel.c, the C model looped over arrays) is a
 setuptools extension compiled with the system C compiler and loaded with ctypes
 (mftire/mf/kernel.py).  It is optional: without a compiler the installation succeeds and
 mftire uses its numpy evaluator.

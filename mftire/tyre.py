@@ -21,13 +21,14 @@ from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
 from mftire.mf.family import MODEL_CODES, PAC2002_CODE
 from mftire.mf.kernel import FlatParameters
 from mftire.mf.solver import (
-    _CHECKED_MODES,
+    CHECKED_MODES,
     OUTPUT_NAMES,
     OUTPUT_UNITS,
     UnsupportedModelError,
     check_fittyp,
     evaluate_arrays,
     unsupported_message,
+    valid_mode,
 )
 from mftire.parameters import with_defaults
 
@@ -200,7 +201,7 @@ class Tyre:
         as arrays of one point.
         """
         # One operating point given as numbers, all channels, the kernel (``backend`` None,
-        # "auto" with MFTIRE_BACKEND read and not "numpy", or "kernel"), a mode checked before:
+        # "auto" with MFTIRE_BACKEND read and not "numpy", or "kernel"), a valid mode (any ``mode=``, ``P=``):
         # the latency path, with the semantics of the general path below (same checks, warnings,
         # numbers and types; tests/test_point_path.py).  Anything else takes the general path.
         if (
@@ -214,7 +215,7 @@ class Tyre:
             and type(Vx) in _OPTIONAL
             and type(P) in _OPTIONAL
             and type(omega) in _OPTIONAL
-            and mode in _CHECKED_MODES
+            and (mode in CHECKED_MODES or valid_mode(mode))
             and (
                 backend == "kernel"
                 if backend is not None and backend != "auto"

@@ -223,9 +223,8 @@ def test_no_argparse_below_the_cli_layer():
     assert found == []
 
 
-#: The one crossing left, for the merge with the C-side work of issue 25: the latency path of Tyre.evaluate reads
-#: the set of checked modes; mftire.mf.solver.valid_mode (its public check) replaces it, then this entry goes.
-_PRIVATE_CROSSINGS_LEFT = {"mftire.tyre: _CHECKED_MODES from mftire.mf.solver"}
+#: No crossing left (the latency path of Tyre.evaluate reads the public mftire.mf.solver.CHECKED_MODES / valid_mode).
+_PRIVATE_CROSSINGS_LEFT: set[str] = set()
 
 
 def test_no_private_name_imported_across_packages():

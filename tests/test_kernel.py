@@ -1,4 +1,4 @@
-"""The compiled array kernel (mftire/mf/kernel.py, mftire/fmu/csource/mf_kernel.c) agrees
+"""The compiled array kernel (mftire/mf/kernel.py, mftire/mf/c/mf_kernel.c) agrees
 with the numpy reference to 1e-12 in every mode, for every model family, with and without
 model extensions, at edge inputs, with the same warnings; ``channels=`` and the backend
 switch work in both paths.
@@ -57,11 +57,11 @@ def kernel_lib(tmp_path_factory):
 
 
 def test_headers_are_generated_from_the_tables():
-    """csource/kernel/*.h are the output of the generator (regenerate with
-    ``python -c "from mftire.fmu.variables import kernel_headers; kernel_headers(True)"``)."""
-    from mftire.fmu.variables import kernel_headers
+    """mftire/mf/c/kernel/*.h are the output of the generator (regenerate with
+    ``python -m mftire.mf.cheaders``)."""
+    from mftire.mf.cheaders import kernel_headers
 
-    d = ROOT / "mftire" / "fmu" / "csource" / "kernel"
+    d = ROOT / "mftire" / "mf" / "c" / "kernel"
     for name, text in kernel_headers().items():
         assert (d / name).read_text(encoding="utf-8") == text, name
 

@@ -1,4 +1,4 @@
-"""The vectorised lane loops of the compiled kernel (mftire/fmu/csource/mf_kernel.c).
+"""The vectorised lane loops of the compiled kernel (mftire/mf/c/mf_kernel.c).
 
 The kernel evaluates blocks of up to 64 points, each padded to a multiple of 8 lanes with
 copies of its first point.  A point's numbers must not depend on where it sits in a batch:

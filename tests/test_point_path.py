@@ -185,6 +185,32 @@ def test_the_latency_path_is_taken_and_needs_no_array_path(monkeypatch):
         tyre.evaluate(4000.0, -0.1, 0.05, channels=("Fx",))
 
 
+def test_calls_with_mode_and_pressure_take_the_latency_path_from_the_first(monkeypatch):
+    """``mode=`` (a code never used before in the process) and ``P=``: the latency path serves the first call
+    already, with the array path's numbers."""
+    from mftire.mf import solver
+
+    tyre = load(REFERENCE_TYRES["MF61"])
+    tyre.evaluate(4000.0, 0.0, 0.0)  # the backend is chosen at the first evaluation of the process
+    refs = {mode: tyre.evaluate(np.array(4000.0), -0.1, 0.05, Vx=20.0, P=2.1e5, mode=mode) for mode in (221, 212)}
+    saved = set(solver.CHECKED_MODES)
+    solver.CHECKED_MODES.difference_update({221, 212})
+
+    def boom(*args, **kw):
+        raise AssertionError("the array path was called")
+
+    monkeypatch.setattr(kernel, "evaluate", boom)
+    try:
+        for mode, ref in refs.items():
+            out = tyre.evaluate(4000.0, -0.1, 0.05, Vx=20.0, P=2.1e5, mode=mode)
+            assert list(out) == list(ref) and all(out[k] == ref[k] or (np.isnan(out[k]) and np.isnan(ref[k]))
+                                                  for k in ref)  # fmt: skip
+        with pytest.raises(MftireInputError):  # an invalid mode: the general path's error
+            tyre.evaluate(4000.0, -0.1, 0.05, mode=311)
+    finally:
+        solver.CHECKED_MODES.update(saved)
+
+
 def test_result_is_an_mfresult_of_numpy_scalars():
     tyre = TYRES["MF61"]
     out = tyre.evaluate(4000.0, -0.1, 0.05, Vx=20.0)

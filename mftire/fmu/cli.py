@@ -35,11 +35,13 @@ def add_parser(subparsers) -> None:
     p.add_argument("tir", metavar="TIR", help="the .tir property file")
     p.add_argument("--output", "-o", required=True, help="the .fmu file to write")
     p.add_argument("--fmi-version", type=int, choices=(2, 3), default=2, help="FMI version (default 2)")
-    p.add_argument("--mode", type=int, default=111, help="start value of the useMode parameter (default 111)")
-    p.add_argument("--model-identifier", help="C identifier of the binary (default: from the file name)")
+    p.add_argument("--mode", type=int, default=111,
+                   help="start value of useMode, the FMU's one mode parameter (default 111)")  # fmt: skip
+    p.add_argument("--model-identifier",
+                   help="C identifier of the binary (default: the file name and a short hash of the parameters)")
     p.add_argument("--transient", action="store_true",
                    help="transient tyre: wheel kinematics in (Fz, Vx, Vy, omega, ...), relaxation-length slip "
-                   "states, low-speed model (FMI 2.0; see docs/transient.md)")  # fmt: skip
+                   "states, low-speed model (FMI 2.0 or 3.0; see docs/transient.md)")  # fmt: skip
     p.add_argument("--cc", help="C compiler command (default: $CC, then cc, gcc, clang)")
     from mftire.cli_options import add_force_option
 

@@ -1,6 +1,6 @@
 """Export a ``.tir`` tyre as a self-contained FMU (FMI 2.0 ME + CS, or FMI 3.0).
 
-The FMU carries the Magic Formula as C code (``mftire/fmu/csource``), compiled
+The FMU carries the Magic Formula as C code (``mftire/mf/c``, wrapped by ``mftire/fmu/c``), compiled
 here with the system C compiler; no Python is needed to use it.  Layout::
 
     modelDescription.xml
@@ -21,19 +21,18 @@ from pathlib import Path
 from mftire.errors import MftireError
 from mftire.fmu import variables as vt
 from mftire.fmu.build import (  # noqa: F401 (re-exported)
-    CORE_SOURCES,
-    CSOURCE,
-    FMI2_COMMON_SOURCES,
     FMI_HEADERS,
+    UNITY,
     FMUExportError,
-    _fmpy_c_code,
     _load,
     _platform,
     compile_sources,
     find_compiler,
     model_identifier_for,
     package_fmu,
+    source_files,
 )
+from mftire.fmu.documentation import documentation_files
 from mftire.mf.extensions import ExtensionSet
 from mftire.mf.family import PAC2002_CODE
 
@@ -53,19 +52,12 @@ def generate_sources(
         variables = vt.variable_table(flat, use_mode, extensions)
     except MftireError as exc:
         raise FMUExportError(f"the model extensions cannot be exported: {exc}") from None
-    files: dict[str, str] = {}
-    for name in CORE_SOURCES + (FMI2_COMMON_SOURCES if fmi_version == 2 else ()):
-        files[name] = (CSOURCE / name).read_text(encoding="utf-8")
-    wrapper = f"fmi{fmi_version}_model.c"
-    files[wrapper] = (CSOURCE / wrapper).read_text(encoding="utf-8")
+    files = source_files("steady", fmi_version)
     files["mf_params.h"] = vt.params_header(variables, extensions)
     files["mf_ext_gen.h"] = vt.extension_header(variables, extensions)
     files["mf_model_gen.h"] = vt.model_header(variables, model_identifier, fmi_version)
-    c_code = _fmpy_c_code()
-    for h in FMI_HEADERS[fmi_version]:
-        files[h] = (c_code / h).read_text(encoding="utf-8")
     if fmi_version == 3:
-        files["buildDescription.xml"] = vt.build_description_xml(model_identifier, sorted(files))
+        files["buildDescription.xml"] = vt.build_description_xml(model_identifier, [UNITY])
     return variables, files
 
 
@@ -90,14 +82,15 @@ def export_fmu(
     fmi_version : 2 or 3
         FMI 2.0 (Model Exchange and Co-Simulation in one FMU) or FMI 3.0 (both too).
     model_identifier : str, optional
-        C identifier of the binary; default from the tyre's file name.
+        C identifier of the binary; default the tyre's file name and a short hash of its parameters
+        (``<name>_<8 hex digits>``), so that two tyres never collide.
     use_mode : int
         Start value of the ``useMode`` parameter (default 111).
     compiler : str, optional
         C compiler command; default ``$CC``, then cc, gcc, clang.
     transient : bool
         Export the transient tyre instead (wheel kinematics in, relaxation-length
-        states; FMI 2.0 only): :func:`mftire.fmu.transient_export.export_transient_fmu`.
+        states; FMI 2.0 or 3.0): :func:`mftire.fmu.transient_export.export_transient_fmu`.
 
     Returns
     -------
@@ -118,16 +111,21 @@ def export_fmu(
     if fmi_version not in (2, 3):
         raise FMUExportError(f"fmi_version must be 2 or 3, not {fmi_version!r}")
     if transient:
-        if fmi_version != 2:
-            raise FMUExportError("--transient exports FMI 2.0 only (Model Exchange with states + Co-Simulation)")
         from mftire.fmu.transient_export import export_transient_fmu
 
-        return export_transient_fmu(tir, output, model_identifier=model_identifier, use_mode=use_mode,
+        return export_transient_fmu(tir, output, fmi_version, model_identifier=model_identifier, use_mode=use_mode,
                                     compiler=compiler)  # fmt: skip
     Mode.from_code(use_mode)
     cc = find_compiler(compiler)  # fail early, before any work
     flat, name, spec = _load(tir)
-    ident = model_identifier or model_identifier_for(name)
+    if model_identifier is None:
+        try:
+            table = vt.variable_table(flat, use_mode, spec)
+        except MftireError as exc:
+            raise FMUExportError(f"the model extensions cannot be exported: {exc}") from None
+        ident = model_identifier_for(name, vt.guid(table, fmi_version))
+    else:
+        ident = model_identifier
     if not re.match(r"^[A-Za-z_][A-Za-z0-9_]*$", ident):
         raise FMUExportError(f"model identifier {ident!r} is not a C identifier")
     variables, files = generate_sources(flat, ident, fmi_version, use_mode, spec)
@@ -136,15 +134,11 @@ def export_fmu(
     description = f"Magic Formula tyre {name} ({fmt}) exported by mftire; ISO-W axes, SI units"
     if spec:
         description += f"; model extensions: {'; '.join(t.describe() for t in spec.terms)}"
-    xml = vt.model_description_xml(
-        variables,
-        ident,
-        fmi_version,
-        model_name=name,
-        description=description,
-        sources=sorted(f for f in files if f.endswith(".c")),
-    )
-    return package_fmu(output, xml, files, ident, platform, suffix, cc)
+    xml = vt.model_description_xml(variables, ident, fmi_version, model_name=name, description=description,
+                                   sources=[UNITY])  # fmt: skip
+    docs = documentation_files(model_name=name, model_identifier=ident, description=description, variables=variables,
+                               flat=flat, fmi_version=fmi_version)  # fmt: skip
+    return package_fmu(output, xml, files, ident, platform, suffix, cc, docs)
 
 
 __all__ = ["FMUExportError", "export_fmu", "find_compiler", "generate_sources", "compile_sources"]

@@ -1,4 +1,4 @@
-"""The transient tyre FMU (``mftire export-fmu TIR --transient``): FMI 2.0 ME + CS.
+"""The transient tyre FMU (``mftire export-fmu TIR --transient``): FMI 2.0 or 3.0, ME + CS.
 
 Wheel kinematics in (:data:`mftire.transient.INPUTS`), two continuous states ``u``,
 ``v`` with their derivatives ``der(u)``, ``der(v)``, the steady-state channels at the
@@ -6,9 +6,10 @@ transient slips out.  One variable table (:func:`transient_variable_table`, buil
 from :mod:`mftire.transient` and the steady-state table of
 :mod:`mftire.fmu.variables`) generates the XML, the GUID and the C headers
 (``mf_params.h`` with the transient constants ``TR_*`` as tunable parameters, and
-``mt_model_gen.h``).  The C model is ``csource/mf_transient.c`` (the equations of
-``mftire/transient.py``) on top of the steady-state evaluator ``mf_eval.c``, wrapped
-by ``csource/fmi2_transient.c`` (and ``csource/fmi2_common.c``, shared with the steady-state FMU).
+``mt_model_gen.h``).  The C model is ``mftire/mf/c/mf_transient.c`` (the equations of
+``mftire/transient.py``) on top of the steady-state evaluator ``mf_eval.c``; ``mftire/fmu/c/mt_model.c``
+puts it behind the one model interface (``fmu_model.h``), and the same thin FMI 2 and FMI 3 wrappers as the
+steady-state FMU's (``fmi2_wrapper.c``, ``fmi3_wrapper.c``) make it an FMU.
 """
 
 from __future__ import annotations
@@ -22,18 +23,20 @@ from xml.sax.saxutils import quoteattr
 from mftire.fmu import variables as vt
 from mftire.fmu.build import (
     CFLAGS,
-    CSOURCE,
-    FMI2_COMMON_SOURCES,
-    FMI_HEADERS,
     LIBS,
+    MODEL_SOURCES,
+    UNITY,
     FMUExportError,
-    _fmpy_c_code,
     _load,
     _platform,
     find_compiler,
     model_identifier_for,
     package_fmu,
+    read_source,
+    source_files,
 )
+from mftire.fmu.documentation import documentation_files
+from mftire.mf import spec
 from mftire.transient import CONSTANTS, INPUTS, STATES, TRANSIENT_OUTPUTS, input_defaults
 
 
@@ -48,9 +51,8 @@ def output_names() -> list[str]:
     )
 
 
-#: Hand-written C sources of the transient FMU.
-TRANSIENT_SOURCES = ("mf_eval.c", "mf_eval.h", "mf_transient.c", "mf_transient.h", "fmi2_transient.c",
-                     *FMI2_COMMON_SOURCES)  # fmt: skip
+#: Hand-written C sources of the transient model (the FMI wrapper and the interface are added per FMI version).
+TRANSIENT_SOURCES = MODEL_SOURCES["transient"]
 
 #: Unit names of :data:`mftire.transient.CONSTANTS` -> FMI units.
 _CONST_UNIT = {"s": "s", "m": "m", "-": None}
@@ -58,16 +60,12 @@ _CONST_UNIT = {"s": "s", "m": "m", "-": None}
 #: C member of MTOutputs for each output name.
 _STEADY_FIELD = {name: field for name, field, _, _ in vt.OUTPUTS}
 
-#: The channel group of ``mf_evaluate_want`` (``MF_WANT_<group>`` of ``csource/mf_eval.h``) each output
-#: needs: the FMU evaluates only the groups of the outputs read (lazy outputs, ``fmi2_transient.c``).
-OUTPUT_GROUPS: dict[str, str] = {
-    "Fx": "FX", "mux": "FX", "Kxk": "FX", "Fy": "FY", "muy": "FY", "Kya": "FY", "Mz": "MZ", "t": "MZ",
-    "Mzr": "MZ", "Mx": "MX", "My": "MY", "Rl": "RAD", "rho": "RAD", "a2": "PATCH", "b2": "PATCH",
-    "sigmax": "RELAX", "sigmay": "RELAX",
-}  # fmt: skip
+#: The channel group of ``mf_evaluate_want`` (``MF_WANT_<group>``, :data:`mftire.mf.spec.GROUPS`) each output
+#: needs: the FMU evaluates only the groups of the outputs read (lazy outputs, ``mt_model.c``).
+OUTPUT_GROUPS: dict[str, str] = {o.fmu: o.group for o in spec.OUTPUTS if o.fmu and o.group}
 
 #: Outputs every evaluation sets (no channel group): the transient slips, the load used and Re.
-UNGROUPED_OUTPUTS = ("kappa_t", "alpha_t", "Fz_out", "Re")
+UNGROUPED_OUTPUTS = ("kappa_t", "alpha_t", *(o.fmu for o in spec.OUTPUTS if o.fmu and not o.group))
 
 
 def output_group(name: str) -> str:
@@ -133,7 +131,7 @@ def transient_variable_table(flat: dict[str, float], use_mode: int = vt.DEFAULT_
     return out
 
 
-def transient_model_header(variables: list[vt.Variable], model_identifier: str) -> str:
+def transient_model_header(variables: list[vt.Variable], model_identifier: str, fmi_version: int = 2) -> str:
     """``mt_model_gen.h``: GUID, value-reference table, start values, names."""
     kinds = {"time": "MT_K_TIME", "input": "MT_K_INPUT", "output": "MT_K_OUTPUT", "mode": "MT_K_MODE",
              "param": "MT_K_PARAM", "state": "MT_K_STATE", "der": "MT_K_DER"}  # fmt: skip
@@ -159,7 +157,7 @@ def transient_model_header(variables: list[vt.Variable], model_identifier: str) 
         "    unsigned short offset; /* byte offset in MTInputs / MTOutputs / MFParams; state index */",
         "} MTVarInfo;",
         "",
-        f'#define MT_GUID "{vt.guid(variables, 2)}"',
+        f'#define MT_GUID "{vt.guid(variables, fmi_version)}"',
         f'#define MT_MODEL_IDENTIFIER "{model_identifier}"',
         f"#define MT_N_VARS {len(by_vr)}",
         f"#define MT_VR_USEMODE {mode.vr}",
@@ -176,7 +174,7 @@ def transient_model_header(variables: list[vt.Variable], model_identifier: str) 
         else:
             off = "0"
         want = output_group(v.name) if v.kind == "output" else "0"
-        lines.append(f"    {{{kinds[v.kind]}, {fixed}, {want}, {off}}}, /* {v.vr} {vt._c_comment(v.name)} */")
+        lines.append(f"    {{{kinds[v.kind]}, {fixed}, {want}, {off}}}, /* {v.vr} {vt.c_comment(v.name)} */")
     lines += ["};", "", "static const char *const MT_VAR_NAMES[MT_N_VARS] = {"]
     lines += [f"    {vt.c_string(v.name)}," for v in by_vr]
     lines += ["};", "", "static const MTInputs MT_INPUT_START = {"]
@@ -190,9 +188,14 @@ def transient_model_header(variables: list[vt.Variable], model_identifier: str) 
 
 
 def transient_model_description_xml(
-    variables: list[vt.Variable], model_identifier: str, model_name: str, description: str, sources: list[str]
+    variables: list[vt.Variable], model_identifier: str, model_name: str, description: str, sources: list[str],
+    fmi_version: int = 2,
 ) -> str:
-    """``modelDescription.xml`` (FMI 2.0, ME + CS) with the states and their derivatives."""
+    """``modelDescription.xml`` (FMI 2.0 or 3.0, ME + CS) with the states and their derivatives."""
+    if fmi_version == 3:
+        return _xml3(variables, model_identifier, model_name, description)
+    if fmi_version != 2:
+        raise ValueError(f"fmi_version must be 2 or 3, not {fmi_version!r}")
     a = vt._attrs
     token = vt.guid(variables, 2)
     lines = [
@@ -249,18 +252,57 @@ def transient_model_description_xml(
     return "\n".join(lines) + "\n"
 
 
+def _xml3(variables: list[vt.Variable], model_identifier: str, model_name: str, description: str) -> str:
+    """``modelDescription.xml`` of FMI 3.0: the states (``initial="exact"``), their derivatives (``derivative``:
+    the state's value reference), every output and derivative depending on every input and state."""
+    a = vt._attrs
+    token = vt.guid(variables, 3)
+    lines = [
+        '<?xml version="1.0" encoding="UTF-8"?>',
+        f'<fmiModelDescription fmiVersion="3.0"{a(modelName=model_name, instantiationToken=token)}'
+        f'{a(description=description, generationTool="mftire", variableNamingConvention="flat")}>',
+        f"  <ModelExchange modelIdentifier={quoteattr(model_identifier)} canBeInstantiatedOnlyOncePerProcess=\"false\""
+        ' needsCompletedIntegratorStep="false"/>',
+        f"  <CoSimulation modelIdentifier={quoteattr(model_identifier)} canHandleVariableCommunicationStepSize=\"true\""
+        ' canBeInstantiatedOnlyOncePerProcess="false" providesIntermediateUpdate="false"'
+        ' canReturnEarlyAfterIntermediateUpdate="false"/>',
+    ]
+    lines += vt._unit_definitions(variables, 3)
+    lines += vt._log_categories()
+    lines.append('  <DefaultExperiment startTime="0" stopTime="1" stepSize="0.001"/>')
+    lines.append("  <ModelVariables>")
+    state_vr = {v.field: v.vr for v in variables if v.kind == "state"}
+    for v in variables:
+        tag = "Float64" if v.type == "Real" else "Int32"
+        initial = {"state": "exact", "der": "calculated"}.get(v.kind, v.initial if v.kind != "input" else None)
+        attrs = a(name=v.name, valueReference=v.vr, description=v.description, causality=v.causality,
+                  variability=v.variability, initial=initial, unit=v.unit if v.type == "Real" else None,
+                  derivative=state_vr[v.field] if v.kind == "der" else None,
+                  start=None if v.start is None else vt._fmt(v.start))  # fmt: skip
+        lines.append(f"    <{tag}{attrs}/>")
+    lines.append("  </ModelVariables>")
+    deps = " ".join(str(v.vr) for v in variables if v.kind in ("input", "state"))
+    lines.append("  <ModelStructure>")
+    lines += [f'    <Output valueReference="{v.vr}" dependencies="{deps}"/>' for v in variables if v.kind == "output"]
+    lines += [f'    <ContinuousStateDerivative valueReference="{v.vr}" dependencies="{deps}"/>'
+              for v in variables if v.kind == "der"]  # fmt: skip
+    lines += [f'    <InitialUnknown valueReference="{v.vr}"/>' for v in variables if v.kind in ("output", "der")]
+    lines.append("  </ModelStructure>")
+    lines.append("</fmiModelDescription>")
+    return "\n".join(lines) + "\n"
+
+
 def generate_transient_sources(
-    flat: dict[str, float], model_identifier: str, use_mode: int = vt.DEFAULT_USE_MODE
+    flat: dict[str, float], model_identifier: str, use_mode: int = vt.DEFAULT_USE_MODE, fmi_version: int = 2
 ) -> tuple[list[vt.Variable], dict[str, str]]:
     """The variable table and every file of ``sources/`` of the transient FMU."""
     variables = transient_variable_table(flat, use_mode)
-    files = {name: (CSOURCE / name).read_text(encoding="utf-8") for name in TRANSIENT_SOURCES}
+    files = source_files("transient", fmi_version)
     files["mf_params.h"] = vt.params_header(variables, None)
     files["mf_ext_gen.h"] = vt.extension_header(variables, None)  # no extension terms (refused above)
-    files["mt_model_gen.h"] = transient_model_header(variables, model_identifier)
-    c_code = _fmpy_c_code()
-    for h in FMI_HEADERS[2]:
-        files[h] = (c_code / h).read_text(encoding="utf-8")
+    files["mt_model_gen.h"] = transient_model_header(variables, model_identifier, fmi_version)
+    if fmi_version == 3:
+        files["buildDescription.xml"] = vt.build_description_xml(model_identifier, [UNITY])
     return variables, files
 
 
@@ -274,125 +316,48 @@ def _check_transient(tir):
 def export_transient_fmu(
     tir,
     output: str | os.PathLike,
+    fmi_version: int = 2,
     *,
     model_identifier: str | None = None,
     use_mode: int = vt.DEFAULT_USE_MODE,
     compiler: str | None = None,
 ) -> Path:
-    """Export a tyre as the transient FMU (FMI 2.0 Model Exchange + Co-Simulation).
+    """Export a tyre as the transient FMU (FMI 2.0 or 3.0, Model Exchange + Co-Simulation).
 
     Inputs ``Fz, Vx, Vy, omega, gamma, P, muRoad, yawRate``; outputs ``Fx, Fy, Mz, Mx,
     My, kappa_t, alpha_t`` and the steady-state channels at the transient slips; states
-    ``u``, ``v``.  Co-Simulation integrates with sub-steps of at most ``TR_CS_STEP``
-    (default 1e-4 s).  See ``docs/transient.md``.
+    ``u``, ``v``.  Co-Simulation advances the states with the model's own integration
+    (``mt_advance`` of ``mf_transient.c``).  The model identifier is, by default, the file name,
+    ``_transient`` and a short hash of the parameters.  See ``docs/transient.md``.
     """
     from mftire.mf.modes import Mode
 
+    if fmi_version not in (2, 3):
+        raise FMUExportError(f"fmi_version must be 2 or 3, not {fmi_version!r}")
     Mode.from_code(use_mode)
     cc = find_compiler(compiler)
     flat, name = _check_transient(tir)
-    ident = model_identifier or model_identifier_for(name + "_transient")
+    if model_identifier is None:
+        table = transient_variable_table(flat, use_mode)
+        ident = model_identifier_for(name + "_transient", vt.guid(table, fmi_version))
+    else:
+        ident = model_identifier
     if not re.match(r"^[A-Za-z_][A-Za-z0-9_]*$", ident):
         raise FMUExportError(f"model identifier {ident!r} is not a C identifier")
-    variables, files = generate_transient_sources(flat, ident, use_mode)
-    platform, suffix = _platform(2)
+    variables, files = generate_transient_sources(flat, ident, use_mode, fmi_version)
+    platform, suffix = _platform(fmi_version)
     description = (
         f"Transient Magic Formula tyre {name} (FITTYP {int(flat['FITTYP'])}) exported by mftire: wheel kinematics "
         "in, relaxation-length slip states u, v, low-speed model; ISO-W axes, SI units"
     )
-    xml = transient_model_description_xml(
-        variables, ident, name, description, sorted(f for f in files if f.endswith(".c"))
-    )
-    return package_fmu(output, xml, files, ident, platform, suffix, cc)
+    xml = transient_model_description_xml(variables, ident, name, description, [UNITY], fmi_version)
+    docs = documentation_files(model_name=name, model_identifier=ident, description=description, variables=variables,
+                               flat=flat, fmi_version=fmi_version, transient=True)  # fmt: skip
+    return package_fmu(output, xml, files, ident, platform, suffix, cc, docs)
 
 
-#: C harness of :func:`build_probe_library`: the model functions with default visibility.
-_PROBE_C = r"""
-#include <string.h>
-#include <time.h>
-#include "mf_transient.h"
-#include "mt_model_gen.h"
-
-static void load_inputs(MTInputs *in, const double *inputs)
-{
-    memset(in, 0, sizeof *in);
-    in->Fz = inputs[0]; in->Vx = inputs[1]; in->Vy = inputs[2]; in->omega = inputs[3];
-    in->gamma = inputs[4]; in->P = inputs[5]; in->muRoad = inputs[6]; in->yawRate = inputs[7];
-}
-
-/* params: NULL = start values; inputs: the 8 kinematic inputs; x: 2 states. */
-__attribute__((visibility("default"))) int mt_probe_rates(int use_mode, const double *inputs, const double *x,
-                                                          double *dx, double *kin)
-{
-    MTInputs in;
-    MTKin k;
-    int rc;
-    load_inputs(&in, inputs);
-    rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, 0u, &k, NULL, NULL);
-    if (rc) return rc;
-    mt_rates(&MT_PARAM_START, &k, x, dx);
-    if (kin) { kin[0] = k.Vsx; kin[1] = k.Vsy; kin[2] = k.sigx; kin[3] = k.sigy; kin[4] = k.w; }
-    return 0;
-}
-
-/* Outputs (Fx, Fy, Mz, Mx, My, kappa_t, alpha_t) at the state x. */
-__attribute__((visibility("default"))) int mt_probe_outputs(int use_mode, const double *inputs, const double *x,
-                                                            double *y)
-{
-    MTInputs in;
-    MTKin k;
-    MTOutputs o;
-    int rc;
-    load_inputs(&in, inputs);
-    rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, MF_WANT_ALL, &k, NULL, NULL);
-    if (rc) return rc;
-    rc = mt_outputs(&MT_PARAM_START, use_mode, &k, x, MF_WANT_ALL, &o, NULL, NULL);
-    if (rc) return rc;
-    y[0] = o.ss.Fx; y[1] = o.ss.Fy; y[2] = o.ss.Mz; y[3] = o.ss.Mx; y[4] = o.ss.My;
-    y[5] = o.kappa_t; y[6] = o.alpha_t;
-    return 0;
-}
-
-/* Every output (value-reference order) at the state x, from the full evaluation (all channel groups). */
-__attribute__((visibility("default"))) int mt_probe_all_outputs(int use_mode, const double *inputs, const double *x,
-                                                                double *y)
-{
-    MTInputs in;
-    MTKin k;
-    MTOutputs o;
-    int rc, vr, i = 0;
-    load_inputs(&in, inputs);
-    rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, MF_WANT_ALL, &k, NULL, NULL);
-    if (rc) return rc;
-    rc = mt_outputs(&MT_PARAM_START, use_mode, &k, x, MF_WANT_ALL, &o, NULL, NULL);
-    if (rc) return rc;
-    for (vr = 0; vr < MT_N_VARS; vr++)
-        if (MT_VARS[vr].kind == MT_K_OUTPUT) y[i++] = *(const double *)((const char *)&o + MT_VARS[vr].offset);
-    return 0;
-}
-
-/* Seconds per Model Exchange derivative evaluation (kinematics + rates), timed in C over n calls
- * with the inputs changing every call (as between two solver calls). */
-__attribute__((visibility("default"))) double mt_probe_bench(int use_mode, const double *inputs, long n)
-{
-    MTInputs in;
-    MTKin k;
-    double x[2] = {1e-3, -2e-3}, dx[2], acc = 0.0;
-    struct timespec t0, t1;
-    long i;
-    load_inputs(&in, inputs);
-    clock_gettime(CLOCK_MONOTONIC, &t0);
-    for (i = 0; i < n; i++) {
-        in.Vy = inputs[2] + 1e-9 * (double)(i & 1023);
-        mt_kinematics(&MT_PARAM_START, use_mode, &in, 0u, &k, NULL, NULL);
-        mt_rates(&MT_PARAM_START, &k, x, dx);
-        acc += dx[0] + dx[1];
-    }
-    clock_gettime(CLOCK_MONOTONIC, &t1);
-    if (acc != acc) return -1.0;
-    return ((double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec)) / (double)n;
-}
-"""
+#: The C harness of :func:`build_probe_library` (``mftire/fmu/c/mt_probe.c``).
+PROBE = "mt_probe.c"
 
 
 def build_probe_library(tir, directory: str | os.PathLike, compiler: str | None = None) -> Path:
@@ -403,17 +368,17 @@ def build_probe_library(tir, directory: str | os.PathLike, compiler: str | None 
     """
     flat, name = _check_transient(tir)
     _, files = generate_transient_sources(flat, "mt_probe")
+    files[PROBE] = read_source(PROBE)
     directory = Path(directory)
     src = directory / "probe_src"
     src.mkdir(parents=True, exist_ok=True)
     for fname, text in files.items():
-        if not fname.startswith("fmi2_"):  # the model and the harness only, no FMI functions
-            (src / fname).write_text(text, encoding="utf-8")
-    (src / "mt_probe.c").write_text(_PROBE_C, encoding="utf-8")
+        (src / fname).write_text(text, encoding="utf-8")
     lib = directory / "libmt_probe.so"
     cc = find_compiler(compiler)
-    cmd = [*cc, *CFLAGS, "-D_POSIX_C_SOURCE=199309L", "-I", str(src), *sorted(str(p) for p in src.glob("*.c")),
-           "-o", str(lib), *LIBS]  # fmt: skip
+    c_files = [str(src / f) for f in (*(f for f in TRANSIENT_SOURCES if f.endswith(".c") and f != "mt_model.c"),
+                                      PROBE)]  # the model and the harness only, no FMI functions
+    cmd = [*cc, *CFLAGS, "-D_POSIX_C_SOURCE=199309L", "-I", str(src), *c_files, "-o", str(lib), *LIBS]
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     if res.returncode != 0:
         raise FMUExportError("compiling the probe library failed:\n" + (res.stderr or res.stdout)[-2000:])

@@ -35,13 +35,11 @@ from dataclasses import dataclass
 from xml.sax.saxutils import quoteattr
 
 from mftire.errors import MftireInputError
+from mftire.mf import cheaders, spec
+from mftire.mf.cheaders import c_comment, c_string
 from mftire.mf.extensions import (
-    BUILTIN_VARIABLES,
-    FORMS,
     MAX_EXTERNAL,
-    OFFSET_TARGETS,
     SECTION,
-    TARGETS,
     Extension,
     ExtensionSet,
     parse_section,
@@ -53,6 +51,10 @@ DEFAULT_USE_MODE = 111
 
 #: Parameters whose change means a different model: ``fixed`` (set before initialisation only).
 FIXED_PARAMETERS = frozenset({"FITTYP"})
+
+#: ``.tir`` keys that are not FMU parameters: ``USE_MODE`` is the ADAMS mode switch of the file; the FMU
+#: has one mode variable, the integer parameter ``useMode`` (its start value is the export's ``use_mode``).
+NOT_PARAMETERS = frozenset({"USE_MODE"})
 
 _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
@@ -96,28 +98,11 @@ INPUTS: tuple[tuple[str, str, str | None, str, str | float], ...] = (
     ("muRoad", "muRoad", None, "Road friction factor, multiplies LMUX and LMUY", 1.0),
 )
 
-#: Outputs: (name, C field of MFOutputs, unit, description).  The output load is
-#: ``Fz_out`` because FMI variable names are unique and ``Fz`` is the input.
-OUTPUTS: tuple[tuple[str, str, str | None, str], ...] = (
-    ("Fx", "Fx", "N", "Longitudinal force"),
-    ("Fy", "Fy", "N", "Lateral force"),
-    ("Fz_out", "Fz", "N", "Vertical load used (negative input set to 0)"),
-    ("Mx", "Mx", "N.m", "Overturning moment"),
-    ("My", "My", "N.m", "Rolling-resistance moment"),
-    ("Mz", "Mz", "N.m", "Self-aligning moment"),
-    ("Re", "Re", "m", "Effective rolling radius"),
-    ("Rl", "Rl", "m", "Loaded radius"),
-    ("rho", "rho", "m", "Tyre vertical deflection"),
-    ("a2", "a2", "m", "Contact patch length 2a"),
-    ("b2", "b2", "m", "Contact patch width 2b"),
-    ("t", "t", "m", "Pneumatic trail"),
-    ("Mzr", "Mzr", "N.m", "Residual aligning moment"),
-    ("mux", "mux", None, "Longitudinal friction coefficient"),
-    ("muy", "muy", None, "Lateral friction coefficient"),
-    ("Kxk", "Kxk", "N", "Longitudinal slip stiffness dFx0/dkappa"),
-    ("Kya", "Kya", "N/rad", "Cornering stiffness dFy0/dalpha"),
-    ("sigmax", "sigmax", "m", "Longitudinal relaxation length"),
-    ("sigmay", "sigmay", "m", "Lateral relaxation length"),
+#: Outputs: (name, C field of MFOutputs, unit, description), the outputs of :data:`mftire.mf.spec.OUTPUTS`
+#: the FMU publishes.  The output load is ``Fz_out`` because FMI variable names are unique and ``Fz`` is
+#: the input.
+OUTPUTS: tuple[tuple[str, str, str | None, str], ...] = tuple(
+    (o.fmu, o.field, None if o.unit == "-" else o.unit, o.description) for o in spec.OUTPUTS if o.fmu and o.field
 )
 
 
@@ -226,15 +211,17 @@ def variable_table(
     out.append(
         Variable(
             "useMode", len(out), "mode", "Integer", "parameter", "tunable", int(use_mode), None,
-            "Three-digit mode: hundreds 1 limit checks / 2 none; tens 1 / 2 alpha-star; "
-            "units 0 pure slip / 1 combined / 2 combined + turn slip",
+            "The one mode switch of the FMU (the file's USE_MODE is not a parameter): three digits, "
+            "hundreds 1 limit checks / 2 none; tens 1 / 2 alpha-star; units 0 pure slip / 1 combined / "
+            "2 combined + turn slip",
             "",
         )
     )  # fmt: skip
-    standard = {p.key: p for p in PARAMETERS if p.unit != "str"}
+    standard = {p.key: p for p in PARAMETERS if p.unit != "str" and p.key not in NOT_PARAMETERS}
     keys = list(standard) + [
-        k for k in flat if k not in standard and k not in ext_keys and _IDENT.match(k) and _number(flat[k])
-    ]
+        k for k in flat if k not in standard and k not in NOT_PARAMETERS and k not in ext_keys and _IDENT.match(k)
+        and _number(flat[k])
+    ]  # fmt: skip
     for key in keys:
         row = standard.get(key)
         unit = _PARAM_UNIT[row.unit] if row else None
@@ -286,135 +273,18 @@ def guid(variables: list[Variable], fmi_version: int) -> str:
 # --------------------------------------------------------------------------- C headers
 
 
-def _c_comment(text: str) -> str:
-    """``text`` made safe inside a C comment: printable ASCII, no ``*/``, no trigraphs."""
-    out = "".join(ch if 0x20 <= ord(ch) < 0x7F else "_" for ch in text)
-    return out.replace("*/", "* /").replace("??", "?_")
-
-
-def c_string(text: str) -> str:
-    """``text`` as a C string literal (UTF-8; quotes, backslashes, ``?`` and non-ASCII escaped)."""
-    body = []
-    for byte in text.encode("utf-8"):
-        ch = chr(byte)
-        if ch in '"\\?':
-            body.append("\\" + ch)
-        elif 0x20 <= byte < 0x7F:
-            body.append(ch)
-        else:
-            body.append(f"\\{byte:03o}")  # octal: at most 3 digits, never swallows what follows
-    return '"' + "".join(body) + '"'
-
-
-def extension_header(variables: list[Variable], extensions: ExtensionSet | None = None, runtime: bool = False) -> str:
-    """``mf_ext_gen.h``: the model-extension terms for ``mf_eval.c``.
-
-    Generated from :mod:`mftire.mf.extensions`: the term table (targets as indices of the
-    scaling factors in ``MFParams``, form, variables, the indices of the term's numeric
-    fields), ``mf_ext_var`` (the C expression of each builtin variable, then the external
-    inputs) and ``mf_ext_form`` (the C expression of each form).
-
-    ``runtime``: the header of the array kernel (:mod:`mftire.mf.kernel`): no table (the
-    terms are data of each call, ``MF_EXT_RUNTIME``), room for every target in ``MFTerm``.
-    """
-    terms = extensions.terms if extensions else ()
-    lines = [
-        "/* mf_ext_gen.h -- GENERATED by mftire/fmu/variables.py from mftire.mf.extensions. Do not edit. */",
-        "#ifndef MF_EXT_GEN_H",
-        "#define MF_EXT_GEN_H",
-        "",
-        f"#define MF_N_TERMS {len(terms)}",
-    ]
-    if runtime:
-        lines.append("#define MF_EXT_RUNTIME 1 /* the term table is given at run time (mf_kernel.c) */")
-    elif not terms:
-        return "\n".join([*lines, "", "#endif /* MF_EXT_GEN_H */", ""])
-    builtin = list(BUILTIN_VARIABLES)
-    external = extensions.external_variables if extensions else ()
-    forms = list(FORMS)
-    n_targets = len(TARGETS) if runtime else max(len(t.targets) for t in terms)
-
-    def var_index(name: str) -> int:
-        return builtin.index(name) if name in builtin else len(builtin) + external.index(name)
-
-    def idx(field: str) -> str:
-        return f"MF_PIDX({field})"
-
-    lines += [
-        "#define MF_TARGET_FX_OFFSET (-1)",
-        "#define MF_TARGET_FY_OFFSET (-2)",
-        "#define MF_PIDX(f) ((int)(offsetof(MFParams, f) / sizeof(double)))",
-        "",
-        "typedef struct {",
-        "    int form;      /* index in mftire.mf.extensions.FORMS */",
-        f"    int n_targets; int targets[{n_targets}]; /* MFParams indices, or MF_TARGET_* */",
-        "    int var, var2; /* mf_ext_var indices; var2 < 0: one variable */",
-        "    int ref, scale, min, max, ref2, scale2, min2, max2; /* MFParams indices */",
-        "    int c0, n;     /* first level (table) or coefficient, and the number of levels (table) */",
-        "} MFTerm;",
-        "",
-    ]
-    if not runtime:
-        lines.append("static const MFTerm MF_TERMS[MF_N_TERMS] = {")
-    for t in terms:
-        tg = ", ".join("MF_TARGET_" + x if x in OFFSET_TARGETS else idx(x) for x in t.targets)
-        two = t.variable2 is not None
-        f2 = [idx(t.key(n)) for n in ("REF2", "SCALE2", "MIN2", "MAX2")] if two else [idx(t.key("REF"))] * 4
-        first = (t.level_keys or t.coefficient_keys)[0]
-        lines.append(
-            f"    {{{forms.index(t.form.name)}, {len(t.targets)}, {{{tg}}}, {var_index(t.variable)}, "
-            f"{var_index(t.variable2) if two else -1}, "
-            f"{', '.join(idx(t.key(n)) for n in ('REF', 'SCALE', 'MIN', 'MAX'))}, {', '.join(f2)}, "
-            f"{idx(first)}, {t.n_levels}}}, /* EXT{t.index}: {_c_comment(t.describe())} */"
-        )
-    if not runtime:
-        lines += ["};", ""]
-    lines += [
-        "/* The variables a term reads: mftire.mf.extensions.BUILTIN_VARIABLES, then the external inputs. */",
-        "static double mf_ext_var(int k, const MFParams *p, const Cond *c, const double *data)",
-        "{",
-        "    switch (k) {",
-    ]
-    for i, (name, (_, expr)) in enumerate(BUILTIN_VARIABLES.items()):
-        lines.append(f"    case {i}: return {expr}; /* {name} */")
-    lines += [
-        f"    default: return data[k - {len(builtin)}];",
-        "    }",
-        "}",
-        "",
-        "static double mf_ext_table(double u, const double *c, int n);",
-        "",
-        "/* f of each form of mftire.mf.extensions.FORMS (neutral coefficients give 1). */",
-        "static double mf_ext_form(int form, double u, double z, double z2, double ref, const double *c, int n)",
-        "{",
-        "    (void)u; (void)z; (void)z2; (void)ref; (void)n;",
-        "    switch (form) {",
-    ]
-    for i, f in enumerate(FORMS.values()):
-        lines.append(f"    case {i}: return {f.c_expr}; /* {f.name}: {_c_comment(f.formula)} */")
-    lines += ["    }", "    return 1.0;", "}", "", "#endif /* MF_EXT_GEN_H */", ""]
-    return "\n".join(lines)
-
-
 def params_header(variables: list[Variable], extensions: ExtensionSet | None = None) -> str:
-    """``mf_params.h``: the ``MFParams`` struct, one double per parameter variable, and
-    the external variables of the model extensions ``extensions``."""
-    lines = [
-        "/* mf_params.h -- GENERATED by mftire/fmu/variables.py from the FMU variable table. Do not edit. */",
-        "#ifndef MF_PARAMS_H",
-        "#define MF_PARAMS_H",
-        "",
-        "typedef struct {",
-    ]
-    for v in variables:
-        if v.kind == "param":
-            lines.append(f"    double {v.field}; /* vr {v.vr}: {_c_comment(v.description[:80])} */")
+    """``mf_params.h`` of the FMU: one double per parameter variable, and the external
+    variables of the model extensions ``extensions`` (:func:`mftire.mf.cheaders.params_header`)."""
+    fields = [(v.field, f"vr {v.vr}: {v.description[:80]}") for v in variables if v.kind == "param"]
     data = extensions.external_variables if extensions else []
-    lines += ["} MFParams;", "", f"#define MF_N_DATA {len(data)}"]
-    if data:
-        lines.append(f"#define MF_DATA_NAMES {{{', '.join(c_string(d) for d in data)}}}")
-    lines += ["", "#endif /* MF_PARAMS_H */", ""]
-    return "\n".join(lines)
+    return cheaders.params_header(fields, data, " from the FMU variable table of mftire/fmu/variables.py")
+
+
+def extension_header(variables: list[Variable], extensions: ExtensionSet | None = None) -> str:
+    """``mf_ext_gen.h`` of the FMU: the terms of ``extensions`` compiled in
+    (:func:`mftire.mf.cheaders.extension_header`)."""
+    return cheaders.extension_header(extensions)
 
 
 def _offset(struct: str, field: str) -> str:
@@ -461,7 +331,7 @@ def model_header(variables: list[Variable], model_identifier: str, fmi_version: 
     for v in by_vr:
         fixed = 1 if v.variability == "fixed" else 0
         off = _offset(structs[v.kind], v.field) if v.kind in structs else "0"
-        lines.append(f"    {{{kinds[v.kind]}, {fixed}, {off}}}, /* {v.vr} {_c_comment(v.name)} */")
+        lines.append(f"    {{{kinds[v.kind]}, {fixed}, {off}}}, /* {v.vr} {c_comment(v.name)} */")
     lines += ["};", "", "static const char *const MF_VAR_NAMES[MF_N_VARS] = {"]
     lines += [f"    {c_string(v.name)}," for v in by_vr]
     lines += ["};", "", "static const MFInputs MF_INPUT_START = {"]
@@ -494,7 +364,8 @@ def _log_categories() -> list[str]:
         "  <LogCategories>",
         '    <Category name="logStatusWarning" description="Limit checks, NaN inputs, clipped curvature factors"/>',
         '    <Category name="logStatusError" description="Invalid calls, modes or parameters"/>',
-        '    <Category name="logAll" description="Every warning (no repetition limit)"/>',
+        '    <Category name="logAll" description="Warnings and errors (each kind of warning at most once per 1000'
+        ' evaluations, with the count of the others)"/>',
         "  </LogCategories>",
     ]
 
@@ -625,34 +496,3 @@ __all__ = [
     "params_header",
     "variable_table",
 ]
-
-
-def kernel_headers(write: bool = False) -> dict[str, str]:
-    """The generated headers of the array kernel (:mod:`mftire.mf.kernel`, ``csource/kernel/``):
-    ``mf_params.h`` with the numeric standard parameters (``kernel.PARAM_KEYS``) and four
-    data slots, and the run-time ``mf_ext_gen.h`` (term table given at each call).
-
-    ``write``: also write them (after a change of the parameter table or the extensions;
-    ``tests/test_kernel.py`` checks that the files are current).
-    """
-    from pathlib import Path
-    from types import SimpleNamespace
-
-    from mftire.mf.kernel import PARAM_KEYS
-    from mftire.parameters import with_defaults
-
-    flat = {k: v for k, v in with_defaults({"FITTYP": 61}).items() if k in PARAM_KEYS}
-    table = variable_table(flat, DEFAULT_USE_MODE, None)
-    if tuple(v.field for v in table if v.kind == "param") != PARAM_KEYS:
-        raise AssertionError("the kernel's MFParams fields are not the standard parameters in table order")
-    slots = SimpleNamespace(external_variables=[f"data{k}" for k in range(MAX_DATA_INPUTS)])
-    out = {
-        "mf_params.h": params_header(table, slots),  # type: ignore[arg-type]
-        "mf_ext_gen.h": extension_header(table, None, runtime=True),
-    }
-    if write:
-        d = Path(__file__).parent / "csource" / "kernel"
-        d.mkdir(exist_ok=True)
-        for name, text in out.items():
-            (d / name).write_text(text, encoding="utf-8")
-    return out

@@ -96,7 +96,7 @@ def aligning_terms(
     Et = (p["QEZ1"] + p["QEZ2"] * dfz + p["QEZ3"] * dfz**2) * (
         1.0 + (p["QEZ4"] + p["QEZ5"] * gamma_star) * (2.0 / np.pi) * np.arctan(Bt * Ct * alphat)
     )
-    Et = _clip_curvature(Et, "Et", "4.E44", mode)  # eq 4.E44
+    Et = _clip_curvature(Et, "ET", mode)  # eq 4.E44
 
     if mode.turn_slip:
         zeta0 = 0.0

@@ -66,7 +66,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mftire.errors import MftireInputError
-from mftire.mf.basic import slip_speed
+from mftire.mf import spec
+from mftire.mf.basic import increments, slip_speed
 
 #: The ``.tir`` section that holds the extension parameters.
 SECTION = "MFTIRE_EXTENSIONS"
@@ -91,21 +92,7 @@ TARGET_CHANNELS: dict[str, tuple[str, ...]] = {
 #: Variables the evaluator derives from its own (conditioned) inputs: name -> (meaning,
 #: C expression over the conditioned inputs ``c`` and parameters ``p`` of the FMU's C).
 #: :func:`builtin_variables` is the Python implementation.
-BUILTIN_VARIABLES: dict[str, tuple[str, str]] = {
-    "Fz": ("vertical load [N]", "c->Fz"),
-    "kappa": ("longitudinal slip [-]", "c->kappa"),
-    "alpha": ("slip angle [rad]", "c->alpha"),
-    "gamma": ("inclination angle [rad]", "c->gamma"),
-    "Vx": ("forward speed [m/s]", "c->Vx"),
-    "P": ("inflation pressure [Pa]", "c->P"),
-    "Vs": ("slip speed |Vx|·sqrt(kappa² + tan²alpha) [m/s] (Pacejka 2012 eqs 4.E5, 3.39)",
-           "fabs(c->Vx) * sqrt(c->kappa * c->kappa + tan(c->alpha) * tan(c->alpha))"),
-    "dfz": ("normalised load increment (Fz − Fz0')/Fz0' [-] (eq 4.E2a)",
-            "(c->Fz - p->LFZO * p->FNOMIN) / (p->LFZO * p->FNOMIN)"),
-    "dpi": ("normalised pressure increment (P − NOMPRES)/NOMPRES [-] (eq 4.E2b)", "(c->P - p->NOMPRES) / p->NOMPRES"),
-    "sign_alpha": ("sign of the slip angle [-]", "(double)((c->alpha > 0.0) - (c->alpha < 0.0))"),
-    "sign_kappa": ("sign of the slip [-]", "(double)((c->kappa > 0.0) - (c->kappa < 0.0))"),
-}  # fmt: skip
+BUILTIN_VARIABLES: dict[str, tuple[str, str]] = {v.name: (v.description, v.c_expr) for v in spec.BUILTIN_VARIABLES}
 
 #: Input names of the evaluator that an external variable may not take.
 RESERVED_VARIABLES = ("phit", "omega", "mode", "muRoad")
@@ -460,17 +447,15 @@ def parse_section(section: Mapping[str, object] | None) -> ExtensionSet:
     return out
 
 
+_BUILTIN_CODE = {v.name: compile(v.python, f"<builtin variable {v.name}>", "eval") for v in spec.BUILTIN_VARIABLES}
+
+
 def builtin_variables(p: Mapping[str, float], c) -> dict[str, np.ndarray]:
     """The variables of :data:`BUILTIN_VARIABLES` from the file's parameters ``p`` and the
-    conditioned inputs ``c`` (:class:`mftire.mf.inputs.Conditions`)."""
-    Fz0p = p["LFZO"] * p["FNOMIN"]  # eq 4.E1
-    return {
-        "Fz": c.Fz, "kappa": c.kappa, "alpha": c.alpha, "gamma": c.gamma, "Vx": c.Vx, "P": c.P,
-        "Vs": slip_speed(c.Vx, c.kappa, c.alpha),
-        "dfz": (c.Fz - Fz0p) / Fz0p,  # eq 4.E2a
-        "dpi": (c.P - p["NOMPRES"]) / p["NOMPRES"],  # eq 4.E2b
-        "sign_alpha": np.sign(c.alpha), "sign_kappa": np.sign(c.kappa),
-    }  # fmt: skip
+    conditioned inputs ``c`` (:class:`mftire.mf.inputs.Conditions`), by their Python expressions in
+    :data:`mftire.mf.spec.BUILTIN_VARIABLES`."""
+    names = {"p": p, "c": c, "np": np, "increments": increments, "slip_speed": slip_speed}
+    return {name: eval(code, {"__builtins__": {}}, names) for name, code in _BUILTIN_CODE.items()}
 
 
 def required_variables(section: Mapping[str, object] | None) -> list[str]:

@@ -16,8 +16,9 @@ differences (see ``docs/pac2002.md``).
 
 from __future__ import annotations
 
-#: Internal model code of a PAC2002 property file (no FITTYP in the file).
-PAC2002_CODE = 2002.0
+from mftire.mf.spec import FAMILIES, PAC2002_CODE
+
+__all__ = ["MF52_FAMILY", "MODEL_CODES", "PAC2002_CODE", "is_mf52", "is_pac2002"]
 
 #: Model codes that take the MF 5.2 equations (FITTYP 6 as MFeval, and PAC2002).
 MF52_FAMILY = (6.0, PAC2002_CODE)
@@ -33,11 +34,6 @@ def is_pac2002(p: dict) -> bool:
     return p.get("FITTYP") == PAC2002_CODE
 
 
-#: Model (:attr:`mftire.iotools.tir.TirParameters.model`) -> model code of the evaluator.
-MODEL_CODES: dict[str, float] = {
-    "MF 5.2": 6.0,
-    "MF 6.1": 61.0,
-    "MF 6.2": 62.0,
-    "PAC2002": PAC2002_CODE,
-    "MF-Tyre 5.0": PAC2002_CODE,  # MF_05: the PAC2002 equations (docs/pac2002.md, "MF_05")
-}
+#: Model (:attr:`mftire.iotools.tir.TirParameters.model`) -> model code of the evaluator
+#: (:data:`mftire.mf.spec.FAMILIES`; MF-Tyre 5.0, ``MF_05``, takes the PAC2002 equations: docs/pac2002.md).
+MODEL_CODES: dict[str, float] = {f.name: f.code for f in FAMILIES}

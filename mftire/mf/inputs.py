@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mftire.mf.modes import Mode
+from mftire.mf.spec import WARNINGS
 
 #: Small number against singularities at zero speed (Pacejka 2012, eq 4.E6a).
 EPSILON = 1e-6
@@ -48,8 +49,17 @@ class Conditions:
     eps_gamma: np.ndarray | float = 0.0  #: camber reduction factor epsilon_gamma (eq 4.90) [-]
 
 
-def _warn(message: str) -> None:
-    warnings.warn(message + " Values have been saturated.", MFLimitWarning, stacklevel=4)
+_WARNINGS = {w.name: w for w in WARNINGS}
+
+
+def limit_message(kind: str, p) -> str:
+    """The text of the limit warning ``kind`` (:data:`mftire.mf.spec.WARNINGS`) with the limit of ``p``."""
+    w = _WARNINGS[kind]
+    return w.text.format(limit=w.limit, value=p[w.limit])
+
+
+def _warn(kind: str, p, stacklevel: int = 4) -> None:
+    warnings.warn(limit_message(kind, p), MFLimitWarning, stacklevel=stacklevel)
 
 
 def condition_inputs(
@@ -99,44 +109,37 @@ def condition_inputs(
         if low_alpha.any():
             alpha = np.where(low_alpha, alpha * (speed_sum / VXLOW), alpha)
 
-        checks = (
-            ("alpha", "ALPMIN", "ALPMAX", "Slip angle"),
-            ("gamma", "CAMMIN", "CAMMAX", "Inclination angle"),
-        )
+        checks = (("alpha", "ALPMIN", "ALPMAX", "ALPHA"), ("gamma", "CAMMIN", "CAMMAX", "GAMMA"))
         clipped = {"alpha": alpha, "gamma": gamma}
-        for name, lo_key, hi_key, label in checks:
+        for name, lo_key, hi_key, kind in checks:
             v = clipped[name]
             lo, hi = p[lo_key], p[hi_key]
             if (v < lo).any():
-                _warn(f"{label} below the limit {lo_key}={lo}.")
+                _warn(kind + "_LOW", p)
             if (v > hi).any():
-                _warn(f"{label} above the limit {hi_key}={hi}.")
+                _warn(kind + "_HIGH", p)
             if (v < lo).any() or (v > hi).any():
                 clipped[name] = np.clip(v, lo, hi)
         alpha, gamma = clipped["alpha"], clipped["gamma"]
 
         if (Fz > p["FZMAX"]).any():
-            _warn(f"Vertical load above the limit FZMAX={p['FZMAX']}.")
+            _warn("FZ_HIGH", p)
             Fz = np.where(Fz > p["FZMAX"], p["FZMAX"], Fz)
         if (Fz < p["FZMIN"]).any():
-            _warn(f"Vertical load below the limit FZMIN={p['FZMIN']}.")
+            _warn("FZ_LOW", p)
         Fz_low = np.where(Fz < p["FZMIN"], p["FZMIN"], Fz)
         if (P < p["PRESMIN"]).any():
-            _warn(f"Pressure below the limit PRESMIN={p['PRESMIN']}.")
+            _warn("P_LOW", p)
         if (P > p["PRESMAX"]).any():
-            _warn(f"Pressure above the limit PRESMAX={p['PRESMAX']}.")
+            _warn("P_HIGH", p)
         P = np.clip(P, p["PRESMIN"], p["PRESMAX"])
         if (kappa < p["KPUMIN"]).any():
-            _warn(f"Slip ratio below the limit KPUMIN={p['KPUMIN']}.")
+            _warn("KAPPA_LOW", p)
         if (kappa > p["KPUMAX"]).any():
-            _warn(f"Slip ratio above the limit KPUMAX={p['KPUMAX']}.")
+            _warn("KAPPA_HIGH", p)
         kappa = np.clip(kappa, p["KPUMIN"], p["KPUMAX"])
         if low_speed.any():
-            warnings.warn(
-                f"Speed input Vx below the limit VXLOW={VXLOW}. Low speed mode activated.",
-                MFLimitWarning,
-                stacklevel=3,
-            )
+            _warn("LOW_SPEED", p, stacklevel=3)
 
     # MFeval departure: the reported slip angle is zero at exactly zero speed.
     standstill = uVx == 0.0
@@ -159,27 +162,3 @@ def condition_inputs(
         low_speed=low_speed,
         smooth=smooth,
     )
-
-
-def turn_slip_spin(p: dict, c: Conditions) -> tuple[np.ndarray, np.ndarray]:
-    """Spin slip phi and camber reduction factor epsilon_gamma.
-
-    phi = (psi_dot - (1 - eps_gamma)·omega·sin(gamma)) / Vc'  (Pacejka 2012 eq 4.76,
-    with psi_dot = -phit·Vc' from eq 4.75); eps_gamma = PECP1·(1 + PECP2·dfz) (eq 4.90).
-
-    MFeval departure: Vc' is the contact-centre speed sqrt(Vx² + Vsy²) (TNO equation
-    manual) protected to ±VXLOW below VXLOW, and eq 4.76 is used without the
-    book's sign change because the road z axis points up.
-    """
-    Fz0p = p["LFZO"] * p["FNOMIN"]  # eq 4.E1
-    dfz = (c.Fz - Fz0p) / Fz0p  # eq 4.E2a
-    Vsy = -np.tan(c.alpha) * np.abs(c.Vx)
-    V = np.sqrt(c.Vx**2 + Vsy**2)
-    eps_gamma = p["PECP1"] * (1.0 + p["PECP2"] * dfz)  # eq 4.90
-    low = np.abs(c.Vx) < p["VXLOW"]
-    sgn = np.sign(c.Vx)
-    sgn = np.where(sgn == 0.0, 1.0, sgn)
-    Vc_prime = np.where(low, p["VXLOW"] * sgn, V)
-    psi_dot = -c.phit * Vc_prime  # eq 4.75
-    phi = (1.0 / Vc_prime) * (psi_dot - (1.0 - eps_gamma) * c.omega * np.sin(c.gamma))  # eq 4.76
-    return phi, eps_gamma

@@ -1,6 +1,6 @@
 """The compiled array kernel behind :meth:`mftire.Tyre.evaluate` (and :func:`mftire.mf.solver.evaluate_arrays`).
 
-One C call evaluates a whole batch with the FMU's C model (``mftire/fmu/csource``:
+One C call evaluates a whole batch with the C model (``mftire/mf/c``:
 ``mf_kernel.c`` includes ``mf_eval.c``, the one C copy of the equations, and adds the
 loop over the arrays with the batch semantics of the numpy evaluator).  The numpy modules
 of :mod:`mftire.mf` stay the readable reference; ``tests/test_kernel.py`` proves that the
@@ -33,7 +33,7 @@ Scalar calls (latency)
     parameters and a ready ``ctypes`` call are prepared once per parameter set, each call
     writes the inputs into this thread's buffer with one ``struct.pack_into``, makes one
     call of ``mf_kernel_point`` (a batch of one point of ``mf_kernel_evaluate``: the array
-    path's numbers bit for bit) and copies the 30 outputs into numpy scalars; the warnings
+    path's numbers bit for bit) and copies the outputs into numpy scalars; the warnings
     are formatted only when the C code reports one.  ``Tyre.evaluate`` calls it directly
     for scalar inputs and all channels (``tests/test_point_path.py``).
 """
@@ -52,6 +52,9 @@ from pathlib import Path
 import numpy as np
 
 from mftire.mf import _kernel_build as build
+from mftire.mf import spec
+from mftire.mf.cheaders import spec_signature
+from mftire.mf.extensions import MAX_EXTERNAL, TARGETS
 from mftire.mf.inputs import MFLimitWarning
 from mftire.parameters import PARAMETERS
 
@@ -61,31 +64,15 @@ _ROOT = Path(__file__).resolve().parents[2]
 PARAM_KEYS: tuple[str, ...] = tuple(p.key for p in PARAMETERS if p.unit != "str")
 _PARAM_INDEX = {k: i for i, k in enumerate(PARAM_KEYS)}
 
-#: The 30 outputs in the order and with the meaning of MFeval's output matrix, the order of
-#: mf_kernel.c's outputs; public as :data:`mftire.mf.solver.OUTPUT_NAMES`.
-OUTPUTS: tuple[str, ...] = (
-    "Fx", "Fy", "Fz", "Mx", "My", "Mz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "Re", "rho",
-    "2a", "t", "mux", "muy", "omega", "Rl", "2b", "Mzr", "Cx", "Cy", "Cz", "Kya", "sigmax", "sigmay",
-    "instKya", "Kxk",
-)  # fmt: skip
+#: The outputs in the order and with the meaning of MFeval's output matrix (:data:`mftire.mf.spec.OUTPUTS`),
+#: the order of mf_kernel.c's outputs; public as :data:`mftire.mf.solver.OUTPUT_NAMES`.
+OUTPUTS: tuple[str, ...] = tuple(o.name for o in spec.OUTPUTS)
 _OUT_INDEX = {k: i for i, k in enumerate(OUTPUTS)}
-_N_IN = 12  # Fz kappa alpha gamma phit Vx P omega data0..3 (mf_kernel.c MF_N_IN)
-_MAX_DATA = 4
-_N_TARGETS = 26  # len(mftire.mf.extensions.TARGETS): the room in the run-time MFTerm
+_N_IN = len(spec.KERNEL_INPUTS)  # mf_kernel.c MF_N_IN
+_IN_INDEX = {k: i for i, k in enumerate(spec.KERNEL_INPUTS)}
+_MAX_DATA = MAX_EXTERNAL
+_N_TARGETS = len(TARGETS)  # the room in the run-time MFTerm
 _TERM_INTS = 2 + _N_TARGETS + 2 + 8 + 2
-
-# Warning kinds of mf_eval.h, in the order the numpy path issues them.
-_W_ALPHA_LOW, _W_ALPHA_HIGH, _W_GAMMA_LOW, _W_GAMMA_HIGH = 7, 8, 9, 10
-_W_FZ_HIGH, _W_FZ_LOW, _W_P_LOW, _W_P_HIGH, _W_KAPPA_LOW, _W_KAPPA_HIGH, _W_LOW_SPEED = 11, 12, 13, 14, 15, 16, 17
-_W_CURVATURE = ((18, "Ex", "4.E14"), (20, "Exa", "4.E56"), (19, "Ey", "4.E24"), (21, "Eyk", "4.E64"),
-                (22, "Et", "4.E44"), (27, "Ey", "4.E24"))  # fmt: skip  # 27: Ey of the zero-camber Fy0 in Mz
-_LIMITS = (
-    (_W_ALPHA_LOW, "Slip angle", "below", "ALPMIN"), (_W_ALPHA_HIGH, "Slip angle", "above", "ALPMAX"),
-    (_W_GAMMA_LOW, "Inclination angle", "below", "CAMMIN"), (_W_GAMMA_HIGH, "Inclination angle", "above", "CAMMAX"),
-    (_W_FZ_HIGH, "Vertical load", "above", "FZMAX"), (_W_FZ_LOW, "Vertical load", "below", "FZMIN"),
-    (_W_P_LOW, "Pressure", "below", "PRESMIN"), (_W_P_HIGH, "Pressure", "above", "PRESMAX"),
-    (_W_KAPPA_LOW, "Slip ratio", "below", "KPUMIN"), (_W_KAPPA_HIGH, "Slip ratio", "above", "KPUMAX"),
-)  # fmt: skip
 
 _lib = None  # the loaded library, False when unavailable
 _why = ""  # why it is unavailable
@@ -141,8 +128,12 @@ def load(path: str | os.PathLike | None = None):
             continue
         sizes = (ctypes.c_long * 5)()
         lib.mf_kernel_sizes(sizes)
-        if tuple(sizes) != (len(PARAM_KEYS), _N_IN, len(OUTPUTS), 28, _TERM_INTS):
+        if tuple(sizes) != (len(PARAM_KEYS), _N_IN, len(OUTPUTS), len(spec.WARNINGS), _TERM_INTS):
             tried.append(f"{cand}: unexpected layout {tuple(sizes)}")
+            continue
+        lib.mf_kernel_signature.restype = ctypes.c_char_p
+        if lib.mf_kernel_signature().decode() != spec_signature():
+            tried.append(f"{cand}: outputs, warnings or inputs not those of mftire.mf.spec")
             continue
         f = lib.mf_kernel_evaluate
         vp, ci = ctypes.c_void_p, ctypes.c_int
@@ -474,7 +465,7 @@ def point_function(p: Mapping[str, float], ext, result: type = dict):
     fn, c_params, c_terms, n_terms = lib.mf_kernel_point, packed[4], packed[5], packed[3]
     longvl, inflpres = p["LONGVL"], p["INFLPRES"]
     # the limits the warnings name, not p itself: no reference cycle through p's cache
-    limits = {key: p[key] for key in (*(k[3] for k in _LIMITS), "VXLOW")}
+    limits = {w.limit: p[w.limit] for w in spec.WARNINGS if w.limit}
     put, template, local = _put, _TEMPLATE, _local
 
     def evaluate_point(Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, channels=None, external=(), data=(),
@@ -527,22 +518,14 @@ def _issue_warnings(p, nan, mask: int, external: Sequence[str], omega_given: boo
     def warn(msg: str) -> None:
         warnings.warn(msg, MFLimitWarning, stacklevel=depth)
 
-    for k, name in enumerate(external):
-        if nan[8 + k]:
-            warn(f"{nan[8 + k]} NaN value(s) in input '{name}' replaced by 0.0.")
-    for k, name in enumerate(("Fz", "kappa", "alpha", "gamma", "phit", "Vx")):
-        if nan[k]:
-            warn(f"{nan[k]} NaN value(s) in input '{name}' replaced by 0.0.")
-    if omega_given and nan[7]:
-        warn(f"{nan[7]} NaN value(s) in input 'omega' replaced by 0.0.")
-    for kind, label, where, key in _LIMITS:
-        if mask >> kind & 1:
-            warn(f"{label} {where} the limit {key}={p[key]}. Values have been saturated.")
-    if mask >> _W_LOW_SPEED & 1:
-        warn(f"Speed input Vx below the limit VXLOW={p['VXLOW']}. Low speed mode activated.")
-    for kind, name, eq in _W_CURVATURE:
-        if mask >> kind & 1:
-            warn(f"{name} over limit (>1), eq {eq}; clipped to 1.")
+    for bit, w in enumerate(spec.WARNINGS):
+        if w.input is not None:  # a NaN count per input (omega counted only when given, by the C)
+            k = _IN_INDEX[w.input]
+            name = w.input if k < 8 else (external[k - 8] if k - 8 < len(external) else None)
+            if nan[k] and name is not None and (omega_given or w.input != "omega"):
+                warn(w.text.format(n=nan[k], input=name))
+        elif mask >> bit & 1:
+            warn(w.text.format(limit=w.limit, value=p[w.limit]) if w.limit else w.text)
 
 
 def build_in_place() -> Path:

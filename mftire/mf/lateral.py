@@ -121,7 +121,7 @@ def fy0(
         * (1.0 + p["PEY5"] * gamma_star**2 - (p["PEY3"] + p["PEY4"] * gamma_star) * _sign_nonzero(alphay))
         * p["LEY"]
     )
-    Ey = _clip_curvature(Ey, "Ey", "4.E24", mode)  # eq 4.E24
+    Ey = _clip_curvature(Ey, "EY", mode)  # eq 4.E24
     By = Kya / (Cy * Dy + EPSILON * _sign_nonzero(Dy))  # eq 4.E26
     Ba = By * alphay
     Fy0 = Dy * np.sin(Cy * np.arctan(Ba - Ey * (Ba - np.arctan(Ba)))) + SVy  # eq 4.E19
@@ -158,7 +158,7 @@ def fy_combined(
     )  # eq 4.E67
     SVyk = DVyk * np.sin(p["RVY5"] * np.arctan(p["RVY6"] * c.kappa)) * p["LVYKA"]  # eq 4.E66
     SHyk = p["RHY1"] + p["RHY2"] * dfz  # eq 4.E65
-    Eyk = _clip_curvature(p["REY1"] + p["REY2"] * dfz, "Eyk", "4.E64", mode)  # eq 4.E64
+    Eyk = _clip_curvature(p["REY1"] + p["REY2"] * dfz, "EYK", mode)  # eq 4.E64
     Cyk = p["RCY1"]  # eq 4.E63
     Byk = (
         (p["RBY1"] + p["RBY4"] * gamma_star**2) * np.cos(np.arctan(p["RBY2"] * (alpha_star - p["RBY3"]))) * p["LYKA"]

@@ -9,6 +9,7 @@ import numpy as np
 from mftire.mf.basic import Basic
 from mftire.mf.inputs import EPSILON, Conditions, MFLimitWarning
 from mftire.mf.modes import Mode
+from mftire.mf.spec import WARNINGS
 
 
 def _sign_nonzero(x: np.ndarray) -> np.ndarray:
@@ -16,11 +17,15 @@ def _sign_nonzero(x: np.ndarray) -> np.ndarray:
     return np.sign(x) + (x == 0.0)
 
 
-def _clip_curvature(E: np.ndarray, name: str, eq: str, mode: Mode) -> np.ndarray:
-    """Curvature factors must not exceed 1; clipped (with a warning in limit mode)."""
+_CURVATURE_TEXT = {w.name: w.text for w in WARNINGS}
+
+
+def _clip_curvature(E: np.ndarray, kind: str, mode: Mode) -> np.ndarray:
+    """Curvature factors must not exceed 1; clipped (with the warning ``kind`` of
+    :data:`mftire.mf.spec.WARNINGS` in limit mode)."""
     if mode.clips_curvature and np.any(E > 1.0):
         if mode.limits:
-            warnings.warn(f"{name} over limit (>1), eq {eq}; clipped to 1.", MFLimitWarning, stacklevel=3)
+            warnings.warn(_CURVATURE_TEXT[kind], MFLimitWarning, stacklevel=3)
         return np.where(E > 1.0, 1.0, E)
     return E
 
@@ -56,7 +61,7 @@ def fx0(
     SVx = Fz * (p["PVX1"] + p["PVX2"] * dfz) * p["LVX"] * b.LMUX_prime * zeta1 * c.smooth  # eq 4.E18
     kappax = c.kappa + SHx  # eq 4.E10
     Ex = (p["PEX1"] + p["PEX2"] * dfz + p["PEX3"] * dfz**2) * (1.0 - p["PEX4"] * np.sign(kappax)) * p["LEX"]
-    Ex = _clip_curvature(Ex, "Ex", "4.E14", mode)  # eq 4.E14
+    Ex = _clip_curvature(Ex, "EX", mode)  # eq 4.E14
     Bk = Bx * kappax
     Fx0 = Dx * np.sin(Cx * np.arctan(Bk - Ex * (Bk - np.arctan(Bk)))) + SVx  # eq 4.E9
     backwards = c.Vx < 0.0
@@ -68,7 +73,7 @@ def fx0(
 def fx_combined(p: dict, mode: Mode, c: Conditions, b: Basic, Fx0: np.ndarray) -> np.ndarray:
     """Combined-slip longitudinal force Fx = Gxa·Fx0 [N] (eqs 4.E50–4.E57)."""
     Cxa = p["RCX1"]  # eq 4.E55
-    Exa = _clip_curvature(p["REX1"] + p["REX2"] * b.dfz, "Exa", "4.E56", mode)  # eq 4.E56
+    Exa = _clip_curvature(p["REX1"] + p["REX2"] * b.dfz, "EXA", mode)  # eq 4.E56
     SHxa = p["RHX1"]  # eq 4.E57
     Bxa = (p["RBX1"] + p["RBX3"] * b.gamma_star**2) * np.cos(np.arctan(p["RBX2"] * c.kappa)) * p["LXAL"]  # 4.E54
     alphas = b.alpha_star + SHxa  # eq 4.E53

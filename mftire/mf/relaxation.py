@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from mftire.mf.basic import increments
 from mftire.mf.family import is_mf52
 from mftire.mf.inputs import Conditions
 
@@ -16,9 +17,7 @@ def relaxation(
     Returns ``(Cx [N/m], Cy [N/m], sigmax [m], sigmay [m])``.
     """
     Fz0, R0 = p["FNOMIN"], p["UNLOADED_RADIUS"]
-    Fz0p = p["LFZO"] * Fz0  # eq 4.E1
-    dfz = (c.Fz - Fz0p) / Fz0p  # eq 4.E2a
-    dpi = (c.P - p["NOMPRES"]) / p["NOMPRES"]  # eq 4.E2b
+    Fz0p, dfz, dpi = increments(p, c.Fz, c.P)  # eqs 4.E1, 4.E2a, 4.E2b
     Cx = p["LONGITUDINAL_STIFFNESS"] * (1.0 + p["PCFX1"] * dfz + p["PCFX2"] * dfz**2) * (1.0 + p["PCFX3"] * dpi)  # 17
     Cy = p["LATERAL_STIFFNESS"] * (1.0 + p["PCFY1"] * dfz + p["PCFY2"] * dfz**2) * (1.0 + p["PCFY3"] * dpi)  # 18
     if is_mf52(p):

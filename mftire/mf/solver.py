@@ -24,12 +24,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from mftire.errors import MftireError, MftireInputError
-from mftire.mf import kernel, pac2002, turnslip
+from mftire.mf import kernel, pac2002, spec, turnslip
 from mftire.mf.aligning import aligning_terms, mz0, mz_combined, zero_camber_lateral
-from mftire.mf.basic import basic
+from mftire.mf.basic import basic, increments
 from mftire.mf.extensions import ExtensionSet, builtin_variables, parse_section
 from mftire.mf.family import PAC2002_CODE, is_pac2002
-from mftire.mf.inputs import Conditions, MFLimitWarning, condition_inputs, turn_slip_spin
+from mftire.mf.inputs import Conditions, MFLimitWarning, condition_inputs
 from mftire.mf.lateral import fy0, fy_combined
 from mftire.mf.longitudinal import fx0, fx_combined
 from mftire.mf.modes import Mode
@@ -38,20 +38,16 @@ from mftire.mf.relaxation import relaxation
 from mftire.mf.rolling import my
 from mftire.mf.vertical import contact_patch, effective_rolling_radius, loaded_radius_61, loaded_radius_62
 
-#: The 30 outputs, in the order and with the meaning of MFeval's output matrix (defined with the
-#: compiled kernel, whose C writes them in this order).
+#: The 30 outputs, in the order and with the meaning of MFeval's output matrix
+#: (:data:`mftire.mf.spec.OUTPUTS`, the order the compiled kernel writes them in).
 OUTPUT_NAMES: tuple[str, ...] = kernel.OUTPUTS
 
-#: Units of the outputs.
-OUTPUT_UNITS: dict[str, str] = {
-    "Fx": "N", "Fy": "N", "Fz": "N", "Mx": "N*m", "My": "N*m", "Mz": "N*m", "kappa": "-", "alpha": "rad",
-    "gamma": "rad", "phit": "1/m", "Vx": "m/s", "P": "Pa", "Re": "m", "rho": "m", "2a": "m", "t": "m",
-    "mux": "-", "muy": "-", "omega": "rad/s", "Rl": "m", "2b": "m", "Mzr": "N*m", "Cx": "N/m", "Cy": "N/m",
-    "Cz": "N/m", "Kya": "N/rad", "sigmax": "m", "sigmay": "m", "instKya": "N/rad", "Kxk": "N",
-}  # fmt: skip
+#: Units of the outputs (SI, one spelling: :data:`mftire.mf.spec.OUTPUTS`).
+OUTPUT_UNITS: dict[str, str] = {o.name: o.unit for o in spec.OUTPUTS}
 
-#: FITTYP values the evaluator handles: 61 (MF 6.1), 62 (MF 6.2) and 6 (MF 5.2, as MFeval).
-EVALUATED_FITTYP = (6, 61, 62)
+#: FITTYP values the evaluator handles: 61 (MF 6.1), 62 (MF 6.2) and 6 (MF 5.2, as MFeval); PAC2002 has
+#: its own model code (:data:`mftire.mf.spec.FAMILIES`).
+EVALUATED_FITTYP = tuple(int(f.code) for f in spec.FAMILIES if f.code != PAC2002_CODE)
 
 
 class UnsupportedModelError(MftireError):
@@ -68,13 +64,14 @@ def unsupported_message(fittyp) -> str:
     return f"FITTYP {shown} is not evaluated: {evaluated}."
 
 
+_NAN_TEXT = next(w.text for w in spec.WARNINGS if w.input is not None)  # fill 0.0 (P: INFLPRES, silently)
+
+
 def _clean(name: str, x: np.ndarray, fill: float) -> np.ndarray:
     """Replace NaN by ``fill`` with a warning (documented input policy)."""
     bad = np.isnan(x)
     if bad.any():
-        warnings.warn(
-            f"{int(bad.sum())} NaN value(s) in input '{name}' replaced by {fill}.", MFLimitWarning, stacklevel=4
-        )
+        warnings.warn(_NAN_TEXT.format(n=int(bad.sum()), input=name), MFLimitWarning, stacklevel=4)
         x = np.where(bad, fill, x)
     return x
 
@@ -153,7 +150,7 @@ def prepare(
         omega = None if not np.any(omega) else _clean("omega", np.array(omega), 0.0)
     with np.errstate(all="ignore"):
         c = condition_inputs(p, m, Fz, kappa, alpha, gamma, phit, Vx, P)
-        dpi = (c.P - p["NOMPRES"]) / p["NOMPRES"]  # eq 4.E2b
+        _, _, dpi = increments(p, c.Fz, c.P)  # eq 4.E2b
         Re, Romega, c.omega = effective_rolling_radius(p, c, dpi, omega)
     return Prepared(m, c, dpi, Re, Romega, external, shape)
 
@@ -194,8 +191,9 @@ class Channels:
     My: np.ndarray | None = None
 
 
-#: What each channel needs computed first.
-_NEEDS = {"Fx": ("Fx",), "Fy": ("Fy",), "Mz": ("Fx", "Fy", "Mz"), "Mx": ("Fy", "Mx"), "My": ("Fx", "My")}
+#: What each channel needs computed first: the whole forces of its group, then itself (mftire.mf.spec.GROUPS).
+_NEEDS = {g.channel: (*g.forces, g.channel) if g.channel not in g.forces else g.forces
+          for g in spec.GROUPS if g.channel}  # fmt: skip
 
 
 def channels(
@@ -221,7 +219,7 @@ def channels(
         if out.b is None:
             c = pre.c
             if m.turn_slip:
-                phi, eps_gamma = turn_slip_spin(q, c)
+                phi, eps_gamma = turnslip.turn_slip_spin(q, c)
                 c = dataclasses.replace(c, phi=phi, eps_gamma=eps_gamma)
             out.c = c
             out.b = basic(q, m, c)
@@ -260,13 +258,14 @@ def channels(
     return out
 
 
-#: The :func:`channels` each output needs (outputs not listed are conditioned inputs, Re and omega).
+#: The :func:`channels` each output needs (outputs of no group are conditioned inputs, Re and omega).
 CHANNEL_NEEDS: dict[str, tuple[str, ...]] = {
-    "Fx": ("Fx",), "mux": ("Fx",), "Kxk": ("Fx",), "Fy": ("Fy",), "muy": ("Fy",), "Kya": ("Fy",),
-    "instKya": ("Fy",), "Mz": ("Mz",), "t": ("Mz",), "Mzr": ("Mz",), "Mx": ("Mx",), "My": ("My",),
-    "rho": ("Fx", "Fy"), "Rl": ("Fx", "Fy"), "Cz": ("Fx", "Fy"), "Cx": ("Fx", "Fy"), "Cy": ("Fx", "Fy"),
-    "sigmax": ("Fx", "Fy"), "sigmay": ("Fx", "Fy"),
-}  # fmt: skip
+    o.name: g.channels for o in spec.OUTPUTS for g in spec.GROUPS if o.group == g.name and g.channels
+}
+
+
+_OUTPUT_BY_NAME = {o.name: o for o in spec.OUTPUTS}
+_GROUP_OUTPUTS = {g.name: {o.name for o in spec.OUTPUTS if o.group == g.name} for g in spec.GROUPS}
 
 
 def output_names(channels: str | Sequence[str] | None) -> tuple[str, ...]:
@@ -293,15 +292,15 @@ def outputs(
     with np.errstate(all="ignore"):
         if "muy" in want:
             muy = np.abs(ch.lat.muy) if m.limits else ch.lat.muy
-        if want & {"rho", "Rl", "Cz"}:
+        if want & _GROUP_OUTPUTS["RAD"]:
             if q["FITTYP"] == 61:
                 rho, Rl, Cz = loaded_radius_61(q, c, dpi, c.omega, pre.Romega, ch.Fx, ch.Fy)
             else:
                 rho, Rl, Cz = loaded_radius_62(q, c, dpi, c.omega, pre.Romega, ch.Fx, ch.Fy)
-        if want & {"2a", "2b"}:
+        if want & _GROUP_OUTPUTS["PATCH"]:
             a, bw = contact_patch(q, c, dpi)
             a, bw = 2.0 * a, 2.0 * bw
-        if want & {"Cx", "Cy", "sigmax", "sigmay"}:
+        if want & _GROUP_OUTPUTS["RELAX"]:
             Cx, Cy, sigmax, sigmay = relaxation(q, c, ch.Kxk, ch.lat.Kya)
         if "instKya" in want:
             fy_flat, al_flat = np.broadcast_to(ch.Fy, shape).ravel(), c.alpha.ravel()
@@ -311,13 +310,17 @@ def outputs(
             else:
                 instKya = np.zeros(shape)
     lat = ch.lat
-    out = {
-        "Fx": ch.Fx, "Fy": ch.Fy, "Fz": c.uFz, "Mx": ch.Mx, "My": ch.My, "Mz": ch.Mz, "kappa": c.ukappa_low,
-        "alpha": c.ualpha, "gamma": c.ugamma, "phit": c.phit, "Vx": c.Vx, "P": c.P, "Re": pre.Re, "rho": rho,
-        "2a": a, "t": ch.t, "mux": ch.mux, "muy": muy, "omega": c.omega, "Rl": Rl, "2b": bw,
-        "Mzr": ch.Mzr, "Cx": Cx, "Cy": Cy, "Cz": Cz, "Kya": lat.Kya if lat is not None else None,
-        "sigmax": sigmax, "sigmay": sigmay, "instKya": instKya, "Kxk": ch.Kxk,
+    # the values by the C model's names (MFOutputs members, and the conditioned inputs), then each output
+    # as mftire.mf.spec.OUTPUTS says
+    fields = {
+        "Fx": ch.Fx, "Fy": ch.Fy, "Fz": c.uFz, "Mx": ch.Mx, "My": ch.My, "Mz": ch.Mz, "Re": pre.Re, "rho": rho,
+        "a2": a, "t": ch.t, "mux": ch.mux, "muy": muy, "omega": c.omega, "Rl": Rl, "b2": bw, "Mzr": ch.Mzr,
+        "Cx": Cx, "Cy": Cy, "Cz": Cz, "Kya": lat.Kya if lat is not None else None, "sigmax": sigmax,
+        "sigmay": sigmay, "Kxk": ch.Kxk,
     }  # fmt: skip
+    out = {o.name: fields[o.field] if o.field is not None and o.cond is None else getattr(c, o.cond)
+           for o in _OUTPUT_BY_NAME.values() if o.name in want}  # fmt: skip
+    out["instKya"] = instKya
     if shape == ():  # scalar inputs: numpy scalars (as the kernel path)
         return {k: np.float64(np.real(out[k])) for k in names}
     return {k: np.broadcast_to(np.real(out[k]), shape).astype(float, copy=False) for k in names}
@@ -392,9 +395,9 @@ def evaluate_arrays(
     names = output_names(channels)
     if not isinstance(mode, Mode) and kernel.use_kernel(backend):
         check_fittyp(p)
-        if mode not in _CHECKED_MODES:
+        if mode not in CHECKED_MODES:
             Mode.from_code(mode)  # raises for a bad mode, as prepare()
-            _CHECKED_MODES.add(mode)
+            CHECKED_MODES.add(mode)
         out = kernel.evaluate(p, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, ext, variables, names)
         if out is not None:
             return out
@@ -405,4 +408,21 @@ def evaluate_arrays(
 
 
 _channels = channels
-_CHECKED_MODES: set = set()  # useMode codes Mode.from_code accepted
+#: The useMode codes found valid so far (:func:`valid_mode` adds to it; the latency path of
+#: :meth:`mftire.Tyre.evaluate` reads it before calling the check).
+CHECKED_MODES: set = set()
+
+
+def valid_mode(mode) -> bool:
+    """Whether ``mode`` is a valid three-digit ``useMode`` given as an ``int`` (checked once per code, then
+    remembered): the latency path of :meth:`mftire.Tyre.evaluate` serves any valid mode from its first call."""
+    if mode in CHECKED_MODES:
+        return True
+    if type(mode) is not int:
+        return False
+    try:
+        Mode.from_code(mode)
+    except MftireError:
+        return False
+    CHECKED_MODES.add(mode)
+    return True

@@ -44,7 +44,7 @@ subtracted times ``w``), My changes sign smoothly with ``Vx``.  At standstill th
 tyre is therefore a damped spring: Fx = Cx·(u + tau_x·du/dt) in the linear range.
 
 The same equations are compiled into the transient FMU (``mftire export-fmu
---transient``, ``mftire/fmu/csource/mf_transient.c``); the constants of
+--transient``, ``mftire/mf/c/mf_transient.c``); the constants of
 :data:`CONSTANTS` are its tunable parameters (one table for both).
 """
 

@@ -1,20 +1,23 @@
 /*
- * fmi3_model.c -- FMI 3.0 Model Exchange and Co-Simulation wrapper of the mftire
- * Magic Formula evaluator (mf_eval.c); the same model core as fmi2_model.c.
- * The tyre is algebraic: no continuous states, no event indicators, no clocks.
+ * fmi3_wrapper.c -- FMI 3.0 Model Exchange and Co-Simulation over the model interface of fmu_model.h
+ * (the steady-state tyre, mf_model.c, or the transient tyre, mt_model.c: whichever the FMU's fmu.c
+ * includes before this file).  Nothing here depends on the tyre.  No event indicators, no clocks.
  *
- * Uses the FMI 3.0 standard headers (fmi3Functions.h and friends).
+ * Uses the FMI 3.0 standard headers (fmi3Functions.h and friends; FMI3_FUNCTION_PREFIX honoured).
  */
+#ifdef MF_FMU_UNITY /* a part of fmu.c (alone, for an importer that compiles every .c: nothing) */
+#include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "fmi3Functions.h"
-#include "mf_model.h"
+#include "fmu_model.h"
 
 typedef enum { ST_INSTANTIATED, ST_INIT, ST_RUNNING, ST_TERMINATED, ST_ERROR } State;
 
 typedef struct {
-    MFModel model;
+    FMModel *model;
     fmi3InstanceEnvironment env;
     fmi3LogMessageCallback logger;
     char *name;
@@ -23,35 +26,53 @@ typedef struct {
     int log_errors, log_warnings;
 } Instance;
 
-static void log_cb(MFModel *m, int status, const char *category, const char *message)
+#define INS ((Instance *)instance)
+
+static void wlog(const Instance *ins, fmi3Status status, const char *category, const char *message)
 {
-    Instance *ins = (Instance *)m->host;
     if (!ins || !ins->logger) return;
-    if (status == MF_STATUS_WARNING && !ins->log_warnings) return;
-    if (status == MF_STATUS_ERROR && !ins->log_errors) return;
-    ins->logger(ins->env, (fmi3Status)status, category, message);
+    if (status == fmi3Warning && !ins->log_warnings) return;
+    if (status == fmi3Error && !ins->log_errors) return;
+    ins->logger(ins->env, status, category, message);
 }
 
-#define INS ((Instance *)instance)
+/* The model's logger (fmu_model.h). */
+static void model_log(void *host, int status, const char *category, const char *message)
+{
+    wlog((const Instance *)host, (fmi3Status)status, category, message);
+}
 
 static fmi3Status fail(fmi3Instance instance, const char *what)
 {
-    if (instance) mf_model_logf(&INS->model, MF_STATUS_ERROR, "logStatusError", "%s", what);
+    if (instance) wlog(INS, fmi3Error, "logStatusError", what);
     return fmi3Error;
+}
+
+/* A call in a state where the standard does not allow it: an error (the instance stays usable). */
+static fmi3Status wrong_state(fmi3Instance instance, const char *fn)
+{
+    static const char *const names[] = {"instantiated", "initialization mode", "running", "terminated", "error"};
+    char msg[160];
+    snprintf(msg, sizeof msg, "%s is not allowed in state '%s'", fn, names[INS->state]);
+    return fail(instance, msg);
 }
 
 static Instance *create(fmi3String name, fmi3String token, fmi3Boolean loggingOn, fmi3InstanceEnvironment env,
                         fmi3LogMessageCallback logger, int cosim)
 {
     Instance *ins;
-    if (!token || strcmp(token, mf_model_guid()) != 0) {
+    (void)loggingOn; /* warnings are rate-limited whatever the debug logging (fmu_model.h) */
+    if (!token || strcmp(token, fm_guid()) != 0) {
         if (logger) logger(env, fmi3Error, "logStatusError", "wrong instantiationToken for this binary");
         return NULL;
     }
     ins = (Instance *)calloc(1, sizeof(Instance));
     if (!ins) return NULL;
     ins->name = (char *)malloc(strlen(name ? name : "") + 1);
-    if (!ins->name) {
+    ins->model = (FMModel *)calloc(1, fm_size());
+    if (!ins->name || !ins->model) {
+        free(ins->name);
+        free(ins->model);
         free(ins);
         return NULL;
     }
@@ -61,8 +82,7 @@ static Instance *create(fmi3String name, fmi3String token, fmi3Boolean loggingOn
     ins->cosim = cosim;
     ins->state = ST_INSTANTIATED;
     ins->log_errors = ins->log_warnings = 1;
-    mf_model_init(&ins->model, log_cb, ins);
-    ins->model.debug_logging = loggingOn ? 1 : 0;
+    fm_init(ins->model, model_log, ins);
     return ins;
 }
 
@@ -76,14 +96,13 @@ FMI3_Export fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean lo
     size_t i;
     if (!instance) return fmi3Error;
     if (nCategories == 0) {
-        INS->model.debug_logging = loggingOn ? 1 : 0;
         INS->log_errors = INS->log_warnings = 1;
         return fmi3OK;
     }
     for (i = 0; i < nCategories; i++) {
         const char *cat = categories[i];
         if (!cat) continue;
-        if (strcmp(cat, "logAll") == 0) INS->model.debug_logging = loggingOn ? 1 : 0;
+        if (strcmp(cat, "logAll") == 0) INS->log_errors = INS->log_warnings = loggingOn ? 1 : 0;
         else if (strcmp(cat, "logStatusWarning") == 0) INS->log_warnings = loggingOn ? 1 : 0;
         else if (strcmp(cat, "logStatusError") == 0) INS->log_errors = loggingOn ? 1 : 0;
         else return fail(instance, "unknown log category");
@@ -140,6 +159,7 @@ FMI3_Export fmi3Instance fmi3InstantiateScheduledExecution(
 FMI3_Export void fmi3FreeInstance(fmi3Instance instance)
 {
     if (!instance) return;
+    free(INS->model);
     free(INS->name);
     free(instance);
 }
@@ -153,7 +173,8 @@ FMI3_Export fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Bo
     (void)stopTimeDefined;
     (void)stopTime;
     if (!instance) return fmi3Error;
-    INS->model.time = startTime;
+    if (INS->state != ST_INSTANTIATED) return wrong_state(instance, "fmi3EnterInitializationMode");
+    fm_set_time(INS->model, startTime);
     INS->state = ST_INIT;
     return fmi3OK;
 }
@@ -161,12 +182,11 @@ FMI3_Export fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Bo
 FMI3_Export fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
 {
     if (!instance) return fmi3Error;
-    /* outputs are valid straight after initialisation */
-    if (mf_model_validate(&INS->model) != MF_STATUS_OK || mf_model_update(&INS->model) != MF_STATUS_OK) {
+    if (INS->state != ST_INIT) return wrong_state(instance, "fmi3ExitInitializationMode");
+    if (fm_exit_initialization(INS->model) != FM_OK) { /* outputs are valid straight after initialisation */
         INS->state = ST_ERROR;
         return fmi3Error;
     }
-    INS->model.initialized = 1;
     INS->state = ST_RUNNING;
     return fmi3OK;
 }
@@ -183,7 +203,7 @@ FMI3_Export fmi3Status fmi3Terminate(fmi3Instance instance)
 FMI3_Export fmi3Status fmi3Reset(fmi3Instance instance)
 {
     if (!instance) return fmi3Error;
-    mf_model_reset(&INS->model);
+    fm_reset(INS->model);
     INS->state = ST_INSTANTIATED;
     return fmi3OK;
 }
@@ -197,7 +217,7 @@ FMI3_Export fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueRefe
     if (!instance) return fmi3Error;
     if (nValues != nvr) return fail(instance, "fmi3GetFloat64: only scalar variables (nValues == nValueReferences)");
     for (i = 0; i < nvr; i++)
-        if (mf_model_get_real(&INS->model, vr[i], &values[i]) != MF_STATUS_OK) return fmi3Error;
+        if (fm_get_real(INS->model, vr[i], &values[i]) != FM_OK) return fmi3Error;
     return fmi3OK;
 }
 
@@ -208,7 +228,7 @@ FMI3_Export fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueRefe
     if (!instance) return fmi3Error;
     if (nValues != nvr) return fail(instance, "fmi3SetFloat64: only scalar variables (nValues == nValueReferences)");
     for (i = 0; i < nvr; i++)
-        if (mf_model_set_real(&INS->model, vr[i], values[i]) != MF_STATUS_OK) return fmi3Error;
+        if (fm_set_real(INS->model, vr[i], values[i]) != FM_OK) return fmi3Error;
     return fmi3OK;
 }
 
@@ -220,7 +240,7 @@ FMI3_Export fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueRefere
     if (nValues != nvr) return fail(instance, "fmi3GetInt32: only scalar variables");
     for (i = 0; i < nvr; i++) {
         int v;
-        if (mf_model_get_int(&INS->model, vr[i], &v) != MF_STATUS_OK) return fmi3Error;
+        if (fm_get_int(INS->model, vr[i], &v) != FM_OK) return fmi3Error;
         values[i] = v;
     }
     return fmi3OK;
@@ -233,7 +253,7 @@ FMI3_Export fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueRefere
     if (!instance) return fmi3Error;
     if (nValues != nvr) return fail(instance, "fmi3SetInt32: only scalar variables");
     for (i = 0; i < nvr; i++)
-        if (mf_model_set_int(&INS->model, vr[i], values[i]) != MF_STATUS_OK) return fmi3Error;
+        if (fm_set_int(INS->model, vr[i], values[i]) != FM_OK) return fmi3Error;
     return fmi3OK;
 }
 
@@ -306,14 +326,14 @@ FMI3_Export fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueRefere
     return nvr == 0 && instance ? fmi3OK : fail(instance, "the model has no clocks");
 }
 
-/* Every output depends on every input (both lists come from the variable table). */
-#define is_output(vr) mf_model_is_output(vr)
+/* Every output (and state derivative) depends on every input and state (fm_dependencies). */
+#define is_output(vr) fm_is_unknown(vr)
 
 FMI3_Export fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance, fmi3ValueReference vr,
                                                            size_t *nDependencies)
 {
     if (!instance || !nDependencies) return fmi3Error;
-    *nDependencies = is_output(vr) ? mf_model_input_vrs(NULL) : 0;
+    *nDependencies = is_output(vr) ? fm_dependencies(NULL, 0) : 0;
     return fmi3OK;
 }
 
@@ -326,7 +346,8 @@ FMI3_Export fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3Va
     unsigned inputs[64];
     size_t i, n;
     if (!instance) return fmi3Error;
-    n = mf_model_input_vrs(inputs);
+    n = fm_dependencies(inputs, 64);
+    if (n > 64) return fail(instance, "fmi3GetVariableDependencies: more than 64 dependencies");
     if (!is_output(dependent) || nDependencies != n) return nDependencies == 0 ? fmi3OK : fmi3Error;
     for (i = 0; i < n; i++) {
         elementIndicesOfDependent[i] = 0;
@@ -487,19 +508,31 @@ FMI3_Export fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Bo
 FMI3_Export fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
 {
     if (!instance) return fmi3Error;
-    INS->model.time = time;
+    fm_set_time(INS->model, time);
+    return fmi3OK;
+}
+
+/* The continuous states (none for the steady-state tyre). */
+static fmi3Status states_call(fmi3Instance instance, const char *fn, size_t nx, const void *array)
+{
+    char msg[160];
+    if (!instance) return fmi3Error;
+    if (nx != fm_n_states() || (nx > 0 && !array)) {
+        snprintf(msg, sizeof msg, "%s: %u continuous states, not %u", fn, fm_n_states(), (unsigned)nx);
+        return fail(instance, msg);
+    }
     return fmi3OK;
 }
 
 FMI3_Export fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 x[], size_t nx)
 {
-    (void)x;
-    return instance && nx == 0 ? fmi3OK : fmi3Error;
+    if (states_call(instance, "fmi3SetContinuousStates", nx, x) != fmi3OK) return fmi3Error;
+    return nx ? (fmi3Status)fm_set_states(INS->model, x) : fmi3OK;
 }
 FMI3_Export fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 dx[], size_t nx)
 {
-    (void)dx;
-    return instance && nx == 0 ? fmi3OK : fmi3Error;
+    if (states_call(instance, "fmi3GetContinuousStateDerivatives", nx, dx) != fmi3OK) return fmi3Error;
+    return nx ? (fmi3Status)fm_get_derivatives(INS->model, dx) : fmi3OK;
 }
 FMI3_Export fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 ei[], size_t ni)
 {
@@ -508,13 +541,14 @@ FMI3_Export fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64
 }
 FMI3_Export fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 x[], size_t nx)
 {
-    (void)x;
-    return instance && nx == 0 ? fmi3OK : fmi3Error;
+    if (states_call(instance, "fmi3GetContinuousStates", nx, x) != fmi3OK) return fmi3Error;
+    return nx ? (fmi3Status)fm_get_states(INS->model, x) : fmi3OK;
 }
 FMI3_Export fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 xn[], size_t nx)
 {
-    (void)xn;
-    return instance && nx == 0 ? fmi3OK : fmi3Error;
+    if (states_call(instance, "fmi3GetNominalsOfContinuousStates", nx, xn) != fmi3OK) return fmi3Error;
+    if (nx) fm_get_nominals(xn);
+    return fmi3OK;
 }
 FMI3_Export fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n)
 {
@@ -525,7 +559,7 @@ FMI3_Export fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, siz
 FMI3_Export fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *n)
 {
     if (!instance || !n) return fmi3Error;
-    *n = 0;
+    *n = fm_n_states();
     return fmi3OK;
 }
 
@@ -545,14 +579,18 @@ FMI3_Export fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentComm
                                   fmi3Boolean *eventHandlingNeeded, fmi3Boolean *terminateSimulation,
                                   fmi3Boolean *earlyReturn, fmi3Float64 *lastSuccessfulTime)
 {
+    fmi3Status status;
     (void)noSetFMUStatePriorToCurrentPoint;
     if (!instance) return fmi3Error;
-    if (communicationStepSize < 0.0) return fail(instance, "fmi3DoStep: negative step size");
-    /* inputs are held over the step; the outputs at its end are those of the inputs */
-    INS->model.time = currentCommunicationPoint + communicationStepSize;
+    if (!INS->cosim) return fail(instance, "fmi3DoStep: not a Co-Simulation instance");
+    if (INS->state != ST_RUNNING) return wrong_state(instance, "fmi3DoStep");
+    if (!(communicationStepSize >= 0.0)) return fail(instance, "fmi3DoStep: invalid step size");
+    status = (fmi3Status)fm_do_step(INS->model, currentCommunicationPoint, communicationStepSize);
     if (eventHandlingNeeded) *eventHandlingNeeded = fmi3False;
     if (terminateSimulation) *terminateSimulation = fmi3False;
     if (earlyReturn) *earlyReturn = fmi3False;
-    if (lastSuccessfulTime) *lastSuccessfulTime = INS->model.time;
-    return mf_model_update(&INS->model) == MF_STATUS_OK ? fmi3OK : fmi3Error;
+    if (lastSuccessfulTime) *lastSuccessfulTime = fm_time(INS->model);
+    return status;
 }
+
+#endif /* MF_FMU_UNITY */

@@ -58,11 +58,11 @@ typedef struct {
  * the rolling offsets of the groups `offsets` & MT_OFFSETS.  Offsets not computed are set to 0 (they are
  * multiplied by w = 0, or not used).  Returns MF_OK or an mf_evaluate code.
  */
-int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned offsets, MTKin *k,
+MF_API int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned offsets, MTKin *k,
                   mf_warning_fn warn, void *ctx);
 
 /* State derivatives dx = (du/dt, dv/dt) at the state x = (u, v). */
-void mt_rates(const MFParams *p, const MTKin *k, const double x[2], double dx[2]);
+MF_API void mt_rates(const MFParams *p, const MTKin *k, const double x[2], double dx[2]);
 
 /*
  * Input guard, called before mt_kinematics: each non-finite input (NaN, +-Inf) of *in is replaced by its
@@ -71,8 +71,8 @@ void mt_rates(const MFParams *p, const MTKin *k, const double x[2], double dx[2]
  * (bit i: input i in MTInputs order, MT_N_INPUTS of them) of the inputs replaced, for the wrapper to log.
  */
 #define MT_N_INPUTS 8
-unsigned mt_guard_inputs(const MFParams *p, MTInputs *in, MTInputs *held);
-const char *mt_input_name(unsigned i);
+MF_API unsigned mt_guard_inputs(const MFParams *p, MTInputs *in, MTInputs *held);
+MF_API const char *mt_input_name(unsigned i);
 
 /*
  * Outputs at the state x: one steady-state evaluation at the transient slips, of the channel groups want
@@ -80,18 +80,18 @@ const char *mt_input_name(unsigned i);
  * alpha_t, Fz and Re are always set.  A field that is not finite (known case: Mz, Mzr at Fz = 0 with turn
  * slip, where the Python evaluator gives NaN too) is set to 0 and counted in out->nonfinite.  k must hold the offsets of want & MT_OFFSETS (mt_kinematics).
  */
-int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2], unsigned want,
+MF_API int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2], unsigned want,
                MTOutputs *out, mf_warning_fn warn, void *ctx);
 
 /* One exponential-Euler step of length h (rates and slope factors frozen at the start of the step):
  * stable for any h. */
-void mt_step(const MFParams *p, const MTKin *k, double x[2], double h);
+MF_API void mt_step(const MFParams *p, const MTKin *k, double x[2], double h);
 
 /* Advance the state by H with the inputs held (Co-Simulation step): one exact step mt_step(H) while it
  * stays linear (limiter inactive, slope factors within MT_CS_LINEAR_TOL), else ceil(H / TR_CS_STEP) equal
  * sub-steps of mt_step.  A non-finite result keeps the state. */
 #define MT_CS_LINEAR_TOL 0.01
-void mt_advance(const MFParams *p, const MTKin *k, double x[2], double H);
+MF_API void mt_advance(const MFParams *p, const MTKin *k, double x[2], double H);
 
 #ifdef __cplusplus
 }

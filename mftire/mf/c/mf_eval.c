@@ -49,10 +49,16 @@ MF_FN double sq(double x) { return x * x; }
  * transcendental calls; agrees with numpy's cos(arctan(x)) to rounding). */
 MF_FN double cos_atan(double x) { return 1.0 / sqrt(1.0 + x * x); }
 
+/* Normalised load increment dfz = (Fz - Fz0')/Fz0' with Fz0' = LFZO*FNOMIN (eqs 4.E1, 4.E2a) and pressure
+ * increment dpi = (P - NOMPRES)/NOMPRES (eq 4.E2b): mftire.mf.basic.increments. */
+MF_FN double mf_fz0p(const MFParams *p) { return p->LFZO * p->FNOMIN; /* eq 4.E1 */ }
+MF_FN double mf_dfz(const MFParams *p, double Fz) { return (Fz - mf_fz0p(p)) / mf_fz0p(p); /* eq 4.E2a */ }
+MF_FN double mf_dpi(const MFParams *p, double P) { return (P - p->NOMPRES) / p->NOMPRES; /* eq 4.E2b */ }
+
 /* ------------------------------------------------------------------ family.py (PAC2002) */
 
-/* Internal model code of a PAC2002 file (no FITTYP in the file), mftire.mf.family. */
-#define MF_PAC2002_CODE 2002.0
+/* Internal model code of a PAC2002 file (no FITTYP in the file): mftire.mf.spec.PAC2002_CODE. */
+#define MF_PAC2002_CODE MF_SPEC_PAC2002_CODE
 
 /* The MF 5.2 equation family: FITTYP 6 and PAC2002. */
 MF_FN int is_mf52(const MFParams *p) { return p->FITTYP == 6.0 || p->FITTYP == MF_PAC2002_CODE; }
@@ -89,57 +95,28 @@ typedef struct {
 
 MF_FN void flag(Ctx *x, int kind) { x->warnings |= 1UL << kind; }
 
-/* The message of warning kind `kind` (the texts of the numpy path, mftire.mf.inputs / solver). */
+/* The message of warning kind `kind` (the texts of mftire/mf/spec.py WARNINGS; for the limits: the file's
+ * limit value; for the data variables: their names). */
 void mf_warning_text(const MFParams *p, int kind, char *buf, unsigned long n)
 {
-    static const char *const nan_names[] = {"Fz", "kappa", "alpha", "gamma", "phit", "Vx", "omega"};
-#define MF_LIMIT(kind, label, side, key) {kind, label, side, #key, offsetof(MFParams, key)}
-    static const struct { int kind; const char *label, *side, *key; size_t at; } limits[] = {
-        MF_LIMIT(MF_W_ALPHA_LOW, "Slip angle", "below", ALPMIN), MF_LIMIT(MF_W_ALPHA_HIGH, "Slip angle", "above", ALPMAX),
-        MF_LIMIT(MF_W_GAMMA_LOW, "Inclination angle", "below", CAMMIN),
-        MF_LIMIT(MF_W_GAMMA_HIGH, "Inclination angle", "above", CAMMAX),
-        MF_LIMIT(MF_W_FZ_HIGH, "Vertical load", "above", FZMAX), MF_LIMIT(MF_W_FZ_LOW, "Vertical load", "below", FZMIN),
-        MF_LIMIT(MF_W_P_LOW, "Pressure", "below", PRESMIN), MF_LIMIT(MF_W_P_HIGH, "Pressure", "above", PRESMAX),
-        MF_LIMIT(MF_W_KAPPA_LOW, "Slip ratio", "below", KPUMIN), MF_LIMIT(MF_W_KAPPA_HIGH, "Slip ratio", "above", KPUMAX),
-    };
-#undef MF_LIMIT
-    static const struct { int kind; const char *name, *eq; } curv[] = {
-        {MF_W_EX, "Ex", "4.E14"}, {MF_W_EY, "Ey", "4.E24"}, {MF_W_EXA, "Exa", "4.E56"},
-        {MF_W_EYK, "Eyk", "4.E64"}, {MF_W_ET, "Et", "4.E44"}, {MF_W_EY0, "Ey", "4.E24"},
-    };
-    unsigned k;
+    static const MFWarningSpec specs[MF_W_COUNT] = MF_WARNING_SPECS;
+    const char *input;
     if (n == 0) return;
     buf[0] = '\0';
-    if (kind >= MF_W_NAN_FZ && kind <= MF_W_NAN_OMEGA) {
-        snprintf(buf, n, "1 NaN value(s) in input '%s' replaced by %.1f.", nan_names[kind - MF_W_NAN_FZ], 0.0);
-        return;
-    }
-    if (kind >= MF_W_NAN_DATA0 && kind <= MF_W_NAN_DATA3) {
+    if (kind < 0 || kind >= MF_W_COUNT) return;
+    input = specs[kind].input;
 #if MF_N_DATA > 0
+    if (kind >= MF_W_NAN_DATA0 && kind < MF_W_NAN_DATA0 + MF_N_DATA) {
         static const char *const data_names[MF_N_DATA] = MF_DATA_NAMES;
-        if (kind - MF_W_NAN_DATA0 < MF_N_DATA) {
-            snprintf(buf, n, "1 NaN value(s) in input '%s' replaced by %.1f.", data_names[kind - MF_W_NAN_DATA0], 0.0);
-            return;
-        }
+        input = data_names[kind - MF_W_NAN_DATA0];
+    }
 #endif
-        snprintf(buf, n, "1 NaN value(s) in input 'data%d' replaced by %.1f.", kind - MF_W_NAN_DATA0, 0.0);
-        return;
-    }
-    for (k = 0; k < sizeof limits / sizeof limits[0]; k++)
-        if (limits[k].kind == kind) {
-            snprintf(buf, n, "%s %s the limit %s=%.17g. Values have been saturated.", limits[k].label,
-                     limits[k].side, limits[k].key, *(const double *)((const char *)p + limits[k].at));
-            return;
-        }
-    if (kind == MF_W_LOW_SPEED) {
-        snprintf(buf, n, "Speed input Vx below the limit VXLOW=%.17g. Low speed mode activated.", p->VXLOW);
-        return;
-    }
-    for (k = 0; k < sizeof curv / sizeof curv[0]; k++)
-        if (curv[k].kind == kind) {
-            snprintf(buf, n, "%s over limit (>1), eq %s; clipped to 1.", curv[k].name, curv[k].eq);
-            return;
-        }
+    if (specs[kind].limit >= 0)
+        snprintf(buf, n, specs[kind].format, ((const double *)p)[specs[kind].limit]);
+    else if (input)
+        snprintf(buf, n, specs[kind].format, input);
+    else
+        snprintf(buf, n, "%s", specs[kind].format);
 }
 
 /* ------------------------------------------------------------------ modes.py */
@@ -169,9 +146,11 @@ int mf_check_mode(int code, char *msg, unsigned long n)
 
 int mf_check_fittyp(const MFParams *p, char *msg, unsigned long n)
 {
-    if (p->FITTYP == 6.0 || p->FITTYP == 61.0 || p->FITTYP == 62.0 || is_pac2002(p)) return MF_OK;
-    snprintf(msg, n,
-             "FITTYP %.17g is not evaluated: mftire evaluates MF 6.1 (61), MF 6.2 (62) and MF 5.2 (6) property files",
+    static const double families[MF_SPEC_N_FAMILIES] = MF_SPEC_FAMILIES;
+    int k;
+    for (k = 0; k < MF_SPEC_N_FAMILIES; k++)
+        if (p->FITTYP == families[k]) return MF_OK;
+    snprintf(msg, n, "FITTYP %.17g is not evaluated: mftire evaluates the model codes of " MF_SPEC_FAMILY_NAMES,
              p->FITTYP);
     return MF_BAD_FITTYP;
 }
@@ -281,8 +260,7 @@ MF_FN void condition_inputs(const MFParams *p, Ctx *m, double Fz, double kappa, 
  */
 MF_FN void turn_slip_spin(const MFParams *p, Cond *c)
 {
-    double Fz0p = p->LFZO * p->FNOMIN; /* eq 4.E1 */
-    double dfz = (c->Fz - Fz0p) / Fz0p; /* eq 4.E2a */
+    double dfz = mf_dfz(p, c->Fz); /* eq 4.E2a */
     double Vsy = -tan(c->alpha) * fabs(c->Vx);
     double V = sqrt(sq(c->Vx) + sq(Vsy));
     double eps_gamma = p->PECP1 * (1.0 + p->PECP2 * dfz); /* eq 4.90 */
@@ -310,9 +288,9 @@ typedef struct {
 MF_FN void basic(const MFParams *p, const Ctx *m, const Cond *c, double muRoad, Basic *b)
 {
     double absVx, Vsy, Vc, Vc_prime, s, LMUV, Amu;
-    b->Fz0p = p->LFZO * p->FNOMIN;                 /* eq 4.E1 */
-    b->dfz = (c->Fz - b->Fz0p) / b->Fz0p;         /* eq 4.E2a */
-    b->dpi = (c->P - p->NOMPRES) / p->NOMPRES;    /* eq 4.E2b */
+    b->Fz0p = mf_fz0p(p);          /* eq 4.E1 */
+    b->dfz = mf_dfz(p, c->Fz);     /* eq 4.E2a */
+    b->dpi = mf_dpi(p, c->P);      /* eq 4.E2b */
     absVx = fabs(c->Vx);
     /* Vsx = -kappa*|Vx| (eq 4.E5) and Vs (eq 3.39) only matter when LMUV != 0 */
     /* ISO sign convention: no minus sign in eq 2.12 (the book is in adapted SAE). */
@@ -461,11 +439,8 @@ MF_FN double zeta6(const MFParams *p, double phi) { return cos_atan(p->QBRP1 * p
 
 /* ------------------------------------------------------------------ longitudinal.py */
 
-/* The warnings of the curvature clips below, by the channel group that raises them (the array
- * kernel computes some groups that were not asked for and keeps only the asked groups' warnings). */
-#define MF_W_OF_FX ((1UL << MF_W_EX) | (1UL << MF_W_EXA))
-#define MF_W_OF_FY ((1UL << MF_W_EY) | (1UL << MF_W_EYK))
-#define MF_W_OF_MZ ((1UL << MF_W_ET) | (1UL << MF_W_EY0))
+/* MF_W_OF_FX, MF_W_OF_FY, MF_W_OF_MZ (mf_spec_gen.h): the warnings of the curvature clips below, by the
+ * channel group that raises them. */
 
 /* Curvature factors must not exceed 1; clipped with a warning in limit mode. */
 MF_FN double clip_curvature(Ctx *m, double E, int kind)
@@ -1079,10 +1054,9 @@ MF_FN void contact_patch(const MFParams *p, const Cond *c, double dpi, double *a
 MF_FN void relaxation(const MFParams *p, const Cond *c, double Kxk, double Kya, double *Cx_out, double *Cy_out,
                        double *sx_out, double *sy_out)
 {
-    double Fz0 = p->FNOMIN, R0 = p->UNLOADED_RADIUS;
-    double Fz0p = p->LFZO * Fz0; /* eq 4.E1 */
-    double dfz = (c->Fz - Fz0p) / Fz0p; /* eq 4.E2a */
-    double dpi = (c->P - p->NOMPRES) / p->NOMPRES; /* eq 4.E2b */
+    double Fz0 = p->FNOMIN, R0 = p->UNLOADED_RADIUS, Fz0p = mf_fz0p(p); /* eq 4.E1 */
+    double dfz = mf_dfz(p, c->Fz); /* eq 4.E2a */
+    double dpi = mf_dpi(p, c->P); /* eq 4.E2b */
     double Cx = p->LONGITUDINAL_STIFFNESS * (1.0 + p->PCFX1 * dfz + p->PCFX2 * sq(dfz)) * (1.0 + p->PCFX3 * dpi); /* 17 */
     double Cy = p->LATERAL_STIFFNESS * (1.0 + p->PCFY1 * dfz + p->PCFY2 * sq(dfz)) * (1.0 + p->PCFY3 * dpi); /* 18 */
     if (is_mf52(p)) {
@@ -1211,7 +1185,7 @@ MF_FN double prepare_point(const MFParams *p, Ctx *m, const MFInputs *in, Cond *
     P = in->P;
     if (isnan(P) || P <= 0.0) P = p->INFLPRES;
     condition_inputs(p, m, Fz, kappa, alpha, gamma, phit, Vx, P, c);
-    return (c->P - p->NOMPRES) / p->NOMPRES; /* eq 4.E2b */
+    return mf_dpi(p, c->P); /* eq 4.E2b */
 }
 
 /* What mf_channels computes: the MF_WANT_* bits of mf_eval.h (mftire.mf.solver.channels, outputs). */

@@ -1,0 +1,347 @@
+/*
+ * mf_model.c -- the steady-state tyre behind the FMI wrappers (fmu_model.h): mf_eval.c at the
+ * importer's inputs, no continuous states.
+ *
+ * All variables are addressed through the value-reference table generated into
+ * mf_model_gen.h from the Python variable table (mftire/fmu/variables.py).
+ * Outputs are evaluated lazily: setting an input or a parameter marks the
+ * instance dirty, reading an output evaluates once.
+ */
+#ifdef MF_FMU_UNITY /* a part of fmu.c (alone, for an importer that compiles every .c: nothing) */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "fmu_common.h"
+#include "mf_model.h"
+#include "mf_model_gen.h"
+
+/* Counters of the input/output guards: 9 inputs, MF_MAX_DATA data inputs, the outputs. */
+#define MF_GUARD_SLOTS (9 + MF_MAX_DATA + 1)
+
+struct FMModel {
+    MFParams params;
+    MFInputs inputs;
+    MFOutputs outputs;
+    int use_mode;
+    double time;
+    int dirty;                /* inputs or parameters changed since the last evaluation */
+    int initialized;          /* after ExitInitializationMode */
+    unsigned long evals;      /* evaluations so far (the clock of the warning rate limit) */
+    FMWarnSlot warn[MF_W_COUNT];
+    FMWarnSlot guard[MF_GUARD_SLOTS]; /* input guards (9 inputs, data, outputs) */
+    fm_log_fn log;
+    void *host;               /* the wrapper's instance */
+};
+
+static int update(FMModel *m);
+
+static const char *fm_guid(void) { return MF_GUID; }
+static size_t fm_size(void) { return sizeof(FMModel); }
+static unsigned fm_n_states(void) { return 0; }
+static int fm_is_unknown(unsigned vr) { return vr < MF_N_VARS && MF_VARS[vr].kind == MF_K_OUTPUT; }
+static void fm_set_time(FMModel *m, double t) { m->time = t; }
+static double fm_time(const FMModel *m) { return m->time; }
+
+static unsigned fm_dependencies(unsigned *vrs, unsigned room)
+{
+    unsigned vr, n = 0;
+    for (vr = 0; vr < MF_N_VARS; vr++)
+        if (MF_VARS[vr].kind == MF_K_INPUT) {
+            if (vrs && n < room) vrs[n] = vr;
+            n++;
+        }
+    return n;
+}
+
+#define logf_(m, status, category, ...) fm_logf((m)->log, (m)->host, status, category, __VA_ARGS__)
+
+static void fm_reset(FMModel *m)
+{
+    m->params = MF_PARAM_START;
+    m->inputs = MF_INPUT_START;
+    memset(&m->outputs, 0, sizeof m->outputs);
+    m->use_mode = MF_USEMODE_START;
+    m->time = 0.0;
+    m->dirty = 1;
+    m->initialized = 0;
+    m->evals = 0;
+    memset(m->warn, 0, sizeof m->warn);
+    memset(m->guard, 0, sizeof m->guard);
+}
+
+static void fm_init(FMModel *m, fm_log_fn log, void *host)
+{
+    memset(m, 0, sizeof *m);
+    m->log = log;
+    m->host = host;
+    fm_reset(m);
+}
+
+/* A warning through the rate limit (slot: its kind or guard). */
+static void limited_warning(FMModel *m, FMWarnSlot *slot, const char *message)
+{
+    fm_warn(m->log, m->host, slot, m->evals, m->time, message);
+}
+
+static void on_warning(void *ctx, int kind, const char *message)
+{
+    FMModel *m = (FMModel *)ctx;
+    if (kind >= 0 && kind < MF_W_COUNT) limited_warning(m, &m->warn[kind], message);
+}
+
+static int check_parameter(const FMModel *m, const double *slot, double value, char *msg, unsigned long n)
+{
+    return fm_check_parameter(&m->params, slot, value, msg, n);
+}
+
+static int fm_exit_initialization(FMModel *m)
+{
+    char msg[256];
+    unsigned vr;
+    if (mf_check_fittyp(&m->params, msg, sizeof msg) != MF_OK || mf_check_mode(m->use_mode, msg, sizeof msg) != MF_OK) {
+        logf_(m, FM_ERROR, "logStatusError", "%s", msg);
+        return FM_ERROR;
+    }
+    for (vr = 0; vr < MF_N_VARS; vr++)
+        if (MF_VARS[vr].kind == MF_K_PARAM) {
+            const double *slot = (const double *)((const char *)&m->params + MF_VARS[vr].offset);
+            if (check_parameter(m, slot, *slot, msg, sizeof msg)) {
+                logf_(m, FM_ERROR, "logStatusError", "%s: %s", MF_VAR_NAMES[vr], msg);
+                return FM_ERROR;
+            }
+        }
+    if (update(m) != FM_OK) return FM_ERROR; /* outputs are valid straight after initialisation */
+    m->initialized = 1;
+    return FM_OK;
+}
+
+/* ------------------------------------------------------------------ input and output guards
+ *
+ * The importer's inputs pass through guard_inputs() before the evaluator sees them
+ * (docs/fmu.md, "Bad inputs"):
+ *   - NaN keeps the evaluator's own replacement and warning (0; P: INFLPRES), except
+ *     muRoad, which becomes 1 (no friction change) here;
+ *   - +-Inf and finite values beyond the bounds below are saturated to the bound;
+ *   - |x| < 1e-30 (subnormal and tiny values) is 0, silently: 1/x would overflow;
+ *   - the bounds are the file's ranges widened to a guard band, or physical bounds
+ *     where the file has no range:
+ *       Fz     <= 3 FZMAX                 (negative: lift-off, set to 0 by the evaluator)
+ *       kappa  |.| <= max(10, 2 max(|KPUMIN|, |KPUMAX|))
+ *       alpha, gamma  |.| <= 1.55 rad     (just below 90 deg: tan() stays finite)
+ *       phit   |.| <= 100 1/m
+ *       Vx     |.| <= 200 m/s
+ *       P      <= 3 PRESMAX               (<= 0 or -Inf: INFLPRES, as for NaN)
+ *       omega  |.| <= 2000 rad/s
+ *       muRoad 1e-3 .. 10                (no friction at all is outside the model: 0/0)
+ *       data variables of the extensions  |.| <= 1e12 (NaN: 0 by the evaluator)
+ * Each replacement is logged as a warning through the FMI logger (rate-limited like the
+ * evaluator's warnings).  guard_outputs() is the last line: a published output that is
+ * still not finite is set to 0 with a logged warning (known case: Mz, Mzr at Fz = 0 with
+ * turn slip and limits, useMode 112, where the Python evaluator gives NaN too);
+ * the fuzz test of tests/test_fmu_guards.py drives 10^5 random vectors through it.
+ */
+#define MF_GUARD_ALPHA 1.55
+#define MF_GUARD_PHIT 100.0
+#define MF_GUARD_VX 200.0
+#define MF_GUARD_OMEGA 2000.0
+#define MF_GUARD_MU 10.0
+#define MF_GUARD_MU_MIN 1e-3
+#define MF_GUARD_TINY 1e-30
+#define MF_GUARD_DATA 1e12
+
+static void guard_log(FMModel *m, unsigned slot, const char *name, double x, double to, const char *why)
+{
+    char text[256];
+    snprintf(text, sizeof text, "input '%s' = %.17g %s %.17g.", name, x, why, to);
+    limited_warning(m, &m->guard[slot < MF_GUARD_SLOTS ? slot : MF_GUARD_SLOTS - 1], text);
+}
+
+/* Saturate x (NaN passes through for the evaluator to replace) to [lo, hi]; |x| < 1e-30 is 0. */
+static double guard_clip(FMModel *m, unsigned slot, const char *name, double x, double lo, double hi)
+{
+    if (fabs(x) < MF_GUARD_TINY) x = 0.0 * x; /* keeps the sign of zero; subnormals overflow 1/x */
+    if (x < lo) {
+        guard_log(m, slot, name, x, lo, "saturated to the bound");
+        return lo;
+    }
+    if (x > hi) {
+        guard_log(m, slot, name, x, hi, "saturated to the bound");
+        return hi;
+    }
+    return x;
+}
+
+static void guard_inputs(FMModel *m, MFInputs *in)
+{
+    const MFParams *p = &m->params;
+    double kmax = fmax(10.0, 2.0 * fmax(fabs(p->KPUMIN), fabs(p->KPUMAX)));
+    double fzmax = 3.0 * p->FZMAX, pmax = 3.0 * p->PRESMAX;
+    int k;
+    if (!(fzmax > 0.0)) fzmax = 3.0 * p->FNOMIN;
+    if (!(pmax > 0.0)) pmax = 3.0 * p->INFLPRES;
+    in->Fz = guard_clip(m, 0, "Fz", in->Fz, -HUGE_VAL, fzmax); /* -Inf: lift-off (0) in the evaluator */
+    if (isinf(in->Fz)) in->Fz = 0.0;
+    in->kappa = guard_clip(m, 1, "kappa", in->kappa, -kmax, kmax);
+    in->alpha = guard_clip(m, 2, "alpha", in->alpha, -MF_GUARD_ALPHA, MF_GUARD_ALPHA);
+    in->gamma = guard_clip(m, 3, "gamma", in->gamma, -MF_GUARD_ALPHA, MF_GUARD_ALPHA);
+    in->phit = guard_clip(m, 4, "phit", in->phit, -MF_GUARD_PHIT, MF_GUARD_PHIT);
+    in->Vx = guard_clip(m, 5, "Vx", in->Vx, -MF_GUARD_VX, MF_GUARD_VX);
+    if (isinf(in->P) && in->P < 0.0) in->P = 0.0; /* <= 0 means INFLPRES */
+    in->P = guard_clip(m, 6, "P", in->P, -HUGE_VAL, pmax);
+    in->omega = guard_clip(m, 7, "omega", in->omega, -MF_GUARD_OMEGA, MF_GUARD_OMEGA);
+    if (isnan(in->muRoad)) {
+        guard_log(m, 8, "muRoad", in->muRoad, 1.0, "replaced by");
+        in->muRoad = 1.0;
+    }
+    in->muRoad = guard_clip(m, 8, "muRoad", in->muRoad, MF_GUARD_MU_MIN, MF_GUARD_MU);
+#if MF_N_DATA > 0
+    {
+        static const char *const names[MF_N_DATA] = MF_DATA_NAMES;
+        for (k = 0; k < MF_N_DATA; k++)
+            in->data[k] = guard_clip(m, 9 + (unsigned)k, names[k], in->data[k], -MF_GUARD_DATA, MF_GUARD_DATA);
+    }
+#endif
+    (void)k;
+}
+
+static void guard_outputs(FMModel *m)
+{
+    double *o = (double *)&m->outputs;
+    unsigned i, vr, n = sizeof m->outputs / sizeof(double), bad = 0;
+    for (i = 0; i < n; i++) bad |= !isfinite(o[i]);
+    if (!bad) return; /* the usual case: no look-up of the names */
+    for (vr = 0; vr < MF_N_VARS; vr++)
+        if (MF_VARS[vr].kind == MF_K_OUTPUT) {
+            double *y = (double *)((char *)&m->outputs + MF_VARS[vr].offset);
+            if (!isfinite(*y)) {
+                char text[160];
+                snprintf(text, sizeof text, "output '%s' = %g is not finite; set to 0.", MF_VAR_NAMES[vr], *y);
+                limited_warning(m, &m->guard[MF_GUARD_SLOTS - 1], text);
+                *y = 0.0;
+            }
+        }
+    for (i = 0; i < n; i++)
+        if (!isfinite(o[i])) o[i] = 0.0; /* members that are not FMU outputs (omega, Cx, Cy, Cz) */
+}
+
+/* Evaluate if the inputs, parameters or mode changed. */
+static int update(FMModel *m)
+{
+    char msg[256];
+    int rc;
+    MFInputs in;
+    if (!m->dirty) return FM_OK;
+    m->evals++;
+    in = m->inputs;
+    guard_inputs(m, &in);
+    rc = mf_evaluate(&m->params, m->use_mode, &in, &m->outputs, on_warning, m);
+    if (rc == MF_OK) guard_outputs(m);
+    if (rc != MF_OK) {
+        if (rc == MF_BAD_MODE) mf_check_mode(m->use_mode, msg, sizeof msg);
+        else mf_check_fittyp(&m->params, msg, sizeof msg);
+        logf_(m, FM_ERROR, "logStatusError", "%s", msg);
+        return FM_ERROR;
+    }
+    m->dirty = 0;
+    return FM_OK;
+}
+
+static int fm_get_real(FMModel *m, unsigned vr, double *value)
+{
+    const MFVarInfo *v;
+    if (vr >= MF_N_VARS) goto bad;
+    v = &MF_VARS[vr];
+    switch (v->kind) {
+    case MF_K_TIME: *value = m->time; return FM_OK;
+    case MF_K_INPUT: *value = *(const double *)((const char *)&m->inputs + v->offset); return FM_OK;
+    case MF_K_PARAM: *value = *(const double *)((const char *)&m->params + v->offset); return FM_OK;
+    case MF_K_OUTPUT:
+        if (update(m) != FM_OK) return FM_ERROR;
+        *value = *(const double *)((const char *)&m->outputs + v->offset);
+        return FM_OK;
+    default: break;
+    }
+bad:
+    logf_(m, FM_ERROR, "logStatusError", "value reference %u is not a Real variable", vr);
+    return FM_ERROR;
+}
+
+static int fm_set_real(FMModel *m, unsigned vr, double value)
+{
+    const MFVarInfo *v;
+    char msg[256];
+    if (vr >= MF_N_VARS) goto bad;
+    v = &MF_VARS[vr];
+    if (v->kind == MF_K_INPUT) {
+        *(double *)((char *)&m->inputs + v->offset) = value;
+        m->dirty = 1;
+        return FM_OK;
+    }
+    if (v->kind == MF_K_PARAM) {
+        double *slot = (double *)((char *)&m->params + v->offset);
+        if (v->fixed && m->initialized) {
+            logf_(m, FM_ERROR, "logStatusError", "%s is a fixed parameter: it can only be set before initialisation",
+                  MF_VAR_NAMES[vr]);
+            return FM_ERROR;
+        }
+        if (check_parameter(m, slot, value, msg, sizeof msg)) { /* refused: the parameter keeps its value */
+            logf_(m, FM_ERROR, "logStatusError", "%s: %s", MF_VAR_NAMES[vr], msg);
+            return FM_ERROR;
+        }
+        *slot = value;
+        m->dirty = 1;
+        return FM_OK;
+    }
+    if (v->kind == MF_K_OUTPUT || v->kind == MF_K_TIME) {
+        logf_(m, FM_ERROR, "logStatusError", "%s cannot be set (causality %s)", MF_VAR_NAMES[vr],
+              v->kind == MF_K_OUTPUT ? "output" : "independent");
+        return FM_ERROR;
+    }
+bad:
+    logf_(m, FM_ERROR, "logStatusError", "value reference %u is not a Real variable", vr);
+    return FM_ERROR;
+}
+
+static int fm_get_int(FMModel *m, unsigned vr, int *value)
+{
+    if (vr == MF_VR_USEMODE) {
+        *value = m->use_mode;
+        return FM_OK;
+    }
+    logf_(m, FM_ERROR, "logStatusError", "value reference %u is not an Integer variable", vr);
+    return FM_ERROR;
+}
+
+static int fm_set_int(FMModel *m, unsigned vr, int value)
+{
+    char msg[256];
+    if (vr != MF_VR_USEMODE) {
+        logf_(m, FM_ERROR, "logStatusError", "value reference %u is not an Integer variable", vr);
+        return FM_ERROR;
+    }
+    if (mf_check_mode(value, msg, sizeof msg) != MF_OK) {
+        logf_(m, FM_ERROR, "logStatusError", "%s", msg);
+        return FM_ERROR;
+    }
+    m->use_mode = value;
+    m->dirty = 1;
+    return FM_OK;
+}
+
+/* ------------------------------------------------------------------ no continuous states */
+
+static int fm_get_states(FMModel *m, double *x) { (void)m, (void)x; return FM_OK; }
+static int fm_set_states(FMModel *m, const double *x) { (void)m, (void)x; return FM_OK; }
+static int fm_get_derivatives(FMModel *m, double *dx) { (void)m, (void)dx; return FM_OK; }
+static void fm_get_nominals(double *xn) { (void)xn; }
+
+/* Co-Simulation: the inputs are held over the step; the outputs at its end are those of the inputs. */
+static int fm_do_step(FMModel *m, double t, double h)
+{
+    m->time = t + h;
+    return update(m);
+}
+
+#endif /* MF_FMU_UNITY */

@@ -1,0 +1,89 @@
+/*
+ * mt_probe.c -- a test and benchmark harness of the transient C model (mftire.fmu.transient_export.
+ * build_probe_library): the model functions of mf_transient.c with default visibility, without any FMI
+ * function.  Compiled with mf_eval.c and mf_transient.c (not part of an FMU).
+ */
+#include <string.h>
+#include <time.h>
+#include "mf_transient.h"
+#include "mt_model_gen.h"
+
+static void load_inputs(MTInputs *in, const double *inputs)
+{
+    memset(in, 0, sizeof *in);
+    in->Fz = inputs[0]; in->Vx = inputs[1]; in->Vy = inputs[2]; in->omega = inputs[3];
+    in->gamma = inputs[4]; in->P = inputs[5]; in->muRoad = inputs[6]; in->yawRate = inputs[7];
+}
+
+/* params: NULL = start values; inputs: the 8 kinematic inputs; x: 2 states. */
+__attribute__((visibility("default"))) int mt_probe_rates(int use_mode, const double *inputs, const double *x,
+                                                          double *dx, double *kin)
+{
+    MTInputs in;
+    MTKin k;
+    int rc;
+    load_inputs(&in, inputs);
+    rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, 0u, &k, NULL, NULL);
+    if (rc) return rc;
+    mt_rates(&MT_PARAM_START, &k, x, dx);
+    if (kin) { kin[0] = k.Vsx; kin[1] = k.Vsy; kin[2] = k.sigx; kin[3] = k.sigy; kin[4] = k.w; }
+    return 0;
+}
+
+/* Outputs (Fx, Fy, Mz, Mx, My, kappa_t, alpha_t) at the state x. */
+__attribute__((visibility("default"))) int mt_probe_outputs(int use_mode, const double *inputs, const double *x,
+                                                            double *y)
+{
+    MTInputs in;
+    MTKin k;
+    MTOutputs o;
+    int rc;
+    load_inputs(&in, inputs);
+    rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, MF_WANT_ALL, &k, NULL, NULL);
+    if (rc) return rc;
+    rc = mt_outputs(&MT_PARAM_START, use_mode, &k, x, MF_WANT_ALL, &o, NULL, NULL);
+    if (rc) return rc;
+    y[0] = o.ss.Fx; y[1] = o.ss.Fy; y[2] = o.ss.Mz; y[3] = o.ss.Mx; y[4] = o.ss.My;
+    y[5] = o.kappa_t; y[6] = o.alpha_t;
+    return 0;
+}
+
+/* Every output (value-reference order) at the state x, from the full evaluation (all channel groups). */
+__attribute__((visibility("default"))) int mt_probe_all_outputs(int use_mode, const double *inputs, const double *x,
+                                                                double *y)
+{
+    MTInputs in;
+    MTKin k;
+    MTOutputs o;
+    int rc, vr, i = 0;
+    load_inputs(&in, inputs);
+    rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, MF_WANT_ALL, &k, NULL, NULL);
+    if (rc) return rc;
+    rc = mt_outputs(&MT_PARAM_START, use_mode, &k, x, MF_WANT_ALL, &o, NULL, NULL);
+    if (rc) return rc;
+    for (vr = 0; vr < MT_N_VARS; vr++)
+        if (MT_VARS[vr].kind == MT_K_OUTPUT) y[i++] = *(const double *)((const char *)&o + MT_VARS[vr].offset);
+    return 0;
+}
+
+/* Seconds per Model Exchange derivative evaluation (kinematics + rates), timed in C over n calls
+ * with the inputs changing every call (as between two solver calls). */
+__attribute__((visibility("default"))) double mt_probe_bench(int use_mode, const double *inputs, long n)
+{
+    MTInputs in;
+    MTKin k;
+    double x[2] = {1e-3, -2e-3}, dx[2], acc = 0.0;
+    struct timespec t0, t1;
+    long i;
+    load_inputs(&in, inputs);
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    for (i = 0; i < n; i++) {
+        in.Vy = inputs[2] + 1e-9 * (double)(i & 1023);
+        mt_kinematics(&MT_PARAM_START, use_mode, &in, 0u, &k, NULL, NULL);
+        mt_rates(&MT_PARAM_START, &k, x, dx);
+        acc += dx[0] + dx[1];
+    }
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    if (acc != acc) return -1.0;
+    return ((double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec)) / (double)n;
+}

@@ -1,0 +1,214 @@
+"""The FMI wrappers (mftire/fmu/c): prefixes for static linking, call states, refused parameters, the
+archive's documentation, the model identifier and the one mode variable (issues 23 and 26)."""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+import zipfile
+from pathlib import Path
+
+import pytest
+from conftest import REFERENCE_TYRES, needs_c_compiler
+
+from mftire.fmu.build import find_compiler
+from mftire.fmu.export import export_fmu
+from mftire.tyre import load
+
+TYRES = ("MF61", "MF52")
+
+
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory):
+    d = tmp_path_factory.mktemp("wrapper")
+    return {(name, v): export_fmu(REFERENCE_TYRES[name], d / f"{name}_{v}.fmu", v) for name in TYRES for v in (2, 3)}
+
+
+_MAIN = r"""
+#include <stdio.h>
+#include <stdlib.h>
+#include "fmi2FunctionTypes.h"
+
+/* the two tyres' functions, by their prefixes */
+#define DECLARE(P) \
+    extern fmi2InstantiateTYPE P##fmi2Instantiate; \
+    extern fmi2EnterInitializationModeTYPE P##fmi2EnterInitializationMode; \
+    extern fmi2ExitInitializationModeTYPE P##fmi2ExitInitializationMode; extern fmi2SetRealTYPE P##fmi2SetReal; \
+    extern fmi2GetRealTYPE P##fmi2GetReal; extern fmi2FreeInstanceTYPE P##fmi2FreeInstance;
+DECLARE(tyreA_)
+DECLARE(tyreB_)
+
+static void logger(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2String c, fmi2String m, ...)
+{
+    (void)e, (void)n, (void)s, (void)c, (void)m;
+}
+
+#define RUN(P, GUID, OUT)                                                                                        \
+    do {                                                                                                         \
+        fmi2ValueReference in[3] = {VR_FZ, VR_KAPPA, VR_ALPHA}, out[1] = {OUT};                                  \
+        fmi2Real u[3] = {4000.0, 0.05, 0.03}, y[1];                                                              \
+        fmi2Component c = P##fmi2Instantiate("x", fmi2ModelExchange, GUID, "", &cb, fmi2False, fmi2False);       \
+        if (!c || P##fmi2EnterInitializationMode(c) || P##fmi2ExitInitializationMode(c)) return 1;              \
+        if (P##fmi2SetReal(c, in, 3, u) || P##fmi2GetReal(c, out, 1, y)) return 2;                               \
+        printf("%.17g\n", y[0]);                                                                                 \
+        P##fmi2FreeInstance(c);                                                                                  \
+    } while (0)
+
+int main(void)
+{
+    fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+    RUN(tyreA_, GUID_A, VR_FX_A);
+    RUN(tyreB_, GUID_B, VR_FX_B);
+    return 0;
+}
+"""
+
+
+@needs_c_compiler
+def test_two_tyres_link_statically_into_one_executable_with_prefixes(fmus, tmp_path):
+    """FMI2_FUNCTION_PREFIX: each FMU's fmu.c compiled with its own prefix, both objects linked into one program
+    (no duplicate symbol: the model is static, only the prefixed FMI functions are external)."""
+    from fmpy import read_model_description
+
+    cc = find_compiler()
+    objects, defs = [], []
+    for tag, name in zip("AB", TYRES, strict=True):
+        path = fmus[(name, 2)]
+        src = tmp_path / f"src{tag}"
+        with zipfile.ZipFile(path) as z:
+            for f in z.namelist():
+                if f.startswith("sources/"):
+                    (src / Path(f).name).parent.mkdir(parents=True, exist_ok=True)
+                    (src / Path(f).name).write_bytes(z.read(f))
+        obj = tmp_path / f"tyre{tag}.o"
+        res = subprocess.run([*cc, "-c", "-std=c99", "-O1", "-Wall", "-Wextra", f"-DFMI2_FUNCTION_PREFIX=tyre{tag}_",
+                              "-I", str(src), str(src / "fmu.c"), "-o", str(obj)], capture_output=True, text=True)
+        assert res.returncode == 0 and res.stderr.strip() == "", res.stderr[-2000:]
+        objects.append(obj)
+        md = read_model_description(str(path))
+        vr = {v.name: v.valueReference for v in md.modelVariables}
+        defs += [f"-DGUID_{tag}=\"{md.guid}\"", f"-DVR_FX_{tag}={vr['Fx']}"]
+        defs += [f"-DVR_FZ={vr['Fz']}", f"-DVR_KAPPA={vr['kappa']}", f"-DVR_ALPHA={vr['alpha']}"] if tag == "A" else []
+        if shutil.which("nm"):
+            symbols = subprocess.run(["nm", "-g", "--defined-only", str(obj)], capture_output=True, text=True).stdout
+            external = [line.split()[-1] for line in symbols.splitlines() if line.strip()]
+            assert external and all(s.startswith(f"tyre{tag}_fmi2") for s in external), external[:10]
+    main = tmp_path / "main.c"
+    main.write_text(_MAIN, encoding="utf-8")
+    exe = tmp_path / "two_tyres"
+    res = subprocess.run([*cc, "-std=c99", *defs, "-I", str(tmp_path / "srcA"), str(main), *map(str, objects), "-o",
+                          str(exe), "-lm"], capture_output=True, text=True)  # fmt: skip
+    assert res.returncode == 0, res.stderr[-3000:]
+    run = subprocess.run([str(exe)], capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, run.stdout + run.stderr
+    got = [float(x) for x in run.stdout.split()]
+    for name, fx in zip(TYRES, got, strict=True):
+        ref = float(load(REFERENCE_TYRES[name]).evaluate(4000.0, 0.05, 0.03)["Fx"])
+        assert abs(fx - ref) <= 1e-9 * abs(ref), (name, fx, ref)
+    assert got[0] != got[1]
+
+
+@needs_c_compiler
+@pytest.mark.parametrize("version", [2, 3])
+def test_do_step_outside_the_running_state_is_an_error(fmus, version):
+    import fmpy
+    from fmpy.fmi2 import FMU2Slave
+    from fmpy.fmi3 import FMU3Slave
+
+    from mftire.fmu.host import make_callbacks
+
+    path = fmus[("MF61", version)]
+    md = fmpy.read_model_description(str(path))
+    unzip = fmpy.extract(str(path))
+    messages: list = []
+    if version == 2:
+        s = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
+                      instanceName="s")  # fmt: skip
+        s.instantiate(callbacks=make_callbacks(messages))
+        s.setupExperiment(startTime=0.0)
+    else:
+        s = FMU3Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
+                      instanceName="s")  # fmt: skip
+
+        def log3(env, status, category, message):
+            messages.append((int(status), category.decode(), message.decode()))
+
+        s.instantiate(logMessage=log3)
+    with pytest.raises(fmpy.fmi1.FMICallException):  # before initialisation
+        s.doStep(0.0, 1e-3)
+    if version == 2:
+        s.enterInitializationMode()
+    else:
+        s.enterInitializationMode(startTime=0.0)
+    with pytest.raises(fmpy.fmi1.FMICallException):  # in initialisation mode
+        s.doStep(0.0, 1e-3)
+    s.exitInitializationMode()
+    s.doStep(0.0, 1e-3)  # the right state
+    s.terminate()
+    with pytest.raises(fmpy.fmi1.FMICallException):  # after terminate
+        s.doStep(1e-3, 1e-3)
+    s.freeInstance()
+    assert sum("DoStep is not allowed in state" in m for _, _, m in messages) == 3, messages
+
+
+@needs_c_compiler
+@pytest.mark.parametrize("version", [2, 3])
+def test_non_physical_parameters_are_refused(fmus, version):
+    from fmpy.fmi1 import FMICallException
+
+    from mftire.fmu.host import FMUTyre
+
+    with FMUTyre(fmus[("MF61", version)], "CS") as fmu:
+        before = fmu.evaluate(4000.0, 0.05, 0.03)
+        for key, value in (("FNOMIN", 0.0), ("FNOMIN", -1.0), ("FNOMIN", math.nan), ("UNLOADED_RADIUS", 0.0),
+                           ("PCX1", math.inf), ("WIDTH", -0.1)):  # fmt: skip
+            with pytest.raises(FMICallException):
+                fmu.set({key: value})
+            assert any(s == 3 and key in m for s, _, m in fmu.messages), (key, fmu.messages[-3:])
+        assert fmu.get(["FNOMIN"])[0] == load(REFERENCE_TYRES["MF61"])["FNOMIN"]  # kept its value
+        assert fmu.evaluate(4000.0, 0.05, 0.03) == before  # still usable, unchanged
+    # a non-physical start value fails the initialisation
+    with pytest.raises(FMICallException):
+        FMUTyre(fmus[("MF61", version)], "ME", start_values={"RIM_RADIUS": -1.0})
+
+
+@needs_c_compiler
+def test_archive_documentation_and_licence(fmus):
+    from fmpy.validation import validate_fmu
+
+    path = fmus[("MF61", 3)]
+    assert validate_fmu(str(path)) == []
+    with zipfile.ZipFile(path) as z:
+        page = z.read("documentation/index.html").decode()
+        licence = z.read("documentation/licenses/license.txt").decode()
+    for text in ("Inputs", "Outputs", "Axes", "ISO-W", "Modes", "useMode", "Validity", "Licence", "kappa",
+                 "Fz_out", "Mzr", "muRoad", "Vertical load Fz", "license.txt"):
+        assert text in page, text
+    tyre = load(REFERENCE_TYRES["MF61"])
+    assert f"{tyre['FZMAX']:g}" in page
+    assert "BSD 3-Clause" in licence and "Modelica" in licence
+
+
+@needs_c_compiler
+def test_one_mode_variable_and_identifiers_that_never_collide(fmus, tmp_path):
+    import fmpy
+
+    md = fmpy.read_model_description(str(fmus[("MF61", 2)]))
+    names = {v.name for v in md.modelVariables}
+    assert "useMode" in names and "USE_MODE" not in names  # issue 26.9: one mode name
+    mode = next(v for v in md.modelVariables if v.name == "useMode")
+    assert "one mode switch" in mode.description
+    # two tyres from files of the same name: different identifiers (a short hash of the parameters)
+    tyre = load(REFERENCE_TYRES["MF61"])
+    (tmp_path / "a").mkdir()
+    shutil.copy(REFERENCE_TYRES["MF61"], tmp_path / "a" / "tyre.tir")
+    flat_b = dict(tyre.flat, PCX1=tyre["PCX1"] * 1.01)  # another tyre, also named "tyre"
+    ids = []
+    for src in (tmp_path / "a" / "tyre.tir", flat_b):
+        out = export_fmu(src, tmp_path / f"{len(ids)}.fmu")
+        ids.append(fmpy.read_model_description(str(out)).coSimulation.modelIdentifier)
+    assert ids[0] != ids[1] and ids[0].startswith("tyre_")
+    # the user's name is kept
+    out = export_fmu(tyre, tmp_path / "named.fmu", model_identifier="front_left")
+    assert fmpy.read_model_description(str(out)).coSimulation.modelIdentifier == "front_left"
