@@ -44,6 +44,7 @@ from scipy.linalg import solve_banded
 from scipy.signal import lfilter
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))  # run from a source checkout
 TIR = ROOT / "tirfiles" / "MF61_255-55R20_mfeval-jl.tir"
 OUT = ROOT / "validation" / "data" / "thermal"
 
