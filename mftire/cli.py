@@ -244,6 +244,9 @@ def build_parser() -> argparse.ArgumentParser:
     from mftire.segmentation import cli as import_cli
 
     import_cli.add_parser(sub)
+    from mftire.thermal import cli as thermal_cli
+
+    thermal_cli.add_parser(sub)
     return parser
 
 

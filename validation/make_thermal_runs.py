@@ -14,7 +14,11 @@ parameter echo:
 * grip law with a threshold (no quadratic):
   ``LMUX, LMUY × 1 + A_GRIP·(T_s − 60) − B_GRIP·max(0, T_s − T_TH)``, of the top layer T_s;
 * cornering and slip stiffness ``LKX, LKY × 1 − K_STIFF·(T_carcass − 40)``;
-* the tyre is sealed: the gas law gives the pressure, which enters the MF's own pressure terms.
+* the tyre is sealed: the gas law gives the pressure, which enters the MF's own pressure terms;
+* sensor noise: FX, FY 12 N, FZ 15 N, MZ, MX 1 N·m, SA 0.005 deg, IA 0.02 deg, SR 0.0001, P 0.3 kPa,
+  surface temperatures 0.5 K.  The slip channels are quieter than in ``make_rig_file.py``: a slip-ratio
+  noise of 0.001 times a slip stiffness of ~1.5e5 N alone gives 150 N of Fx error, which would hide the
+  temperature effect this run is for (the force errors of every model would sit on that floor).
 
 Integration: backward Euler per sample of the layered chain (``scipy.linalg.solve_banded``); the
 coupling temperature -> grip -> forces -> power -> temperature by fixed-point iteration.
@@ -22,7 +26,7 @@ coupling temperature -> grip -> forces -> power -> temperature by fixed-point it
 Programmes (``PROGRAMMES``)
 ---------------------------
 ``warmup_loads``  a warm-up (slip angle swept +-6 deg at 40 km/h), then load steps (0.5, 1.0, 1.4 x
-                  FNOMIN) each with a slip angle sweep and a braking sweep, at 40 and 60 km/h;
+                  FNOMIN) each with a slip angle sweep and a braking sweep, at 40, 60 and 90 km/h;
 ``stint``         a stint of repeated cornering: laps of a 7 s corner at a steady slip angle
                   (3-5 deg), a 2 s braking zone, and a 6 s straight at 25 m/s.
 
@@ -104,7 +108,7 @@ def programme(name: str, fnomin: float) -> pd.DataFrame:
     if name == "warmup_loads":
         seg(5, 0.3 * fnomin, 11.1)
         seg(60, fnomin, 11.1, sa=lambda tl: 6.0 * _triangle(tl, 2.0))  # warm-up
-        for v in (11.1, 16.7):
+        for v in (11.1, 16.7, 25.0):
             for f, ia in ((0.5, 0.0), (1.0, 2.0), (1.4, 0.0)):
                 seg(4, f * fnomin, v, ia=ia)
                 seg(16, f * fnomin, v, sa=lambda tl: 9.0 * _triangle(tl, 4.0), ia=ia)
@@ -211,12 +215,12 @@ def simulate(name: str, seed: int = 0, tir=TIR) -> tuple[pd.DataFrame, pd.DataFr
     ia = np.degrees(gamma)
     raw = pd.DataFrame({
         "ET": t, "V": V * 3.6 + noise(0.05), "N": out["omega"] * 60 / (2 * np.pi) + noise(0.5),
-        "SA": -np.degrees(alpha) + noise(0.02), "IA": ia + noise(0.02), "RL": out["Rl"] * 100 + noise(0.02),
+        "SA": -np.degrees(alpha) + noise(0.005), "IA": ia + noise(0.02), "RL": out["Rl"] * 100 + noise(0.02),
         "RE": out["Re"] * 100 + noise(0.02), "P": P / 1e3 + noise(0.3), "FX": out["Fx"] + noise(12.0),
         "FY": -out["Fy"] + noise(12.0), "FZ": -Fz + noise(15.0), "MX": out["Mx"] + noise(1.0),
         "MZ": -out["Mz"] + noise(1.0), "RST": T_ROAD + noise(0.2),
         "TSTI": T_top + 1.5 * ia + noise(0.5), "TSTC": T_top + noise(0.5), "TSTO": T_top - 1.5 * ia + noise(0.5),
-        "AMBTMP": T_AMB + noise(0.1), "SR": kappa + noise(0.001),
+        "AMBTMP": T_AMB + noise(0.1), "SR": kappa + noise(0.0001),
     })  # fmt: skip
     raw["V"] /= 3.6
     raw["N"] *= 2 * np.pi / 60
@@ -244,7 +248,110 @@ def make(out_dir=OUT, names=("run",), seed: int = 0) -> list[Path]:
     return paths
 
 
+def split_time(tir=TIR) -> float:
+    """ET [s] at which the stint starts in the shipped run (the fit uses the rows before it)."""
+    import mftire
+
+    return float(len(programme("warmup_loads", mftire.load(tir)["FNOMIN"])) / FS)
+
+
+def _rms(x) -> float:
+    x = np.asarray(x, float)
+    return float(np.sqrt(np.mean(x[np.isfinite(x)] ** 2)))
+
+
+def check(work_dir, run=None, tir=TIR, quiet: bool = False) -> dict:
+    """The done-when measurement on the shipped run (validation/README.md, "Thermal tyre").
+
+    1. ``mftire fit-thermal RUN --tir TIR --output THERMAL.tir --fit-until SPLIT``;
+    2. ``mftire replay RUN --tir THERMAL.tir --output replay.csv``, errors on ET > SPLIT;
+    3. the same laws fed the measured temperature (mean IR) and the measured pressure, fitted on
+       ET <= SPLIT (:func:`mftire.thermal.thermal_fit.fit_laws` with every node the measurement);
+    4. the isothermal fit: LMUX, LMUY, LKX, LKY of TIR refitted on ET <= SPLIT at the cold pressure,
+       written as ISO.tir and replayed (``mftire replay RUN --tir ISO.tir``).
+    """
+    import contextlib
+    import io
+
+    import mftire
+    from mftire.cli import main
+    from mftire.iotools.rig import read_ttc
+    from mftire.iotools.tir import write_tir
+    from mftire.thermal.thermal_fit import _force_rows, fit_laws, measured_surface, with_default_laws
+    from mftire.tyre import Tyre
+
+    work = Path(work_dir)
+    work.mkdir(parents=True, exist_ok=True)
+    run = Path(run or OUT / "thermal_run.dat.gz")
+    split = split_time(tir)
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        rc1 = main(["fit-thermal", str(run), "--tir", str(tir), "--output", str(work / "THERMAL.tir"),
+                    "--fit-until", f"{split:g}", "--force"])  # fmt: skip
+        rc2 = main(["replay", str(run), "--tir", str(work / "THERMAL.tir"), "--output", str(work / "replay.csv"),
+                    "--force"])  # fmt: skip
+    assert rc1 == rc2 == 0, out.getvalue()
+    df = read_ttc(run)
+    held = df["ET"].to_numpy() > split
+    fit = ~held
+    rep = pd.read_csv(work / "replay.csv")
+    ir = measured_surface(df)
+    res = {"split_s": split, "surface_rms_K": _rms(rep["T_surface"][held] - ir[held]),
+           "pressure_rms_kPa": _rms(rep["P_model"][held] - rep["P"][held]) / 1e3}  # fmt: skip
+    for ch in ("Fx", "Fy"):
+        res[f"{ch}_replay"] = _rms(rep[f"{ch}_model"][held] - rep[ch][held])
+    # the model fed the measured temperature and pressure
+    base = Tyre(with_default_laws(mftire.load(tir).parameters, float(np.round(np.nanmedian(ir[fit])))))
+    dfit = df[fit].reset_index(drop=True)
+    meas_T = np.repeat(ir[:, None], 3, axis=1)
+    laws = [t.index for t in base.extension_set.terms]
+    coeffs, _, _ = fit_laws(base, dfit, meas_T[fit], dfit["P"].to_numpy(), {n: "surface" for n in laws},
+                            _force_rows(dfit))  # fmt: skip
+    base.flat.update(coeffs)
+    f = base.evaluate(df["Fz"].to_numpy(), df["kappa"].to_numpy(), df["alpha"].to_numpy(), df["gamma"].to_numpy(),
+                      Vx=df["Vx"].to_numpy(), P=df["P"].to_numpy(), temperature=ir)  # fmt: skip
+    for ch in ("Fx", "Fy"):
+        res[f"{ch}_measured_T"] = _rms(f[ch][held] - df[ch].to_numpy()[held])
+    # the isothermal fit: scaling factors refitted at the cold pressure
+    from scipy.optimize import least_squares
+
+    iso = mftire.load(tir)
+    rows = _force_rows(dfit)
+    p0 = float(df["P"].iloc[0])
+    keys = ("LMUX", "LMUY", "LKX", "LKY")
+    x0 = np.array([iso.flat[k] for k in keys])
+
+    def r(x):
+        iso.flat.update(dict(zip(keys, x, strict=True)))
+        o = iso.evaluate(dfit["Fz"].to_numpy()[rows], dfit["kappa"].to_numpy()[rows], dfit["alpha"].to_numpy()[rows],
+                         dfit["gamma"].to_numpy()[rows], Vx=dfit["Vx"].to_numpy()[rows], P=p0, channels=("Fx", "Fy"))
+        return np.concatenate([o["Fx"] - dfit["Fx"].to_numpy()[rows], o["Fy"] - dfit["Fy"].to_numpy()[rows]])
+
+    sol = least_squares(r, x0, diff_step=1e-4)
+    p = iso.parameters.copy()
+    for k, v in zip(keys, sol.x, strict=True):
+        p.set(k, float(v))
+    write_tir(p, work / "ISO.tir")
+    with contextlib.redirect_stdout(out):
+        main(["replay", str(run), "--tir", str(work / "ISO.tir"), "--output", str(work / "replay_iso.csv"), "--force"])
+    rep_iso = pd.read_csv(work / "replay_iso.csv")
+    for ch in ("Fx", "Fy"):
+        res[f"{ch}_isothermal"] = _rms(rep_iso[f"{ch}_model"][held] - rep_iso[ch][held])
+        res[f"{ch}_ratio_to_measured_T"] = res[f"{ch}_replay"] / res[f"{ch}_measured_T"]
+        res[f"{ch}_reduction_vs_isothermal_pct"] = 100 * (1 - res[f"{ch}_replay"] / res[f"{ch}_isothermal"])
+        res[f"{ch}_measured_T_reduction_vs_isothermal_pct"] = 100 * (1 - res[f"{ch}_measured_T"]
+                                                                     / res[f"{ch}_isothermal"])
+    if not quiet:
+        print(out.getvalue())
+        for k, v in res.items():
+            print(f"{k:40s} {v:10.3f}")
+    return res
+
+
 if __name__ == "__main__":
+    if sys.argv[1:2] == ["--check"]:
+        check(sys.argv[2] if len(sys.argv) > 2 else "thermal_check")
+        sys.exit(0)
     args = sys.argv[1:]
     names = ("run", *PROGRAMMES) if "--all" in args else ("run",)
     args = [a for a in args if a != "--all"]

@@ -14,12 +14,14 @@ and each node stores heat ``C·dT/dt`` (lumped capacitance, Incropera & DeWitt �
     C_g dT_g/dt =       G_bg (T_b − T_g)
 
 with ``q_s`` the sliding friction power (:func:`friction_power`) and ``q_b`` the rolling loss
-(:func:`rolling_loss`).  :func:`implicit_step` advances it by one backward-Euler step (L-stable:
+(:func:`rolling_loss` and :func:`hysteresis_loss`).  :func:`implicit_step` advances it by one backward-Euler step (L-stable:
 any step size is safe, and the steady state is exact); :func:`steady_state` solves it for
 constant inputs.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -61,6 +63,21 @@ def rolling_loss(Fz, Vx, coefficient: float) -> np.ndarray:
     return coefficient * np.maximum(np.asarray(Fz, dtype=float), 0.0) * np.abs(np.asarray(Vx, dtype=float))
 
 
+def hysteresis_loss(Fx, Fy, Fz, Vx, coefficient: float, load: float) -> np.ndarray:
+    """Force-dependent hysteresis loss heating the bulk [W].
+
+    ``P = c·|Vx|·(Fx² + Fy²)/max(Fz, 0.1·Fz0)``: the deformation energy of the carcass grows with the
+    square of the transmitted force over its stiffness (a spring's ``F²/(2k)``), the stiffness grows
+    about in proportion to the load (Pacejka 2012 §4.3.2: cornering stiffness ∝ Fz at moderate loads),
+    and a fixed share of it is lost per revolution by hysteresis (Harsh & Shyrokau 2019, §2.2, the
+    deformation loss of the bulk node).  ``c`` [-], forces [N], ``Vx`` [m/s], ``Fz`` [N], ``load``
+    the nominal load ``Fz0`` [N] (the floor keeps a light load finite).
+    """
+    F2 = np.asarray(Fx, dtype=float) ** 2 + np.asarray(Fy, dtype=float) ** 2
+    return coefficient * np.abs(np.asarray(Vx, dtype=float)) * F2 / np.maximum(np.asarray(Fz, dtype=float),
+                                                                              0.1 * load)
+
+
 def air_conductance(Vx, h0: float, h1: float) -> np.ndarray:
     """Convective conductance of the tread surface to the ambient air [W/K].
 
@@ -88,6 +105,19 @@ def gas_temperature(pressure, cold_pressure: float, cold_temperature: float, atm
     """The inverse of :func:`hot_pressure`: gas temperature [°C] from a gauge pressure [Pa]."""
     return (np.asarray(pressure, dtype=float) + atmosphere) / (cold_pressure + atmosphere) \
         * (cold_temperature + KELVIN) - KELVIN
+
+
+def gas_heat_capacity(unloaded_radius: float, rim_radius: float, width: float, pressure: float,
+                      temperature: float = 20.0, atmosphere: float = ATMOSPHERE) -> float:
+    """Heat capacity of the inflation gas at constant volume [J/K].
+
+    ``C = m·c_v`` with the mass of air ``m = p_abs·V/(R·T)`` (ideal gas, R = 287.05 J/(kg·K),
+    c_v = 718 J/(kg·K): Incropera & DeWitt Table A.4) in the torus volume
+    ``V ≈ π·(R0² − R_rim²)·w`` (radii and width [m]).  ``pressure`` gauge [Pa], ``temperature`` [°C].
+    """
+    volume = math.pi * max(unloaded_radius ** 2 - rim_radius ** 2, 0.0) * width
+    mass = (pressure + atmosphere) * volume / (287.05 * (temperature + KELVIN))
+    return mass * 718.0
 
 
 def _solve_tridiagonal(a1, b1, c1, a2, b2, c2, a3, b3, r1, r2, r3):
@@ -142,5 +172,5 @@ def steady_state(q_s: float, q_b: float, g_air: float, T_amb: float, T_road: flo
     return Ts, Tb, Tb
 
 
-__all__ = ["ATMOSPHERE", "KELVIN", "air_conductance", "friction_power", "gas_temperature", "hot_pressure",
-           "implicit_step", "rolling_loss", "slip_velocities", "steady_state"]
+__all__ = ["ATMOSPHERE", "KELVIN", "air_conductance", "friction_power", "gas_heat_capacity", "gas_temperature", "hot_pressure",
+           "hysteresis_loss", "implicit_step", "rolling_loss", "slip_velocities", "steady_state"]

@@ -25,7 +25,14 @@ import numpy as np
 import pandas as pd
 
 from mftire.errors import MftireInputError
-from mftire.thermal.heat import air_conductance, friction_power, hot_pressure, implicit_step, rolling_loss
+from mftire.thermal.heat import (
+    air_conductance,
+    friction_power,
+    hot_pressure,
+    hysteresis_loss,
+    implicit_step,
+    rolling_loss,
+)
 from mftire.thermal.thermal_section import NODE_VARIABLES, SECTION, ThermalParameters, check_nodes, parse_thermal
 
 #: Road temperature column names, best first.
@@ -103,6 +110,11 @@ def initial_temperatures(params: ThermalParameters, T_amb0: float) -> tuple[floa
     """Initial node temperatures [°C]: the section's, else the ambient temperature at the start."""
     return tuple(T_amb0 if v is None else v for v in (params.t_init_surface, params.t_init_bulk,
                                                      params.t_init_gas))  # type: ignore[return-value]
+
+
+def bulk_power(params: ThermalParameters, Fz, Vx, Fx, Fy, fnomin: float) -> np.ndarray:
+    """Heat into the bulk node [W]: rolling loss plus force hysteresis (:mod:`mftire.thermal.heat`)."""
+    return rolling_loss(Fz, Vx, params.roll_loss) + hysteresis_loss(Fx, Fy, Fz, Vx, params.hysteresis, fnomin)
 
 
 def simulate_nodes(params: ThermalParameters, t, q_s, q_b, Vx, T_amb, T_road,
@@ -190,7 +202,6 @@ def replay(tyre, df: pd.DataFrame, *, name: str = "data", max_iterations: int = 
         return Replay(table, 0, 0.0, False)
     T_road = road_temperature(df, name)
     T0 = initial_temperatures(params, float(T_amb[0]))
-    q_b = rolling_loss(Fz, Vx, params.roll_loss)
     nodes_T = np.tile(np.asarray(T0, float), (n, 1))
     change, it = math.inf, 0
     for it in range(1, max_iterations + 1):  # noqa: B007
@@ -199,6 +210,7 @@ def replay(tyre, df: pd.DataFrame, *, name: str = "data", max_iterations: int = 
             else p_cold
         out = forces(nodes, P)
         q_s = friction_power(out["Fx"], out["Fy"], kappa, alpha, Vx)
+        q_b = bulk_power(params, Fz, Vx, out["Fx"], out["Fy"], float(tyre.flat["FNOMIN"]))
         new = simulate_nodes(params, t, q_s, q_b, Vx, T_amb, T_road, T0)
         change = float(np.max(np.abs(new - nodes_T)))
         nodes_T = new
@@ -230,5 +242,5 @@ def _table(df: pd.DataFrame, out, nodes, P) -> pd.DataFrame:
     return pd.DataFrame(cols, index=df.index)
 
 
-__all__ = ["FORCE_CHANNELS", "REPLAY_COLUMNS", "ROAD_COLUMNS", "Replay", "check_series", "cold_pressure",
+__all__ = ["FORCE_CHANNELS", "REPLAY_COLUMNS", "ROAD_COLUMNS", "Replay", "bulk_power", "check_series", "cold_pressure",
            "initial_temperatures", "node_tyre", "replay", "road_temperature", "simulate_nodes", "thermal_of"]

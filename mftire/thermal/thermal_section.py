@@ -19,6 +19,7 @@ key                       unit        meaning
 ``TH_G_ROAD``             W/K         conductance surface → road (at the road temperature)
 ``TH_SLIP_SHARE``         -           share of the sliding friction power heating the surface (default 1)
 ``TH_ROLL_LOSS``          -           rolling-loss coefficient: bulk power ``c·Fz·|Vx|``
+``TH_HYSTERESIS``         -           hysteresis coefficient: bulk power ``c·|Vx|·(Fx² + Fy²)/Fz``
 ``TH_COLD_PRESSURE``      Pa          gauge pressure set cold (default ``INFLPRES``)
 ``TH_COLD_TEMPERATURE``   °C          temperature at which it was set (default 20)
 ``TH_ATMOSPHERE``         Pa          atmospheric pressure of the gas law (default 101325)
@@ -64,14 +65,15 @@ class ThermalParameters:
     cap_surface: float = 2000.0
     cap_bulk: float = 12000.0
     cap_gas: float = 150.0
-    g_surface_bulk: float = 60.0
-    g_bulk_gas: float = 8.0
-    g_bulk_ambient: float = 4.0
+    g_surface_bulk: float = 150.0
+    g_bulk_gas: float = 10.0
+    g_bulk_ambient: float = 10.0
     h_air0: float = 10.0
-    h_air1: float = 6.0
-    g_road: float = 20.0
+    h_air1: float = 8.0
+    g_road: float = 40.0
     slip_share: float = 1.0
     roll_loss: float = 0.01
+    hysteresis: float = 0.005
     cold_pressure: float | None = None
     cold_temperature: float = 20.0
     atmosphere: float = 101325.0
@@ -109,7 +111,7 @@ class ThermalParameters:
 _POSITIVE = ("cap_surface", "cap_bulk", "cap_gas", "atmosphere")
 #: Keys that must be >= 0.
 _NONNEGATIVE = ("g_surface_bulk", "g_bulk_gas", "g_bulk_ambient", "h_air0", "h_air1", "g_road", "slip_share",
-                "roll_loss")
+                "roll_loss", "hysteresis")
 _NUMBER_NAMES = tuple(f.name for f in fields(ThermalParameters) if f.name != "nodes")
 
 
