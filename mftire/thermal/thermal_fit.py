@@ -17,9 +17,10 @@ Two steps, each a least-squares fit with a clear result:
 2. **Temperature laws** (:func:`fit_laws`).  The laws of ``[MFTIRE_EXTENSIONS]`` that read a
    temperature (grip, stiffness; when the file has none, a quadratic grip law on LMUX, LMUY and a
    linear stiffness law on LKX, LKY are added) read a node of the fitted thermal model.  The node of
-   each law is chosen by held-out error: every assignment (surface or bulk per law) is fitted on the
-   first 70 % of the fit rows and scored on the last 30 % (Fx and Fy over FNOMIN); the best is refitted
-   on all of them.
+   each law is chosen by held-out error: every assignment (surface or bulk per law) is scored by
+   blocked cross-validation (the fit rows cut into ``folds`` contiguous blocks in time, each block
+   predicted by the laws fitted on the others; RMS of Fx and Fy over FNOMIN); the best is refitted on
+   all of them.
 """
 
 from __future__ import annotations
@@ -60,7 +61,7 @@ UNITS = {"cap_surface": "J/K", "cap_bulk": "J/K", "cap_gas": "J/K", "g_surface_b
          "g_bulk_ambient": "W/K", "h_air0": "W/K", "h_air1": "W/K/(m/s)^0.8", "g_road": "W/K", "roll_loss": "-",
          "hysteresis": "-", "slip_share": "-"}  # fmt: skip
 #: Nodes a law may read in the held-out choice.
-LAW_NODES = ("surface", "bulk")
+LAW_NODES = ("surface", "bulk", "gas")
 #: A variable read as a temperature (a law on it becomes a law of a node).
 _TEMPERATURE_NAME = re.compile(r"^(temperature|T|T_.*|TST[ICO]|.*TEMP.*)$", re.IGNORECASE)
 #: The weak prior on the logarithm of each fitted parameter around its start (the typical passenger-car
@@ -293,7 +294,7 @@ def fit_laws(tyre, df: pd.DataFrame, nodes_T: np.ndarray, P: np.ndarray, assignm
 
 
 def fit_thermal(tyre, df: pd.DataFrame, *, fit_until: float | None = None, name: str = "data",
-                nodes: Sequence[str] = LAW_NODES) -> ThermalResult:
+                nodes: Sequence[str] = LAW_NODES, folds: int = 3) -> ThermalResult:
     """Fit the thermal model and its temperature laws on the rows with ``ET <= fit_until`` (all rows
     by default) of a continuous series; returns the ``.tir`` to write (module docstring)."""
     from mftire.tyre import Tyre, as_tyre
@@ -331,11 +332,15 @@ def fit_thermal(tyre, df: pd.DataFrame, *, fit_until: float | None = None, name:
     rows = _force_rows(df)
     if rows.size < 20:
         raise MftireInputError(f"{name}: fewer than 20 rows with slip to fit the temperature laws on")
-    cut = int(0.7 * rows.size)
-    train, held = rows[:cut], rows[cut:]
+    blocks = np.array_split(rows, folds)
     scores: dict[tuple[str, ...], float] = {}
     for combo in itertools.product(nodes, repeat=len(laws)):
-        _, _, scores[combo] = fit_laws(base, df, nodes_T, P, dict(zip(laws, combo, strict=True)), train, held)
+        errs = []
+        for k in range(folds):  # contiguous blocks in time: fit on the others, score on block k
+            train = np.concatenate([b for j, b in enumerate(blocks) if j != k])
+            _, _, e = fit_laws(base, df, nodes_T, P, dict(zip(laws, combo, strict=True)), train, blocks[k])
+            errs.append(e * e * blocks[k].size)
+        scores[combo] = float(np.sqrt(sum(errs) / rows.size))
     best = min(scores, key=scores.get)
     assignment = dict(zip(laws, best, strict=True))
     coeffs, sd, _ = fit_laws(base, df, nodes_T, P, assignment, rows)
