@@ -14,8 +14,8 @@ and each node stores heat ``C·dT/dt`` (lumped capacitance, Incropera & DeWitt �
     C_g dT_g/dt =       G_bg (T_b − T_g)
 
 with ``q_s`` the sliding friction power (:func:`friction_power`) and ``q_b`` the rolling loss
-(:func:`rolling_loss` and :func:`hysteresis_loss`).  :func:`implicit_step` advances it by one backward-Euler step (L-stable:
-any step size is safe, and the steady state is exact); :func:`steady_state` solves it for
+(:func:`rolling_loss` and :func:`hysteresis_loss`).  :func:`implicit_step` advances it by one
+backward-Euler step (L-stable: any step size is safe, and the steady state is exact); :func:`steady_state` solves it for
 constant inputs.
 """
 
@@ -172,5 +172,5 @@ def steady_state(q_s: float, q_b: float, g_air: float, T_amb: float, T_road: flo
     return Ts, Tb, Tb
 
 
-__all__ = ["ATMOSPHERE", "KELVIN", "air_conductance", "friction_power", "gas_heat_capacity", "gas_temperature", "hot_pressure",
-           "hysteresis_loss", "implicit_step", "rolling_loss", "slip_velocities", "steady_state"]
+__all__ = ["ATMOSPHERE", "KELVIN", "air_conductance", "friction_power", "gas_heat_capacity", "gas_temperature",
+           "hot_pressure", "hysteresis_loss", "implicit_step", "rolling_loss", "slip_velocities", "steady_state"]

@@ -70,12 +70,14 @@ def check_series(df: pd.DataFrame, name: str, columns=REPLAY_COLUMNS) -> None:
     """Clear errors for a series a replay or fit cannot take (missing column, NaN, time not increasing)."""
     missing = [c for c in columns if c not in df.columns]
     if missing:
-        raise MftireInputError(f"{name}: missing column(s) {', '.join(missing)} (have: {', '.join(map(str, df.columns))})")
+        have = ", ".join(map(str, df.columns))
+        raise MftireInputError(f"{name}: missing column(s) {', '.join(missing)} (have: {have})")
     for c in columns:
         x = pd.to_numeric(df[c], errors="coerce").to_numpy(float)
         bad = ~np.isfinite(x)
         if bad.any():
-            raise MftireInputError(f"{name}: column {c}, data row {int(np.flatnonzero(bad)[0]) + 1}: not a finite number")
+            row = int(np.flatnonzero(bad)[0]) + 1
+            raise MftireInputError(f"{name}: column {c}, data row {row}: not a finite number")
     t = df["ET"].to_numpy(float)
     if t.size < 2:
         raise MftireInputError(f"{name}: a time series needs at least 2 rows, not {t.size}")
@@ -124,7 +126,7 @@ def simulate_nodes(params: ThermalParameters, t, q_s, q_b, Vx, T_amb, T_road,
     (surface, bulk, gas)."""
     t = np.asarray(t, float)
     n = t.size
-    qs = (params.slip_share * np.asarray(q_s, float)).tolist()
+    qs = np.broadcast_to(params.slip_share * np.asarray(q_s, float), (n,)).tolist()
     qb = np.broadcast_to(np.asarray(q_b, float), (n,)).tolist()
     g_air = air_conductance(Vx, params.h_air0, params.h_air1)
     g_air = np.broadcast_to(g_air, (n,)).tolist()

@@ -255,7 +255,8 @@ def _force_rows(df: pd.DataFrame, most: int = 4000) -> np.ndarray:
 
 
 def fit_laws(tyre, df: pd.DataFrame, nodes_T: np.ndarray, P: np.ndarray, assignment: dict[int, str],
-             rows: np.ndarray, score_rows: np.ndarray | None = None) -> tuple[dict[str, float], dict[str, float], float]:
+             rows: np.ndarray, score_rows: np.ndarray | None = None
+             ) -> tuple[dict[str, float], dict[str, float], float]:
     """Fit the coefficients of the laws ``assignment`` (EXTn -> node) on ``rows``.
 
     Returns ``(coefficients, standard errors, RMS)``; the RMS is of Fx and Fy over FNOMIN on
