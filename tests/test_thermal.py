@@ -11,10 +11,10 @@ import pandas as pd
 import pytest
 
 from mftire.errors import MftireInputError
+from mftire.mf.thermal_section import SECTION, ThermalParameters, parse_thermal
 from mftire.thermal import heat
 from mftire.thermal.simulation import bulk_power, replay, simulate_nodes
 from mftire.thermal.thermal_fit import fit_thermal_parameters
-from mftire.thermal.thermal_section import SECTION, ThermalParameters, parse_thermal
 
 ROOT = Path(__file__).resolve().parent.parent
 TIR = ROOT / "tirfiles" / "MF61_255-55R20_mfeval-jl.tir"
@@ -206,3 +206,34 @@ def test_fit_thermal_cli_on_a_reduced_run(tmp_path, capsys):
     f = tyre.evaluate(6752.0, 0.0, 0.05, temperature=np.array([40.0, 80.0]))
     assert f["Fy"][0] != f["Fy"][1]
 
+
+
+def test_a_thermal_tir_evaluates_in_steady_state_with_its_default_temperature(tmp_path):
+    from mftire.cli import main
+    from mftire.iotools.tir import read_tir, write_tir
+    from mftire.thermal.thermal_fit import with_default_laws
+    from mftire.tyre import Tyre
+
+    tp = with_default_laws(read_tir(TIR), 60.0)
+    tp.sections["MFTIRE_EXTENSIONS"]["EXT1_C1"] = -0.1  # grip falls 10 % per 50 K
+    tp.sections[SECTION] = P.replace(nodes={1: "surface", 2: "bulk"}, temperature=110.0).section()
+    tyre = Tyre(tp)
+    assert tyre.variable_defaults == {"temperature": 110.0}
+    plain = Tyre(read_tir(TIR))
+    args = (6752.0, 0.0, np.radians(8.0))
+    hot = float(tyre.evaluate(*args)["Fy"])
+    assert hot == pytest.approx(float(tyre.evaluate(*args, temperature=110.0)["Fy"]), rel=1e-15)
+    assert float(tyre.evaluate(*args, temperature=60.0)["Fy"]) == pytest.approx(float(plain.evaluate(*args)["Fy"]),
+                                                                                rel=1e-12)
+    assert abs(hot) < 0.95 * abs(float(plain.evaluate(*args)["Fy"]))
+    # mftire evaluate: the temperature column is optional for such a file
+    write_tir(tp, tmp_path / "th.tir")
+    pd.DataFrame({"Fz": [6752.0], "kappa": [0.0], "alpha": [np.radians(8.0)], "gamma": [0.0]}).to_csv(
+        tmp_path / "in.csv", index=False)
+    assert main(["evaluate", str(tmp_path / "th.tir"), "--input", str(tmp_path / "in.csv"), "--output",
+                 str(tmp_path / "out.csv")]) == 0
+    assert pd.read_csv(tmp_path / "out.csv")["Fy"].iloc[0] == pytest.approx(hot, rel=1e-12)
+    # a bad section is refused when the file is loaded
+    tp.sections[SECTION]["TH_CAP_BULK"] = 0.0
+    with pytest.raises(MftireInputError, match="TH_CAP_BULK"):
+        Tyre(tp)

@@ -25,6 +25,7 @@ import numpy as np
 import pandas as pd
 
 from mftire.errors import MftireInputError
+from mftire.mf.thermal_section import NODE_VARIABLES, SECTION, ThermalParameters, check_nodes, parse_thermal
 from mftire.thermal.heat import (
     air_conductance,
     friction_power,
@@ -33,7 +34,6 @@ from mftire.thermal.heat import (
     implicit_step,
     rolling_loss,
 )
-from mftire.thermal.thermal_section import NODE_VARIABLES, SECTION, ThermalParameters, check_nodes, parse_thermal
 
 #: Road temperature column names, best first.
 ROAD_COLUMNS = ("RST", "T_road")

@@ -36,6 +36,7 @@ import pandas as pd
 from scipy.optimize import least_squares
 
 from mftire.errors import MftireInputError
+from mftire.mf.thermal_section import SECTION, ThermalParameters
 from mftire.thermal.heat import friction_power, gas_heat_capacity, gas_temperature, hot_pressure, hysteresis_loss
 from mftire.thermal.simulation import (
     NODE_VARIABLES,
@@ -45,7 +46,6 @@ from mftire.thermal.simulation import (
     simulate_nodes,
     thermal_of,
 )
-from mftire.thermal.thermal_section import SECTION, ThermalParameters
 
 #: Surface temperature columns of the rig (infrared, inner / centre / outer).
 SURFACE_COLUMNS = ("TSTI", "TSTC", "TSTO")

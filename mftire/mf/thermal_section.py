@@ -133,7 +133,7 @@ def parse_thermal(section: Mapping[str, object] | None) -> ThermalParameters | N
         name = k[3:].lower() if k.startswith("TH_") else None
         if name not in _NUMBER_NAMES:
             raise MftireInputError(f"[{SECTION}] {k}: unknown key (expected TH_CAP_SURFACE, TH_G_ROAD, ..., "
-                                   "EXTn_NODE; see mftire.thermal.thermal_section)")  # fmt: skip
+                                   "EXTn_NODE; see mftire.mf.thermal_section)")  # fmt: skip
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(float(value)):
             raise MftireInputError(f"[{SECTION}] {k} = {value!r} must be a finite number")
         v = float(value)
