@@ -237,3 +237,22 @@ def test_a_thermal_tir_evaluates_in_steady_state_with_its_default_temperature(tm
     tp.sections[SECTION]["TH_CAP_BULK"] = 0.0
     with pytest.raises(MftireInputError, match="TH_CAP_BULK"):
         Tyre(tp)
+
+
+def test_fit_thermal_bad_input_is_a_clear_error(tmp_path, capsys):
+    from mftire.cli import main
+    from mftire.iotools.rig import read_ttc
+
+    df = read_ttc(RUN)
+    df = df[df["ET"] < 60.0]
+    cases = {
+        "no_ir.csv": (df.drop(columns=["TSTI", "TSTC", "TSTO"]), "no surface temperature column"),
+        "backwards.csv": (df.iloc[::-1], "ET does not increase at data row 2"),
+        "nan.csv": (df.assign(Fz=df["Fz"].where(df.index != 10)), "column Fz, data row 11: not a finite number"),
+    }
+    for name, (frame, message) in cases.items():
+        frame.to_csv(tmp_path / name, index=False)
+        out = tmp_path / (name + ".tir")
+        assert main(["fit-thermal", str(tmp_path / name), "--tir", str(TIR), "--output", str(out)]) == 2
+        assert message in capsys.readouterr().err
+        assert not out.exists() and not (tmp_path / (name + "_temperature.png")).exists()

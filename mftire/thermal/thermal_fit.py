@@ -42,6 +42,7 @@ from mftire.thermal.simulation import (
     NODE_VARIABLES,
     bulk_power,
     check_series,
+    initial_temperatures,
     road_temperature,
     simulate_nodes,
     thermal_of,
@@ -318,7 +319,7 @@ def fit_thermal(tyre, df: pd.DataFrame, *, fit_until: float | None = None, name:
     # node temperatures along every row (fit-part simulation driven by the measured forces)
     p = th.params
     qs = friction_power(df["Fx"], df["Fy"], df["kappa"], df["alpha"], df["Vx"])
-    T0 = (p.t_init_surface or float(df["AMBTMP"].iloc[0]),) * 3
+    T0 = initial_temperatures(p, float(df["AMBTMP"].iloc[0]))
     nodes_T = simulate_nodes(p, df["ET"].to_numpy(float), qs,
                              bulk_power(p, df["Fz"], df["Vx"], df["Fx"], df["Fy"], fnomin),
                              df["Vx"].to_numpy(float), df["AMBTMP"].to_numpy(float), road_temperature(df, name), T0)
