@@ -256,3 +256,32 @@ def test_fit_thermal_bad_input_is_a_clear_error(tmp_path, capsys):
         assert main(["fit-thermal", str(tmp_path / name), "--tir", str(TIR), "--output", str(out)]) == 2
         assert message in capsys.readouterr().err
         assert not out.exists() and not (tmp_path / (name + "_temperature.png")).exists()
+
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+_pos = st.floats(1.0, 1e5)
+_cond = st.floats(0.0, 1e3)
+_temp = st.floats(-30.0, 150.0)
+
+
+@settings(max_examples=200, deadline=None)
+@given(caps=st.tuples(_pos, _pos, _pos), g=st.tuples(_cond, _cond, _cond, _cond, _cond), dt=st.floats(1e-3, 1e5),
+       T=st.tuples(_temp, _temp, _temp), Ta=_temp, Tr=_temp, q=st.tuples(st.floats(0.0, 1e4), st.floats(0.0, 1e4)))
+def test_implicit_step_keeps_energy_and_the_maximum_principle(caps, g, dt, T, Ta, Tr, q):
+    g_sb, g_bg, g_ba, g_road, g_air = g
+    new = heat.implicit_step(T, dt, q[0], q[1], g_air, Ta, Tr, caps, g_sb, g_bg, g_ba, g_road)
+    assert all(math.isfinite(x) for x in new)
+    # energy: C (T+ - T) = dt (heat in - heat out at T+)
+    flow = q[0] + q[1] - g_air * (new[0] - Ta) - g_road * (new[0] - Tr) - g_ba * (new[1] - Ta)
+    stored = sum(c * (a - b) for c, a, b in zip(caps, new, T, strict=True))
+    scale = sum(c * (abs(a) + abs(b)) for c, a, b in zip(caps, new, T, strict=True)) + dt * (
+        q[0] + q[1] + g_air * (abs(new[0]) + abs(Ta)) + g_road * (abs(new[0]) + abs(Tr)) + g_ba * (abs(new[1]) + abs(Ta)))
+    assert stored == pytest.approx(dt * flow, abs=1e-10 * scale + 1e-9)  # round-off of the solve only
+    # no heat in: every node stays between the coldest and the hottest of the start and the sinks
+    cold = heat.implicit_step(T, dt, 0.0, 0.0, g_air, Ta, Tr, caps, g_sb, g_bg, g_ba, g_road)
+    lo, hi = min(*T, Ta, Tr), max(*T, Ta, Tr)
+    assert all(lo - 1e-9 <= x <= hi + 1e-9 for x in cold)
+    # heat in never cools a node below the no-heat step
+    assert all(a >= b - 1e-9 for a, b in zip(new, cold, strict=True))
