@@ -277,7 +277,8 @@ def test_implicit_step_keeps_energy_and_the_maximum_principle(caps, g, dt, T, Ta
     flow = q[0] + q[1] - g_air * (new[0] - Ta) - g_road * (new[0] - Tr) - g_ba * (new[1] - Ta)
     stored = sum(c * (a - b) for c, a, b in zip(caps, new, T, strict=True))
     scale = sum(c * (abs(a) + abs(b)) for c, a, b in zip(caps, new, T, strict=True)) + dt * (
-        q[0] + q[1] + g_air * (abs(new[0]) + abs(Ta)) + g_road * (abs(new[0]) + abs(Tr)) + g_ba * (abs(new[1]) + abs(Ta)))
+        q[0] + q[1] + g_air * (abs(new[0]) + abs(Ta)) + g_road * (abs(new[0]) + abs(Tr))
+        + g_ba * (abs(new[1]) + abs(Ta)))
     assert stored == pytest.approx(dt * flow, abs=1e-10 * scale + 1e-9)  # round-off of the solve only
     # no heat in: every node stays between the coldest and the hottest of the start and the sinks
     cold = heat.implicit_step(T, dt, 0.0, 0.0, g_air, Ta, Tr, caps, g_sb, g_bg, g_ba, g_road)
