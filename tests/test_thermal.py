@@ -286,3 +286,28 @@ def test_implicit_step_keeps_energy_and_the_maximum_principle(caps, g, dt, T, Ta
     assert all(lo - 1e-9 <= x <= hi + 1e-9 for x in cold)
     # heat in never cools a node below the no-heat step
     assert all(a >= b - 1e-9 for a, b in zip(new, cold, strict=True))
+
+
+def test_fit_thermal_refits_a_diagnosed_law_in_a_measured_column():
+    from mftire.iotools.rig import read_ttc
+    from mftire.iotools.tir import read_tir
+    from mftire.thermal.thermal_fit import fit_thermal
+    from mftire.tyre import Tyre
+
+    tp = read_tir(TIR)
+    # what mftire diagnose writes for a grip that follows the centre tread temperature
+    tp.sections["MFTIRE_EXTENSIONS"] = {"EXT1_TARGET": "LMUX LMUY", "EXT1_FORM": "linear", "EXT1_VARIABLE": "TSTC",
+                                        "EXT1_REF": 50.0, "EXT1_SCALE": 50.0, "EXT1_C1": 0.0}
+    df = read_ttc(RUN)
+    df = df[df["ET"] < 200.0].reset_index(drop=True)
+    res = fit_thermal(Tyre(tp), df, nodes=("surface", "bulk"), folds=2)
+    ext, th = res.tir.sections["MFTIRE_EXTENSIONS"], parse_thermal(res.tir.sections[SECTION])
+    assert ext["EXT1_VARIABLE"] == "TSTC" and "EXT2_TARGET" not in ext  # the file's law, no default laws added
+    assert th.nodes.keys() == {1} and th.nodes[1] in ("surface", "bulk")
+    assert th.temperature == 50.0 and ext["EXT1_C1"] != 0.0
+    assert set(res.laws[0].heldout) == {"surface", "bulk"}
+    tyre = Tyre(res.tir)
+    assert tyre.variable_defaults == {"TSTC": 50.0}
+    # the replay reads the node, not the measured column
+    rep = replay(tyre, df.drop(columns=["TSTC"]))
+    assert rep.thermal and np.isfinite(rep.table["Fy_model"]).all()
