@@ -71,6 +71,22 @@ def _cmd_convert(args: argparse.Namespace) -> int:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
+    if args.fmu:
+        from mftire.fmu.build import find_compiler
+        from mftire.fmu.portable import build_info
+
+        try:
+            cc = " ".join(find_compiler())
+        except MftireError as exc:
+            cc = f"none ({exc})"
+        print("FMU export on this machine (mftire export-fmu):")
+        for key, value in build_info(cc).items():
+            print(f"  {key + ':':16} {value}")
+        if args.tir is None:
+            return 0
+        print()
+    elif args.tir is None:
+        raise MftireError("mftire info: give a .tir file (or --fmu)")
     from mftire.iotools.tir import read_tir
     from mftire.iotools.tir_checks import check_parameters
     from mftire.tyre import Tyre
@@ -197,9 +213,11 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Print the size, loads, ranges and sections of a .tir, the keys that take "
                        "default values and every failed sanity check. Exit code 0, or 1 with --strict when a "
                        "check warns, 2 when the file is broken.")  # fmt: skip
-    p.add_argument("tir", metavar="TIR", help="the .tir property file")
+    p.add_argument("tir", metavar="TIR", nargs="?", help="the .tir property file")
     p.add_argument("--strict", action="store_true", help="reading warnings (blank/non-numeric values) are errors; "
                    "exit 1 on check warnings too (for CI)")
+    p.add_argument("--fmu", action="store_true", help="also say what export-fmu builds here: compiler, glibc "
+                   "floor of the Linux binary, whether a Windows DLL is shipped (MinGW-w64 present)")  # fmt: skip
     p.set_defaults(func=_cmd_info)
 
     p = sub.add_parser("plot", help="draw the standard curves at 0.5, 1 and 1.5 x FNOMIN",
