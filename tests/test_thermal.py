@@ -311,3 +311,16 @@ def test_fit_thermal_refits_a_diagnosed_law_in_a_measured_column():
     # the replay reads the node, not the measured column
     rep = replay(tyre, df.drop(columns=["TSTC"]))
     assert rep.thermal and np.isfinite(rep.table["Fy_model"]).all()
+
+
+def test_a_regulated_pressure_rig_fits_without_the_gas_law():
+    from mftire.thermal.thermal_fit import fit_thermal_parameters
+
+    true = P.replace(cold_pressure=230e3, cold_temperature=21.0)
+    df, _ = _synthetic_series(true, seconds=300.0)
+    df["P"] = 230e3  # the rig holds the pressure
+    fit = fit_thermal_parameters(df, ThermalParameters(cap_gas=P.cap_gas), fnomin=6752.0, bin_s=0.2, sealed=False)
+    assert fit.params.pressure == 0 and math.isnan(fit.rms_pressure) and "g_bulk_gas" not in fit.sigma
+    assert fit.params.cold_pressure == 230e3
+    assert fit.params.cap_surface == pytest.approx(true.cap_surface, rel=0.1)
+    assert fit.rms_surface < 0.32

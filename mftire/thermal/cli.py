@@ -55,7 +55,7 @@ def _cmd_fit_thermal(args: argparse.Namespace) -> int:
 
     tyre = load(args.tir)
     df = _read(args)
-    res = fit_thermal(tyre, df, fit_until=args.fit_until, name=args.data)
+    res = fit_thermal(tyre, df, fit_until=args.fit_until, name=args.data, sealed=args.pressure == "sealed")
     write_tir(res.tir, args.output)
     _plot_fit(res, plot)
     if args.report:
@@ -147,6 +147,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--output", required=True, metavar="THERMAL.tir", help="the .tir to write")
     p.add_argument("--fit-until", type=float, default=None, metavar="SECONDS",
                    help="fit on the rows with ET <= SECONDS (default: all), leaving the rest to a replay")
+    p.add_argument("--pressure", choices=("sealed", "regulated"), default="sealed",
+                   help="sealed (default): the measured P follows the gas law and identifies the gas node; "
+                   "regulated: the rig holds the pressure, P is not fitted and the replay uses the cold pressure")
     p.add_argument("--plot", metavar="FIG.png", help="figure (default: OUTPUT stem + _temperature.png)")
     p.add_argument("--report", metavar="REPORT.json", help="also write the results as JSON")
     add_force_option(p)

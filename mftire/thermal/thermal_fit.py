@@ -162,9 +162,14 @@ def _sigma(res, names) -> dict[str, float]:
 
 
 def fit_thermal_parameters(df: pd.DataFrame, start: ThermalParameters | None = None, *, name: str = "data",
-                           bin_s: float = 0.5, fitted: Sequence[str] = FITTED, fnomin: float = 1.0) -> ThermalFit:
+                           bin_s: float = 0.5, fitted: Sequence[str] = FITTED, fnomin: float = 1.0,
+                           sealed: bool = True) -> ThermalFit:
     """Step 1 of the module docstring on a series (ET, Fz, kappa, alpha, gamma, Vx, Fx, Fy, AMBTMP,
-    road temperature, surface temperatures, P); ``fnomin`` [N] normalises the hysteresis loss."""
+    road temperature, surface temperatures, P); ``fnomin`` [N] normalises the hysteresis loss.
+
+    ``sealed`` False: the rig regulates the pressure, so the measured ``P`` says nothing of the gas
+    temperature; the pressure is left out of the residuals, ``TH_PRESSURE`` is 0 (the replay takes the
+    cold pressure as the MF's ``P``) and the gas-node conductance is not fitted."""
     check_series(df, name, ("ET", "Fz", "kappa", "alpha", "Vx", "Fx", "Fy", "AMBTMP"))
     work = pd.DataFrame({
         "ET": df["ET"].to_numpy(float),
@@ -174,7 +179,9 @@ def fit_thermal_parameters(df: pd.DataFrame, start: ThermalParameters | None = N
         "Vx": df["Vx"].to_numpy(float), "T_amb": df["AMBTMP"].to_numpy(float),
         "T_road": road_temperature(df, name), "T_ir": measured_surface(df, name),
     })  # fmt: skip
-    has_p = "P" in df.columns and np.isfinite(df["P"].to_numpy(float)).all()
+    has_p = sealed and "P" in df.columns and np.isfinite(df["P"].to_numpy(float)).all()
+    if not sealed:
+        fitted = [n for n in fitted if n != "g_bulk_gas"]
     if has_p:
         work["P"] = df["P"].to_numpy(float)
     b = _bin(work, bin_s)
@@ -188,8 +195,9 @@ def fit_thermal_parameters(df: pd.DataFrame, start: ThermalParameters | None = N
     if abs(ir0 - T0) > 3.0:  # the run starts with a warm tyre: start every node at the first reading
         init = {"t_init_surface": ir0, "t_init_bulk": ir0, "t_init_gas": ir0}
         T0 = ir0
-    p_cold = float(work["P"].iloc[0]) if has_p else start.cold_pressure
-    start = start.replace(cold_pressure=p_cold, cold_temperature=T0, **init)
+    p_first = float(df["P"].iloc[0]) if "P" in df.columns and math.isfinite(float(df["P"].iloc[0])) else None
+    p_cold = p_first if p_first is not None else start.cold_pressure
+    start = start.replace(cold_pressure=p_cold, cold_temperature=T0, pressure=int(bool(sealed)), **init)
     t, qs, fzv, vf2, V, Ta, Tr = (b[c].to_numpy(float) for c in ("ET", "q_s", "fzv", "vf2", "Vx", "T_amb",
                                                                    "T_road"))
     Tir = b["T_ir"].to_numpy(float)
@@ -296,9 +304,10 @@ def fit_laws(tyre, df: pd.DataFrame, nodes_T: np.ndarray, P: np.ndarray, assignm
 
 
 def fit_thermal(tyre, df: pd.DataFrame, *, fit_until: float | None = None, name: str = "data",
-                nodes: Sequence[str] = LAW_NODES, folds: int = 3) -> ThermalResult:
+                nodes: Sequence[str] = LAW_NODES, folds: int = 3, sealed: bool = True) -> ThermalResult:
     """Fit the thermal model and its temperature laws on the rows with ``ET <= fit_until`` (all rows
-    by default) of a continuous series; returns the ``.tir`` to write (module docstring)."""
+    by default) of a continuous series; returns the ``.tir`` to write (module docstring).  ``sealed``
+    False: a rig that regulates the pressure (:func:`fit_thermal_parameters`)."""
     from mftire.tyre import Tyre, as_tyre
 
     tyre = as_tyre(tyre)
@@ -315,7 +324,7 @@ def fit_thermal(tyre, df: pd.DataFrame, *, fit_until: float | None = None, name:
         start = ThermalParameters(cap_gas=gas_heat_capacity(f["UNLOADED_RADIUS"], f["RIM_RADIUS"], f["WIDTH"],
                                                             float(f["INFLPRES"])))
     fnomin = float(tyre.flat["FNOMIN"])
-    th = fit_thermal_parameters(df, start, name=name, fnomin=fnomin)
+    th = fit_thermal_parameters(df, start, name=name, fnomin=fnomin, sealed=sealed)
     # node temperatures along every row (fit-part simulation driven by the measured forces)
     p = th.params
     qs = friction_power(df["Fx"], df["Fy"], df["kappa"], df["alpha"], df["Vx"])
