@@ -35,7 +35,9 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     OutputPlan([args.tir, args.input], args.force).file(args.output, stdout=True)
     tyre = Tyre.from_file(args.tir, strict=args.strict)
     # columns the model extensions of the file need (e.g. temperature) are required too
-    df = read_numeric_csv(args.input, (*EVALUATE_REQUIRED, *tyre.required_variables), EVALUATE_OPTIONAL)
+    # (a variable with a steady-state default, e.g. the temperature of a thermal .tir, may be left out)
+    needed = [v for v in tyre.required_variables if v not in tyre.variable_defaults]
+    df = read_numeric_csv(args.input, (*EVALUATE_REQUIRED, *needed), (*EVALUATE_OPTIONAL, *tyre.variable_defaults))
     df = df.reset_index(drop=True)
     result = pd.concat([df, tyre.evaluate_frame(df, mode=args.mode, name=args.input)], axis=1)
     if args.output == "-":
@@ -262,6 +264,9 @@ def build_parser() -> argparse.ArgumentParser:
     from mftire.segmentation import cli as import_cli
 
     import_cli.add_parser(sub)
+    from mftire.thermal import cli as thermal_cli
+
+    thermal_cli.add_parser(sub)
     return parser
 
 

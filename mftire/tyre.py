@@ -89,6 +89,10 @@ class Tyre:
         self.extension_set: ExtensionSet = parse_section(self.extensions)
         #: External input variables the extensions need (data columns such as ``temperature``).
         self.required_variables: list[str] = self.extension_set.external_variables
+        #: Values a steady-state evaluation uses for extension variables it is not given: ``TH_TEMPERATURE``
+        #: of ``[MFTIRE_THERMAL]`` [°C] for the variable of each temperature law that reads a thermal node
+        #: (:mod:`mftire.mf.thermal_section`); empty without that section.
+        self.variable_defaults: dict[str, float] = _variable_defaults(self)
         path = getattr(params, "path", None)
         self.name = name or (os.path.basename(str(path)) if path else "tyre")
 
@@ -242,6 +246,8 @@ class Tyre:
         if self.flat.get("FITTYP") not in _EVALUATED_CODES:
             why = unsupported_message(self.parameters.get("FITTYP"))
             raise UnsupportedModelError(f"{self.name} ({self.format}): {why}")
+        if self.variable_defaults:
+            variables = {**{k: v for k, v in self.variable_defaults.items() if k not in variables}, **variables}
         if variables:
             check_keywords(variables, self.required_variables)
         warn_units(self, Fz, alpha)
@@ -299,6 +305,18 @@ def _point_state(tyre: Tyre) -> _Point | None:
     return pt
 
 
+def _variable_defaults(tyre: Tyre) -> dict[str, float]:
+    """``Tyre.variable_defaults``: the thermal section's steady-state temperature for its laws' variables."""
+    from mftire.mf.thermal_section import SECTION as THERMAL
+    from mftire.mf.thermal_section import parse_thermal
+
+    params = parse_thermal(tyre.parameters.sections.get(THERMAL))
+    if params is None or params.temperature is None:
+        return {}
+    terms = {t.index: t for t in tyre.extension_set.terms}
+    return {terms[n].variable: params.temperature for n in params.nodes if n in terms}
+
+
 _FRAME_INPUTS = ("Fz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "omega")
 _FRAME_REQUIRED = ("Fz", "kappa", "alpha")
 
@@ -313,12 +331,12 @@ def _frame_evaluate(self: Tyre, df: pd.DataFrame, mode: int = 111, name: str = "
         if src is not None:
             kw[col] = df[src].to_numpy(dtype=float)
     missing = [c for c in _FRAME_REQUIRED if c not in kw]
-    missing += [v for v in self.required_variables if v not in df.columns]
+    missing += [v for v in self.required_variables if v not in df.columns and v not in self.variable_defaults]
     if missing:
         raise MftireInputError(
             f"{name}: missing column(s) {', '.join(missing)} (have: {', '.join(map(str, df.columns))})"
         )
-    variables = {v: df[v].to_numpy(dtype=float) for v in self.required_variables}
+    variables = {v: df[v].to_numpy(dtype=float) for v in self.required_variables if v in df.columns}
     return self.evaluate(**kw, mode=mode, **variables)
 
 
