@@ -95,7 +95,8 @@ WORSE = 1.05  #: a scored channel's held-out RMS above this x before is a violat
 CEILING_MIN, CUT_MIN = 0.70, 0.50
 SWEEP_TIME = {"braking": 12.0, "cornering": 20.0}  #: [s]
 SWEEP_PAUSE, RUN_PAUSE, BLOCK_PAUSE = 8.0, 30.0, 240.0  #: [s]
-POINTS_BRAKING, POINTS_CORNERING = 11, 8  #: points of a braking sweep, of one way of a cornering sweep
+#: ranges of the points of a braking sweep, of one way of a cornering sweep (drawn per campaign)
+POINTS_BRAKING, POINTS_CORNERING = (11, 22), (8, 16)
 KAPPA_END, ALPHA_MAX_DEG = -0.25, 10.0
 
 #: family -> (target choices, size range [min, max] of |s|, the channels the effect acts on per target)
@@ -161,12 +162,12 @@ class ZooDraw:
 # programme
 
 
-def _sweep_slips(kind: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _sweep_slips(kind: str, points: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(kappa, alpha, direction) of a sweep: braking 0 -> KAPPA_END, cornering -A -> +A -> -A."""
     if kind == "braking":
-        k = KAPPA_END * np.linspace(0.0, 1.0, POINTS_BRAKING) ** 1.5
+        k = KAPPA_END * np.linspace(0.0, 1.0, points[0]) ** 1.5
         return k, np.zeros(len(k)), np.ones(len(k))  # |slip| increases
-    one = np.deg2rad(np.linspace(-ALPHA_MAX_DEG, ALPHA_MAX_DEG, POINTS_CORNERING))
+    one = np.deg2rad(np.linspace(-ALPHA_MAX_DEG, ALPHA_MAX_DEG, points[1]))
     a = np.concatenate([one, one[-2::-1]])
     d = np.concatenate([np.ones(len(one)), -np.ones(len(one) - 1)])  # up, then down
     return np.zeros(len(a)), a, d
@@ -224,6 +225,7 @@ def _runs(rng, conds: list[dict], target_runs: int, blocked: bool) -> list[dict]
 def _table(rng, runs: list[dict]) -> pd.DataFrame:
     """Inputs of every point: actual load (wander), slips, camber, speed, pressure, time, run, sweep."""
     pieces, t, prev_block, sweep = [], 0.0, None, 0
+    points = (int(rng.integers(*POINTS_BRAKING)), int(rng.integers(*POINTS_CORNERING)))
     for i, r in enumerate(runs):
         if prev_block is not None:
             t += BLOCK_PAUSE if r["block"] != prev_block else RUN_PAUSE
@@ -232,7 +234,7 @@ def _table(rng, runs: list[dict]) -> pd.DataFrame:
         for j, kind in enumerate(kinds):
             if j:
                 t += SWEEP_PAUSE
-            kappa, alpha, direction = _sweep_slips(kind)
+            kappa, alpha, direction = _sweep_slips(kind, points)
             n = len(kappa)
             wander = np.clip(0.4 * FZ_WANDER * _smooth_noise(n, rng), -FZ_WANDER, FZ_WANDER)
             tt = t + np.linspace(0.0, SWEEP_TIME[kind], n)
