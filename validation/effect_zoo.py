@@ -462,15 +462,18 @@ def draw(seed: int) -> ZooDraw:
     if is_null:
         clean = plain if g is None else _evaluate(tyre, table, targets=("LMUX", "LMUY"), factor=1.0 + g)
     else:
-        options, (lo, hi) = FAMILIES[family]
-        order = [tuple(options[i]) for i in rng.permutation(len(options))]
-        s0 = float(np.exp(rng.uniform(np.log(lo), np.log(hi)))) * (1.0 if shape == "optimum" else rng.choice([-1, 1]))
-        if family in ("curvature",):
-            s0 = -abs(s0)  # E <= 1 (Pacejka 2012 eq 4.E14): the curvature is lowered
         snr_min = float(rng.uniform(2.0, 4.0))
+        u_size, sign = float(rng.uniform()), float(rng.choice([-1.0, 1.0]))
 
-        def simulate(s: float, targets: tuple[str, ...]):
-            if family in INPUT_FAMILIES:
+        def size(fam: str) -> float:
+            lo, hi = FAMILIES[fam][1]
+            s = float(np.exp(np.log(lo) + u_size * (np.log(hi) - np.log(lo))))
+            if fam == "curvature":
+                return -s  # E <= 1 (Pacejka 2012 eq 4.E14): the curvature is lowered
+            return s if shape == "optimum" else sign * s
+
+        def simulate(s: float, fam: str, targets: tuple[str, ...]):
+            if fam in INPUT_FAMILIES:
                 x = table.copy()
                 col = targets[0]
                 u = table[col].to_numpy(float)
@@ -491,16 +494,27 @@ def draw(seed: int) -> ZooDraw:
                     best = max(best, eff / sig)
             return best
 
-        for targets in order:  # the first target on which the effect shows (a shift the tyre lacks does not)
-            s = s0
-            clean, true_inputs = simulate(s, targets)
+        # the drawn family's targets in a random order, then (only if none shows) the other families
+        others = [f for f in rng.permutation(list(FAMILIES)) if f != family]
+        tries = [(fam, tuple(FAMILIES[fam][0][i])) for fam in [family, *others]
+                 for i in rng.permutation(len(FAMILIES[fam][0]))]  # fmt: skip
+        if kind == "direction":  # up and down sweeps are lateral: a law in the direction needs Fy or Mz
+            tries = [(f, t) for f, t in tries if f not in INPUT_FAMILIES and not all(
+                x.endswith("X") or x == "FX_OFFSET" for x in t)]  # fmt: skip
+        for fam, targets in tries:  # the first on which the effect shows (a shift the tyre lacks does not)
+            s = size(fam)
+            clean, true_inputs = simulate(s, fam, targets)
             snr = snr_of(clean)
             if 0 < snr < snr_min:  # too small to see: scaled to snr_min noise sigmas (at most 20x)
                 s *= min(20.0, snr_min / snr)
-                clean, true_inputs = simulate(s, targets)
+                clean, true_inputs = simulate(s, fam, targets)
                 snr = snr_of(clean)
             if snr >= 1.5:
                 break
+        if fam != family:
+            truth["family_drawn"] = family
+            family = fam
+            truth["family"] = fam
         chans = [ch for ch in SCORED if np.max(np.abs((clean[ch] - plain[ch]).to_numpy())) > 1e-9 * (
             1 + np.max(np.abs(plain[ch].to_numpy())))]  # fmt: skip
         truth.update(targets=list(targets), size=round(s, 6), snr=round(snr, 2), channels=chans)
