@@ -36,12 +36,13 @@ on the training rows only, evaluates the held-out rows (outliers excluded) befor
 its size and every MF coefficient fitted: an ``[MFTIRE_EXTENSIONS]`` ``linear`` term in the true g;
 for input errors the fit and evaluation with the true inputs).  Scores (issue 21 "Done when"):
 
-* *cause named first*: the top candidate is significant and is the generating column or an accepted
-  equivalent the draw documents (``accepted``: e.g. the friction energy or time for wear);
+* *cause named first*: the cause the diagnosis names (the first of its ranking when it reports an
+  effect, or ``DiagnosisResult.cause`` when it names a cause without a law) is the generating column
+  or an accepted equivalent the draw documents (``accepted``: e.g. the friction energy or time for wear);
 * *held-out cut* of the scored channels (Fx, Fy, Mz where measured; each channel's RMS normalised by its
   held-out peak, pooled): counted in draws whose ceiling cut is >= 70 %; success >= 50 %;
 * *violation*: any scored channel's held-out RMS > 1.05 x before;
-* *false finding*: a null draw where the diagnosis reports an effect.
+* *false finding*: a null draw where the diagnosis reports an effect or names a cause.
 
 Run from the repository root::
 
@@ -495,7 +496,7 @@ def draw(seed: int) -> ZooDraw:
             return best
 
         # the drawn family's targets in a random order, then (only if none shows) the other families
-        others = [f for f in rng.permutation(list(FAMILIES)) if f != family]
+        others = [str(f) for f in rng.permutation(list(FAMILIES)) if f != family]
         tries = [(fam, tuple(FAMILIES[fam][0][i])) for fam in [family, *others]
                  for i in rng.permutation(len(FAMILIES[fam][0]))]  # fmt: skip
         if kind == "direction":  # up and down sweeps are lateral: a law in the direction needs Fy or Mz
@@ -737,14 +738,17 @@ def evaluate_draw(seed: int, n_perm: int = 99) -> dict:
     top = res.ranking[0] if res is not None and res.ranking else None
     rec["found_first"] = None if top is None else top.variable
     rec["top_significant"] = bool(top is not None and top.significant)
-    finding = bool(res is not None and (res.significant or res.extended is not None))
-    rec["finding"] = finding
+    rec["significant"] = bool(res is not None and res.significant)
+    # the cause the diagnosis names: the first of the ranking when it reports an effect, or the cause it
+    # names without a law (``DiagnosisResult.cause`` where the method has it: "cause named, no law found")
+    rec["cause"] = rec["found_first"] if rec["significant"] else getattr(res, "cause", None)
+    finding = bool(res is not None and (res.significant or res.extended is not None or rec["cause"] is not None))
+    rec["finding"] = finding  # an effect or a cause reported (on a null: a false finding)
     rec["law"] = None
     if res is not None and res.effect is not None and res.extended is not None:
         e = res.effect
         rec["law"] = f"{' '.join(e.targets) or e.name} x {e.name} in {e.variable}"
-    rec["cause_named"] = bool(not t["is_null"] and top is not None and top.significant
-                              and top.variable in t["accepted"])  # fmt: skip
+    rec["cause_named"] = bool(not t["is_null"] and rec["cause"] in t["accepted"])
 
     held = d.holdout & ~d.outlier
     hdf = d.data[held]
