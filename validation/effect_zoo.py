@@ -405,6 +405,7 @@ def draw(seed: int) -> ZooDraw:
     table = _table(rng, runs)
     n = len(table)
     plain = _evaluate(tyre, table)
+    by_sweep = table.assign(run=table.sweep)  # the heat models cool in every pause, also between the sweeps of a run
 
     # the generating variable
     v = _assign_run_values(rng, table, runs, kind, truth) if kind else None
@@ -412,7 +413,7 @@ def draw(seed: int) -> ZooDraw:
         which = _pick(rng, ("tread_temp", "wear", "track_temp"))
         if which == "tread_temp":  # follows the friction power with a lag (first-order heat model)
             heat, tau = float(rng.uniform(3e-3, 1.2e-2)), float(rng.uniform(40.0, 200.0))
-            v = np.round(thermal_tread_temp(table, sliding_power(table, plain), ambient=float(rng.uniform(15, 35)),
+            v = np.round(thermal_tread_temp(by_sweep, sliding_power(table, plain), ambient=float(rng.uniform(15, 35)),
                                             heat=heat, tau=tau), 2)  # fmt: skip
             truth.update(variable=_pick(rng, ("tread_temp", "TSTC", "surface_temp")), variable_kind="drift",
                          confounding=truth["confounding"] + ["follows friction power"])  # fmt: skip
@@ -579,7 +580,7 @@ def draw(seed: int) -> ZooDraw:
         elif name == "humidity":  # random per run
             val = rng.uniform(30, 80, len(runs))[table.run.to_numpy()]
         elif name == "rig_oil_temp":  # follows the friction power with a lag, like a temperature would
-            val = thermal_tread_temp(table, sliding_power(table, plain), ambient=35.0, heat=2e-3, tau=400.0)
+            val = thermal_tread_temp(by_sweep, sliding_power(table, plain), ambient=35.0, heat=2e-3, tau=400.0)
         else:  # operator: a two-level label per block of runs
             val = ((table.run.to_numpy() // int(rng.integers(3, 8))) % 2).astype(float)
         user[name] = np.round(val, 2)
