@@ -127,3 +127,22 @@ def test_headline_rates_are_the_issue_definitions():
     assert h["cause_named_first"] == pytest.approx(2 / 3)
     assert h["ceiling_draws"] == 2 and h["cut_ge_50_where_ceiling_ge_70"] == 0.5
     assert h["violations"] == 1 and h["false_findings_on_nulls"] == 0.5
+
+
+def test_the_judge_flags_a_channel_made_worse_and_scores_the_cut():
+    d = zoo.draw(2)
+    held = d.data[d.holdout & ~d.outlier]
+    truth = d.clean[d.holdout & ~d.outlier]
+    before = truth.copy()
+    before["Fy"] = truth["Fy"] + 0.05 * float(truth["Fy"].abs().max())  # the base model misses an Fy offset
+    chans = ["Fx", "Fy", "Mz"]
+    same = zoo.score_heldout(held, before, before, truth, truth, chans)
+    assert same["cut"] == 0.0 and same["worst_change"] == 0.0 and not same["violation"]
+    assert same["ceiling_cut"] > 0.5 and same["best_cut"] == same["ceiling_cut"]
+    fixed = zoo.score_heldout(held, before, truth, truth, None, chans)
+    assert fixed["cut"] > 0.5 and not fixed["violation"] and math.isnan(fixed["ceiling_cut"])
+    worse = truth.copy()
+    worse["Fx"] = truth["Fx"] * 1.03  # Fx made 3 % of its value worse: many noise sigmas
+    bad = zoo.score_heldout(held, truth, worse, truth, None, chans)
+    assert bad["violation"] and bad["change_Fx"] > 0.05 and bad["change_Fy"] == 0.0
+    assert zoo.score_heldout(held, truth, None, truth, None, chans)["violation"]  # not evaluable: a violation

@@ -708,6 +708,44 @@ def _derived_for_eval(d: ZooDraw) -> pd.DataFrame:
     return full
 
 
+def score_heldout(held: pd.DataFrame, before: pd.DataFrame, after: pd.DataFrame | None, truth: pd.DataFrame,
+                  ceiling: pd.DataFrame | None, channels: list[str]) -> dict:
+    """Held-out scores of the measured rows ``held`` (outliers already excluded) for the models ``before``
+    (the base fit), ``after`` (the diagnosed model; None: it could not be evaluated), ``truth`` (noise-free)
+    and ``ceiling``: per channel the RMS on its primary rows and the relative change after/before; pooled
+    over the channels (each RMS normalised by the channel's held-out peak) the cut, the best cut (truth)
+    and the ceiling cut; the worst change and whether it is a violation (> ``WORSE``)."""
+    rec: dict = {}
+    ssb = ssa = ssc = sst = 0.0
+    worst = 0.0
+    for ch in channels:
+        rows = _primary(held, ch) & np.isfinite(held[ch].to_numpy(float))
+        if rows.sum() < 5:
+            continue
+        y = held[ch].to_numpy(float)
+        peak = float(np.max(np.abs(y[rows])))
+        rb = channel_rms(y, before[ch].to_numpy(), rows)
+        ra = channel_rms(y, after[ch].to_numpy(), rows) if after is not None else float("inf")
+        rt = channel_rms(y, truth[ch].to_numpy(), rows)
+        rec[f"rms_{ch}_before"], rec[f"rms_{ch}_after"], rec[f"rms_{ch}_truth"] = rb, ra, rt
+        rec[f"change_{ch}"] = ra / rb - 1.0 if rb > 0 else 0.0
+        worst = max(worst, rec[f"change_{ch}"])
+        ssb += (rb / peak) ** 2
+        ssa += (ra / peak) ** 2
+        sst += (rt / peak) ** 2
+        if ceiling is not None:
+            rc = channel_rms(y, ceiling[ch].to_numpy(), rows)
+            rec[f"rms_{ch}_ceiling"] = rc
+            ssc += (rc / peak) ** 2
+    rec["scored"] = " ".join(ch for ch in channels if f"rms_{ch}_before" in rec)
+    rec["cut"] = 1.0 - math.sqrt(ssa / ssb) if ssb > 0 else float("nan")
+    rec["best_cut"] = 1.0 - math.sqrt(sst / ssb) if ssb > 0 else float("nan")
+    rec["ceiling_cut"] = (1.0 - math.sqrt(ssc / ssb)) if (ssb > 0 and ceiling is not None) else float("nan")
+    rec["worst_change"] = worst
+    rec["violation"] = bool(worst > WORSE - 1.0)
+    return rec
+
+
 def evaluate_draw(seed: int, n_perm: int = 99) -> dict:
     """Fit, diagnose and score draw ``seed``; one flat record."""
     from mftire.diagnosis.diagnose import diagnose
@@ -766,41 +804,14 @@ def evaluate_draw(seed: int, n_perm: int = 99) -> dict:
         except Exception as exc:
             rec["eval_error"] = f"{type(exc).__name__}: {exc}"
             after = None
-    ceil_tyre, ceil_data = None, None
+    ceil_tyre, ceiling = None, None
     if not t["is_null"]:
         ceil_tyre, ceil_data = _ceiling_model(d, base_params, train_rows)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             ceiling = ceil_tyre.evaluate_frame(_frame_inputs(ceil_data[held]))
-    clean = d.clean[held]
-    scored = [ch for ch in SCORED if ch in hdf.columns and ch not in d.zero_channels]
-    ssb = ssa = ssc = sst = 0.0
-    worst = 0.0
-    for ch in scored:
-        rows = _primary(hdf, ch) & np.isfinite(hdf[ch].to_numpy(float))
-        if rows.sum() < 5:
-            continue
-        y = hdf[ch].to_numpy(float)
-        peak = float(np.max(np.abs(y[rows])))
-        rb = channel_rms(y, before[ch].to_numpy(), rows)
-        ra = channel_rms(y, after[ch].to_numpy(), rows) if after is not None else float("inf")
-        rt = channel_rms(y, clean[ch].to_numpy(), rows)
-        rec[f"rms_{ch}_before"], rec[f"rms_{ch}_after"], rec[f"rms_{ch}_truth"] = rb, ra, rt
-        rec[f"change_{ch}"] = ra / rb - 1.0 if rb > 0 else 0.0
-        worst = max(worst, rec[f"change_{ch}"])
-        ssb += (rb / peak) ** 2
-        ssa += (ra / peak) ** 2
-        sst += (rt / peak) ** 2
-        if ceil_tyre is not None:
-            rc = channel_rms(y, ceiling[ch].to_numpy(), rows)
-            rec[f"rms_{ch}_ceiling"] = rc
-            ssc += (rc / peak) ** 2
-    rec["scored"] = " ".join(ch for ch in scored if f"rms_{ch}_before" in rec)
-    rec["cut"] = 1.0 - math.sqrt(ssa / ssb) if ssb > 0 else float("nan")
-    rec["best_cut"] = 1.0 - math.sqrt(sst / ssb) if ssb > 0 else float("nan")
-    rec["ceiling_cut"] = (1.0 - math.sqrt(ssc / ssb)) if (ssb > 0 and ceil_tyre is not None) else float("nan")
-    rec["worst_change"] = worst
-    rec["violation"] = bool(worst > WORSE - 1.0)
+    rec.update(score_heldout(hdf, before, after, d.clean[held], ceiling,
+                             [ch for ch in SCORED if ch in hdf.columns and ch not in d.zero_channels]))
     rec["total_s"] = round(time.perf_counter() - t_start, 2)
     return rec
 
