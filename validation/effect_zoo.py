@@ -18,7 +18,9 @@ than the method's catalogue of laws.  What it varies (each drawn independently f
   track temperature drifting in time), a staircase in test order, a two-level flag, an MF input
   (speed, slip speed), the sweep direction, optionally times an MF input (load dfz, camber, speed,
   pressure, sign of the slip angle: an interaction);
-* **effect size** (and its size in noise sigmas, ``snr``; never below ~2 sigmas);
+* **effect size**: drawn as it shows, 2-25 noise sigmas (log-uniform; ``snr``: the effect's RMS on its
+  most affected scored channel over that channel's noise), the physical size ``s`` following (at most 2x
+  the family's largest size of :data:`FAMILIES`); an effect that cannot show on its target moves to another;
 * **confounding**: loads tested in blocks or interleaved, staircases in test order, identifier
   columns that follow the effect (a file number per specimen), a variable that follows friction power;
 * **held-out design**: an unseen level (interior band) of the variable, an unseen combination of a
@@ -464,7 +466,8 @@ def draw(seed: int) -> ZooDraw:
     if is_null:
         clean = plain if g is None else _evaluate(tyre, table, targets=("LMUX", "LMUY"), factor=1.0 + g)
     else:
-        snr_min = float(rng.uniform(2.0, 4.0))
+        # the size as it shows: 2-25 noise sigmas (log-uniform) on the most affected scored channel
+        snr_target = float(np.exp(rng.uniform(np.log(2.0), np.log(25.0))))
         u_size, sign = float(rng.uniform()), float(rng.choice([-1.0, 1.0]))
 
         def size(fam: str) -> float:
@@ -505,10 +508,13 @@ def draw(seed: int) -> ZooDraw:
                 x.endswith("X") or x == "FX_OFFSET" for x in t)]  # fmt: skip
         for fam, targets in tries:  # the first on which the effect shows (a shift the tyre lacks does not)
             s = size(fam)
+            cap = 2.0 * FAMILIES[fam][1][1]  # at most 2x the family's largest physical size
             clean, true_inputs = simulate(s, fam, targets)
             snr = snr_of(clean)
-            if 0 < snr < snr_min:  # too small to see: scaled to snr_min noise sigmas (at most 20x)
-                s *= min(20.0, snr_min / snr)
+            for _ in range(2):  # scaled to the drawn visibility (the effect is not quite linear in s)
+                if snr <= 0:
+                    break
+                s = float(np.clip(s * np.clip(snr_target / snr, 0.05, 20.0), -cap, cap))
                 clean, true_inputs = simulate(s, fam, targets)
                 snr = snr_of(clean)
             if snr >= 1.5:
@@ -860,6 +866,15 @@ def table_markdown(df: pd.DataFrame, command: str) -> str:
                      f"{'-' if null else len(c)} | {_pct((c.cut >= CUT_MIN).mean()) if len(c) else '-'} | "
                      f"{_pct(g.cut.median())} | {'-' if null else _pct(g.ceiling_cut.median())} | "
                      f"{int(g.violation.astype(bool).sum())} | {int(g.finding.astype(bool).sum())} |")  # fmt: skip
+    eff = df[~df.is_null.astype(bool)]
+    for key, title in (("variable_kind", "variable kind"), ("holdout_design", "held-out design")):
+        lines += ["", f"| effect draws by {title} | draws | cause first | ceiling ≥ 70 % | cut ≥ 50 % of those | "
+                  "worse > 5 % |", "|---|---:|---:|---:|---:|---:|"]  # fmt: skip
+        for name, g in sorted(eff.groupby(eff[key].astype(str).str.split(" ").str[0])):
+            c = g[g.ceiling_cut >= CEILING_MIN]
+            cut = _pct((c.cut >= CUT_MIN).mean()) if len(c) else "-"
+            lines.append(f"| {name} | {len(g)} | {_pct(g.cause_named.astype(bool).mean())} | {len(c)} | {cut} | "
+                         f"{int(g.violation.astype(bool).sum())} |")
     errs = int(df.error.notna().sum()) if "error" in df else 0
     if errs:
         lines += ["", f"The diagnosis raised an error on {errs} draw(s) (column `error` of the results)."]
