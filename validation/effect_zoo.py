@@ -118,6 +118,8 @@ FAMILIES: dict[str, tuple[tuple[tuple[str, ...], ...], tuple[float, float]]] = {
     "camber_offset": ((("gamma",),), (math.radians(0.5), math.radians(2.5))),
 }
 INPUT_FAMILIES = ("pressure_input", "slip_angle_offset", "camber_offset")
+#: scaling factors a law keeps positive (factor >= 0.3): friction, stiffness, shape, trail
+POSITIVE = frozenset({"LMUX", "LMUY", "LKX", "LKY", "LCX", "LCY", "LTR"})
 SHAPES = ("linear", "quadratic", "hinge", "saturating", "optimum")
 #: variable kinds and their probabilities
 VARIABLE_KINDS = {"run_constant": 0.24, "staircase": 0.14, "flag": 0.12, "drift": 0.3, "mf_input": 0.1,
@@ -485,7 +487,7 @@ def draw(seed: int) -> ZooDraw:
                 x[col] = u * (1.0 + s * g) if col == "P" else u + s * g  # effective pressure; angle offsets
                 return _evaluate(tyre, table, inputs=x), x
             factor = 1.0 + s * g
-            if not targets[0].endswith("OFFSET"):
+            if set(targets) & POSITIVE:  # friction, stiffness, shape and trail stay positive
                 factor = np.maximum(factor, 0.3)
             return _evaluate(tyre, table, targets=targets, factor=factor), None
 
@@ -525,7 +527,10 @@ def draw(seed: int) -> ZooDraw:
             truth["family"] = fam
         chans = [ch for ch in SCORED if np.max(np.abs((clean[ch] - plain[ch]).to_numpy())) > 1e-9 * (
             1 + np.max(np.abs(plain[ch].to_numpy())))]  # fmt: skip
-        truth.update(targets=list(targets), size=round(s, 6), snr=round(snr, 2), channels=chans)
+        s = round(s, 6)
+        truth.update(targets=list(targets), size=s, snr=round(snr, 2), channels=chans)
+        if fam not in INPUT_FAMILIES and set(targets) & POSITIVE:
+            g = (np.maximum(1.0 + s * g, 0.3) - 1.0) / s  # the law as applied (a factor kept positive)
         if family in INPUT_FAMILIES:
             truth["law_expressible"] = (f"input law ({targets[0]} corrected by the generating law): no "
                                         "[MFTIRE_EXTENSIONS] form; ceiling = fit and evaluation with the true inputs")
@@ -615,7 +620,7 @@ def _holdout(rng, table: pd.DataFrame, runs: list[dict], v: np.ndarray | None, t
     run = table.run.to_numpy()
     n_runs = len(runs)
     loads = sorted({r["load"] for r in runs})
-    options = ["new_runs", "interior_load"]
+    options = ["new_runs"] + (["interior_load"] if len(loads) >= 4 else [])  # 3 loads stay to fit load terms
     if v is not None and len(np.unique(v)) >= 3:
         options += ["unseen_level", "unseen_level"]
     if v is not None:
@@ -678,26 +683,30 @@ def _fit(train: pd.DataFrame, start: TirParameters) -> TirParameters:
         return fit_tir(train, start, progress=False).parameters
 
 
-def _ceiling_model(d: ZooDraw, base: TirParameters, train_rows: np.ndarray) -> tuple[Tyre, pd.DataFrame]:
-    """The refit of the training rows with the generating law, and the inputs to evaluate it at."""
+def _ceiling_model(d: ZooDraw, train_rows: np.ndarray) -> tuple[Tyre, pd.DataFrame]:
+    """The refit of the training rows with the generating law, and the inputs to evaluate it at.
+
+    Started from the generating tyre (the plain file and the law's true size), so that the refit finds the
+    best the law's form reaches rather than a local minimum of the base fit; every MF coefficient and the
+    law's size are refitted.  A scaling or offset law is an ``[MFTIRE_EXTENSIONS]`` ``linear`` term in the
+    true per-row shape g (z = g·|s|, C1 = ±1 at the start, so the fitter's bounds on C1 allow up to twice the
+    true size); an input law is the fit and evaluation with the true inputs."""
     t = d.truth
     fit_data = d.data.copy()
     for ch in d.zero_channels:
         if ch in fit_data.columns:
             fit_data = fit_data.drop(columns=[ch])
-    params = base.copy()
+    params = read_tir(ROOT / d.tyre_file)
     if t["family"] in INPUT_FAMILIES:
         col = t["targets"][0]
         fit_data[col] = d.true_inputs[col].to_numpy()
     else:
-        targets = t["targets"]
-        g = d.law_g
-        if targets[0].endswith("OFFSET"):
-            pass  # FX/FY_OFFSET = Fz·C1·g: the generating offset Fz·s·g
-        for k, v in {"EXT1_TARGET": " ".join(targets), "EXT1_FORM": "linear", "EXT1_VARIABLE": "zoo_g",
-                     "EXT1_REF": 0.0, "EXT1_SCALE": 1.0, "EXT1_C1": float(np.clip(t["size"], -1.9, 1.9))}.items():
+        size = float(t["size"])
+        for k, v in {"EXT1_TARGET": " ".join(t["targets"]), "EXT1_FORM": "linear", "EXT1_VARIABLE": "zoo_g",
+                     "EXT1_REF": 0.0, "EXT1_SCALE": 1.0 / max(abs(size), 1e-9),
+                     "EXT1_C1": 1.0 if size >= 0 else -1.0}.items():  # fmt: skip
             params.set(k, v, section=SECTION)
-        fit_data["zoo_g"] = g
+        fit_data["zoo_g"] = d.law_g
     tyre = Tyre(_fit(fit_data[train_rows], params))
     return tyre, fit_data
 
@@ -812,7 +821,7 @@ def evaluate_draw(seed: int, n_perm: int = 99) -> dict:
             after = None
     ceil_tyre, ceiling = None, None
     if not t["is_null"]:
-        ceil_tyre, ceil_data = _ceiling_model(d, base_params, train_rows)
+        ceil_tyre, ceil_data = _ceiling_model(d, train_rows)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             ceiling = ceil_tyre.evaluate_frame(_frame_inputs(ceil_data[held]))
