@@ -856,9 +856,10 @@ def _pct(x: float) -> str:
 
 def table_markdown(df: pd.DataFrame, command: str) -> str:
     h = headline(df)
+    commits = ", ".join(sorted(df["commit"].astype(str).unique())) if "commit" in df else "not recorded"
     lines = [MARK_BEGIN, "", f"Measured with `{command}` ({h['draws']} draws: {h['effect_draws']} with an effect, "
-             f"{h['null_draws']} nulls; {time.strftime('%Y-%m-%d')}, per-draw results in "
-             "`validation/effect_zoo_results.csv`).", "",
+             f"{h['null_draws']} nulls; the diagnosis of commit {commits}; {time.strftime('%Y-%m-%d')}; per-draw "
+             "results in `validation/effect_zoo_results.csv`).", "",
              "| headline (issue 21 target) | measured |", "|---|---:|",
              f"| right cause named first (≥ 95 % of effect draws) | {_pct(h['cause_named_first'])} |",
              f"| held-out cut ≥ 50 % where the ceiling is ≥ 70 % (≥ 85 %; {h['ceiling_draws']} draws) | "
@@ -918,6 +919,17 @@ def _worker(args: tuple[int, int]) -> dict:
         return {"seed": seed, "zoo_error": f"{type(exc).__name__}: {exc}"}
 
 
+def _commit() -> str:
+    """The repository's commit (short hash, ``+dirty`` with uncommitted changes to mftire/): the method judged."""
+    import subprocess
+
+    def git(*a: str) -> str:
+        return subprocess.run(["git", "-C", str(ROOT), *a], capture_output=True, text=True).stdout.strip()
+
+    head = git("rev-parse", "--short", "HEAD") or "unknown"
+    return head + ("+dirty" if git("status", "--porcelain", "--", "mftire") else "")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--draws", type=int, default=200)
@@ -937,6 +949,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     seeds = [(s, args.n_perm) for s in range(args.seed, args.seed + args.draws)]
     records = []
+    commit = _commit()
     from mftire.iotools.atomic import atomic_path
 
     def save():
@@ -951,12 +964,12 @@ def main(argv: list[str] | None = None) -> int:
         with ProcessPoolExecutor(args.jobs) as pool:
             it = pool.map(_worker, seeds)
             for rec in it:
-                records.append(rec)
+                records.append({**rec, "commit": commit})
                 _print_rec(rec)
                 save()
     else:
         for s in seeds:
-            rec = _worker(s)
+            rec = {**_worker(s), "commit": commit}
             records.append(rec)
             _print_rec(rec)
             save()
