@@ -676,7 +676,7 @@ def _frame_inputs(df: pd.DataFrame) -> pd.DataFrame:
 
 
 def _fit(train: pd.DataFrame, start: TirParameters) -> TirParameters:
-    from mftire.fitting.core import fit_tir
+    from mftire.fitting import fit_tir
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
