@@ -774,7 +774,7 @@ def evaluate_draw(seed: int, n_perm: int = 99) -> dict:
                  "snr": t["snr"], "confounding": "; ".join(t["confounding"]), "holdout_design": t["holdout_design"],
                  "noise": t["noise"], "outliers": t["outlier_fraction"], "rows": t["rows"],
                  "not_measured": " ".join(f"{k}:{v}" for k, v in t["not_measured"].items()), "tyre": t["tyre"],
-                 "accepted": " ".join(t["accepted"])}  # fmt: skip
+                 "accepted": " ".join(t["accepted"]), "identifiers": " ".join(t["identifiers"].values())}  # fmt: skip
     train_rows = ~d.holdout
     fit_data = d.data.drop(columns=[c for c in d.zero_channels if c in d.data.columns])
     base_params = _fit(fit_data[train_rows], d.start)
@@ -885,9 +885,26 @@ def table_markdown(df: pd.DataFrame, command: str) -> str:
             cut = _pct((c.cut >= CUT_MIN).mean()) if len(c) else "-"
             lines.append(f"| {name} | {len(g)} | {_pct(g.cause_named.astype(bool).mean())} | {len(c)} | {cut} | "
                          f"{int(g.violation.astype(bool).sum())} |")
-    errs = int(df.error.notna().sum()) if "error" in df else 0
-    if errs:
-        lines += ["", f"The diagnosis raised an error on {errs} draw(s) (column `error` of the results)."]
+    lines += [""]
+    if "identifiers" in df:
+        ids = [set(str(x).split()) for x in df.identifiers]
+        in_id = [str(c) in i for c, i in zip(df.get("cause", df.found_first), ids, strict=True)]
+        law_id = [isinstance(law, str) and law.split(" in ")[-1] in i for law, i in zip(df.law, ids, strict=True)]
+        lines.append(f"- A cause named in an identifier column (run, sweep, segment, row, file number): {sum(in_id)} "
+                     f"draws; a law in one: {sum(law_id)}.")
+    bad = df[df.violation.astype(bool)].sort_values("worst_change", ascending=False)
+    if len(bad):
+        worst = "; ".join(f"seed {int(r.seed)} {r.group}: {r.law} ({100 * r.worst_change:+.0f} %)"
+                          for r in bad.head(8).itertuples())  # fmt: skip
+        lines.append(f"- Worst held-out changes: {worst}.")
+    if "error" in df and df.error.notna().any():
+        e = df[df.error.notna()]
+        lines.append(f"- The diagnosis raised an error on {len(e)} draw(s): "
+                     + "; ".join(f"seed {int(r.seed)}: {str(r.error)[:60]}" for r in e.head(5).itertuples()) + ".")
+    if "diagnose_s" in df:
+        lines.append(f"- Time: diagnosis median {df.diagnose_s.median():.1f} s, max {df.diagnose_s.max():.0f} s; a "
+                     f"whole draw (two fits, the diagnosis, scoring) {df.total_s.sum() / 60:.0f} min in all (wall "
+                     "time, one process).")
     lines += ["", MARK_END]
     return "\n".join(lines)
 
