@@ -2,8 +2,8 @@
 
 The generator is checked with real numbers (reproducible from the seed, a quarter nulls, the ground
 truth and identifier columns present, the effect visible above the noise, the held-out design keeps
-the MF conditions); the current diagnosis is judged on 16 fixed draws (the first 12 effect draws and
-the 4 null draws of seeds 0-15): no scored channel more than 5 % worse on held-out
+the MF conditions); the current diagnosis is judged on 16 fixed draws (seeds 0-15: 12 effect draws
+and 4 nulls): no scored channel more than 5 % worse on held-out
 data, no finding on the nulls, an oracle ceiling for every effect draw.
 """
 

@@ -857,8 +857,9 @@ def _pct(x: float) -> str:
 def table_markdown(df: pd.DataFrame, command: str) -> str:
     h = headline(df)
     commits = ", ".join(sorted(df["commit"].astype(str).unique())) if "commit" in df else "not recorded"
+    days = ", ".join(sorted(df["date"].astype(str).unique())) if "date" in df else "date not recorded"
     lines = [MARK_BEGIN, "", f"Measured with `{command}` ({h['draws']} draws: {h['effect_draws']} with an effect, "
-             f"{h['null_draws']} nulls; the diagnosis of commit {commits}; {time.strftime('%Y-%m-%d')}; per-draw "
+             f"{h['null_draws']} nulls; the diagnosis of commit {commits}; {days}; per-draw "
              "results in `validation/effect_zoo_results.csv`).", "",
              "| headline (issue 21 target) | measured |", "|---|---:|",
              f"| right cause named first (≥ 95 % of effect draws) | {_pct(h['cause_named_first'])} |",
@@ -966,7 +967,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     seeds = [(s, args.n_perm) for s in range(args.seed, args.seed + args.draws)]
     records = []
-    commit = _commit()
+    commit, day = _commit(), time.strftime("%Y-%m-%d")
     from mftire.iotools.atomic import atomic_path
 
     def save():
@@ -981,12 +982,12 @@ def main(argv: list[str] | None = None) -> int:
         with ProcessPoolExecutor(args.jobs) as pool:
             it = pool.map(_worker, seeds)
             for rec in it:
-                records.append({**rec, "commit": commit})
+                records.append({**rec, "commit": commit, "date": day})
                 _print_rec(rec)
                 save()
     else:
         for s in seeds:
-            rec = {**_worker(s), "commit": commit}
+            rec = {**_worker(s), "commit": commit, "date": day}
             records.append(rec)
             _print_rec(rec)
             save()
