@@ -431,6 +431,32 @@ def _finish_holdout(case: Case, table: pd.DataFrame) -> None:
 # simulate, fit, write
 
 
+def rig_artefacts(table: pd.DataFrame, clean: pd.DataFrame, rng: np.random.Generator, noise: float = NOISE,
+                  outlier_fraction: float = OUTLIER_FRACTION) -> tuple[pd.DataFrame, np.ndarray, dict[str, float]]:
+    """``table`` with the channels of ``clean`` plus rig noise and outliers: ``(data, outlier mask, sigma)``.
+
+    Noise: Gaussian, ``noise`` of the channel's peak in the run (column ``run``), at least a fifth of
+    ``noise`` of its peak over the campaign (``sigma``); outliers: ``outlier_fraction`` of the rows carry a
+    spike of 10-30 sigmas on one of Fx, Fy, Mz.  ``table`` must have a default RangeIndex.
+    """
+    # noise sigma per channel: ``noise`` of its peak over the campaign ...
+    sigma = {ch: noise * float(np.max(np.abs(clean[ch]))) for ch in CHANNELS}
+    data = table.copy()
+    for ch in CHANNELS:
+        # ... and in a run ``noise`` of the channel's peak in the run, at least a fifth of the campaign's
+        run_peak = clean[ch].abs().groupby(table.run).transform("max").to_numpy()
+        run_sigma = np.maximum(noise * run_peak, 0.2 * sigma[ch])
+        data[ch] = clean[ch].to_numpy() + run_sigma * rng.standard_normal(len(data))
+    n_out = int(round(outlier_fraction * len(data)))
+    rows = rng.choice(len(data), n_out, replace=False)
+    outlier = np.zeros(len(data), bool)
+    outlier[rows] = True
+    for i in rows:
+        ch = ("Fx", "Fy", "Mz")[rng.integers(3)]
+        data.loc[i, ch] += rng.choice((-1.0, 1.0)) * rng.uniform(10.0, 30.0) * sigma[ch]
+    return data, outlier, sigma
+
+
 def simulate(case: Case, reduced: bool) -> tuple[pd.DataFrame, np.ndarray, dict[str, float]]:
     """The campaign table, its outlier mask and the noise sigma per channel."""
     rng = np.random.default_rng(1000 + CASES.index(case.name) + (500 if reduced else 0))
@@ -441,21 +467,7 @@ def simulate(case: Case, reduced: bool) -> tuple[pd.DataFrame, np.ndarray, dict[
         for col, fn in case.derived.items():
             table[col] = np.round(fn(table, base), 3)
     clean = truth(case, table)
-    # noise sigma per channel: NOISE of its peak over the campaign ...
-    sigma = {ch: NOISE * float(np.max(np.abs(clean[ch]))) for ch in CHANNELS}
-    data = table.copy()
-    for ch in CHANNELS:
-        # ... and in a run NOISE of the channel's peak in the run, at least a fifth of the campaign's
-        run_peak = clean[ch].abs().groupby(table.run).transform("max").to_numpy()
-        run_sigma = np.maximum(NOISE * run_peak, 0.2 * sigma[ch])
-        data[ch] = clean[ch].to_numpy() + run_sigma * rng.standard_normal(len(data))
-    n_out = int(round(OUTLIER_FRACTION * len(data)))
-    rows = rng.choice(len(data), n_out, replace=False)
-    outlier = np.zeros(len(data), bool)
-    outlier[rows] = True
-    for i in rows:
-        ch = ("Fx", "Fy", "Mz")[rng.integers(3)]
-        data.loc[i, ch] += rng.choice((-1.0, 1.0)) * rng.uniform(10.0, 30.0) * sigma[ch]
+    data, outlier, sigma = rig_artefacts(table, clean, rng)
     for ch in case.zero_channels:
         data[ch] = 0.0
     cols = SWEEP_COLUMNS + ["time", "run"] + [c for c in case_columns(case)]
@@ -470,10 +482,15 @@ def holdout_mask(data: pd.DataFrame, column: str, values) -> np.ndarray:
 
 def start_file(case: Case, seed: int) -> TirParameters:
     """The generating tyre's plain file with its main coefficients perturbed by a few per cent."""
-    params = mf_template(case.fe_tyre) if case.model == "fe" else plain_tir()
+    return perturbed(mf_template(case.fe_tyre) if case.model == "fe" else plain_tir(), seed)
+
+
+def perturbed(params: TirParameters, seed: int, relative: float = PERTURBATION) -> TirParameters:
+    """``params`` (changed in place and returned) with the main coefficients :data:`PERTURBED` perturbed by
+    a relative Gaussian ``relative`` (the start file of a fit, as a user's template would be)."""
     rng = np.random.default_rng(seed)
     for key in PERTURBED:
-        params.set(key, float(params[key]) * (1.0 + PERTURBATION * rng.standard_normal()))
+        params.set(key, float(params[key]) * (1.0 + relative * rng.standard_normal()))
     return params
 
 
