@@ -27,9 +27,9 @@ from typing import Any
 
 import pandas as pd
 
-from mftire.iotools.atomic import atomic_path
+from mftire.iotools.atomic import atomic_path, staged_folder
 from mftire.iotools.tir import write_tir
-from mftire.parallel import Executor
+from mftire.parallel import Executor, FilesTask, write_files
 
 
 class _Steps:
@@ -65,15 +65,22 @@ def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progre
     # many small SVDs, and idle BLAS threads spinning for work would take the cores from the workers
     with warnings.catch_warnings(), threadpool_limits(1, user_api="blas"):
         warnings.simplefilter("ignore")
-        with (executor or Executor()).session() as ex:
-            return _run_demo(output, quick, progress, ex)
+        # every output is written into a staging folder and moved into ``output`` at the end: a run that
+        # fails (a lost cluster, Ctrl-C) writes nothing there
+        with (executor or Executor()).session() as ex, staged_folder(output) as stage:
+            summary = _run_demo(stage, quick, progress, ex)
+    if progress:
+        out = os.fspath(output)
+        print(f"done: {os.path.join(out, 'report.html')}\n      {os.path.join(out, 'report.json')}", flush=True)
+    return summary
 
 
-def _rig_task(args: tuple[str, bool]) -> RigStage:
-    """:func:`rig_stage` as a task for the executor (warnings silenced in the worker too)."""
+def _rig_task(quick: bool, folder: str) -> RigStage:
+    """:func:`rig_stage` as a task for the executor (warnings silenced in the worker too); it writes into a
+    scratch ``folder`` of the worker, whose files :class:`~mftire.parallel.FilesTask` returns to the client."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return rig_stage(*args)
+        return rig_stage(folder, quick)
 
 
 def _diagnose_task(args: tuple) -> Any:
@@ -107,7 +114,7 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
     fe, free = campaign(fe_tyre, quick=quick, progress=False, executor=executor)
     # the rig stage needs nothing of the others: with workers it runs from now on, alongside them
     # (after the FE campaign, which keeps every worker busy)
-    rig_pending = executor.start_map(_rig_task, [(out, quick)])
+    rig_pending = executor.start_map(FilesTask(_rig_task), [quick], labels=["the rig stage"])
     fe = fe.assign(source="fe")
     with atomic_path(os.path.join(out, "fe_sweeps.csv")) as tmp:
         fe.to_csv(tmp, index=False)
@@ -167,7 +174,8 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
     plots = comp.plots(fig_dir, executor=executor)
 
     step("third source: the simulated raw rig run imported, fitted, diagnosed" + (" (quick)" if quick else ""))
-    rig = rig_pending.result()[0]
+    rig, rig_files = rig_pending.result()[0]
+    write_files(out, rig_files)  # computed on a worker, written here
 
     step("HTML report")
     rep = HtmlReport("mftire demo: MF 6.1 from FE and measured sweeps, closed loop",
@@ -223,10 +231,8 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
                               "fmu": fmu_info, "diagnosis": "diagnosis/diagnosis.md",
                               "rig_sweeps": "rig_sweeps.csv", "rig_fitted_tir": "rig_fitted.tir",
                               "rig_diagnosis": "rig_diagnosis/diagnosis.md"})  # fmt: skip
-    html, js = rep.write(os.path.join(out, "report.html"), os.path.join(out, "report.json"))
+    rep.write(os.path.join(out, "report.html"), os.path.join(out, "report.json"))
     _headline(comp, diag, os.path.join(out, "headline.png"))
-    if progress:
-        print(f"done: {html}\n      {js}", flush=True)
     return summary
 
 

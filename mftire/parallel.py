@@ -18,6 +18,24 @@ it, so that independent stages of a job overlap (``mftire demo`` runs its rig st
 process fits, then the diagnosis and the bootstrap refits side by side).  Outside a session, or with ``jobs=1``,
 ``start_map`` defers the batch to the moment its results are asked for: the serial order.
 
+**Workers compute, the client writes.** A task returns data (arrays, tables, result objects,
+figure bytes: :class:`FilesTask` runs a function that writes files into a scratch folder of the
+worker and brings the files back as bytes); this process writes every output through
+:mod:`mftire.iotools.output`/:mod:`mftire.iotools.atomic` (:func:`write_files`). So ``--scheduler``
+works with any ``--output``, relative included, on workers that share no filesystem with it.
+
+**Failures** (Dask) end the run with one line and :class:`ClusterError` (the CLI's exit 2): the
+address is checked before any work (:meth:`Executor.check`); no worker for ``worker_timeout``
+seconds, tasks killed with their workers, or a lost scheduler are named as such; a task that raises
+is reported with its input (:class:`TaskError`: the ``labels`` of :meth:`Executor.imap`, e.g. a file
+name).  Commands write their outputs only after the tasks are done, so nothing partial is written.
+
+**Worker memory allocator.** Dask's nanny starts workers with ``MALLOC_TRIM_THRESHOLD_=65536``,
+which also freezes glibc's mmap threshold at 128 KiB: every large temporary array is then mapped
+and unmapped again, and FE chunks run 4-6 times slower.  The client registers
+:class:`MallocTuning` on the cluster's workers (glibc ``mallopt``: mmap threshold 32 MiB, trim
+threshold 64 MiB, glibc's own dynamic limits), so the workers run at in-process speed.
+
 **Determinism.** A task is a pure function of its argument: random draws are made before the tasks
 are submitted (or from a seed the task carries), and results come back in submission order, so the
 result is bit for bit the serial one whatever the executor, the number of workers or the order in
@@ -28,17 +46,33 @@ BLAS or CPU instruction set; on one machine they do not.)
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterable, Iterator
+import threading
+import time
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
 
-from mftire.errors import MftireInputError
+from mftire.errors import MftireError, MftireInputError
 
-__all__ = ["Executor", "Pending", "available_cores", "add_parallel_options"]
+__all__ = ["ClusterError", "Executor", "FilesTask", "MallocTuning", "Pending", "TaskError", "add_parallel_options",
+           "available_cores", "chunk_count", "write_files"]
 
 T = TypeVar("T")
 R = TypeVar("R")
+
+#: Seconds between two looks at the cluster while waiting for a task.
+_POLL_S = 1.0
+#: Default of ``Executor.worker_timeout`` and ``--worker-timeout``.
+WORKER_TIMEOUT_S = 60.0
+
+
+class ClusterError(MftireError):
+    """The Dask cluster cannot run the tasks: scheduler lost, every worker lost, tasks killed with workers."""
+
+
+class TaskError(MftireError):
+    """A task raised; the message names its input (``labels`` of :meth:`Executor.imap`) and the error."""
 
 
 def available_cores() -> int:
@@ -47,6 +81,24 @@ def available_cores() -> int:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # macOS, Windows
         return max(1, os.cpu_count() or 1)
+
+
+def chunk_count(n_items: int, workers: int, seconds_per_item: float, target_s: float = 20.0) -> int:
+    """How many chunks to cut ``n_items`` into: a multiple of ``workers`` (they finish together), each
+    chunk about ``target_s`` seconds of work or less (a lost worker costs little, progress shows, the
+    scheduler's ~1 ms per task stays negligible), never more chunks than items."""
+    if n_items <= 0:
+        return 1
+    workers = max(1, workers)
+    per_worker = seconds_per_item * n_items / workers
+    rounds = max(1, int(-(-per_worker // max(target_s, 1e-9))))
+    return max(1, min(n_items, workers * rounds))
+
+
+def _label(labels: Sequence[str] | Callable[[Any], str] | None, i: int, item: Any, n: int) -> str:
+    if labels is None:
+        return f"task {i + 1} of {n}"
+    return str(labels(item) if callable(labels) else labels[i])
 
 
 @dataclass(frozen=True)
@@ -60,20 +112,34 @@ class Executor:
         uses :func:`available_cores`. Ignored when ``scheduler`` is given.
     scheduler : str, optional
         Address of a running Dask distributed scheduler, e.g. ``tcp://10.0.0.5:8786``.
+    worker_timeout : float
+        Seconds [s] the cluster may have no worker at all before the run ends with :class:`ClusterError`.
+    quiet : bool
+        Silence Dask's own log lines while connected (the CLI: errors are one line of ours).
     """
 
     jobs: int | None = 1
     scheduler: str | None = None
+    worker_timeout: float = WORKER_TIMEOUT_S
+    quiet: bool = False
 
     def __post_init__(self) -> None:
         if self.jobs is not None and (not isinstance(self.jobs, int) or self.jobs < 0):
             raise MftireInputError(f"--jobs must be a whole number >= 0 (0: all cores), got {self.jobs!r}")
         if self.scheduler is not None and not str(self.scheduler).strip():
             raise MftireInputError("--scheduler needs an address, e.g. tcp://host:8786")
+        if not self.worker_timeout > 0:
+            raise MftireInputError(f"--worker-timeout must be > 0 s, got {self.worker_timeout!r}")
 
     @property
     def workers(self) -> int:
-        """Local worker processes (1: this process)."""
+        """Local worker processes (1: this process); on a Dask cluster its worker threads now."""
+        if self.scheduler:
+            pool = getattr(self, "_pool", None)
+            if pool is not None:
+                return max(1, sum(pool.nthreads().values()))
+            with _dask_client(str(self.scheduler), self.quiet) as client:
+                return max(1, sum(client.nthreads().values()))
         return available_cores() if not self.jobs else self.jobs
 
     def describe(self) -> str:
@@ -82,40 +148,56 @@ class Executor:
             return f"Dask scheduler {self.scheduler}"
         return "this process" if self.workers == 1 else f"{self.workers} local processes"
 
-    def imap(self, fn: Callable[[T], R], items: Iterable[T]) -> Iterator[R]:
+    def check(self) -> Executor:
+        """Check the scheduler address (form, host, a scheduler answering, at least one worker) before any
+        work; :class:`MftireInputError` or :class:`ClusterError` naming what is wrong.  Returns self."""
+        if self.scheduler:
+            with _dask_client(str(self.scheduler), self.quiet) as client:
+                if not client.nthreads():
+                    _wait_for_workers(client, str(self.scheduler), self.worker_timeout)
+        return self
+
+    def imap(self, fn: Callable[[T], R], items: Iterable[T], *, labels: Sequence[str] | Callable | None = None,
+             progress: Callable[[int, int], None] | None = None) -> Iterator[R]:
         """Results of ``fn`` on each item, yielded in the order of ``items`` as they are ready.
 
         ``fn`` and the items must be picklable (a module-level function or a dataclass
-        instance with ``__call__``) unless the tasks run in this process.
+        instance with ``__call__``) unless the tasks run in this process.  ``labels`` names each
+        item's input in the error of a task that raises (a list, or a function of the item; default
+        "task i of n"); ``progress(done, total)`` is called as each task finishes (in any order).
         """
         items = list(items)
         pool = getattr(self, "_pool", None)
         if pool is not None:  # a session: the workers are up already
-            yield from _collect(_submit_all(pool, fn, items))
+            yield from _collect(self, pool, _submit_all(pool, fn, items, progress), items, labels)
             return
         if self.scheduler:
-            yield from _dask_imap(str(self.scheduler), fn, items)
+            with _dask_client(str(self.scheduler), self.quiet) as client:
+                yield from _collect(self, client, _submit_all(client, fn, items, progress), items, labels)
             return
         n = min(self.workers, len(items))
         if n <= 1:
-            for x in items:
-                yield fn(x)
+            for i, x in enumerate(items):
+                yield _run_labelled(fn, x, _label(labels, i, x, len(items)))
+                if progress is not None:
+                    progress(i + 1, len(items))
             return
         from concurrent.futures import ProcessPoolExecutor
 
         with ProcessPoolExecutor(max_workers=n) as pool:
-            yield from pool.map(fn, items)
+            yield from _collect(self, pool, _submit_all(pool, fn, items, progress), items, labels)
 
-    def start_map(self, fn: Callable[[T], R], items: Iterable[T]) -> Pending[R]:
+    def start_map(self, fn: Callable[[T], R], items: Iterable[T], *, labels: Sequence[str] | Callable | None = None,
+                  progress: Callable[[int, int], None] | None = None) -> Pending[R]:
         """Start ``fn`` on each item now and return at once; :meth:`Pending.result` gives the results
         in the order of ``items``.  In a :meth:`session` with workers the tasks are sent to them
         straight away; otherwise they run when the results are first asked for (as :meth:`map`)."""
         items = list(items)
         pool = getattr(self, "_pool", None)
         if pool is None:
-            return Pending(lambda: self.imap(fn, items))
-        futures = _submit_all(pool, fn, items)
-        return Pending(lambda: _collect(futures), futures)
+            return Pending(lambda: self.imap(fn, items, labels=labels, progress=progress))
+        futures = _submit_all(pool, fn, items, progress)
+        return Pending(lambda: _collect(self, pool, futures, items, labels), futures)
 
     @contextmanager
     def session(self) -> Iterator[Executor]:
@@ -130,30 +212,40 @@ class Executor:
             yield self
             return
         if self.scheduler:
-            pool: Any = _dask_client(str(self.scheduler))
+            cm: Any = _dask_client(str(self.scheduler), self.quiet)
         else:
             from concurrent.futures import ProcessPoolExecutor
 
-            pool = ProcessPoolExecutor(max_workers=self.workers)
-        ex = Executor(jobs=self.jobs, scheduler=self.scheduler)
-        object.__setattr__(ex, "_pool", pool)  # frozen: the open pool is not a field (not compared, not in repr)
-        try:
-            yield ex
-        finally:
-            object.__setattr__(ex, "_pool", None)
-            if self.scheduler:
-                pool.close()
-            else:
-                pool.shutdown(wait=True, cancel_futures=True)
+            cm = _pool_cm(ProcessPoolExecutor(max_workers=self.workers))
+        with cm as pool:
+            ex = Executor(jobs=self.jobs, scheduler=self.scheduler, worker_timeout=self.worker_timeout,
+                          quiet=self.quiet)
+            object.__setattr__(ex, "_pool", pool)  # frozen: the open pool is not a field (not compared, not in repr)
+            try:
+                yield ex
+            finally:
+                object.__setattr__(ex, "_pool", None)
 
-    def map(self, fn: Callable[[T], R], items: Iterable[T]) -> list[R]:
+    def map(self, fn: Callable[[T], R], items: Iterable[T], *, labels: Sequence[str] | Callable | None = None,
+            progress: Callable[[int, int], None] | None = None) -> list[R]:
         """``list(self.imap(fn, items))``: all results, in the order of ``items``."""
-        return list(self.imap(fn, items))
+        return list(self.imap(fn, items, labels=labels, progress=progress))
 
     @classmethod
-    def from_args(cls, args: Any) -> Executor:
-        """From the ``--jobs``/``--scheduler`` options of :func:`add_parallel_options`."""
-        return cls(jobs=getattr(args, "jobs", None), scheduler=getattr(args, "scheduler", None))
+    def from_args(cls, args: Any, check: bool = True) -> Executor:
+        """From the ``--jobs``/``--scheduler``/``--worker-timeout`` options of :func:`add_parallel_options`;
+        with ``check`` a scheduler's address is checked at once (:meth:`check`), before any work."""
+        ex = cls(jobs=getattr(args, "jobs", None), scheduler=getattr(args, "scheduler", None),
+                 worker_timeout=getattr(args, "worker_timeout", None) or WORKER_TIMEOUT_S, quiet=True)
+        return ex.check() if check else ex
+
+
+@contextmanager
+def _pool_cm(pool: Any) -> Iterator[Any]:
+    try:
+        yield pool
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 class Pending(Generic[R]):
@@ -186,43 +278,280 @@ class Pending(Generic[R]):
             f.cancel()
 
 
-def _submit_all(pool: Any, fn: Callable[[T], R], items: list[T]) -> list:
-    """Futures of ``fn`` on each item: a process pool or a Dask client."""
-    if hasattr(pool, "gather"):  # a Dask client; pure=False: no hashing of large arguments
-        return list(pool.map(fn, items, pure=False)) if items else []
-    return [pool.submit(fn, x) for x in items]
-
-
-def _collect(futures: list) -> Iterator:
+def _run_labelled(fn: Callable[[T], R], x: T, label: str) -> R:
     try:
-        for fut in futures:
-            yield fut.result()
+        return fn(x)
+    except (KeyboardInterrupt, SystemExit, MemoryError):
+        raise
+    except Exception as exc:  # noqa: BLE001 - any error of a task is reported with its input
+        raise _labelled(exc, label) from exc
+
+
+def _labelled(exc: BaseException, label: str) -> MftireError:
+    """``exc`` of the task ``label`` as one line naming it: an mftire error keeps its class (an input error
+    stays an input error), anything else becomes a :class:`TaskError` with the error's class name."""
+    if isinstance(exc, MftireError):
+        try:
+            return type(exc)(f"{label}: {exc}")
+        except Exception:  # noqa: BLE001 - an error class with another signature
+            return TaskError(f"{label}: {exc}")
+    return TaskError(f"{label}: {type(exc).__name__}: {exc}")
+
+
+def _submit_all(pool: Any, fn: Callable[[T], R], items: list[T], progress: Callable[[int, int], None] | None) -> list:
+    """Futures of ``fn`` on each item: a process pool or a Dask client."""
+    if not items:
+        return []
+    if hasattr(pool, "gather"):  # a Dask client; pure=False: no hashing of large arguments
+        futures = list(pool.map(fn, items, pure=False))
+    else:
+        futures = [pool.submit(fn, x) for x in items]
+    if progress is not None:
+        lock, done = threading.Lock(), [0]
+
+        def tick(_f: Any) -> None:
+            with lock:
+                done[0] += 1
+                n = done[0]
+            try:
+                progress(n, len(futures))
+            except Exception:  # noqa: BLE001 - progress output must never stop the run
+                pass
+
+        for f in futures:
+            f.add_done_callback(tick)
+    return futures
+
+
+def _collect(ex: Executor, pool: Any, futures: list, items: list, labels: Any) -> Iterator:
+    """The results of ``futures`` in order; errors become one-line :class:`TaskError`/:class:`ClusterError`."""
+    dask = hasattr(pool, "gather")
+    try:
+        for i, fut in enumerate(futures):
+            if dask:
+                yield _dask_result(pool, fut, ex, lambda i=i: _label(labels, i, items[i], len(items)))
+                continue
+            try:
+                yield fut.result()
+            except Exception as exc:  # noqa: BLE001
+                from concurrent.futures.process import BrokenProcessPool
+
+                if isinstance(exc, BrokenProcessPool):
+                    raise ClusterError(f"a local worker process died ({exc}); nothing written") from None
+                raise _labelled(exc, _label(labels, i, items[i], len(items))) from exc
     finally:
         for fut in futures:
             fut.cancel()
 
 
-def _dask_client(address: str) -> Any:
+# ----------------------------------------------------------------------------------------------------- Dask
+
+
+def _dask_result(client: Any, fut: Any, ex: Executor, label: Callable[[], str]) -> Any:
+    """Wait for one Dask future, looking at the cluster every second: no worker for ``worker_timeout``
+    seconds, or the scheduler gone, end the wait with :class:`ClusterError`."""
+    address = str(ex.scheduler)
+    no_worker_since = None
+    done = threading.Event()
+    fut.add_done_callback(lambda _f: done.set())
+    while not done.wait(_POLL_S):
+        if client.status not in ("running", "connecting"):
+            raise ClusterError(f"lost the Dask scheduler at {address}")
+        try:
+            n = len(client.sync(client.scheduler.ncores, callback_timeout=10))
+        except Exception as exc:  # noqa: BLE001 - OSError, CommClosedError, TimeoutError: all mean no scheduler
+            raise ClusterError(f"lost the Dask scheduler at {address} ({type(exc).__name__})") from None
+        if n:
+            no_worker_since = None
+        elif no_worker_since is None:
+            no_worker_since = time.monotonic()
+        elif time.monotonic() - no_worker_since > ex.worker_timeout:
+            raise ClusterError(f"lost every Dask worker of the scheduler at {address}: none for "
+                               f"{ex.worker_timeout:g} s (--worker-timeout); nothing written")
+    status = fut.status
+    if status == "finished":
+        return fut.result()
+    if status == "error":
+        exc = fut.exception()
+        if type(exc).__name__ == "KilledWorker":
+            raise ClusterError(f"lost Dask workers: {label()} was running on workers that died "
+                               f"({exc}); nothing written") from None
+        raise _labelled(exc, label()) from None
+    raise ClusterError(f"lost the Dask scheduler at {address} (task {status})")
+
+
+def _wait_for_workers(client: Any, address: str, timeout: float) -> None:
+    t0 = time.monotonic()
+    while not client.nthreads():
+        if time.monotonic() - t0 > timeout:
+            raise ClusterError(f"the Dask scheduler at {address} has no worker (waited {timeout:g} s, "
+                               "--worker-timeout)")
+        time.sleep(min(_POLL_S, timeout))
+
+
+def check_address(address: str) -> tuple[str, str, int]:
+    """(scheme, host, port) of a scheduler address ``[tcp://]host:port``; :class:`MftireInputError` for a
+    malformed address or a host name that does not resolve (before Dask would retry for a long time)."""
+    import socket
+
+    a = address.strip()
+    scheme, sep, rest = a.partition("://")
+    if not sep:
+        scheme, rest = "tcp", a
+    if scheme == "inproc":  # a cluster in this very process (tests)
+        return scheme, rest, 0
+    if scheme not in ("tcp", "tls", "ws", "wss"):
+        raise MftireInputError(f"--scheduler {address!r}: unknown protocol {scheme!r} (use tcp://host:port, or "
+                               "tls://, ws://, wss://)")
+    host, sep, port_s = rest.rstrip("/").rpartition(":")
+    host = host.strip("[]")
+    if not sep or not host or not port_s.isdigit() or not 0 < int(port_s) < 65536:
+        raise MftireInputError(f"--scheduler {address!r}: not an address of the form tcp://host:port "
+                               "(port 1-65535), e.g. tcp://10.0.0.5:8786")
+    try:
+        socket.getaddrinfo(host, int(port_s), type=socket.SOCK_STREAM)
+    except OSError as exc:
+        raise MftireInputError(f"--scheduler {address!r}: host {host!r} not found ({exc.strerror or exc})") from None
+    return scheme, host, int(port_s)
+
+
+@contextmanager
+def _dask_client(address: str, quiet: bool = False) -> Iterator[Any]:
+    """A Dask client of the scheduler at ``address`` with :class:`MallocTuning` on its workers; closed (within
+    seconds, also when the scheduler is gone) when the block ends."""
     try:
         from distributed import Client
     except ImportError as exc:
         raise MftireInputError("--scheduler needs Dask distributed: pip install 'mftire[dask]'") from exc
-    try:  # set_as_default=False: connecting must not change the caller's global Dask configuration
-        return Client(address, set_as_default=False, timeout="20s")
-    except (OSError, ValueError) as exc:
-        raise MftireInputError(f"cannot use the Dask scheduler at {address!r}: {exc}") from exc
+    scheme, host, port = check_address(address)
+    if scheme == "tcp":  # a refused connection is reported at once (Dask would retry for its whole timeout)
+        import socket
+
+        try:
+            socket.create_connection((host, port), timeout=10).close()
+        except OSError as exc:
+            raise MftireInputError(f"cannot reach the Dask scheduler at {address!r}: "
+                                   f"{exc.strerror or type(exc).__name__}") from None
+    with _quiet_dask(quiet):
+        try:  # set_as_default=False: connecting must not change the caller's global Dask configuration
+            client = Client(address, set_as_default=False, timeout="20s")
+        except (OSError, ValueError, TimeoutError) as exc:
+            raise MftireInputError(f"cannot use the Dask scheduler at {address!r}: {exc}") from None
+        try:
+            try:
+                client.register_plugin(MallocTuning(), name="mftire-malloc")
+            except Exception:  # noqa: BLE001 - an old scheduler or a closed one: the tuning is an optimisation
+                pass
+            yield client
+        finally:
+            try:
+                client.close(timeout=5)
+            except Exception:  # noqa: BLE001 - the scheduler may be gone already
+                pass
 
 
-def _dask_imap(address: str, fn: Callable[[T], R], items: list[T]) -> Iterator[R]:
-    with _dask_client(address) as client:
-        yield from _collect(_submit_all(client, fn, items))
+@contextmanager
+def _quiet_dask(quiet: bool) -> Iterator[None]:
+    """Dask's loggers at CRITICAL inside the block (``quiet``), restored after."""
+    if not quiet:
+        yield
+        return
+    import logging
+
+    loggers = [logging.getLogger(n) for n in ("distributed", "tornado", "asyncio")]
+    levels = [lg.level for lg in loggers]
+    for lg in loggers:
+        lg.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        for lg, lv in zip(loggers, levels, strict=True):
+            lg.setLevel(lv)
+
+
+class MallocTuning:
+    """Dask worker plugin: glibc's allocator back to in-process speed on a nanny-started worker.
+
+    The nanny exports ``MALLOC_TRIM_THRESHOLD_=65536``; glibc then also keeps its mmap threshold at 128 KiB
+    (the dynamic threshold is off whenever one of them is set), so every temporary array larger than that
+    is mapped, faulted in page by page and unmapped again.  ``setup`` sets the mmap threshold to 32 MiB and
+    the trim threshold to 64 MiB with ``mallopt`` (what glibc's dynamic rule reaches for large arrays).
+    No effect on other C libraries (musl, macOS, Windows)."""
+
+    idempotent = True
+    name = "mftire-malloc"
+
+    def setup(self, worker: Any = None) -> None:
+        import ctypes
+        import ctypes.util
+
+        try:
+            libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+            mallopt = libc.mallopt
+        except (OSError, AttributeError):
+            return
+        m_trim_threshold, m_mmap_threshold = -1, -3  # glibc malloc.h
+        mallopt(m_mmap_threshold, 32 * 1024 * 1024)
+        mallopt(m_trim_threshold, 64 * 1024 * 1024)
+
+    def teardown(self, worker: Any = None) -> None:
+        pass
+
+    def transition(self, key: Any, start: str, finish: str, **kwargs: Any) -> None:
+        pass
+
+
+# ------------------------------------------------------------------------------------------- client writes
+
+
+@dataclass(frozen=True)
+class FilesTask:
+    """``fn(item, folder)`` run with a fresh scratch folder of the worker: returns ``(result, files)``, ``files``
+    mapping the path (relative to the folder, ``/``-separated) of every file ``fn`` wrote to its bytes.
+    The client writes them with :func:`write_files`.  ``fn`` must return no path inside the folder."""
+
+    fn: Callable[[Any, str], Any]
+
+    def __call__(self, item: Any) -> tuple[Any, dict[str, bytes]]:
+        import tempfile
+
+        with tempfile.TemporaryDirectory(prefix="mftire-task-") as folder:
+            result = self.fn(item, folder)
+            files: dict[str, bytes] = {}
+            for root, _dirs, names in os.walk(folder):
+                for name in sorted(names):
+                    p = os.path.join(root, name)
+                    with open(p, "rb") as fh:
+                        files[os.path.relpath(p, folder).replace(os.sep, "/")] = fh.read()
+        return result, dict(sorted(files.items()))
+
+
+def write_files(folder: str | os.PathLike, files: dict[str, bytes]) -> list[str]:
+    """Write ``files`` (relative path -> bytes, from :class:`FilesTask`) into ``folder``, each atomically.
+    Returns the paths written."""
+    from mftire.iotools.atomic import atomic_path
+
+    out = []
+    for rel, data in files.items():
+        if os.path.isabs(rel) or ".." in rel.split("/"):
+            raise MftireInputError(f"a task returned a file outside its folder: {rel!r}")
+        path = os.path.join(os.fspath(folder), *rel.split("/"))
+        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+            fh.write(data)
+        out.append(path)
+    return out
 
 
 def add_parallel_options(parser: Any, what: str) -> None:
-    """Add ``--jobs N`` and ``--scheduler ADDRESS`` to an argparse parser (``what`` runs in parallel)."""
+    """Add ``--jobs N``, ``--scheduler ADDRESS`` and ``--worker-timeout S`` to an argparse parser (``what`` runs
+    in parallel)."""
     parser.add_argument("--jobs", type=int, default=0, metavar="N",
                         help=f"local worker processes for {what} (default 0: all cores; 1: no pool); "
                         "the result does not depend on it")  # fmt: skip
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help=f"run {what} on a Dask distributed cluster at ADDRESS (e.g. tcp://host:8786; "
-                        "needs pip install 'mftire[dask]' here and on the workers)")  # fmt: skip
+                        "needs pip install 'mftire[dask]' here and on the workers; the outputs are written "
+                        "here, the workers need no shared folder)")  # fmt: skip
+    parser.add_argument("--worker-timeout", type=float, default=WORKER_TIMEOUT_S, metavar="S",
+                        help=f"with --scheduler: end the run (exit 2, nothing written) when the cluster has had "
+                        f"no worker for S seconds (default {WORKER_TIMEOUT_S:g})")  # fmt: skip

@@ -127,8 +127,12 @@ def test_dask_local_cluster_matches_serial_bit_for_bit(fe_serial, fit, bands_ser
 
 def test_bad_scheduler_address_is_a_clear_error():
     pytest.importorskip("distributed", reason="Dask distributed not installed")
-    with pytest.raises(MftireInputError, match="Dask scheduler at 'nonsense://x'"):
-        Executor(scheduler="nonsense://x").map(abs, [1])
+    # a malformed address, an unknown host, a refused connection: one clear line at once, before any work
+    for address, match in (("nonsense://x", "unknown protocol 'nonsense'"), ("127.0.0.1", "tcp://host:port"),
+                           ("tcp://127.0.0.1:99999", "port 1-65535"), ("tcp://no-such-host.invalid:8786", "not found"),
+                           ("tcp://127.0.0.1:1", "cannot reach the Dask scheduler")):
+        with pytest.raises(MftireInputError, match=match):
+            Executor(scheduler=address).check()
 
 
 def test_session_reuses_workers_and_start_map_returns_at_once():

@@ -25,7 +25,7 @@ from mftire.compare.tables import (
 )
 from mftire.iotools.atomic import atomic_path, write_text_atomic
 from mftire.iotools.jsonutil import jsonable
-from mftire.parallel import Executor
+from mftire.parallel import Executor, FilesTask, write_files
 from mftire.tyre import Tyre
 
 __all__ = ["Comparison", "compare", "write_comparison", "bands_frame"]
@@ -87,30 +87,35 @@ class Comparison:
         ``executor`` draws the figures (each one a task; default: in this process, one after the
         other); the files do not depend on it."""
         directory = os.fspath(directory)
+        jobs = [_Plot(plot_family, (fam, self.data, self.grid, self.grid_predictions),
+                      {"bands": self.bands, "dpi": dpi}, f"{fam}.png") for fam in FAMILIES]  # fmt: skip
+        jobs.append(_Plot(plot_stiffness, (self.stiffness,), {"dpi": dpi}, "stiffness.png"))
+        jobs.append(_Plot(plot_trail, (self.trail, self.grid, self.grid_predictions), {"dpi": dpi}, "trail.png"))
+        jobs.append(_Plot(plot_free_rolling, (self.free_rolling,), {"dpi": dpi}, "free_rolling.png"))
+        # drawn by the workers, written here (mftire.parallel.FilesTask): no folder shared with the workers
+        out = (executor or Executor()).map(FilesTask(_run_plot), jobs, labels=[j.name for j in jobs])
         os.makedirs(directory, exist_ok=True)
-        jobs = [_Plot(plot_family, (fam, self.data, self.grid, self.grid_predictions,
-                                    os.path.join(directory, f"{fam}.png")), {"bands": self.bands, "dpi": dpi})
-                for fam in FAMILIES]  # fmt: skip
-        jobs.append(_Plot(plot_stiffness, (self.stiffness, os.path.join(directory, "stiffness.png")), {"dpi": dpi}))
-        jobs.append(_Plot(plot_trail, (self.trail, self.grid, self.grid_predictions,
-                                       os.path.join(directory, "trail.png")), {"dpi": dpi}))  # fmt: skip
-        jobs.append(_Plot(plot_free_rolling, (self.free_rolling, os.path.join(directory, "free_rolling.png")),
-                          {"dpi": dpi}))  # fmt: skip
-        out = (executor or Executor()).map(_run_plot, jobs)
-        return [p for p in out if p]
+        paths = []
+        for job, (drawn, files) in zip(jobs, out, strict=True):
+            if drawn:
+                write_files(directory, files)
+                paths.append(os.path.join(directory, job.name))
+        return paths
 
 
 @dataclass(frozen=True)
 class _Plot:
-    """One figure of :meth:`Comparison.plots`: ``fn(*args, **kwargs)`` (a picklable task)."""
+    """One figure of :meth:`Comparison.plots`: ``fn(*args, path, **kwargs)`` (a picklable task)."""
 
     fn: Any
     args: tuple
     kwargs: dict
+    name: str  #: file name of the figure
 
 
-def _run_plot(job: _Plot) -> str | None:
-    return job.fn(*job.args, **job.kwargs)
+def _run_plot(job: _Plot, folder: str) -> bool:
+    """Draw one figure into ``folder``; whether there was anything to draw."""
+    return job.fn(*job.args, os.path.join(folder, job.name), **job.kwargs) is not None
 
 
 def bands_frame(bands, grid: pd.DataFrame) -> pd.DataFrame | None:

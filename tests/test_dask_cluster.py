@@ -1,0 +1,157 @@
+"""Issue 27: every batch job on a Dask cluster, results written by the client, clean failures.
+
+One LocalCluster (2 worker processes, 1 thread each, started in a folder of its own so that a file a worker
+wrote by mistake would land elsewhere) is shared by the tests of this module; each command runs once locally
+and once with ``--scheduler`` on that cluster, with a *relative* output, and the two output folders must hold
+the same bytes.  The failure test starts a scheduler and two nanny-less workers as processes and kills them.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+import warnings
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from mftire.cli import main
+
+distributed = pytest.importorskip("distributed", reason="Dask distributed not installed (pip install "
+                                  "'mftire[dask]'); the Dask paths are not tested")  # fmt: skip
+
+ROOT = Path(__file__).resolve().parents[1]
+#: run-time figures that differ from run to run (the rig stage's import and stage seconds)
+_TIMINGS = re.compile(rb'("?(?:import_s|stage_s)"?(?:</td><td>|: ))[-+0-9.e]+')
+
+
+@pytest.fixture(scope="module")
+def cluster(tmp_path_factory):
+    elsewhere = tmp_path_factory.mktemp("workers_cwd")
+    cwd = os.getcwd()
+    os.chdir(elsewhere)  # the workers start here: a relative path written on a worker would land here
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            c = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+    finally:
+        os.chdir(cwd)
+    with c:
+        yield c.scheduler_address, elsewhere
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    out = {}
+    for p in sorted(folder.rglob("*")):
+        if p.is_file():
+            data = p.read_bytes()
+            if p.suffix == ".fmu":  # a zip: compare the members, not the time stamps of the archive
+                with zipfile.ZipFile(p) as z:
+                    data = b"".join(n.encode() + z.read(n) for n in sorted(z.namelist()))
+            out[p.relative_to(folder).as_posix()] = _TIMINGS.sub(rb"\1<time>", data)
+    return out
+
+
+def _same_outputs(a: Path, b: Path) -> None:
+    fa, fb = _files(a), _files(b)
+    assert fa.keys() == fb.keys() and fa
+    for name in fa:
+        assert fa[name] == fb[name], name
+
+
+def _run_here(folder: Path, argv: list[str]) -> int:
+    cwd = os.getcwd()
+    os.chdir(folder)
+    try:
+        return main(argv)
+    finally:
+        os.chdir(cwd)
+
+
+def test_demo_on_the_cluster_with_a_relative_output_equals_the_local_run(cluster, tmp_path, capsys):
+    address, workers_cwd = cluster
+    assert _run_here(tmp_path, ["demo", "--quick", "--output", "local", "--jobs", "1"]) == 0
+    assert _run_here(tmp_path, ["demo", "--quick", "--output", "out", "--scheduler", address]) == 0
+    assert "done: out/report.html" in capsys.readouterr().out
+    _same_outputs(tmp_path / "local", tmp_path / "out")
+    assert list(workers_cwd.iterdir()) == []  # nothing written by the workers
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []  # no staging folder left
+
+
+# ------------------------------------------------------------------------------------------------- failures
+
+
+def _start(args: list[str], log: Path) -> subprocess.Popen:
+    """A Dask process (mftire importable: the scheduler unpickles the task graph too) in its own session."""
+    env = {**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
+    return subprocess.Popen([sys.executable, *args], stdout=subprocess.DEVNULL, stderr=open(log, "wb"),
+                            start_new_session=True, cwd=log.parent, env=env)  # fmt: skip
+
+
+def _stop(p: subprocess.Popen) -> None:
+    if p.poll() is None:
+        os.killpg(p.pid, signal.SIGKILL)
+    p.wait(timeout=30)
+
+
+def test_killing_every_worker_mid_run_is_one_line_exit_2_and_no_output(tmp_path):
+    port = _free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    sched = _start(["-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", str(port),
+                    "--dashboard-address", ":0", "--no-show"], tmp_path / "scheduler.log")  # fmt: skip
+    workers: list[subprocess.Popen] = []
+    try:
+        env_path = f"{ROOT}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"
+        for i in range(2):  # no nanny: a killed worker stays dead
+            workers.append(_start(["-m", "distributed.cli.dask_worker", address, "--no-nanny", "--nthreads", "1",
+                                   "--no-dashboard"], tmp_path / f"worker{i}.log"))  # fmt: skip
+        with distributed.Client(address, timeout="60s", set_as_default=False) as client:
+            client.wait_for_workers(2, timeout=60)
+            run = subprocess.Popen(
+                [sys.executable, "-m", "mftire.cli", "fe", "campaign", "--output", "out", "--scheduler", address,
+                 "--worker-timeout", "3"], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                env={**os.environ, "PYTHONPATH": env_path})  # fmt: skip
+            t0 = time.monotonic()
+            while not any(client.processing().values()):  # the tasks are on the workers
+                assert time.monotonic() - t0 < 60 and run.poll() is None, run.communicate()
+                time.sleep(0.2)
+        t_kill = time.monotonic()
+        for w in workers:
+            os.killpg(w.pid, signal.SIGKILL)
+        out, err = run.communicate(timeout=120)
+        elapsed = time.monotonic() - t_kill
+    finally:
+        for p in (*workers, sched):
+            _stop(p)
+    lines = err.decode().strip().splitlines()
+    assert run.returncode == 2, err
+    assert len(lines) == 1 and lines[0].startswith("mftire fe: error: lost every Dask worker"), lines
+    assert "3 s" in lines[0]
+    assert elapsed < 30
+    assert not (tmp_path / "out").exists() and not any(p.name.startswith(".out") for p in tmp_path.iterdir())
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_a_lost_scheduler_and_a_bad_address_are_one_line_and_exit_2(tmp_path, capsys):
+    # nothing listens there: refused at once, before any work (the output folder is never made)
+    port = _free_port()
+    t0 = time.monotonic()
+    rc = main(["fe", "campaign", "--quick", "--output", str(tmp_path / "o"), "--scheduler", f"tcp://127.0.0.1:{port}"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "cannot reach the Dask scheduler" in err[0]
+    assert time.monotonic() - t0 < 15 and not (tmp_path / "o").exists()
+    rc = main(["fe", "campaign", "--quick", "--output", str(tmp_path / "o"), "--scheduler", "127.0.0.1"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "tcp://host:port" in err[0]
