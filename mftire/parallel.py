@@ -56,7 +56,7 @@ from typing import Any, Generic, TypeVar
 from mftire.errors import MftireError, MftireInputError
 
 __all__ = ["ClusterError", "Executor", "FilesTask", "MallocTuning", "Pending", "TaskError", "add_parallel_options",
-           "available_cores", "chunk_count", "write_files"]
+           "available_cores", "batch_names", "chunk_count", "expand_inputs", "progress_printer", "write_files"]
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -231,6 +231,25 @@ class Executor:
         """``list(self.imap(fn, items))``: all results, in the order of ``items``."""
         return list(self.imap(fn, items, labels=labels, progress=progress))
 
+    def stream(self, fn: Callable[[T], R], items: Iterable[T], *, window: int | None = None,
+               labels: Sequence[str] | Callable | None = None, progress: Callable[[int, int], None] | None = None,
+               total: int | None = None) -> Iterator[R]:
+        """As :meth:`imap`, but ``items`` is consumed lazily and at most ``window`` tasks (default twice the
+        workers) are in flight at once: memory stays bounded however many items there are.  ``total`` (the
+        number of items, when known) is passed to ``progress``."""
+        if not self.scheduler and self.workers <= 1:
+            for i, x in enumerate(items):
+                yield _run_labelled(fn, x, _label(labels, i, x, total or 0) if labels is not None else f"task {i + 1}")
+                if progress is not None:
+                    progress(i + 1, total or 0)
+            return
+        if getattr(self, "_pool", None) is not None:
+            yield from _stream(self, self._pool, fn, items, max(1, window or 2 * self.workers), labels, progress,
+                               total)
+            return
+        with self.session() as ex:
+            yield from _stream(ex, ex._pool, fn, items, max(1, window or 2 * ex.workers), labels, progress, total)
+
     @classmethod
     def from_args(cls, args: Any, check: bool = True) -> Executor:
         """From the ``--jobs``/``--scheduler``/``--worker-timeout`` options of :func:`add_parallel_options`;
@@ -325,23 +344,60 @@ def _submit_all(pool: Any, fn: Callable[[T], R], items: list[T], progress: Calla
 
 def _collect(ex: Executor, pool: Any, futures: list, items: list, labels: Any) -> Iterator:
     """The results of ``futures`` in order; errors become one-line :class:`TaskError`/:class:`ClusterError`."""
-    dask = hasattr(pool, "gather")
     try:
         for i, fut in enumerate(futures):
-            if dask:
-                yield _dask_result(pool, fut, ex, lambda i=i: _label(labels, i, items[i], len(items)))
-                continue
-            try:
-                yield fut.result()
-            except Exception as exc:  # noqa: BLE001
-                from concurrent.futures.process import BrokenProcessPool
-
-                if isinstance(exc, BrokenProcessPool):
-                    raise ClusterError(f"a local worker process died ({exc}); nothing written") from None
-                raise _labelled(exc, _label(labels, i, items[i], len(items))) from exc
+            yield _result(ex, pool, fut, lambda i=i: _label(labels, i, items[i], len(items)))
     finally:
         for fut in futures:
             fut.cancel()
+
+
+def _result(ex: Executor, pool: Any, fut: Any, label: Callable[[], str]) -> Any:
+    """The result of one future of a process pool or a Dask client, errors as one line naming the task."""
+    if hasattr(pool, "gather"):
+        return _dask_result(pool, fut, ex, label)
+    try:
+        return fut.result()
+    except Exception as exc:  # noqa: BLE001
+        from concurrent.futures.process import BrokenProcessPool
+
+        if isinstance(exc, BrokenProcessPool):
+            raise ClusterError(f"a local worker process died ({exc}); nothing written") from None
+        raise _labelled(exc, label()) from exc
+
+
+def _stream(ex: Executor, pool: Any, fn: Callable, items: Iterable, window: int, labels: Any,
+            progress: Callable[[int, int], None] | None, total: int | None) -> Iterator:
+    """Results of ``fn`` on ``items`` in order, with at most ``window`` tasks in flight (bounded memory)."""
+    from collections import deque
+
+    inflight: deque = deque()
+    done = [0]
+    n = total if total is not None else 0
+
+    def tick(_f: Any) -> None:
+        done[0] += 1
+        if progress is not None:
+            try:
+                progress(done[0], n)
+            except Exception:  # noqa: BLE001
+                pass
+
+    dask = hasattr(pool, "gather")
+    try:
+        for i, x in enumerate(items):
+            fut = pool.submit(fn, x, pure=False) if dask else pool.submit(fn, x)
+            fut.add_done_callback(tick)
+            inflight.append((fut, _label(labels, i, x, n) if labels is not None else f"task {i + 1}"))
+            while len(inflight) >= window:
+                f, lab = inflight.popleft()
+                yield _result(ex, pool, f, lambda lab=lab: lab)
+        while inflight:
+            f, lab = inflight.popleft()
+            yield _result(ex, pool, f, lambda lab=lab: lab)
+    finally:
+        for f, _ in inflight:
+            f.cancel()
 
 
 # ----------------------------------------------------------------------------------------------------- Dask
@@ -540,6 +596,53 @@ def write_files(folder: str | os.PathLike, files: dict[str, bytes]) -> list[str]
             fh.write(data)
         out.append(path)
     return out
+
+
+def expand_inputs(patterns: Sequence[str]) -> list[str]:
+    """Input files of a batch command: each argument that is not an existing file but a glob pattern
+    (``runs/*.csv``, for shells that do not expand it) is replaced by its matches, sorted; a pattern that
+    matches nothing is an error."""
+    import glob
+
+    out: list[str] = []
+    for p in patterns:
+        if os.path.exists(p) or not glob.has_magic(p):
+            out.append(p)
+            continue
+        found = sorted(glob.glob(p))
+        if not found:
+            raise MftireInputError(f"{p}: no file matches this pattern")
+        out.extend(found)
+    return list(dict.fromkeys(out))
+
+
+def batch_names(paths: Sequence[str]) -> list[str]:
+    """One output name per input of a batch command: the file name without its suffix(es) (``a.csv.gz`` ->
+    ``a``); two inputs of the same name are refused (their outputs would collide)."""
+    names = []
+    seen: dict[str, str] = {}
+    for p in paths:
+        base = os.path.basename(os.fspath(p))
+        name = base.split(".")[0] or base
+        if name in seen:
+            raise MftireInputError(f"{p}: same output name {name!r} as {seen[name]}; rename one of them")
+        seen[name] = p
+        names.append(name)
+    return names
+
+
+def progress_printer(prefix: str, what: str) -> Callable[[int, int], None]:
+    """A ``progress(done, total)`` for :meth:`Executor.imap` that prints ``prefix: done/total what`` to standard
+    error (one line rewritten in place on a terminal, a line per task otherwise)."""
+    import sys
+
+    tty = sys.stderr.isatty()
+
+    def show(done: int, total: int) -> None:
+        end = "\n" if (not tty or done == total) else ""
+        print(f"{chr(13) if tty else ''}{prefix}: {done}/{total} {what}", end=end, file=sys.stderr, flush=True)
+
+    return show
 
 
 def add_parallel_options(parser: Any, what: str) -> None:

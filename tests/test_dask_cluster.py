@@ -26,8 +26,8 @@ distributed = pytest.importorskip("distributed", reason="Dask distributed not in
                                   "'mftire[dask]'); the Dask paths are not tested")  # fmt: skip
 
 ROOT = Path(__file__).resolve().parents[1]
-#: run-time figures that differ from run to run (the rig stage's import and stage seconds)
-_TIMINGS = re.compile(rb'("?(?:import_s|stage_s)"?(?:</td><td>|: ))[-+0-9.e]+')
+#: what differs from run to run: the rig stage's import and stage seconds, the report's time stamp
+_TIMINGS = re.compile(rb'("?(?:import_s|stage_s)"?(?:</td><td>|: )|generated )[-+0-9.e:T ]+')
 
 
 @pytest.fixture(scope="module")
@@ -155,3 +155,67 @@ def test_a_lost_scheduler_and_a_bad_address_are_one_line_and_exit_2(tmp_path, ca
     rc = main(["fe", "campaign", "--quick", "--output", str(tmp_path / "o"), "--scheduler", "127.0.0.1"])
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and "tcp://host:port" in err[0]
+
+
+# --------------------------------------------------------------------------------------------- batch commands
+
+
+@pytest.fixture(scope="module")
+def sweep_files(tmp_path_factory):
+    """Three small sweep files of the MF 6.1 reference tyre (braking and cornering, noise of its own seed)."""
+    import numpy as np
+    from conftest import REFERENCE_TYRES
+
+    from mftire.fitting.synthetic import synthetic_sweeps
+    from mftire.iotools.tir import read_tir
+    from mftire.parameters import with_defaults
+
+    folder = tmp_path_factory.mktemp("runs")
+    tyre = read_tir(REFERENCE_TYRES["MF61"])
+    f0 = with_defaults(tyre)["FNOMIN"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for i in range(3):
+            df = synthetic_sweeps(tyre, [0.5 * f0, f0, 1.5 * f0], np.radians([0.0]), n_kappa=15, n_alpha=11,
+                                  n_combined=5, noise=0.02, seed=10 + i, channels=("Fx", "Fy"))
+            df.to_csv(folder / f"tyre_{i}.csv", index=False)
+    return folder, REFERENCE_TYRES["MF61"], f0
+
+
+def test_batch_fit_and_diagnose_on_the_cluster_equal_the_local_runs(cluster, sweep_files, tmp_path, capsys):
+    address, workers_cwd = cluster
+    runs, tir, f0 = sweep_files
+    pattern = str(runs / "tyre_*.csv")  # a glob, expanded by mftire
+    fit = ["fit", pattern, "--each", "--template", str(tir), "--stages", "1,2"]
+    assert _run_here(tmp_path, [*fit, "--output", "fit_local", "--jobs", "1"]) == 0
+    assert _run_here(tmp_path, [*fit, "--output", "fit_dask", "--scheduler", address]) == 0
+    printed = capsys.readouterr()
+    assert "3/3 fits done" in printed.err and "tyre_2.tir: " in printed.out
+    _same_outputs(tmp_path / "fit_local", tmp_path / "fit_dask")
+    assert sorted(p.name for p in (tmp_path / "fit_dask").iterdir()) == ["tyre_0.tir", "tyre_1.tir", "tyre_2.tir"]
+    # each fitted file is the one a fit of that file alone gives
+    assert main(["fit", str(runs / "tyre_1.csv"), "--template", str(tir), "--stages", "1,2",
+                 "--output", str(tmp_path / "single.tir")]) == 0  # fmt: skip
+    assert (tmp_path / "single.tir").read_bytes() == (tmp_path / "fit_dask" / "tyre_1.tir").read_bytes()
+
+    # diagnose two of them, each with its own fitted .tir from the folder fit --each wrote
+    diag = ["diagnose", str(runs / "tyre_0.csv"), str(runs / "tyre_2.csv"), "--each", "--tir", "fit_local",
+            "--permutations", "9", "--holdout", f"Fz={f0:g}"]  # fmt: skip
+    assert _run_here(tmp_path, [*diag, "--output", "diag_local", "--jobs", "1"]) == 0
+    assert _run_here(tmp_path, [*diag, "--output", "diag_dask", "--scheduler", address]) == 0
+    _same_outputs(tmp_path / "diag_local", tmp_path / "diag_dask")
+    for name in ("tyre_0", "tyre_2"):
+        assert (tmp_path / "diag_dask" / name / "diagnosis.json").exists()
+    assert list(workers_cwd.iterdir()) == []
+
+
+def test_a_task_that_raises_is_reported_with_its_input(cluster, sweep_files, tmp_path, capsys):
+    address, _ = cluster
+    runs, tir, _ = sweep_files
+    bad = tmp_path / "broken.csv"
+    bad.write_text("Fz,kappa\n1,2\n")
+    rc = main(["fit", str(runs / "tyre_0.csv"), str(bad), "--each", "--template", str(tir), "--stages", "1",
+               "--output", str(tmp_path / "o"), "--scheduler", address])  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and err[-1].startswith("mftire fit: error: broken.csv: "), err
+    assert not (tmp_path / "o").exists()

@@ -1,0 +1,117 @@
+"""Batch commands: many inputs, one task each, on local processes or a Dask cluster (:mod:`mftire.parallel`).
+
+``mftire fit --each``, ``mftire diagnose --each``: every input file is one task.  The client reads each file
+and sends its bytes (the workers need no shared folder); the worker writes the input into a scratch folder,
+runs the command's own library function and writes its outputs there; the files come back as bytes
+(:class:`mftire.parallel.FilesTask`) and the client writes them into a staging folder beside the output
+folder, published when every task is done (:func:`mftire.iotools.atomic.staged_folder`): a failed batch
+writes nothing.  At most twice as many tasks as workers are in flight (:meth:`Executor.stream`), so the
+client's memory does not grow with the number of inputs.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import warnings
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from mftire.parallel import Executor, FilesTask, progress_printer, write_files
+
+
+@dataclass(frozen=True)
+class InputFile:
+    """One input of a batch: its output name, its file name and its bytes."""
+
+    name: str
+    filename: str
+    data: bytes
+
+
+def read_inputs(paths: Sequence[str], names: Sequence[str]) -> Iterator[InputFile]:
+    """The inputs, each read when its task is sent."""
+    for path, name in zip(paths, names, strict=True):
+        with open(path, "rb") as fh:
+            yield InputFile(name, os.path.basename(path), fh.read())
+
+
+def _local_copy(item: InputFile, folder: str) -> str:
+    path = os.path.join(folder, item.filename)
+    with open(path, "wb") as fh:
+        fh.write(item.data)
+    return path
+
+
+@dataclass(frozen=True)
+class FitFile:
+    """``mftire fit`` of one input file: ``<name>.tir`` (and the report in ``<name>/`` with ``report``)."""
+
+    template: Any  #: TirParameters
+    stages: str | None
+    weights: str | None
+    alpha_star: bool
+    fixed: tuple[str, ...]
+    report: bool
+
+    def __call__(self, item: InputFile, folder: str) -> list[str]:
+        from mftire.errors import MftireInputError
+        from mftire.fitting.core import fit_tir
+        from mftire.iotools.tir import write_tir
+
+        with tempfile.TemporaryDirectory(prefix="mftire-in-") as tmp, warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            result = fit_tir([_local_copy(item, tmp)], self.template, stages=self.stages, weights=self.weights,
+                             alpha_star=self.alpha_star, fixed=list(self.fixed), progress=False)
+        data = result.data
+        if not any(s.status == "fitted" or (s.channel in data.columns and data[s.channel].notna().any())
+                   for s in result.stages):
+            raise MftireInputError("no stage could be fitted (no force or moment channel with data)")
+        write_tir(result.parameters, os.path.join(folder, item.name + ".tir"))
+        if self.report:
+            from mftire.fitting.report import write_report
+
+            write_report(result, os.path.join(folder, item.name))
+        rms = ", ".join(f"{s.channel} {s.rms:.4g}" for s in result.stages if s.status == "fitted")
+        return [f"{item.name}.tir: {len(dict.fromkeys(result.identified))} coefficients fitted ({rms})"]
+
+
+@dataclass(frozen=True)
+class DiagnoseFile:
+    """``mftire diagnose`` of one input file into ``<name>/``; the fitted tyre is ``tyres[name]`` or ``tyre``."""
+
+    tyres: dict  #: output name -> TirParameters (a folder of fitted .tir files), or {} for ``tyre``
+    tyre: Any
+    holdout: Any
+    n_perm: int
+    seed: int
+
+    def __call__(self, item: InputFile, folder: str) -> list[str]:
+        from mftire.diagnosis.diagnose import diagnose
+        from mftire.diagnosis.report import write_report
+        from mftire.iotools.tables import load_sweep_files
+        from mftire.tyre import Tyre
+
+        tyre = Tyre(self.tyres[item.name] if self.tyres else self.tyre)
+        with tempfile.TemporaryDirectory(prefix="mftire-in-") as tmp, warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            data, _ = load_sweep_files([_local_copy(item, tmp)])
+            result = diagnose(data, tyre, self.holdout, n_perm=self.n_perm, seed=self.seed, progress=False)
+            doc = write_report(result, os.path.join(folder, item.name))
+        return [f"{item.name}/: {doc['summary'].splitlines()[0] if doc.get('summary') else ''}"]
+
+
+def run_batch(executor: Executor, task: Callable[[InputFile, str], list[str]], paths: Sequence[str],
+              names: Sequence[str], output: str, command: str, what: str) -> list[str]:
+    """Run ``task`` on every input (in parallel), write every output into ``output``; returns the lines of the
+    tasks, in the order of the inputs."""
+    from mftire.iotools.atomic import staged_folder
+
+    lines: list[str] = []
+    with staged_folder(output) as stage:
+        for result, files in executor.stream(FilesTask(task), read_inputs(paths, names), labels=lambda x: x.filename,
+                                             progress=progress_printer(f"mftire {command}", what), total=len(paths)):
+            write_files(stage, files)
+            lines.extend(result)
+    return lines
