@@ -34,6 +34,13 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
     OutputPlan([args.tir, args.input], args.force).file(args.output, stdout=True)
     tyre = Tyre.from_file(args.tir, strict=args.strict)
+    if args.chunk_rows and args.input != "-":  # streamed in chunks on the local pool or a Dask cluster
+        from mftire.batch import evaluate_streamed
+        from mftire.parallel import Executor
+
+        evaluate_streamed(Executor.from_args(args), tyre.parameters, args.input, args.output, args.chunk_rows,
+                          args.mode, (*EVALUATE_REQUIRED, *tyre.required_variables), EVALUATE_OPTIONAL)
+        return 0
     # columns the model extensions of the file need (e.g. temperature) are required too
     df = read_numeric_csv(args.input, (*EVALUATE_REQUIRED, *tyre.required_variables), EVALUATE_OPTIONAL)
     df = df.reset_index(drop=True)
@@ -179,6 +186,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", required=True, help="output CSV, or - for standard output")
     p.add_argument("--mode", type=int, default=111, help="MFeval useMode (default 111)")
     p.add_argument("--strict", action="store_true", help="reading warnings (blank/non-numeric values) are errors")
+    p.add_argument("--chunk-rows", type=int, default=0, metavar="N",
+                   help="stream the table N rows at a time (bounded memory; the chunks run on --jobs processes "
+                   "or a --scheduler cluster); the output is byte for byte the one of the whole table")
+    from mftire.parallel import add_parallel_options
+
+    add_parallel_options(p, "the chunks of --chunk-rows")
     add_force_option(p)
     p.set_defaults(func=_cmd_evaluate)
 
