@@ -244,3 +244,19 @@ def test_streamed_evaluate_in_chunks_equals_the_whole_table(cluster, tmp_path):
     assert (tmp_path / "pool.csv").read_bytes() == whole
     ky = pd.read_csv(tmp_path / "dask.csv", usecols=["instKya"])["instKya"].to_numpy()
     assert np.isfinite(ky[24990:25010]).all() and np.ptp(ky) > 0  # real differences across chunk edges
+
+
+def test_fe_design_of_experiments_on_the_cluster_equals_the_local_run(cluster, tmp_path, capsys):
+    address, workers_cwd = cluster
+    # three designs (a coarse grid: the test is about the batch, not the physics), the reduced programme
+    (tmp_path / "doe.csv").write_text("design,grid.nx,grid.ny,tread.kx\n"
+                                      "base,12,5,\nsoft,12,5,6e7\nstiff,12,5,1.2e8\n")  # fmt: skip
+    base = ["fe", "campaign", "--designs", "doe.csv", "--quick", "--output"]
+    assert _run_here(tmp_path, [*base, "local", "--jobs", "1"]) == 0
+    assert _run_here(tmp_path, [*base, "dask", "--scheduler", address]) == 0
+    assert "wrote 3 designs into dask" in capsys.readouterr().out
+    _same_outputs(tmp_path / "local", tmp_path / "dask")
+    assert sorted(p.name for p in (tmp_path / "dask").iterdir()) == ["base", "soft", "stiff"]
+    a, b = ((tmp_path / "dask" / d / "sweeps.csv").read_bytes() for d in ("soft", "stiff"))
+    assert a != b  # the designs differ
+    assert list(workers_cwd.iterdir()) == []
