@@ -116,12 +116,15 @@ class Executor:
         Seconds [s] the cluster may have no worker at all before the run ends with :class:`ClusterError`.
     quiet : bool
         Silence Dask's own log lines while connected (the CLI: errors are one line of ours).
+    tune_workers : bool
+        Register :class:`MallocTuning` on the cluster's workers (default; ``False`` leaves them as they are).
     """
 
     jobs: int | None = 1
     scheduler: str | None = None
     worker_timeout: float = WORKER_TIMEOUT_S
     quiet: bool = False
+    tune_workers: bool = True
 
     def __post_init__(self) -> None:
         if self.jobs is not None and (not isinstance(self.jobs, int) or self.jobs < 0):
@@ -138,7 +141,7 @@ class Executor:
             pool = getattr(self, "_pool", None)
             if pool is not None:
                 return max(1, sum(pool.nthreads().values()))
-            with _dask_client(str(self.scheduler), self.quiet) as client:
+            with _dask_client(str(self.scheduler), self.quiet, self.tune_workers) as client:
                 return max(1, sum(client.nthreads().values()))
         return available_cores() if not self.jobs else self.jobs
 
@@ -152,7 +155,7 @@ class Executor:
         """Check the scheduler address (form, host, a scheduler answering, at least one worker) before any
         work; :class:`MftireInputError` or :class:`ClusterError` naming what is wrong.  Returns self."""
         if self.scheduler:
-            with _dask_client(str(self.scheduler), self.quiet) as client:
+            with _dask_client(str(self.scheduler), self.quiet, self.tune_workers) as client:
                 if not client.nthreads():
                     _wait_for_workers(client, str(self.scheduler), self.worker_timeout)
         return self
@@ -172,7 +175,7 @@ class Executor:
             yield from _collect(self, pool, _submit_all(pool, fn, items, progress), items, labels)
             return
         if self.scheduler:
-            with _dask_client(str(self.scheduler), self.quiet) as client:
+            with _dask_client(str(self.scheduler), self.quiet, self.tune_workers) as client:
                 yield from _collect(self, client, _submit_all(client, fn, items, progress), items, labels)
             return
         n = min(self.workers, len(items))
@@ -212,14 +215,14 @@ class Executor:
             yield self
             return
         if self.scheduler:
-            cm: Any = _dask_client(str(self.scheduler), self.quiet)
+            cm: Any = _dask_client(str(self.scheduler), self.quiet, self.tune_workers)
         else:
             from concurrent.futures import ProcessPoolExecutor
 
             cm = _pool_cm(ProcessPoolExecutor(max_workers=self.workers))
         with cm as pool:
             ex = Executor(jobs=self.jobs, scheduler=self.scheduler, worker_timeout=self.worker_timeout,
-                          quiet=self.quiet)
+                          quiet=self.quiet, tune_workers=self.tune_workers)
             object.__setattr__(ex, "_pool", pool)  # frozen: the open pool is not a field (not compared, not in repr)
             try:
                 yield ex
@@ -472,7 +475,7 @@ def check_address(address: str) -> tuple[str, str, int]:
 
 
 @contextmanager
-def _dask_client(address: str, quiet: bool = False) -> Iterator[Any]:
+def _dask_client(address: str, quiet: bool = False, tune: bool = True) -> Iterator[Any]:
     """A Dask client of the scheduler at ``address`` with :class:`MallocTuning` on its workers; closed (within
     seconds, also when the scheduler is gone) when the block ends."""
     try:
@@ -495,7 +498,8 @@ def _dask_client(address: str, quiet: bool = False) -> Iterator[Any]:
             raise MftireInputError(f"cannot use the Dask scheduler at {address!r}: {exc}") from None
         try:
             try:
-                client.register_plugin(MallocTuning(), name="mftire-malloc")
+                if tune:
+                    client.register_plugin(MallocTuning(), name="mftire-malloc")
             except Exception:  # noqa: BLE001 - an old scheduler or a closed one: the tuning is an optimisation
                 pass
             yield client

@@ -67,7 +67,8 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     tyre = _tyre(args)
     out = Path(args.output)
     t0 = time.perf_counter()
-    table, free = campaign(tyre, quick=args.quick, executor=executor)
+    with executor.session() as ex:  # one pool or Dask client for every batch of chunks
+        table, free = campaign(tyre, quick=args.quick, executor=ex)
     write_csv_atomic(table, out / "sweeps.csv")
     write_csv_atomic(free, out / "free_rolling.csv")
     counts = table["kind"].value_counts().to_dict()
