@@ -518,7 +518,10 @@ def _quiet_dask(quiet: bool) -> Iterator[None]:
         return
     import logging
 
-    loggers = [logging.getLogger(n) for n in ("distributed", "tornado", "asyncio")]
+    names = ("distributed", "tornado", "asyncio")
+    loggers = [logging.getLogger(n) for n in names]
+    loggers += [lg for n, lg in list(logging.root.manager.loggerDict.items())
+                if isinstance(lg, logging.Logger) and n.startswith(tuple(f"{x}." for x in names))]
     levels = [lg.level for lg in loggers]
     for lg in loggers:
         lg.setLevel(logging.CRITICAL)

@@ -99,7 +99,8 @@ def _stop(p: subprocess.Popen) -> None:
     p.wait(timeout=30)
 
 
-def test_killing_every_worker_mid_run_is_one_line_exit_2_and_no_output(tmp_path):
+@pytest.mark.parametrize("lost", ["workers", "scheduler"])
+def test_killing_the_cluster_mid_run_is_one_line_exit_2_and_no_output(tmp_path, lost):
     port = _free_port()
     address = f"tcp://127.0.0.1:{port}"
     sched = _start(["-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", str(port),
@@ -121,8 +122,8 @@ def test_killing_every_worker_mid_run_is_one_line_exit_2_and_no_output(tmp_path)
                 assert time.monotonic() - t0 < 60 and run.poll() is None, run.communicate()
                 time.sleep(0.2)
         t_kill = time.monotonic()
-        for w in workers:
-            os.killpg(w.pid, signal.SIGKILL)
+        for p in workers if lost == "workers" else [sched]:
+            os.killpg(p.pid, signal.SIGKILL)
         out, err = run.communicate(timeout=120)
         elapsed = time.monotonic() - t_kill
     finally:
@@ -130,8 +131,11 @@ def test_killing_every_worker_mid_run_is_one_line_exit_2_and_no_output(tmp_path)
             _stop(p)
     lines = err.decode().strip().splitlines()
     assert run.returncode == 2, err
-    assert len(lines) == 1 and lines[0].startswith("mftire fe: error: lost every Dask worker"), lines
-    assert "3 s" in lines[0]
+    assert len(lines) == 1, lines
+    if lost == "workers":  # none left: the run ends after --worker-timeout
+        assert lines[0].startswith("mftire fe: error: lost every Dask worker") and "3 s" in lines[0], lines
+    else:
+        assert lines[0].startswith(f"mftire fe: error: lost the Dask scheduler at {address}"), lines
     assert elapsed < 30
     assert not (tmp_path / "out").exists() and not any(p.name.startswith(".out") for p in tmp_path.iterdir())
 
@@ -260,3 +264,13 @@ def test_fe_design_of_experiments_on_the_cluster_equals_the_local_run(cluster, t
     a, b = ((tmp_path / "dask" / d / "sweeps.csv").read_bytes() for d in ("soft", "stiff"))
     assert a != b  # the designs differ
     assert list(workers_cwd.iterdir()) == []
+
+
+def test_fit_bands_checks_the_scheduler_before_fitting(sweep_files, tmp_path, capsys):
+    runs, tir, _ = sweep_files
+    out = tmp_path / "fitted.tir"
+    rc = main(["fit", str(runs / "tyre_0.csv"), "--template", str(tir), "--stages", "1", "--output", str(out),
+               "--bands", "3", "--scheduler", f"tcp://127.0.0.1:{_free_port()}"])  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "cannot reach the Dask scheduler" in err[0], err
+    assert not out.exists()  # nothing fitted, nothing written
