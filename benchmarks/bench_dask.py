@@ -118,7 +118,8 @@ def main() -> int:
     print(f"  fit of one tyre file (stages 1-3, {len(data)} points): {w_fit:.2f} s wall, {c_fit:.2f} s CPU; "
           f"input {in_bytes / 1e3:.0f} kB, fitted .tir {tir_bytes / 1e3:.1f} kB")
 
-    from mftire.batch import EvaluateChunk
+    from mftire.cli import evaluate_columns
+    from mftire.streaming import EvaluateChunk
 
     rng = np.random.default_rng(0)
     m = 100_000
@@ -126,7 +127,7 @@ def main() -> int:
                           "alpha": rng.uniform(-0.2, 0.2, m), "gamma": 0.0})
     tyre_mf = Tyre(params)
     _, w_kernel, _ = _timed(lambda: tyre_mf.evaluate_frame(frame))
-    (text, _), w_chunk, _ = _timed(lambda: EvaluateChunk(params, 111, "bench")((frame, 0, m, True)))
+    (text, _), w_chunk, _ = _timed(lambda: EvaluateChunk(params, 111, "bench", evaluate_columns)((frame, 0, m, True)))
     _, w_parse, _ = _timed(lambda: pd.read_csv(__import__("io").StringIO(frame.to_csv(index=False))))
     print(f"  evaluate: kernel (30 channels, a table) {m / w_kernel:.3g} points/s; a chunk with its CSV text "
           f"{m / w_chunk:.3g} points/s; {len(text) / m:.0f} bytes of output per point; reading the 4-column "

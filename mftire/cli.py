@@ -35,11 +35,12 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     OutputPlan([args.tir, args.input], args.force).file(args.output, stdout=True)
     tyre = Tyre.from_file(args.tir, strict=args.strict)
     if args.chunk_rows and args.input != "-":  # streamed in chunks on the local pool or a Dask cluster
-        from mftire.batch import evaluate_streamed
         from mftire.parallel import Executor
+        from mftire.streaming import evaluate_streamed
 
         evaluate_streamed(Executor.from_args(args), tyre.parameters, args.input, args.output, args.chunk_rows,
-                          args.mode, (*EVALUATE_REQUIRED, *tyre.required_variables), EVALUATE_OPTIONAL)
+                          args.mode, (*EVALUATE_REQUIRED, *tyre.required_variables), EVALUATE_OPTIONAL,
+                          evaluate_columns)
         return 0
     # columns the model extensions of the file need (e.g. temperature) are required too
     df = read_numeric_csv(args.input, (*EVALUATE_REQUIRED, *tyre.required_variables), EVALUATE_OPTIONAL)

@@ -639,17 +639,64 @@ def batch_names(paths: Sequence[str]) -> list[str]:
 
 
 def progress_printer(prefix: str, what: str) -> Callable[[int, int], None]:
-    """A ``progress(done, total)`` for :meth:`Executor.imap` that prints ``prefix: done/total what`` to standard
-    error (one line rewritten in place on a terminal, a line per task otherwise)."""
+    """A ``progress(done, total)`` for :meth:`Executor.imap` that prints ``prefix: done/total what`` (``total``
+    0: unknown, ``prefix: done what``) to standard error, one line rewritten in place on a terminal, a line
+    per call otherwise."""
     import sys
 
     tty = sys.stderr.isatty()
 
     def show(done: int, total: int) -> None:
         end = "\n" if (not tty or done == total) else ""
-        print(f"{chr(13) if tty else ''}{prefix}: {done}/{total} {what}", end=end, file=sys.stderr, flush=True)
+        count = f"{done}/{total}" if total else f"{done}"
+        print(f"{chr(13) if tty else ''}{prefix}: {count} {what}", end=end, file=sys.stderr, flush=True)
 
     return show
+
+
+# ---------------------------------------------------------------------------------------- batch commands
+
+
+@dataclass(frozen=True)
+class InputFile:
+    """One input of a batch: its output name, its file name and its bytes."""
+
+    name: str
+    filename: str
+    data: bytes
+
+
+def read_inputs(paths: Sequence[str], names: Sequence[str]) -> Iterator[InputFile]:
+    """The inputs of a batch command, each read when its task is sent (the workers need no shared folder)."""
+    for path, name in zip(paths, names, strict=True):
+        with open(path, "rb") as fh:
+            yield InputFile(name, os.path.basename(path), fh.read())
+
+
+def local_copy(item: InputFile, folder: str) -> str:
+    """Write an input's bytes into ``folder`` under its file name (on the worker); its path."""
+    path = os.path.join(folder, item.filename)
+    with open(path, "wb") as fh:
+        fh.write(item.data)
+    return path
+
+
+def run_batch(executor: Executor, task: Callable[[InputFile, str], list[str]], paths: Sequence[str],
+              names: Sequence[str], output: str, command: str, what: str) -> list[str]:
+    """Run ``task`` (``task(input, folder) -> lines``, writing its outputs into ``folder``) on every input
+    file, on ``executor`` with at most twice as many tasks as workers in flight; the client writes every
+    task's files into a staging folder beside ``output``, published when every task is done (a failed
+    batch writes nothing).  Returns the tasks' lines, in the order of the inputs."""
+    from mftire.iotools.atomic import staged_folder
+
+    lines: list[str] = []
+    with staged_folder(output) as stage:
+        for result, files in executor.stream(FilesTask(task), read_inputs(paths, names), labels=lambda x: x.filename,
+                                             progress=progress_printer(f"mftire {command}", what), total=len(paths)):
+            write_files(stage, files)
+            lines.extend(result)
+    return lines
+
 
 
 def add_parallel_options(parser: Any, what: str) -> None:

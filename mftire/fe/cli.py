@@ -51,7 +51,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     from mftire.parallel import Executor
 
     if args.designs:  # a design of experiments: one output sub-folder per run of the table
-        from mftire.batch import read_designs, run_designs
+        from mftire.fe.designs import read_designs, run_designs
 
         plan = OutputPlan([args.designs], args.force)
         runs = read_designs(args.designs, args.quick)
