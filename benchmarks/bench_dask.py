@@ -84,8 +84,9 @@ def main() -> int:
         n = 2000
         with tuned.session() as ex:
             ex.map(_noop, range(10))
-            _, w_noop, _ = _timed(lambda: ex.map(_noop, range(n)))
-        print(f"scheduler round trip per empty task: {1e3 * w_noop / n:.2f} ms ({n} tasks, 2 workers)")
+            _, w_noop, c_noop = _timed(lambda: ex.map(_noop, range(n)))
+        print(f"scheduler round trip per empty task: {1e3 * w_noop / n:.2f} ms wall, {1e3 * c_noop / n:.2f} ms CPU "
+              f"of this process (client and LocalCluster scheduler) ({n} tasks, 2 workers)")
 
     # per-task costs for docs/scale.md, in this process
     print("\nper-task costs (this process, one core):")
@@ -126,12 +127,16 @@ def main() -> int:
     frame = pd.DataFrame({"Fz": rng.uniform(2000, 6000, m), "kappa": rng.uniform(-0.2, 0.2, m),
                           "alpha": rng.uniform(-0.2, 0.2, m), "gamma": 0.0})
     tyre_mf = Tyre(params)
-    _, w_kernel, _ = _timed(lambda: tyre_mf.evaluate_frame(frame))
-    (text, _), w_chunk, _ = _timed(lambda: EvaluateChunk(params, 111, "bench", evaluate_columns)((frame, 0, m, True)))
-    _, w_parse, _ = _timed(lambda: pd.read_csv(__import__("io").StringIO(frame.to_csv(index=False))))
-    print(f"  evaluate: kernel (30 channels, a table) {m / w_kernel:.3g} points/s; a chunk with its CSV text "
-          f"{m / w_chunk:.3g} points/s; {len(text) / m:.0f} bytes of output per point; reading the 4-column "
-          f"input {m / w_parse:.3g} rows/s")
+    _, _, c_kernel = _timed(lambda: tyre_mf.evaluate_frame(frame))
+    (text, _), _, c_chunk = _timed(lambda: EvaluateChunk(params, 111, "bench", evaluate_columns)((frame, 0, m, True)))
+    csv_in = frame.to_csv(index=False)
+    _, _, c_parse = _timed(lambda: pd.read_csv(__import__("io").StringIO(csv_in)))
+    with tempfile.TemporaryDirectory() as d:
+        _, w_write, _ = _timed(lambda: open(os.path.join(d, "o.csv"), "wb").write(text))
+    print(f"  evaluate (CPU): kernel (30 channels, a table) {m / c_kernel:.3g} points/s; a chunk with its CSV text "
+          f"{m / c_chunk:.3g} points/s; {len(text) / m:.0f} bytes of output per point; reading the 4-column input "
+          f"({len(csv_in) / m:.0f} bytes per row) {m / c_parse:.3g} rows/s; "
+          f"writing {len(text) / w_write / 1e6:.0f} MB/s")
     print(f"load average after: {os.getloadavg()[0]:.2f}")
     return 0 if ratio <= TARGET_OVERHEAD else 1
 

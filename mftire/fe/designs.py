@@ -7,7 +7,7 @@ import os
 import warnings
 from typing import Any
 
-from mftire.parallel import Executor, progress_printer
+from mftire.parallel import Executor, FilesTask, progress_printer, write_files
 
 #: Columns of a design table that are not tyre parameters.
 DESIGN_COLUMNS = ("design", "tyre", "programme")
@@ -67,32 +67,45 @@ def read_designs(path: str, quick: bool) -> list[tuple[str, Any, bool]]:
     return runs
 
 
-def _campaign_task(run: tuple[str, Any, bool]) -> tuple[Any, Any]:
-    """One design's campaign in one task (the designs spread over the workers)."""
+def _write_design(folder: str, name: str, table: Any, free: Any) -> None:
+    from mftire.fe.sweeps import write_csv_atomic
+
+    write_csv_atomic(table, os.path.join(folder, name, "sweeps.csv"))
+    write_csv_atomic(free, os.path.join(folder, name, "free_rolling.csv"))
+
+
+def _campaign_task(run: tuple[str, Any, bool], folder: str) -> int:
+    """One design's campaign in one task (the designs spread over the workers); the worker formats the CSV
+    files too (into ``folder``, returned as bytes by :class:`~mftire.parallel.FilesTask`), the client only
+    writes bytes.  Returns the rows of the sweep table."""
     from mftire.fe.sweeps import campaign
 
-    _name, tyre, quick = run
+    name, tyre, quick = run
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return campaign(tyre, quick=quick, progress=False)
+        table, free = campaign(tyre, quick=quick, progress=False)
+    _write_design(folder, name, table, free)
+    return len(table)
 
 
 def run_designs(executor: Executor, runs: list[tuple[str, Any, bool]], output: str) -> list[str]:
     """Every run of a design table into ``output/<design>/`` (sweeps.csv, free_rolling.csv).  As many designs
     as workers or more: one task per design; fewer: the designs one after the other, each campaign's
-    chunks of points spread over every worker.  The tables are the same either way (bit for bit)."""
-    from mftire.fe.sweeps import campaign, write_csv_atomic
+    chunks of points spread over every worker.  The files are the same either way (byte for byte)."""
+    from mftire.fe.sweeps import campaign
     from mftire.iotools.atomic import staged_folder
 
     lines = []
     with executor.session() as ex, staged_folder(output) as stage:
         if len(runs) >= ex.workers:
-            results = ex.stream(_campaign_task, runs, labels=lambda r: f"design {r[0]}", total=len(runs),
-                                progress=progress_printer("mftire fe", "designs done"))
+            for (name, _tyre, quick), (rows, files) in zip(runs, ex.stream(
+                    FilesTask(_campaign_task), runs, labels=lambda r: f"design {r[0]}", total=len(runs),
+                    progress=progress_printer("mftire fe", "designs done")), strict=True):  # fmt: skip
+                write_files(stage, files)
+                lines.append(f"{name}/: {rows} rows{' (quick)' if quick else ''}")
         else:
-            results = (campaign(t, quick=q, progress=False, executor=ex) for _n, t, q in runs)
-        for (name, _tyre, quick), (table, free) in zip(runs, results, strict=True):
-            write_csv_atomic(table, os.path.join(stage, name, "sweeps.csv"))
-            write_csv_atomic(free, os.path.join(stage, name, "free_rolling.csv"))
-            lines.append(f"{name}/: {len(table)} rows{' (quick)' if quick else ''}")
+            for name, tyre, quick in runs:
+                table, free = campaign(tyre, quick=quick, progress=False, executor=ex)
+                _write_design(stage, name, table, free)
+                lines.append(f"{name}/: {len(table)} rows{' (quick)' if quick else ''}")
     return lines
