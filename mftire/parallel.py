@@ -32,9 +32,10 @@ name).  Commands write their outputs only after the tasks are done, so nothing p
 
 **Worker memory allocator.** Dask's nanny starts workers with ``MALLOC_TRIM_THRESHOLD_=65536``,
 which also freezes glibc's mmap threshold at 128 KiB: every large temporary array is then mapped
-and unmapped again, and FE chunks run 4-6 times slower.  The client registers
-:class:`MallocTuning` on the cluster's workers (glibc ``mallopt``: mmap threshold 32 MiB, trim
-threshold 64 MiB, glibc's own dynamic limits), so the workers run at in-process speed.
+and unmapped again, and FE chunks run 4-6 times slower.  The client registers the worker plugin
+:class:`mftire.dask_plugins.MallocTuning` on the cluster (glibc ``mallopt``: mmap
+threshold 32 MiB, trim threshold 64 MiB), so the workers run at in-process speed; ``dask worker
+--preload mftire.dask_plugins`` does the same from the worker's side.
 
 **Determinism.** A task is a pure function of its argument: random draws are made before the tasks
 are submitted (or from a seed the task carries), and results come back in submission order, so the
@@ -55,8 +56,9 @@ from typing import Any, Generic, TypeVar
 
 from mftire.errors import MftireError, MftireInputError
 
-__all__ = ["ClusterError", "Executor", "FilesTask", "MallocTuning", "Pending", "TaskError", "add_parallel_options",
-           "available_cores", "batch_names", "chunk_count", "expand_inputs", "progress_printer", "write_files"]
+__all__ = ["ClusterError", "Executor", "FilesTask", "Pending", "TaskError", "add_parallel_options",
+           "available_cores", "batch_names", "chunk_count", "expand_inputs", "progress_printer",
+           "write_files"]
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -497,11 +499,13 @@ def _dask_client(address: str, quiet: bool = False, tune: bool = True) -> Iterat
         except (OSError, ValueError, TimeoutError) as exc:
             raise MftireInputError(f"cannot use the Dask scheduler at {address!r}: {exc}") from None
         try:
-            try:
-                if tune:
-                    client.register_plugin(MallocTuning(), name="mftire-malloc")
-            except Exception:  # noqa: BLE001 - an old scheduler or a closed one: the tuning is an optimisation
-                pass
+            if tune:
+                from mftire.dask_plugins import MallocTuning
+
+                try:
+                    client.register_plugin(MallocTuning(), name=MallocTuning.name)
+                except (OSError, TimeoutError):  # the scheduler went away: the first task will say so
+                    pass
             yield client
         finally:
             try:
@@ -530,38 +534,6 @@ def _quiet_dask(quiet: bool) -> Iterator[None]:
     finally:
         for lg, lv in zip(loggers, levels, strict=True):
             lg.setLevel(lv)
-
-
-class MallocTuning:
-    """Dask worker plugin: glibc's allocator back to in-process speed on a nanny-started worker.
-
-    The nanny exports ``MALLOC_TRIM_THRESHOLD_=65536``; glibc then also keeps its mmap threshold at 128 KiB
-    (the dynamic threshold is off whenever one of them is set), so every temporary array larger than that
-    is mapped, faulted in page by page and unmapped again.  ``setup`` sets the mmap threshold to 32 MiB and
-    the trim threshold to 64 MiB with ``mallopt`` (what glibc's dynamic rule reaches for large arrays).
-    No effect on other C libraries (musl, macOS, Windows)."""
-
-    idempotent = True
-    name = "mftire-malloc"
-
-    def setup(self, worker: Any = None) -> None:
-        import ctypes
-        import ctypes.util
-
-        try:
-            libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
-            mallopt = libc.mallopt
-        except (OSError, AttributeError):
-            return
-        m_trim_threshold, m_mmap_threshold = -1, -3  # glibc malloc.h
-        mallopt(m_mmap_threshold, 32 * 1024 * 1024)
-        mallopt(m_trim_threshold, 64 * 1024 * 1024)
-
-    def teardown(self, worker: Any = None) -> None:
-        pass
-
-    def transition(self, key: Any, start: str, finish: str, **kwargs: Any) -> None:
-        pass
 
 
 # ------------------------------------------------------------------------------------------- client writes

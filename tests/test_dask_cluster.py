@@ -264,6 +264,12 @@ def test_fe_design_of_experiments_on_the_cluster_equals_the_local_run(cluster, t
     assert sorted(p.name for p in (tmp_path / "dask").iterdir()) == ["base", "soft", "stiff"]
     a, b = ((tmp_path / "dask" / d / "sweeps.csv").read_bytes() for d in ("soft", "stiff"))
     assert a != b  # the designs differ
+    # the workers got the allocator plugin (mftire.dask_plugins.MallocTuning), and it ran there
+    with distributed.Client(address, set_as_default=False) as client:
+        assert set(client.run(lambda dask_worker: "mftire-malloc" in dask_worker.plugins).values()) == {True}
+        from mftire.dask_plugins import tune_malloc
+
+        assert set(client.run(tune_malloc).values()) == {True}  # glibc's mallopt accepted both settings
     assert list(workers_cwd.iterdir()) == []
 
 
