@@ -86,10 +86,10 @@ class _SolveChunk:
         return np.column_stack([r.Fx, r.Fy, r.Mz, r.Mx, r.My])
 
 
-#: Measured cost of one slip point on the default grid [s] (benchmarks/bench_dask.py: one chunk in process on
-#: the idle machine), the grid cells it was measured with, the target duration of one task [s] and the
-#: smallest chunk [points].
-SECONDS_PER_POINT = 1.4e-3
+#: Measured CPU cost of one point of the thesis programme on the default grid [s] (benchmarks/bench_dask.py:
+#: 0.87-0.89 ms), the grid cells it was measured with, the target duration of one task [s] (a lost worker
+#: costs little, progress shows, Dask's ~1.5 ms per task stays negligible) and the smallest chunk [points].
+SECONDS_PER_POINT = 0.9e-3
 DEFAULT_GRID_CELLS = 40 * 15
 TASK_TARGET_S = 10.0
 MIN_CHUNK_POINTS = 32
