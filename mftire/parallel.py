@@ -2,15 +2,17 @@
 
 Used for the bootstrap refits of the prediction bands (:func:`mftire.fitting.bands.bootstrap_bands`),
 the chunks of an FE campaign (:func:`mftire.fe.sweeps.run_sweeps`), the figures of a comparison
-(:meth:`mftire.compare.core.Comparison.plots`) and ``mftire demo``.
+(:meth:`mftire.compare.core.Comparison.plots`), ``mftire demo``, and the batch commands: ``fit --each``,
+``diagnose --each`` (:func:`run_batch`: one task per input file), ``fe campaign --designs``
+(:mod:`mftire.fe.designs`) and ``evaluate --chunk-rows`` (:mod:`mftire.streaming`, :meth:`Executor.stream`).
 
 * ``Executor(jobs=1)`` runs every task in this process, one after another (the library default).
 * ``Executor(jobs=N)`` runs them in ``N`` local worker processes
   (:class:`concurrent.futures.ProcessPoolExecutor`); ``jobs=None`` or ``0`` uses every core
   this process may run on (the command-line default, ``--jobs``).
 * ``Executor(scheduler="tcp://host:8786")`` sends them to a running Dask distributed scheduler
-  (``--scheduler ADDRESS``; the optional extra ``pip install 'mftire[dask]'``). The workers need
-  mftire installed. No scheduler of our own: Dask does the scheduling, retries and data transfer.
+  (``--scheduler ADDRESS``; the optional extra ``pip install 'mftire[dask]'``). The workers and the
+  scheduler (it unpickles the task graph) need mftire installed. No scheduler of our own: Dask does the scheduling, retries and data transfer.
 
 **Sessions.** ``with executor.session() as ex:`` keeps the workers (a process pool, or a Dask
 client) up for several batches, and ``ex.start_map(fn, items)`` starts a batch without waiting for
