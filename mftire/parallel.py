@@ -12,7 +12,8 @@ the chunks of an FE campaign (:func:`mftire.fe.sweeps.run_sweeps`), the figures 
   this process may run on (the command-line default, ``--jobs``).
 * ``Executor(scheduler="tcp://host:8786")`` sends them to a running Dask distributed scheduler
   (``--scheduler ADDRESS``; the optional extra ``pip install 'mftire[dask]'``). The workers and the
-  scheduler (it unpickles the task graph) need mftire installed. No scheduler of our own: Dask does the scheduling, retries and data transfer.
+  scheduler (it unpickles the task graph) need mftire installed. No scheduler of our own: Dask does
+  the scheduling, retries and data transfer.
 
 **Sessions.** ``with executor.session() as ex:`` keeps the workers (a process pool, or a Dask
 client) up for several batches, and ``ex.start_map(fn, items)`` starts a batch without waiting for
