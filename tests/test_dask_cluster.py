@@ -281,3 +281,20 @@ def test_fit_bands_checks_the_scheduler_before_fitting(sweep_files, tmp_path, ca
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and "cannot reach the Dask scheduler" in err[0], err
     assert not out.exists()  # nothing fitted, nothing written
+
+
+def test_batch_outputs_follow_the_output_policy(sweep_files, tmp_path, capsys):
+    runs, tir, _ = sweep_files
+    out = tmp_path / "fitted"
+    out.mkdir()
+    (out / "keep.txt").write_text("mine")
+    args = ["fit", str(runs / "tyre_0.csv"), str(runs / "tyre_1.csv"), "--each", "--template", str(tir),
+            "--stages", "1", "--output", str(out), "--jobs", "1"]  # fmt: skip
+    assert main(args) == 2  # a non-empty folder needs --force, checked before any work
+    assert "use --force" in capsys.readouterr().err and sorted(p.name for p in out.iterdir()) == ["keep.txt"]
+    assert main([*args, "--force"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["keep.txt", "tyre_0.tir", "tyre_1.tir"]  # others left alone
+    # an input that is also an output is refused, even with --force: the template would be replaced by a fit
+    rc = main(["fit", str(runs / "tyre_0.csv"), "--each", "--template", str(out / "tyre_0.tir"), "--stages", "1",
+               "--output", str(out), "--force", "--jobs", "1"])  # fmt: skip
+    assert rc == 2 and "output is the input file" in capsys.readouterr().err
