@@ -294,6 +294,13 @@ def test_batch_outputs_follow_the_output_policy(sweep_files, tmp_path, capsys):
     assert "use --force" in capsys.readouterr().err and sorted(p.name for p in out.iterdir()) == ["keep.txt"]
     assert main([*args, "--force"]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["keep.txt", "tyre_0.tir", "tyre_1.tir"]  # others left alone
+    # an output folder implies --each (a folder cannot be one fitted .tir); so does diagnose --tir FOLDER
+    assert main(["fit", str(runs / "tyre_2.csv"), "--template", str(tir), "--stages", "1", "--output",
+                 str(tmp_path / "implied") + "/", "--jobs", "1"]) == 0  # fmt: skip
+    assert (tmp_path / "implied" / "tyre_2.tir").is_file()
+    assert main(["diagnose", str(runs / "tyre_2.csv"), "--tir", str(tmp_path / "implied"), "--output",
+                 str(tmp_path / "d"), "--permutations", "9", "--jobs", "1"]) == 0  # fmt: skip
+    assert (tmp_path / "d" / "tyre_2" / "diagnosis.json").is_file()
     # an input that is also an output is refused, even with --force: the template would be replaced by a fit
     rc = main(["fit", str(runs / "tyre_0.csv"), "--each", "--template", str(out / "tyre_0.tir"), "--stages", "1",
                "--output", str(out), "--force", "--jobs", "1"])  # fmt: skip

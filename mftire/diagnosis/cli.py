@@ -14,8 +14,8 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     from mftire.iotools.tables import load_sweep_files
     from mftire.tyre import load
 
-    if args.each:
-        return _cmd_diagnose_each(args)
+    if args.each or os.path.isdir(args.tir):
+        return _cmd_diagnose_each(args)  # one diagnosis per file (a folder of fitted .tir files: one per input)
     OutputPlan([*args.data, args.tir], args.force).folder(args.output, REPORT_FILES)
     tyre = load(args.tir)
     data, _ = load_sweep_files(args.data)
@@ -76,7 +76,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
                    "input, as mftire fit --each writes)")
     p.add_argument("--each", action="store_true",
                    help="one diagnosis per DATA file (several files or a glob), run as parallel tasks (--jobs, "
-                   "--scheduler), each into OUTPUT/<name>/")
+                   "--scheduler), each into OUTPUT/<name>/ (implied when --tir is a folder)")
     p.add_argument("--output", required=True, help="output directory")
     p.add_argument("--holdout", help="held-out condition, COLUMN=V1[,V2...] in SI (e.g. Vx=16.67); default automatic")
     p.add_argument("--permutations", type=int, default=99, help="permutations of the significance test (default 99)")

@@ -7,12 +7,17 @@ import sys
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:
+    import os
+
     from mftire.errors import MftireInputError
     from mftire.fitting.core import fit_tir
     from mftire.iotools.tir import write_tir
 
-    if args.each:
-        return _cmd_fit_each(args)
+    if args.each or os.path.isdir(args.output) or args.output.endswith(("/", os.sep)):
+        return _cmd_fit_each(args)  # one fit per file (an output folder cannot be one fitted .tir)
+    from mftire.parallel import expand_inputs
+
+    args.data = expand_inputs(args.data)  # a glob the shell did not expand
     _check_outputs(args)
     if args.bands:  # the cluster is checked before any work
         from mftire.parallel import Executor
@@ -133,7 +138,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    "(with --each: --report each, a report folder per input in the output folder)")
     p.add_argument("--each", action="store_true",
                    help="one fit per DATA file (several files or a glob such as 'runs/*.csv'), run as parallel "
-                   "tasks (--jobs, --scheduler); --output is then a folder receiving <name>.tir per input")
+                   "tasks (--jobs, --scheduler); --output is then a folder receiving <name>.tir per input "
+                   "(implied when --output is a folder or ends with /)")
     p.add_argument("--stages", default="all",
                    help="stages to run, numbers or names, e.g. 1,2,3 or longitudinal,lateral (default all)")
     p.add_argument("--weights", default=None,
