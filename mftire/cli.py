@@ -34,11 +34,14 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
     OutputPlan([args.tir, args.input], args.force).file(args.output, stdout=True)
     tyre = Tyre.from_file(args.tir, strict=args.strict)
-    if args.chunk_rows and args.input != "-":  # streamed in chunks on the local pool or a Dask cluster
+    from mftire.streaming import chunk_rows
+
+    rows = chunk_rows(args.chunk_rows, args.input, bool(args.scheduler))
+    if rows:  # streamed in chunks on the local pool or a Dask cluster
         from mftire.parallel import Executor
         from mftire.streaming import evaluate_streamed
 
-        evaluate_streamed(Executor.from_args(args), tyre.parameters, args.input, args.output, args.chunk_rows,
+        evaluate_streamed(Executor.from_args(args), tyre.parameters, args.input, args.output, rows,
                           args.mode, (*EVALUATE_REQUIRED, *tyre.required_variables), EVALUATE_OPTIONAL,
                           evaluate_columns)
         return 0
@@ -187,9 +190,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", required=True, help="output CSV, or - for standard output")
     p.add_argument("--mode", type=int, default=111, help="MFeval useMode (default 111)")
     p.add_argument("--strict", action="store_true", help="reading warnings (blank/non-numeric values) are errors")
-    p.add_argument("--chunk-rows", type=int, default=0, metavar="N",
+    p.add_argument("--chunk-rows", type=int, default=None, metavar="N",
                    help="stream the table N rows at a time (bounded memory; the chunks run on --jobs processes "
-                   "or a --scheduler cluster); the output is byte for byte the one of the whole table")
+                   "or a --scheduler cluster); the output is byte for byte the one of the whole table. Default: "
+                   "chunks of 100000 rows with --scheduler or for an input over 64 MB, else the whole table; 0: "
+                   "always the whole table")
     from mftire.parallel import add_parallel_options
 
     add_parallel_options(p, "the chunks of --chunk-rows")

@@ -10,6 +10,32 @@ from typing import Any
 
 from mftire.parallel import Executor, progress_printer
 
+#: Rows per chunk when ``--chunk-rows`` is not given (≈ 60 MB of output text per chunk, 2.5 s of a worker's
+#: time: benchmarks/bench_dask.py), and the input size from which a local run streams by default.
+DEFAULT_CHUNK_ROWS = 100_000
+STREAM_FROM_BYTES = 64 * 1024 * 1024
+
+
+def chunk_rows(given: int | None, path: str, cluster: bool) -> int:
+    """Rows per chunk for ``evaluate``: ``given`` (0: the whole table), or by default
+    :data:`DEFAULT_CHUNK_ROWS` on a cluster or for an input file larger than :data:`STREAM_FROM_BYTES`, else 0.
+    Standard input is always read whole."""
+    import os
+
+    from mftire.errors import MftireInputError
+
+    if given is not None and given < 0:
+        raise MftireInputError(f"--chunk-rows must be >= 0 (0: the whole table), got {given}")
+    if path == "-":
+        return 0
+    if given is not None:
+        return given
+    try:
+        big = os.path.getsize(path) > STREAM_FROM_BYTES
+    except OSError:
+        big = False  # a missing file is reported by the reader
+    return DEFAULT_CHUNK_ROWS if cluster or big else 0
+
 
 @dataclass(frozen=True)
 class EvaluateChunk:
