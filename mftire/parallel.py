@@ -187,7 +187,7 @@ class Executor:
         n = min(self.workers, len(items))
         if n <= 1:
             for i, x in enumerate(items):
-                yield _run_labelled(fn, x, _label(labels, i, x, len(items)))
+                yield fn(x) if labels is None else _run_labelled(fn, x, _label(labels, i, x, len(items)))
                 if progress is not None:
                     progress(i + 1, len(items))
             return
@@ -248,7 +248,7 @@ class Executor:
         number of items, when known) is passed to ``progress``."""
         if not self.scheduler and self.workers <= 1:
             for i, x in enumerate(items):
-                yield _run_labelled(fn, x, _label(labels, i, x, total or 0) if labels is not None else f"task {i + 1}")
+                yield fn(x) if labels is None else _run_labelled(fn, x, _label(labels, i, x, total or 0))
                 if progress is not None:
                     progress(i + 1, total or 0)
             return
@@ -315,9 +315,13 @@ def _run_labelled(fn: Callable[[T], R], x: T, label: str) -> R:
         raise _labelled(exc, label) from exc
 
 
-def _labelled(exc: BaseException, label: str) -> MftireError:
+def _labelled(exc: BaseException, label: str, explicit: bool = True) -> BaseException:
     """``exc`` of the task ``label`` as one line naming it: an mftire error keeps its class (an input error
-    stays an input error), anything else becomes a :class:`TaskError` with the error's class name."""
+    stays an input error), anything else becomes a :class:`TaskError` with the error's class name.  Without
+    ``explicit`` labels (the caller gave none: "task i of n") an mftire error, which names its input itself,
+    is returned unchanged."""
+    if isinstance(exc, MftireError) and not explicit:
+        return exc
     if isinstance(exc, MftireError):
         try:
             return type(exc)(f"{label}: {exc}")
@@ -355,16 +359,16 @@ def _collect(ex: Executor, pool: Any, futures: list, items: list, labels: Any) -
     """The results of ``futures`` in order; errors become one-line :class:`TaskError`/:class:`ClusterError`."""
     try:
         for i, fut in enumerate(futures):
-            yield _result(ex, pool, fut, lambda i=i: _label(labels, i, items[i], len(items)))
+            yield _result(ex, pool, fut, lambda i=i: _label(labels, i, items[i], len(items)), labels is not None)
     finally:
         for fut in futures:
             fut.cancel()
 
 
-def _result(ex: Executor, pool: Any, fut: Any, label: Callable[[], str]) -> Any:
+def _result(ex: Executor, pool: Any, fut: Any, label: Callable[[], str], explicit: bool = True) -> Any:
     """The result of one future of a process pool or a Dask client, errors as one line naming the task."""
     if hasattr(pool, "gather"):
-        return _dask_result(pool, fut, ex, label)
+        return _dask_result(pool, fut, ex, label, explicit)
     try:
         return fut.result()
     except Exception as exc:  # noqa: BLE001
@@ -372,7 +376,10 @@ def _result(ex: Executor, pool: Any, fut: Any, label: Callable[[], str]) -> Any:
 
         if isinstance(exc, BrokenProcessPool):
             raise ClusterError(f"a local worker process died ({exc}); nothing written") from None
-        raise _labelled(exc, label()) from exc
+        err = _labelled(exc, label(), explicit)
+        if err is exc:
+            raise
+        raise err from exc
 
 
 def _stream(ex: Executor, pool: Any, fn: Callable, items: Iterable, window: int, labels: Any,
@@ -400,10 +407,10 @@ def _stream(ex: Executor, pool: Any, fn: Callable, items: Iterable, window: int,
             inflight.append((fut, _label(labels, i, x, n) if labels is not None else f"task {i + 1}"))
             while len(inflight) >= window:
                 f, lab = inflight.popleft()
-                yield _result(ex, pool, f, lambda lab=lab: lab)
+                yield _result(ex, pool, f, lambda lab=lab: lab, labels is not None)
         while inflight:
             f, lab = inflight.popleft()
-            yield _result(ex, pool, f, lambda lab=lab: lab)
+            yield _result(ex, pool, f, lambda lab=lab: lab, labels is not None)
     finally:
         for f, _ in inflight:
             f.cancel()
@@ -412,7 +419,7 @@ def _stream(ex: Executor, pool: Any, fn: Callable, items: Iterable, window: int,
 # ----------------------------------------------------------------------------------------------------- Dask
 
 
-def _dask_result(client: Any, fut: Any, ex: Executor, label: Callable[[], str]) -> Any:
+def _dask_result(client: Any, fut: Any, ex: Executor, label: Callable[[], str], explicit: bool = True) -> Any:
     """Wait for one Dask future, looking at the cluster every second: no worker for ``worker_timeout``
     seconds, or the scheduler gone, end the wait with :class:`ClusterError`."""
     address = str(ex.scheduler)
@@ -441,7 +448,10 @@ def _dask_result(client: Any, fut: Any, ex: Executor, label: Callable[[], str]) 
         if type(exc).__name__ == "KilledWorker":
             raise ClusterError(f"lost Dask workers: {label()} was running on workers that died "
                                f"({exc}); nothing written") from None
-        raise _labelled(exc, label()) from None
+        err = _labelled(exc, label(), explicit)
+        if err is exc:  # an mftire error, which names its input itself
+            raise exc
+        raise err from None
     raise ClusterError(f"lost the Dask scheduler at {address} (task {status})")
 
 
