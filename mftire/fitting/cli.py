@@ -13,8 +13,8 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     from mftire.fitting.core import fit_tir
     from mftire.iotools.tir import write_tir
 
-    if args.each or os.path.isdir(args.output) or args.output.endswith(("/", os.sep)):
-        return _cmd_fit_each(args)  # one fit per file (an output folder cannot be one fitted .tir)
+    if args.each or args.output.endswith(("/", os.sep)):
+        return _cmd_fit_each(args)  # one fit per file (an output named as a folder cannot be one fitted .tir)
     from mftire.parallel import expand_inputs
 
     args.data = expand_inputs(args.data)  # a glob the shell did not expand
@@ -139,7 +139,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--each", action="store_true",
                    help="one fit per DATA file (several files or a glob such as 'runs/*.csv'), run as parallel "
                    "tasks (--jobs, --scheduler); --output is then a folder receiving <name>.tir per input "
-                   "(implied when --output is a folder or ends with /)")
+                   "(implied when --output ends with /)")
     p.add_argument("--stages", default="all",
                    help="stages to run, numbers or names, e.g. 1,2,3 or longitudinal,lateral (default all)")
     p.add_argument("--weights", default=None,
