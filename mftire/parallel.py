@@ -490,6 +490,31 @@ def check_address(address: str) -> tuple[str, str, int]:
     return scheme, host, int(port_s)
 
 
+def _probe(address: str, host: str, port: int, timeout: float = 10.0) -> None:
+    """A Dask scheduler at ``host:port``, or :class:`MftireInputError` at once: a refused connection (Dask would
+    retry for its whole timeout), or a server that is not a Dask scheduler (Dask would wait for its handshake
+    for ever; a scheduler sends one as soon as a connection opens: a frame header, 8 bytes little-endian)."""
+    import socket
+    import struct
+
+    try:
+        with socket.create_connection((host, port), timeout=timeout) as sock:
+            data = b""
+            while len(data) < 8:
+                got = sock.recv(8 - len(data))
+                if not got:
+                    break
+                data += got
+    except TimeoutError:
+        raise MftireInputError(f"no Dask scheduler at {address!r}: the server there sent nothing in {timeout:g} s "
+                               "(a Dask scheduler greets at once)") from None
+    except OSError as exc:
+        raise MftireInputError(f"cannot reach the Dask scheduler at {address!r}: "
+                               f"{exc.strerror or type(exc).__name__}") from None
+    if len(data) < 8 or not 0 < struct.unpack("<Q", data)[0] < 1 << 20:
+        raise MftireInputError(f"no Dask scheduler at {address!r}: the server there does not speak Dask's protocol")
+
+
 @contextmanager
 def _dask_client(address: str, quiet: bool = False, tune: bool = True) -> Iterator[Any]:
     """A Dask client of the scheduler at ``address`` with :class:`MallocTuning` on its workers; closed (within
@@ -499,14 +524,8 @@ def _dask_client(address: str, quiet: bool = False, tune: bool = True) -> Iterat
     except ImportError as exc:
         raise MftireInputError("--scheduler needs Dask distributed: pip install 'mftire[dask]'") from exc
     scheme, host, port = check_address(address)
-    if scheme == "tcp":  # a refused connection is reported at once (Dask would retry for its whole timeout)
-        import socket
-
-        try:
-            socket.create_connection((host, port), timeout=10).close()
-        except OSError as exc:
-            raise MftireInputError(f"cannot reach the Dask scheduler at {address!r}: "
-                                   f"{exc.strerror or type(exc).__name__}") from None
+    if scheme == "tcp":
+        _probe(address, host, port)
     with _quiet_dask(quiet):
         try:  # set_as_default=False: connecting must not change the caller's global Dask configuration
             client = Client(address, set_as_default=False, timeout="20s")
