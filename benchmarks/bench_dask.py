@@ -45,7 +45,7 @@ def main() -> int:
     import distributed
 
     from mftire.fe.config import load_tyre
-    from mftire.fe.sweeps import campaign
+    from mftire.fe.slip_sweeps import campaign
     from mftire.parallel import Executor
 
     tyre = load_tyre(None)
@@ -94,7 +94,7 @@ def main() -> int:
           f"({n_points} points, {c_serial:.1f} s CPU{'; quick grid' if args.quick else ''})")
     import pandas as pd
 
-    from mftire.fitting.core import fit_tir
+    from mftire.fitting.fitter import fit_tir
     from mftire.fitting.synthetic import synthetic_sweeps
     from mftire.iotools.tir import read_tir, write_tir
     from mftire.parameters import with_defaults

@@ -1,8 +1,8 @@
 """One executor for embarrassingly parallel work: local processes, or a Dask cluster.
 
 Used for the bootstrap refits of the prediction bands (:func:`mftire.fitting.bands.bootstrap_bands`),
-the chunks of an FE campaign (:func:`mftire.fe.sweeps.run_sweeps`), the figures of a comparison
-(:meth:`mftire.compare.core.Comparison.plots`), ``mftire demo``, and the batch commands: ``fit --each``,
+the chunks of an FE campaign (:func:`mftire.fe.slip_sweeps.run_sweeps`), the figures of a comparison
+(:meth:`mftire.compare.comparison.Comparison.plots`), ``mftire demo``, and the batch commands: ``fit --each``,
 ``diagnose --each`` (:func:`run_batch`: one task per input file), ``fe campaign --designs``
 (:mod:`mftire.fe.designs`) and ``evaluate --chunk-rows`` (:mod:`mftire.streaming`, :meth:`Executor.stream`).
 
@@ -59,9 +59,9 @@ from typing import Any, Generic, TypeVar
 
 from mftire.errors import MftireError, MftireInputError
 
-__all__ = ["ClusterError", "Executor", "FilesTask", "Pending", "TaskError", "add_parallel_options",
-           "available_cores", "batch_names", "chunk_count", "expand_inputs", "progress_printer",
-           "write_files"]
+__all__ = ["ClusterError", "Executor", "FilesTask", "InputFile", "Pending", "TaskError", "available_cores",
+           "batch_names", "chunk_count", "expand_inputs", "local_copy", "progress_printer", "read_inputs",
+           "run_batch", "write_files"]
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -261,7 +261,8 @@ class Executor:
 
     @classmethod
     def from_args(cls, args: Any, check: bool = True) -> Executor:
-        """From the ``--jobs``/``--scheduler``/``--worker-timeout`` options of :func:`add_parallel_options`;
+        """From the ``--jobs``/``--scheduler``/``--worker-timeout`` options of
+        :func:`mftire.cli_options.add_parallel_options`;
         with ``check`` a scheduler's address is checked at once (:meth:`check`), before any work."""
         ex = cls(jobs=getattr(args, "jobs", None), scheduler=getattr(args, "scheduler", None),
                  worker_timeout=getattr(args, "worker_timeout", None) or WORKER_TIMEOUT_S, quiet=True)
@@ -643,18 +644,18 @@ def batch_names(paths: Sequence[str]) -> list[str]:
     return names
 
 
-def progress_printer(prefix: str, what: str) -> Callable[[int, int], None]:
-    """A ``progress(done, total)`` for :meth:`Executor.imap` that prints ``prefix: done/total what`` (``total``
-    0: unknown, ``prefix: done what``) to standard error, one line rewritten in place on a terminal, a line
-    per call otherwise."""
-    import sys
+def progress_printer(prefix: str, what: str, enabled: bool | None = None) -> Callable[[int, int], None]:
+    """A ``progress(done, total)`` for :meth:`Executor.imap` through the one progress reporter
+    (:mod:`mftire.progress`: standard error, only on a terminal unless ``enabled``): ``prefix: done/total what``
+    rewritten in place (``total`` 0: unknown, ``prefix: done what``)."""
+    from mftire.progress import Progress
 
-    tty = sys.stderr.isatty()
+    rep = Progress(prefix, enabled)
 
     def show(done: int, total: int) -> None:
-        end = "\n" if (not tty or done == total) else ""
-        count = f"{done}/{total}" if total else f"{done}"
-        print(f"{chr(13) if tty else ''}{prefix}: {count} {what}", end=end, file=sys.stderr, flush=True)
+        rep.update(f"{done}/{total} {what}" if total else f"{done} {what}")
+        if total and done == total:
+            rep.done()
 
     return show
 
@@ -701,19 +702,3 @@ def run_batch(executor: Executor, task: Callable[[InputFile, str], list[str]], p
             write_files(stage, files)
             lines.extend(result)
     return lines
-
-
-
-def add_parallel_options(parser: Any, what: str) -> None:
-    """Add ``--jobs N``, ``--scheduler ADDRESS`` and ``--worker-timeout S`` to an argparse parser (``what`` runs
-    in parallel)."""
-    parser.add_argument("--jobs", type=int, default=0, metavar="N",
-                        help=f"local worker processes for {what} (default 0: all cores; 1: no pool); "
-                        "the result does not depend on it")  # fmt: skip
-    parser.add_argument("--scheduler", metavar="ADDRESS",
-                        help=f"run {what} on a Dask distributed cluster at ADDRESS (e.g. tcp://host:8786; "
-                        "needs pip install 'mftire[dask]' here and on the workers; the outputs are written "
-                        "here, the workers need no shared folder)")  # fmt: skip
-    parser.add_argument("--worker-timeout", type=float, default=WORKER_TIMEOUT_S, metavar="S",
-                        help=f"with --scheduler: end the run (exit 2, nothing written) when the cluster has had "
-                        f"no worker for S seconds (default {WORKER_TIMEOUT_S:g})")  # fmt: skip

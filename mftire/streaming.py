@@ -69,7 +69,7 @@ def evaluate_chunks(path: str, rows: int, required: Sequence[str], optional: Seq
     import pandas as pd
 
     from mftire.errors import MftireInputError
-    from mftire.iotools.tables import check_numeric_columns
+    from mftire.iotools.loaders import check_numeric_columns
 
     try:
         reader = pd.read_csv(path, chunksize=max(1, rows))

@@ -99,3 +99,15 @@ def test_files_task_returns_the_files_and_write_files_writes_them(tmp_path):
     assert (tmp_path / "out" / "sub" / "x.bin").read_bytes() == b"\x07"
     with pytest.raises(MftireInputError, match="outside its folder"):
         write_files(tmp_path / "out", {"../escape": b""})
+
+
+def test_progress_of_tasks_goes_through_the_one_reporter(capsys):
+    from mftire.parallel import progress_printer
+
+    show = progress_printer("mftire fit", "fits done", enabled=True)
+    for i in (1, 2, 3):
+        show(i, 3)
+    err = capsys.readouterr().err.splitlines()
+    assert [e.split("] ", 1)[1] for e in err] == [f"mftire fit: {i}/3 fits done" for i in (1, 2, 3)]
+    progress_printer("mftire fit", "fits done")(1, 3)  # not a terminal: quiet
+    assert capsys.readouterr().err == ""

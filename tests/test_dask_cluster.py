@@ -195,7 +195,7 @@ def test_batch_fit_and_diagnose_on_the_cluster_equal_the_local_runs(cluster, swe
     assert _run_here(tmp_path, [*fit, "--output", "fit_local", "--jobs", "1"]) == 0
     assert _run_here(tmp_path, [*fit, "--output", "fit_dask", "--scheduler", address]) == 0
     printed = capsys.readouterr()
-    assert "3/3 fits done" in printed.err and "tyre_2.tir: " in printed.out
+    assert "tyre_2.tir: " in printed.out and printed.err == ""  # progress lines only on a terminal
     _same_outputs(tmp_path / "fit_local", tmp_path / "fit_dask")
     assert sorted(p.name for p in (tmp_path / "fit_dask").iterdir()) == ["tyre_0.tir", "tyre_1.tir", "tyre_2.tir"]
     # each fitted file is the one a fit of that file alone gives

@@ -24,7 +24,7 @@ class DiagnoseFile:
     def __call__(self, item: InputFile, folder: str) -> list[str]:
         from mftire.diagnosis.diagnose import diagnose
         from mftire.diagnosis.report import write_report
-        from mftire.iotools.tables import load_sweep_files
+        from mftire.iotools.loaders import load_sweep_files
         from mftire.tyre import Tyre
 
         tyre = Tyre(self.tyres[item.name] if self.tyres else self.tyre)

@@ -10,8 +10,8 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     from mftire.diagnosis.diagnose import diagnose
     from mftire.diagnosis.holdout import parse_holdout
     from mftire.diagnosis.report import write_report
+    from mftire.iotools.loaders import load_sweep_files
     from mftire.iotools.output import OutputPlan
-    from mftire.iotools.tables import load_sweep_files
     from mftire.tyre import load
 
     if args.each or os.path.isdir(args.tir):
@@ -20,7 +20,9 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     tyre = load(args.tir)
     data, _ = load_sweep_files(args.data)
     holdout = parse_holdout(args.holdout) if args.holdout else None
-    result = diagnose(data, tyre, holdout, n_perm=args.permutations, seed=args.seed)
+    from mftire.cli_options import progress_of
+
+    result = diagnose(data, tyre, holdout, n_perm=args.permutations, seed=args.seed, progress=progress_of(args))
     doc = write_report(result, args.output)
     print(doc["summary"])
     for ch, c in ((doc.get("holdout") or {}).get("channels") or {}).items():
@@ -81,11 +83,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--holdout", help="held-out condition, COLUMN=V1[,V2...] in SI (e.g. Vx=16.67); default automatic")
     p.add_argument("--permutations", type=int, default=99, help="permutations of the significance test (default 99)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the permutation test (default 0)")
-    from mftire.parallel import add_parallel_options
+    from mftire.cli_options import add_parallel_options
 
     add_parallel_options(p, "the diagnoses of --each")
-    from mftire.iotools.output import add_force_option
+    from mftire.cli_options import add_force_option
 
     add_force_option(p)
+    from mftire.cli_options import add_quiet_option
+
+    add_quiet_option(p)
     p.set_defaults(func=_cmd_diagnose)
     return p

@@ -68,7 +68,7 @@ def read_designs(path: str, quick: bool) -> list[tuple[str, Any, bool]]:
 
 
 def _write_design(folder: str, name: str, table: Any, free: Any) -> None:
-    from mftire.fe.sweeps import write_csv_atomic
+    from mftire.fe.slip_sweeps import write_csv_atomic
 
     write_csv_atomic(table, os.path.join(folder, name, "sweeps.csv"))
     write_csv_atomic(free, os.path.join(folder, name, "free_rolling.csv"))
@@ -78,7 +78,7 @@ def _campaign_task(run: tuple[str, Any, bool], folder: str) -> int:
     """One design's campaign in one task (the designs spread over the workers); the worker formats the CSV
     files too (into ``folder``, returned as bytes by :class:`~mftire.parallel.FilesTask`), the client only
     writes bytes.  Returns the rows of the sweep table."""
-    from mftire.fe.sweeps import campaign
+    from mftire.fe.slip_sweeps import campaign
 
     name, tyre, quick = run
     with warnings.catch_warnings():
@@ -92,7 +92,7 @@ def run_designs(executor: Executor, runs: list[tuple[str, Any, bool]], output: s
     """Every run of a design table into ``output/<design>/`` (sweeps.csv, free_rolling.csv).  As many designs
     as workers or more: one task per design; fewer: the designs one after the other, each campaign's
     chunks of points spread over every worker.  The files are the same either way (byte for byte)."""
-    from mftire.fe.sweeps import campaign
+    from mftire.fe.slip_sweeps import campaign
     from mftire.iotools.atomic import staged_folder
 
     lines = []

@@ -24,7 +24,7 @@ class FitFile:
 
     def __call__(self, item: InputFile, folder: str) -> list[str]:
         from mftire.errors import MftireInputError
-        from mftire.fitting.core import fit_tir
+        from mftire.fitting.fitter import fit_tir
         from mftire.iotools.tir import write_tir
 
         with tempfile.TemporaryDirectory(prefix="mftire-in-") as tmp, warnings.catch_warnings():
@@ -37,7 +37,7 @@ class FitFile:
             raise MftireInputError("no stage could be fitted (no force or moment channel with data)")
         write_tir(result.parameters, os.path.join(folder, item.name + ".tir"))
         if self.report:
-            from mftire.fitting.report import write_report
+            from mftire.fitting.fit_report import write_report
 
             write_report(result, os.path.join(folder, item.name))
         rms = ", ".join(f"{s.channel} {s.rms:.4g}" for s in result.stages if s.status == "fitted")
