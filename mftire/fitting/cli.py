@@ -64,8 +64,8 @@ def _cmd_fit_each(args: argparse.Namespace) -> int:
     from mftire.tyre import load
 
     if args.bands or args.heldout or (args.report and args.report != "each"):
-        raise MftireInputError("--each writes the reports into the output folder (--report without a folder is "
-                               "not possible: use --report each); --bands and --heldout are for one fit")
+        raise MftireInputError("with --each, --report takes the word 'each' (a report folder <name>/ per input in "
+                               "the output folder); --bands and --heldout are for one fit")
     paths = expand_inputs(args.data)
     names = batch_names(paths)
     plan = OutputPlan([*paths, args.template], args.force)
