@@ -27,9 +27,10 @@ from typing import Any
 
 import pandas as pd
 
+from mftire.batch import write_files
 from mftire.iotools.atomic import atomic_path, staged_folder
 from mftire.iotools.tir import write_tir
-from mftire.parallel import Executor, FilesTask, write_files
+from mftire.parallel import Executor, FilesTask
 from mftire.progress import Progress
 
 #: Files and folders the demo writes into its output folder.

@@ -3,7 +3,7 @@
 Used for the bootstrap refits of the prediction bands (:func:`mftire.fitting.bands.bootstrap_bands`),
 the chunks of an FE campaign (:func:`mftire.fe.slip_sweeps.run_sweeps`), the figures of a comparison
 (:meth:`mftire.compare.comparison.Comparison.plots`), ``mftire demo``, and the batch commands: ``fit --each``,
-``diagnose --each`` (:func:`run_batch`: one task per input file), ``fe campaign --designs``
+``diagnose --each`` (:func:`mftire.batch.run_batch`: one task per input file), ``fe campaign --designs``
 (:mod:`mftire.fe.designs`) and ``evaluate --chunk-rows`` (:mod:`mftire.streaming`, :meth:`Executor.stream`).
 
 * ``Executor(jobs=1)`` runs every task in this process, one after another (the library default).
@@ -24,7 +24,7 @@ process fits, then the diagnosis and the bootstrap refits side by side).  Outsid
 **Workers compute, the client writes.** A task returns data (arrays, tables, result objects,
 figure bytes: :class:`FilesTask` runs a function that writes files into a scratch folder of the
 worker and brings the files back as bytes); this process writes every output through
-:mod:`mftire.iotools.output`/:mod:`mftire.iotools.atomic` (:func:`write_files`). So ``--scheduler``
+:mod:`mftire.iotools.output`/:mod:`mftire.iotools.atomic` (:func:`mftire.batch.write_files`). So ``--scheduler``
 works with any ``--output``, relative included, on workers that share no filesystem with it.
 
 **Failures** (Dask) end the run with one line and :class:`ClusterError` (the CLI's exit 2): the
@@ -59,9 +59,8 @@ from typing import Any, Generic, TypeVar
 
 from mftire.errors import MftireError, MftireInputError
 
-__all__ = ["ClusterError", "Executor", "FilesTask", "InputFile", "Pending", "TaskError", "available_cores",
-           "batch_names", "chunk_count", "expand_inputs", "local_copy", "progress_printer", "read_inputs",
-           "run_batch", "write_files"]
+__all__ = ["ClusterError", "Executor", "FilesTask", "Pending", "TaskError", "available_cores", "batch_names",
+           "chunk_count", "expand_inputs", "progress_printer"]
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -577,7 +576,7 @@ def _quiet_dask(quiet: bool) -> Iterator[None]:
 class FilesTask:
     """``fn(item, folder)`` run with a fresh scratch folder of the worker: returns ``(result, files)``, ``files``
     mapping the path (relative to the folder, ``/``-separated) of every file ``fn`` wrote to its bytes.
-    The client writes them with :func:`write_files`.  ``fn`` must return no path inside the folder."""
+    The client writes them with :func:`mftire.batch.write_files`.  ``fn`` must return no path inside the folder."""
 
     fn: Callable[[Any, str], Any]
 
@@ -593,22 +592,6 @@ class FilesTask:
                     with open(p, "rb") as fh:
                         files[os.path.relpath(p, folder).replace(os.sep, "/")] = fh.read()
         return result, dict(sorted(files.items()))
-
-
-def write_files(folder: str | os.PathLike, files: dict[str, bytes]) -> list[str]:
-    """Write ``files`` (relative path -> bytes, from :class:`FilesTask`) into ``folder``, each atomically.
-    Returns the paths written."""
-    from mftire.iotools.atomic import atomic_path
-
-    out = []
-    for rel, data in files.items():
-        if os.path.isabs(rel) or ".." in rel.split("/"):
-            raise MftireInputError(f"a task returned a file outside its folder: {rel!r}")
-        path = os.path.join(os.fspath(folder), *rel.split("/"))
-        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
-            fh.write(data)
-        out.append(path)
-    return out
 
 
 def expand_inputs(patterns: Sequence[str]) -> list[str]:
@@ -658,47 +641,3 @@ def progress_printer(prefix: str, what: str, enabled: bool | None = None) -> Cal
             rep.done()
 
     return show
-
-
-# ---------------------------------------------------------------------------------------- batch commands
-
-
-@dataclass(frozen=True)
-class InputFile:
-    """One input of a batch: its output name, its file name and its bytes."""
-
-    name: str
-    filename: str
-    data: bytes
-
-
-def read_inputs(paths: Sequence[str], names: Sequence[str]) -> Iterator[InputFile]:
-    """The inputs of a batch command, each read when its task is sent (the workers need no shared folder)."""
-    for path, name in zip(paths, names, strict=True):
-        with open(path, "rb") as fh:
-            yield InputFile(name, os.path.basename(path), fh.read())
-
-
-def local_copy(item: InputFile, folder: str) -> str:
-    """Write an input's bytes into ``folder`` under its file name (on the worker); its path."""
-    path = os.path.join(folder, item.filename)
-    with open(path, "wb") as fh:
-        fh.write(item.data)
-    return path
-
-
-def run_batch(executor: Executor, task: Callable[[InputFile, str], list[str]], paths: Sequence[str],
-              names: Sequence[str], output: str, command: str, what: str) -> list[str]:
-    """Run ``task`` (``task(input, folder) -> lines``, writing its outputs into ``folder``) on every input
-    file, on ``executor`` with at most twice as many tasks as workers in flight; the client writes every
-    task's files into a staging folder beside ``output``, published when every task is done (a failed
-    batch writes nothing).  Returns the tasks' lines, in the order of the inputs."""
-    from mftire.iotools.atomic import staged_folder
-
-    lines: list[str] = []
-    with staged_folder(output) as stage:
-        for result, files in executor.stream(FilesTask(task), read_inputs(paths, names), labels=lambda x: x.filename,
-                                             progress=progress_printer(f"mftire {command}", what), total=len(paths)):
-            write_files(stage, files)
-            lines.extend(result)
-    return lines

@@ -83,7 +83,8 @@ def test_batch_inputs_globs_and_names(tmp_path):
 
 
 def test_files_task_returns_the_files_and_write_files_writes_them(tmp_path):
-    from mftire.parallel import FilesTask, write_files
+    from mftire.batch import write_files
+    from mftire.parallel import FilesTask
 
     def make(item, folder):
         import os

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mftire.batch import write_files
 from mftire.compare.data import FAMILIES, curve_grid, prepare_comparison_data
 from mftire.compare.models import evaluate_models, load_models
 from mftire.compare.plots import plot_family, plot_free_rolling, plot_stiffness, plot_trail
@@ -25,7 +26,7 @@ from mftire.compare.tables import (
 )
 from mftire.iotools.atomic import atomic_path, write_text_atomic
 from mftire.iotools.jsonutil import jsonable
-from mftire.parallel import Executor, FilesTask, write_files
+from mftire.parallel import Executor, FilesTask
 from mftire.tyre import Tyre
 
 __all__ = ["Comparison", "compare", "write_comparison", "bands_frame"]

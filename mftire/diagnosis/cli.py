@@ -34,12 +34,13 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
 def _cmd_diagnose_each(args: argparse.Namespace) -> int:
     """``--each``: one diagnosis per input file into ``OUTPUT/<name>/``; ``--tir`` a .tir for all, or a folder
     with ``<name>.tir`` per input (what ``mftire fit --each`` writes)."""
-    from mftire.diagnosis.batch import DiagnoseFile
+    from mftire.batch import run_batch
+    from mftire.diagnosis.diagnose_batch import DiagnoseFile
     from mftire.diagnosis.holdout import parse_holdout
     from mftire.errors import MftireInputError
     from mftire.iotools.output import OutputPlan
     from mftire.iotools.tir import read_tir
-    from mftire.parallel import Executor, batch_names, expand_inputs, run_batch
+    from mftire.parallel import Executor, batch_names, expand_inputs
     from mftire.tyre import load
 
     paths = expand_inputs(args.data)

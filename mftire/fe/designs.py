@@ -7,7 +7,8 @@ import os
 import warnings
 from typing import Any
 
-from mftire.parallel import Executor, FilesTask, progress_printer, write_files
+from mftire.batch import write_files
+from mftire.parallel import Executor, FilesTask, progress_printer
 
 #: Columns of a design table that are not tyre parameters.
 DESIGN_COLUMNS = ("design", "tyre", "programme")

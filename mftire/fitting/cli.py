@@ -57,10 +57,11 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
 def _cmd_fit_each(args: argparse.Namespace) -> int:
     """``--each``: one fit per input file, ``OUTPUT/<name>.tir`` (and ``OUTPUT/<name>/`` with ``--report``)."""
+    from mftire.batch import run_batch
     from mftire.errors import MftireInputError
-    from mftire.fitting.batch import FitFile
+    from mftire.fitting.fit_batch import FitFile
     from mftire.iotools.output import OutputPlan
-    from mftire.parallel import Executor, batch_names, expand_inputs, run_batch
+    from mftire.parallel import Executor, batch_names, expand_inputs
     from mftire.tyre import load
 
     if args.bands or args.heldout or (args.report and args.report != "each"):

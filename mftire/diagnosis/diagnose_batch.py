@@ -1,4 +1,4 @@
-"""``mftire diagnose --each``: one diagnosis per input file as a task of :func:`mftire.parallel.run_batch`."""
+"""``mftire diagnose --each``: one diagnosis per input file as a task of :func:`mftire.batch.run_batch`."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import warnings
 from dataclasses import dataclass
 from typing import Any
 
-from mftire.parallel import InputFile, local_copy
+from mftire.batch import InputFile, local_copy
 
 
 @dataclass(frozen=True)
