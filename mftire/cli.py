@@ -34,6 +34,17 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
     OutputPlan([args.tir, args.input], args.force).file(args.output, stdout=True)
     tyre = Tyre.from_file(args.tir, strict=args.strict)
+    from mftire.streaming import chunk_rows
+
+    rows = chunk_rows(args.chunk_rows, args.input, bool(args.scheduler))
+    if rows:  # streamed in chunks on the local pool or a Dask cluster
+        from mftire.parallel import Executor
+        from mftire.streaming import evaluate_streamed
+
+        evaluate_streamed(Executor.from_args(args), tyre.parameters, args.input, args.output, rows,
+                          args.mode, (*EVALUATE_REQUIRED, *tyre.required_variables), EVALUATE_OPTIONAL,
+                          evaluate_columns)
+        return 0
     # columns the model extensions of the file need (e.g. temperature) are required too
     # (a variable with a steady-state default, e.g. the temperature of a thermal .tir, may be left out)
     needed = [v for v in tyre.required_variables if v not in tyre.variable_defaults]
@@ -199,6 +210,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", required=True, help="output CSV, or - for standard output")
     p.add_argument("--mode", type=int, default=111, help="MFeval useMode (default 111)")
     p.add_argument("--strict", action="store_true", help="reading warnings (blank/non-numeric values) are errors")
+    p.add_argument("--chunk-rows", type=int, default=None, metavar="N",
+                   help="stream the table N rows at a time (bounded memory; the chunks run on --jobs processes "
+                   "or a --scheduler cluster); the output is byte for byte the one of the whole table. Default: "
+                   "chunks of 100000 rows with --scheduler or for an input over 64 MB, else the whole table; 0: "
+                   "always the whole table")
+    from mftire.cli_options import add_parallel_options
+
+    add_parallel_options(p, "the chunks of --chunk-rows")
     add_force_option(p)
     p.set_defaults(func=_cmd_evaluate)
 

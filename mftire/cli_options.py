@@ -27,10 +27,17 @@ def add_force_option(parser: argparse.ArgumentParser) -> None:
 
 
 def add_parallel_options(parser: Any, what: str) -> None:
-    """Add ``--jobs N`` and ``--scheduler ADDRESS`` to an argparse parser (``what`` runs in parallel)."""
+    """Add ``--jobs N``, ``--scheduler ADDRESS`` and ``--worker-timeout S`` to an argparse parser (``what`` runs
+    in parallel; :meth:`mftire.parallel.Executor.from_args` reads them)."""
+    from mftire.parallel import WORKER_TIMEOUT_S
+
     parser.add_argument("--jobs", type=int, default=0, metavar="N",
                         help=f"local worker processes for {what} (default 0: all cores; 1: no pool); "
                         "the result does not depend on it")  # fmt: skip
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help=f"run {what} on a Dask distributed cluster at ADDRESS (e.g. tcp://host:8786; "
-                        "needs pip install 'mftire[dask]' here and on the workers)")  # fmt: skip
+                        "needs pip install 'mftire[dask]' here, on the scheduler and on the workers; the outputs "
+                        "are written here, the workers need no shared folder)")  # fmt: skip
+    parser.add_argument("--worker-timeout", type=float, default=WORKER_TIMEOUT_S, metavar="S",
+                        help=f"with --scheduler: end the run (exit 2, nothing written) when the cluster has had "
+                        f"no worker for S seconds (default {WORKER_TIMEOUT_S:g})")  # fmt: skip

@@ -27,9 +27,10 @@ from typing import Any
 
 import pandas as pd
 
-from mftire.iotools.atomic import atomic_path
+from mftire.batch import write_files
+from mftire.iotools.atomic import atomic_path, staged_folder
 from mftire.iotools.tir import write_tir
-from mftire.parallel import Executor
+from mftire.parallel import Executor, FilesTask
 from mftire.progress import Progress
 
 #: Files and folders the demo writes into its output folder.
@@ -55,15 +56,23 @@ def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progre
     # many small SVDs, and idle BLAS threads spinning for work would take the cores from the workers
     with warnings.catch_warnings(), threadpool_limits(1, user_api="blas"):
         warnings.simplefilter("ignore")
-        with (executor or Executor()).session() as ex:
-            return _run_demo(output, quick, progress, ex)
+        # every output is written into a staging folder and moved into ``output`` at the end: a run that
+        # fails (a lost cluster, Ctrl-C) writes nothing there
+        with (executor or Executor()).session() as ex, staged_folder(output) as stage:
+            summary, closing = _run_demo(stage, quick, progress, ex)
+    if progress is not False:  # the results on stdout (progress lines go to stderr), once the files are in place
+        out = os.fspath(output)
+        print(closing, flush=True)
+        print(f"done: {os.path.join(out, 'report.html')}\n      {os.path.join(out, 'report.json')}", flush=True)
+    return summary
 
 
-def _rig_task(args: tuple[str, bool]) -> RigStage:
-    """:func:`rig_stage` as a task for the executor (warnings silenced in the worker too)."""
+def _rig_task(quick: bool, folder: str) -> RigStage:
+    """:func:`rig_stage` as a task for the executor (warnings silenced in the worker too); it writes into a
+    scratch ``folder`` of the worker, whose files :class:`~mftire.parallel.FilesTask` returns to the client."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return rig_stage(*args)
+        return rig_stage(folder, quick)
 
 
 def _diagnose_task(args: tuple) -> Any:
@@ -76,7 +85,7 @@ def _diagnose_task(args: tuple) -> Any:
         return diagnose(data, tyre, progress=False, n_perm=n_perm)
 
 
-def _run_demo(output: str | os.PathLike, quick: bool, progress: bool | None, executor: Executor) -> dict:
+def _run_demo(output: str | os.PathLike, quick: bool, progress: bool | None, executor: Executor) -> tuple[dict, str]:
     from mftire.compare.comparison import compare
     from mftire.diagnosis.report import write_report
     from mftire.fe.config import load_tyre
@@ -98,7 +107,7 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool | None, exe
     fe, free = campaign(fe_tyre, quick=quick, progress=False, executor=executor)
     # the rig stage needs nothing of the others: with workers it runs from now on, alongside them
     # (after the FE campaign, which keeps every worker busy)
-    rig_pending = executor.start_map(_rig_task, [(out, quick)])
+    rig_pending = executor.start_map(FilesTask(_rig_task), [quick], labels=["the rig stage"])
     fe = fe.assign(source="fe")
     with atomic_path(os.path.join(out, "fe_sweeps.csv")) as tmp:
         fe.to_csv(tmp, index=False)
@@ -167,7 +176,8 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool | None, exe
     plots = comp.plots(fig_dir, executor=executor)
 
     step("third source: the simulated raw rig run imported, fitted, diagnosed" + (" (quick)" if quick else ""))
-    rig = rig_pending.result()[0]
+    rig, rig_files = rig_pending.result()[0]
+    write_files(out, rig_files)  # computed on a worker, written here
 
     step("HTML report")
     rep = HtmlReport("mftire demo: MF 6.1 from FE and measured sweeps, closed loop",
@@ -237,15 +247,13 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool | None, exe
                               "fmu": fmu_info, "diagnosis": "diagnosis/diagnosis.md",
                               "rig_sweeps": "rig_sweeps.csv", "rig_fitted_tir": "rig_fitted.tir",
                               "rig_diagnosis": "rig_diagnosis/diagnosis.md"})  # fmt: skip
-    html, js = rep.write(os.path.join(out, "report.html"), os.path.join(out, "report.json"))
+    rep.write(os.path.join(out, "report.html"), os.path.join(out, "report.json"))
     _headline(comp, diag, os.path.join(out, "headline.png"))
     summary["run_time_s"] = reporter.elapsed()
-    if progress is not False:  # the results on stdout (progress lines go to stderr)
-        print(headline_text(summary, diag, html, js), flush=True)
-    return summary
+    return summary, headline_text(summary, diag)
 
 
-def headline_text(summary: dict, diag, html: str, js: str) -> str:
+def headline_text(summary: dict, diag) -> str:
     """The demo's closing lines: held-out errors before and after, the cause, the band coverage, the run time."""
     L = [f"done in {summary['run_time_s']:.1f} s"]
     if diag.holdout is not None and diag.errors:
@@ -269,7 +277,6 @@ def headline_text(summary: dict, diag, html: str, js: str) -> str:
                  + ", ".join(f"{ch} {rig[f'heldout_{ch}_rms_pct_before']:.2f} -> "
                              f"{rig[f'heldout_{ch}_rms_pct_after']:.2f} %" for ch in ("Fx", "Fy")
                              if f"heldout_{ch}_rms_pct_before" in rig))
-    L.append(f"  report: {html}\n          {js}")
     return "\n".join(L)
 
 

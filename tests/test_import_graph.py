@@ -164,12 +164,12 @@ def test_no_module_imports_names_from_the_root_package():
 
 #: The layers of docs/architecture.md, bottom first: a module may import only from its own layer or below.
 PY_LAYERS: tuple[tuple[str, ...], ...] = (
-    ("mftire.errors", "mftire._lazy", "mftire.progress", "mftire.parallel", "mftire.data"),
+    ("mftire.errors", "mftire._lazy", "mftire.progress", "mftire.parallel", "mftire.dask_plugins", "mftire.data"),
     ("mftire.parameters",),
     ("mftire.iotools",),
     ("mftire.mf",),
     ("mftire.tyre", "mftire.input_checks", "mftire.curves", "mftire.extensions", "mftire.transient",
-     "mftire.thermal"),
+     "mftire.thermal", "mftire.batch", "mftire.streaming"),
     ("mftire.segmentation", "mftire.plotting", "mftire.report_html"),
     ("mftire.fe",),
     ("mftire.fmu",),

@@ -127,8 +127,12 @@ def test_dask_local_cluster_matches_serial_bit_for_bit(fe_serial, fit, bands_ser
 
 def test_bad_scheduler_address_is_a_clear_error():
     pytest.importorskip("distributed", reason="Dask distributed not installed")
-    with pytest.raises(MftireInputError, match="Dask scheduler at 'nonsense://x'"):
-        Executor(scheduler="nonsense://x").map(abs, [1])
+    # a malformed address, an unknown host, a refused connection: one clear line at once, before any work
+    for address, match in (("nonsense://x", "unknown protocol 'nonsense'"), ("127.0.0.1", "tcp://host:port"),
+                           ("tcp://127.0.0.1:99999", "port 1-65535"), ("tcp://no-such-host.invalid:8786", "not found"),
+                           ("tcp://127.0.0.1:1", "cannot reach the Dask scheduler")):
+        with pytest.raises(MftireInputError, match=match):
+            Executor(scheduler=address).check()
 
 
 def test_session_reuses_workers_and_start_map_returns_at_once():
@@ -160,3 +164,29 @@ def test_bootstrap_started_in_a_session_matches_serial_bit_for_bit(fit, bands_se
             assert ex.map(abs, [-1]) == [1]  # the pool takes other work while the replicates run
             bands = pending.result()
     _same_bands(bands_serial, bands)
+
+
+def test_a_server_that_is_not_a_dask_scheduler_is_refused_at_once():
+    # a server that answers with something else, or stays silent (Dask itself would wait for its handshake for ever)
+    import socket
+    import threading
+
+    from mftire.parallel import _probe
+
+    def serve(sock: socket.socket, greeting: bytes) -> None:
+        conn, _ = sock.accept()
+        conn.sendall(greeting)
+        threading.Event().wait(1.0)
+        conn.close()
+
+    for greeting, match, timeout in ((b"HTTP/1.0 400 Bad Request\r\n\r\n", "does not speak Dask", 5.0),
+                                     (b"", "sent nothing in 0.5 s", 0.5)):  # fmt: skip
+        with socket.socket() as srv:
+            srv.bind(("127.0.0.1", 0))
+            srv.listen(1)
+            port = srv.getsockname()[1]
+            t = threading.Thread(target=serve, args=(srv, greeting), daemon=True)
+            t.start()
+            with pytest.raises(MftireInputError, match=match):
+                _probe(f"tcp://127.0.0.1:{port}", "127.0.0.1", port, timeout=timeout)
+            t.join(5)

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from mftire.batch import write_files
 from mftire.compare.data import FAMILIES, curve_grid, prepare_comparison_data
 from mftire.compare.models import evaluate_models, load_models
 from mftire.compare.plots import plot_family, plot_free_rolling, plot_stiffness, plot_trail
@@ -25,7 +26,7 @@ from mftire.compare.tables import (
 )
 from mftire.iotools.atomic import atomic_path, write_text_atomic
 from mftire.iotools.jsonutil import jsonable
-from mftire.parallel import Executor
+from mftire.parallel import Executor, FilesTask
 from mftire.tyre import Tyre
 
 __all__ = ["Comparison", "compare", "compare_models", "write_comparison", "bands_frame"]
@@ -94,38 +95,39 @@ class Comparison:
         ``executor`` draws the figures (each one a task; default: in this process, one after the
         other); the files do not depend on it."""
         directory = os.fspath(directory)
-        os.makedirs(directory, exist_ok=True)
         kw = {"dpi": dpi, "heldout": self.heldout}
-        jobs = [_Plot(plot_family, (fam, self.data, self.grid, self.grid_predictions,
-                                    os.path.join(directory, f"{fam}.png")), {"bands": self.bands, **kw})
-                for fam in FAMILIES]  # fmt: skip
-        if self.characteristics is not None:  # no data: the model curves (and their trail) only
-            jobs.append(_Plot(plot_trail, (self.trail, self.grid, self.grid_predictions,
-                                           os.path.join(directory, "trail.png")), kw))  # fmt: skip
-            out = (executor or Executor()).map(_run_plot, jobs)
-            return [q for p in out for q in ([p] if isinstance(p, str) else (p or []))]
-        jobs.append(_Plot(plot_stiffness, (self.stiffness, os.path.join(directory, "stiffness.png")), kw))
-        jobs.append(_Plot(plot_trail, (self.trail, self.grid, self.grid_predictions,
-                                       os.path.join(directory, "trail.png")), kw))  # fmt: skip
-        jobs.append(_Plot(plot_free_rolling, (self.free_rolling, os.path.join(directory, "free_rolling.png")), kw))
-        out = (executor or Executor()).map(_run_plot, jobs)
+        jobs = [_Plot(plot_family, (fam, self.data, self.grid, self.grid_predictions), {"bands": self.bands, **kw},
+                      f"{fam}.png") for fam in FAMILIES]  # fmt: skip
+        if self.characteristics is None:  # with data; without, the model curves (and their trail) only
+            jobs.append(_Plot(plot_stiffness, (self.stiffness,), kw, "stiffness.png"))
+        jobs.append(_Plot(plot_trail, (self.trail, self.grid, self.grid_predictions), kw, "trail.png"))
+        if self.characteristics is None:
+            jobs.append(_Plot(plot_free_rolling, (self.free_rolling,), kw, "free_rolling.png"))
+        # drawn by the workers, written here (mftire.parallel.FilesTask): no folder shared with the workers
+        out = (executor or Executor()).map(FilesTask(_run_plot), jobs, labels=[j.name for j in jobs])
+        os.makedirs(directory, exist_ok=True)
         paths: list[str] = []
-        for p in out:
-            paths.extend([p] if isinstance(p, str) else (p or []))
+        for names, files in out:
+            if names:
+                write_files(directory, files)
+                paths.extend(os.path.join(directory, n) for n in names)
         return paths
 
 
 @dataclass(frozen=True)
 class _Plot:
-    """One figure of :meth:`Comparison.plots`: ``fn(*args, **kwargs)`` (a picklable task)."""
+    """One figure of :meth:`Comparison.plots`: ``fn(*args, path, **kwargs)`` (a picklable task)."""
 
     fn: Any
     args: tuple
     kwargs: dict
+    name: str  #: file name of the figure
 
 
-def _run_plot(job: _Plot) -> str | list[str] | None:
-    return job.fn(*job.args, **job.kwargs)
+def _run_plot(job: _Plot, folder: str) -> list[str]:
+    """Draw one figure (or one per channel) into ``folder``; the names of the files drawn, in order."""
+    drawn = job.fn(*job.args, os.path.join(folder, job.name), **job.kwargs)
+    return [os.path.basename(p) for p in ([drawn] if isinstance(drawn, str) else (drawn or []))]
 
 
 def bands_frame(bands, grid: pd.DataFrame) -> pd.DataFrame | None:

@@ -50,13 +50,27 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     from mftire.iotools.output import OutputPlan
     from mftire.parallel import Executor
 
+    if args.designs:  # a design of experiments: one output sub-folder per run of the table
+        from mftire.fe.designs import read_designs, run_designs
+
+        plan = OutputPlan([args.designs], args.force)
+        runs = read_designs(args.designs, args.quick)
+        plan.folder(args.output, [f"{n}/{f}" for n, _t, _q in runs for f in ("sweeps.csv", "free_rolling.csv")])
+        executor = Executor.from_args(args)
+        t0 = time.perf_counter()
+        lines = run_designs(executor, runs, args.output)
+        print("\n".join([f"wrote {len(runs)} designs into {args.output} in {time.perf_counter() - t0:.1f} s "
+                         f"({executor.describe()})", *("  " + x for x in lines)]))
+        return 0
     OutputPlan([args.tyre], args.force).folder(args.output, ("sweeps.csv", "free_rolling.csv"))
+    executor = Executor.from_args(args)  # the cluster is checked before any work
     tyre = _tyre(args)
     out = Path(args.output)
     t0 = time.perf_counter()
     from mftire.cli_options import progress_of
 
-    table, free = campaign(tyre, quick=args.quick, executor=Executor.from_args(args), progress=progress_of(args))
+    with executor.session() as ex:  # one pool or Dask client for every batch of chunks
+        table, free = campaign(tyre, quick=args.quick, executor=ex, progress=progress_of(args))
     write_csv_atomic(table, out / "sweeps.csv")
     write_csv_atomic(free, out / "free_rolling.csv")
     counts = table["kind"].value_counts().to_dict()
@@ -132,6 +146,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     c.add_argument("--tyre", default="default", help=tyre_help)
     c.add_argument("--output", required=True, help="output directory (sweeps.csv, free_rolling.csv)")
     c.add_argument("--quick", action="store_true", help="reduced grid (for tests)")
+    c.add_argument("--designs", metavar="TABLE.csv",
+                   help="a design of experiments: one run per row, columns design (name of the output sub-folder), "
+                   "optional tyre (TOML) and programme (full or quick), and tyre parameters as section.key "
+                   "(e.g. friction.mu_s); the runs spread over --jobs/--scheduler")
     from mftire.cli_options import add_parallel_options
 
     add_parallel_options(c, "the chunks of slip points")

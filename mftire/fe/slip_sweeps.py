@@ -28,7 +28,7 @@ from mftire.fe import carcass as cc
 from mftire.fe.config import TyreConfig, check_operating_range
 from mftire.fe.rolling_contact import solve
 from mftire.iotools.atomic import write_text_atomic
-from mftire.parallel import Executor
+from mftire.parallel import Executor, chunk_count
 from mftire.progress import reporter
 
 SWEEP_COLUMNS = ["Fz", "kappa", "alpha", "gamma", "Vx", "P", "Fx", "Fy", "Mz", "Mx", "My"]
@@ -85,6 +85,15 @@ class _SolveChunk:
         return np.column_stack([r.Fx, r.Fy, r.Mz, r.Mx, r.My])
 
 
+#: Measured CPU cost of one point of the thesis programme on the default grid [s] (benchmarks/bench_dask.py:
+#: 0.87-0.89 ms), the grid cells it was measured with, the target duration of one task [s] (a lost worker
+#: costs little, progress shows, Dask's ~1.5 ms per task stays negligible) and the smallest chunk [points].
+SECONDS_PER_POINT = 0.9e-3
+DEFAULT_GRID_CELLS = 40 * 15
+TASK_TARGET_S = 10.0
+MIN_CHUNK_POINTS = 32
+
+
 def solve_points(
     tyre: TyreConfig,
     pts: np.ndarray,
@@ -102,8 +111,13 @@ def solve_points(
     for every chunk size and executor.
     """
     n = pts.shape[1]
-    workers = 1 if executor is None or executor.scheduler else executor.workers
-    n_chunks = workers * max(1, -(-n // (max(chunk, 1) * workers)))
+    workers = 1 if executor is None else executor.workers  # a Dask cluster: its worker threads now
+    # a multiple of the workers, each chunk at most ``chunk`` points and about TASK_TARGET_S seconds or less
+    # (mftire.parallel.chunk_count), and not smaller than MIN_CHUNK_POINTS (the vectorised solve's overhead)
+    per_point = SECONDS_PER_POINT * tyre.grid.nx * tyre.grid.ny / DEFAULT_GRID_CELLS
+    n_chunks = max(chunk_count(n, workers, per_point, TASK_TARGET_S),
+                   workers * max(1, -(-n // (max(chunk, 1) * workers))))
+    n_chunks = max(1, min(n_chunks, n // MIN_CHUNK_POINTS))
     size = max(1, -(-n // n_chunks))
     bounds = [(start, min(start + size, n)) for start in range(0, n, size)]
     chunks = (np.ascontiguousarray(pts[:, a:b]) for a, b in bounds)  # contiguous: the same SIMD paths everywhere

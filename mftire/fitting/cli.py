@@ -7,11 +7,22 @@ import sys
 
 
 def _cmd_fit(args: argparse.Namespace) -> int:
+    import os
+
     from mftire.errors import MftireInputError
     from mftire.fitting.fitter import fit_tir
     from mftire.iotools.tir import write_tir
 
+    if args.each or args.output.endswith(("/", os.sep)):
+        return _cmd_fit_each(args)  # one fit per file (an output named as a folder cannot be one fitted .tir)
+    from mftire.parallel import expand_inputs
+
+    args.data = expand_inputs(args.data)  # a glob the shell did not expand
     _check_outputs(args)
+    if args.bands:  # the cluster is checked before any work
+        from mftire.parallel import Executor
+
+        args.executor = Executor.from_args(args)
     from mftire.tyre import load
 
     load(args.template)  # a broken template is an error, a suspicious one warns (mftire.iotools.tir_checks)
@@ -44,6 +55,35 @@ def _cmd_fit(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_fit_each(args: argparse.Namespace) -> int:
+    """``--each``: one fit per input file, ``OUTPUT/<name>.tir`` (and ``OUTPUT/<name>/`` with ``--report``)."""
+    from mftire.batch import run_batch
+    from mftire.errors import MftireInputError
+    from mftire.fitting.fit_batch import FitFile
+    from mftire.iotools.output import OutputPlan
+    from mftire.parallel import Executor, batch_names, expand_inputs
+    from mftire.tyre import load
+
+    if args.bands or args.heldout or (args.report and args.report != "each"):
+        raise MftireInputError("with --each, --report takes the word 'each' (a report folder <name>/ per input in "
+                               "the output folder); --bands and --heldout are for one fit")
+    paths = expand_inputs(args.data)
+    names = batch_names(paths)
+    plan = OutputPlan([*paths, args.template], args.force)
+    plan.folder(args.output, [n + ".tir" for n in names])
+    executor = Executor.from_args(args)
+    fixed = tuple(k.strip() for k in (args.fix or "").split(",") if k.strip())
+    load(args.template)  # a broken template is an error, a suspicious one warns
+    from mftire.iotools.tir import read_tir
+
+    task = FitFile(read_tir(args.template), args.stages, args.weights, args.alpha_star, fixed,
+                   report=bool(args.report))
+    lines = run_batch(executor, task, paths, names, args.output, "fit", "fits done")
+    print("\n".join([f"mftire fit: {len(paths)} fits into {args.output} ({executor.describe()})",
+                     *("  " + x for x in lines)]))
+    return 0
+
+
 def _check_outputs(args: argparse.Namespace) -> None:
     """Every output of ``fit`` (the .tir, the report folder, the band files) before any work."""
     import os
@@ -70,7 +110,8 @@ def _bands(args: argparse.Namespace, result) -> list[str]:
 
     bands = bootstrap_bands(None, args.template, n=args.bands, level=args.band_level, fit=result,
                             weights=args.weights, alpha_star=args.alpha_star, seed=args.seed,
-                            executor=Executor.from_args(args), progress=progress_of(args))
+                            executor=getattr(args, "executor", None) or Executor.from_args(args),
+                            progress=progress_of(args))
     cov = coverage_table(bands, args.heldout) if args.heldout else None
     directory = args.report or os.path.dirname(os.path.abspath(args.output))
     paths = write_bands(bands, directory, cov)
@@ -96,7 +137,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--template", required=True, metavar="TIR",
                    help="start values and constants (FNOMIN, NOMPRES, UNLOADED_RADIUS, ...), FITTYP 61/62")
     p.add_argument("--output", required=True, metavar="FITTED.tir", help="fitted .tir (written atomically)")
-    p.add_argument("--report", metavar="DIR", help="write report.md, metrics.json and plots into DIR")
+    p.add_argument("--report", metavar="DIR", help="write report.md, metrics.json and plots into DIR "
+                   "(with --each: --report each, a report folder per input in the output folder)")
+    p.add_argument("--each", action="store_true",
+                   help="one fit per DATA file (several files or a glob such as 'runs/*.csv'), run as parallel "
+                   "tasks (--jobs, --scheduler); --output is then a folder receiving <name>.tir per input "
+                   "(implied when --output ends with /)")
     p.add_argument("--stages", default="all",
                    help="stages to run, numbers or names, e.g. 1,2,3 or longitudinal,lateral (default all)")
     p.add_argument("--weights", default=None,
@@ -113,7 +159,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="random seed of the bootstrap (default 0)")
     from mftire.cli_options import add_parallel_options
 
-    add_parallel_options(p, "the bootstrap refits of --bands")
+    add_parallel_options(p, "the fits of --each and the bootstrap refits of --bands")
     p.add_argument("--fix", metavar="KEYS", help="coefficients held at their template values, "
                    "comma-separated (e.g. PPX1,PPX2,PPX3,PPX4 to fit without pressure terms)")
     from mftire.cli_options import add_force_option

@@ -137,3 +137,37 @@ def write_text_atomic(path: str | os.PathLike, text: str, newline: str | None = 
         fh.write(text)
         fh.flush()
         os.fsync(fh.fileno())
+
+
+@contextlib.contextmanager
+def staged_folder(folder: str | os.PathLike) -> Iterator[str]:
+    """Yield a hidden staging folder beside ``folder``; on success move every file written into it to the same
+    place in ``folder`` (each with one ``os.replace``: other files of ``folder`` are left alone), on failure
+    (including Ctrl-C) remove it: a run that fails writes nothing into ``folder``.  Missing parents of
+    ``folder`` are created, and removed again on failure."""
+    folder = os.fspath(folder)
+    parent = os.path.dirname(os.path.abspath(folder))
+    created = _makedirs(parent)
+    try:
+        stage = tempfile.mkdtemp(prefix=f".{os.path.basename(os.path.abspath(folder))}.partial-", dir=parent)
+    except BaseException:
+        _removedirs(created)
+        raise
+    try:
+        yield stage
+        os.makedirs(folder, exist_ok=True)
+        for root, _dirs, names in os.walk(stage):
+            target = os.path.join(folder, os.path.relpath(root, stage))
+            os.makedirs(target, exist_ok=True)
+            for name in names:
+                src, dst = os.path.join(root, name), os.path.join(target, name)
+                if os.path.islink(dst) or writes_through(dst):  # a link is followed, a device written through
+                    with atomic_path(dst) as tmp:
+                        shutil.copyfile(src, tmp)
+                else:
+                    os.replace(src, dst)
+    except BaseException:
+        _removedirs(created)
+        raise
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)

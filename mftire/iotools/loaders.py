@@ -150,6 +150,13 @@ def read_numeric_csv(path: str, required: Sequence[str], optional: Sequence[str]
         raise MftireInputError(f"{path}: file not found") from None
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         raise MftireInputError(f"{path}: not a readable CSV file ({exc})") from None
+    return check_numeric_columns(df, path, required, optional)
+
+
+def check_numeric_columns(df: pd.DataFrame, path: str, required: Sequence[str], optional: Sequence[str] = (),
+                          first_row: int = 0) -> pd.DataFrame:
+    """The checks of :func:`read_numeric_csv` on a table read already (``df`` is changed in place and returned):
+    ``first_row`` is the 0-based data row of ``df``'s first row in the file (a chunk of a streamed file)."""
     df.columns = [str(c).strip() for c in df.columns]
     missing = [c for c in required if c not in df.columns]
     if missing:
@@ -161,8 +168,8 @@ def read_numeric_csv(path: str, required: Sequence[str], optional: Sequence[str]
         values = pd.to_numeric(raw, errors="coerce")
         bad = values.isna() | ~np.isfinite(values.to_numpy(dtype=float, na_value=np.nan))
         if bad.any():
-            i = int(np.flatnonzero(bad.to_numpy())[0])
-            cell = raw.iloc[i]
+            i = first_row + int(np.flatnonzero(bad.to_numpy())[0])
+            cell = raw.iloc[i - first_row]
             what = "empty or NaN" if pd.isna(cell) or str(cell).strip().lower() == "nan" else f"{cell!r}"
             raise MftireInputError(
                 f"{path}: column '{col}', row {i + 1} (line {i + 2}): {what} is not a finite number"
