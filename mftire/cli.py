@@ -8,14 +8,15 @@ input print one line naming the file, column and row, and exit with code 2.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import TYPE_CHECKING
 
 from mftire.data import default_tir  # noqa: F401  (moved to mftire.data; kept importable from here)
-from mftire.errors import MftireError
+from mftire.errors import MftireError, Terminated
 
 if TYPE_CHECKING:  # pandas, scipy, matplotlib and the feature packages load when a command needs them
     import pandas as pd
@@ -251,14 +252,38 @@ def _one_line_warning(prefix: str):
     return show
 
 
+@contextlib.contextmanager
+def _sigterm_interrupts() -> Iterator[None]:
+    """While a command runs, SIGTERM raises :class:`~mftire.errors.Terminated` (a KeyboardInterrupt) in the
+    main thread, as Ctrl-C does, so that worker processes, the C compiler and temporary folders are
+    stopped and removed on the way out; the previous handler is restored after."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise Terminated()
+
+    old = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     import warnings
+
+    from mftire.iotools.output import command_scope
 
     parser = build_parser()
     args = parser.parse_args(argv)
     prefix = f"mftire {args.command}"
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), command_scope(), _sigterm_interrupts():
             warnings.showwarning = _one_line_warning(prefix)
             rc = int(args.func(args) or 0)
         sys.stdout.flush()
@@ -266,11 +291,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (MftireError, OSError) as exc:
         if isinstance(exc, BrokenPipeError):
             return _broken_pipe()
-        print(f"{prefix}: error: {exc}", file=sys.stderr)
+        print(f"{prefix}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"{prefix}: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        terminated = isinstance(exc, Terminated)
+        print(f"{prefix}: {'terminated' if terminated else 'interrupted'}", file=sys.stderr)
+        return 143 if terminated else 130
+
+
+def _one_line(exc: BaseException) -> str:
+    """The message of ``exc`` on one line (an OSError names its file once)."""
+    text = str(exc)
+    return " ".join(text.split("\n")) if "\n" in text else text
 
 
 def _broken_pipe() -> int:

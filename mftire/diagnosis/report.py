@@ -10,6 +10,7 @@ import numpy as np
 
 from mftire.diagnosis.diagnose import DiagnosisResult
 from mftire.iotools.atomic import atomic_path, write_text_atomic
+from mftire.iotools.output import safe_name
 from mftire.iotools.tir import write_tir
 from mftire.plotting import subplots
 
@@ -169,7 +170,7 @@ def _figures(result: DiagnosisResult, outdir: str) -> None:
     df = result.data
     ranking = result.ranking
     fig, ax = subplots(figsize=(8, 0.35 * max(len(ranking), 4) + 1.2), constrained_layout=True)
-    names = [f"{r.variable} ({r.channel})" for r in ranking][::-1]
+    names = [f"{_text(r.variable)} ({r.channel})" for r in ranking][::-1]
     scores = [r.score for r in ranking][::-1]
     colors = ["tab:red" if r.significant else "tab:gray" for r in ranking][::-1]
     ax.barh(names, scores, color=colors)
@@ -192,11 +193,12 @@ def _figures(result: DiagnosisResult, outdir: str) -> None:
             ax.plot(x, ya, ".", ms=2, alpha=0.3, color="tab:orange")
             ax.plot(*_binned(x, ya), "s-", color="tab:orange", label="after (binned mean)")
         ax.axhline(0, color="k", lw=0.8)
-        ax.set_xlabel(r.variable)
+        ax.set_xlabel(_text(r.variable))
         ax.set_ylabel(f"{r.channel} data − model")
-        ax.set_title(f"residual of {r.channel} against {r.variable} (score {r.score:.2f})")
+        ax.set_title(f"residual of {r.channel} against {_text(r.variable)} (score {r.score:.2f})")
         ax.legend()
-        with atomic_path(os.path.join(outdir, f"residual_vs_{r.variable}.png")) as tmp:
+        # a column name is data, never a path (mftire.iotools.output.safe_name)
+        with atomic_path(os.path.join(outdir, f"residual_vs_{safe_name(r.variable)}.png")) as tmp:
             fig.savefig(tmp, format="png", dpi=100)
 
     if result.effect is None or result.train is None:
@@ -240,3 +242,8 @@ def write_report(result: DiagnosisResult, outdir: str | os.PathLike) -> dict:
 
         plot_profiles(result, outdir)
     return doc
+
+
+def _text(label: object) -> str:
+    """A label from data as plain figure text (a ``$`` would start matplotlib's mathtext)."""
+    return str(label).replace("$", r"\$")

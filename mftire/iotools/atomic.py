@@ -1,5 +1,9 @@
 """Atomic file writes: write to a temporary file beside the target, then rename.
 
+The rename is :func:`mftire.iotools.output.final_rename`: while a command runs it refuses
+files that are not the command's outputs and, without ``--force``, does not replace a file
+that appeared meanwhile; in library use it is :func:`os.replace`.
+
 A failed write leaves the target untouched, and readers never see a half-written
 file (and no temporary file is left behind).  The new file keeps the permissions of the file it replaces (0644 for a new
 file).
@@ -51,7 +55,9 @@ def atomic_path(path: str | os.PathLike) -> Iterator[str]:
     try:
         yield tmp
         os.chmod(tmp, mode)
-        os.replace(tmp, path)
+        from mftire.iotools.output import final_rename  # the running command's policy (output.py, rule 8)
+
+        final_rename(tmp, path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)

@@ -27,8 +27,13 @@ def _parse_signs(items: Sequence[str] | None) -> dict[str, float]:
 
 def _cmd_import(args: argparse.Namespace) -> int:
     from mftire.iotools.atomic import write_text_atomic
+    from mftire.iotools.output import OutputPlan
     from mftire.iotools.rig import import_rig, parse_map_options
 
+    plan = OutputPlan([args.raw, args.columns_map], args.force)  # every output checked before any work
+    plan.file(args.output)
+    if args.report:
+        plan.file(args.report)
     columns = parse_map_options(args.map or [])
     warm: str | float = args.warmup
     try:
@@ -71,5 +76,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--warmup", default="auto", metavar="auto|none|SECONDS",
                    help="warm-up to drop: auto (first segment when its condition recurs), none, or seconds")
     p.add_argument("--report", metavar="REPORT.json", help="also write the import report as JSON")
+    from mftire.iotools.output import add_force_option
+
+    add_force_option(p)
     p.set_defaults(func=_cmd_import)
     return p
