@@ -7,8 +7,8 @@
 * :func:`warn_units`: slip angles above 1.5 rad (degrees?) or every load below 5 % of
   FNOMIN (kN?) give one :class:`~mftire.errors.MftireUnitWarning` per tyre and cause,
   in every use mode.
-* :func:`check_constants`: FNOMIN and UNLOADED_RADIUS must be finite and positive
-  (every equation divides by them).
+* :func:`check_constants`: the constants that would make a channel non-finite or absurd
+  (:data:`mftire.iotools.tir_checks.PARAMETER_LIMITS`), for every way a tyre is made.
 """
 
 from __future__ import annotations
@@ -89,13 +89,22 @@ def check_keywords(given: Mapping[str, Any], required: Sequence[str]) -> None:
     raise TypeError(msg)
 
 
-def check_constants(flat: Mapping[str, float], path: Any = None) -> None:
-    """FNOMIN and UNLOADED_RADIUS scale every equation: they must be finite and positive."""
+def check_constants(flat: Mapping[str, float], path: Any = None, extensions: Mapping[str, Any] | None = None) -> None:
+    """The one parameter check of every consumer (:func:`mftire.iotools.tir_checks.value_errors`:
+    FNOMIN, UNLOADED_RADIUS, NOMPRES, LFZO, LONGVL ... finite and in range, ranges not inverted,
+    friction within rubber's, extension coefficients not absurd); the first problem raises
+    :class:`~mftire.iotools.tir_checks.TirCheckError`."""
+    from mftire.iotools.tir_checks import value_errors
+
+    where = f"{path}: " if path else ""
     for key in ("FNOMIN", "UNLOADED_RADIUS"):
         v = flat[key]
-        if not (np.isfinite(v) and v > 0):
-            where = f"{path}: " if path else ""
-            raise TirCheckError(f"{where}{key} = {v:g} must be > 0")
+        if not np.isfinite(v):
+            raise TirCheckError(f"{where}{key} = {float(v):g} must be > 0")
+    errors = value_errors(flat, extensions)
+    if errors:
+        more = f" (and {len(errors) - 1} more problem(s); see mftire info)" if len(errors) > 1 else ""
+        raise TirCheckError(f"{where}{errors[0]}{more}")
 
 
 __all__ = ["EVALUATE_ARGUMENTS", "UNIT_LIMITS", "check_constants", "check_keywords", "warn_units"]

@@ -79,7 +79,8 @@ class Tyre:
             self.flat = pac2002.prepare(self.flat)
         from mftire.input_checks import check_constants
 
-        check_constants(self.flat, getattr(params, "path", None))
+        check_constants(self.flat, getattr(params, "path", None) or name,
+                        self.parameters.sections.get(SECTION))  # the one parameter check (tir_checks)
         self.flat = FlatParameters(self.flat)  # a dict that counts its changes (the kernel's cache)
         ext = self.parameters.sections.get(SECTION)
         #: The ``[MFTIRE_EXTENSIONS]`` section (model extensions), or None.

@@ -111,6 +111,108 @@ _QUANTITY = {"FNOMIN": ("FORCE",), "UNLOADED_RADIUS": ("LENGTH",), "NOMPRES": ("
              "INFLPRES": ("PRESSURE", "FORCE", "LENGTH")}
 
 
+@dataclass(frozen=True)
+class Limit:
+    """A constant's bound: ``key op bound`` must hold (``op`` is ``">"`` or ``">="``)."""
+
+    key: str
+    op: str
+    bound: float
+    why: str
+
+    def holds(self, value: float) -> bool:
+        return value > self.bound if self.op == ">" else value >= self.bound
+
+
+#: The one table of constants whose value makes a channel non-finite or absurd: an error in every
+#: consumer (``evaluate``, ``info``, ``fit``'s template, ``export-fmu``, :class:`mftire.Tyre` from a
+#: mapping, and the FMU's tunable parameters, whose C check is generated from this table).
+PARAMETER_LIMITS: tuple[Limit, ...] = (
+    Limit("FNOMIN", ">", 0.0, "every equation divides by the nominal load (eqs 4.E1, 4.E2a)"),
+    Limit("UNLOADED_RADIUS", ">", 0.0, "the moments, radii and relaxation lengths scale with it"),
+    Limit("WIDTH", ">=", 0.0, "a width is not negative"),
+    Limit("RIM_RADIUS", ">=", 0.0, "a radius is not negative"),
+    Limit("NOMPRES", ">", 0.0, "dpi = (P - NOMPRES)/NOMPRES (eq 4.E2b): Fx, My and Cz come out NaN"),
+    Limit("LFZO", ">", 0.0, "Fz0' = LFZO·FNOMIN divides dfz (eqs 4.E1, 4.E2a): every force comes out NaN"),
+    Limit("LONGVL", ">", 0.0, "the default speed and Vs/LONGVL (eq 4.E7): Re and the speed terms come out NaN"),
+    Limit("VXLOW", ">", 0.0, "the low-speed reduction divides by it: NaN at standstill"),
+    Limit("LMUX", ">=", 0.0, "a negative friction scale turns Fx against the slip"),
+    Limit("LMUY", ">=", 0.0, "a negative friction scale turns Fy against the slip"),
+)
+#: Ranges whose lower end must be below the upper end (mode 1xx clips every input into them).
+RANGE_PAIRS: tuple[tuple[str, str, str], ...] = (
+    ("FZMIN", "FZMAX", "N"), ("KPUMIN", "KPUMAX", "-"), ("ALPMIN", "ALPMAX", "rad"), ("CAMMIN", "CAMMAX", "rad"),
+    ("PRESMIN", "PRESMAX", "Pa"),
+)  # fmt: skip
+#: Peak friction coefficient beyond any rubber (racing slicks reach about 2): |(PDX1 + PDX2·dfz)·LMUX| and
+#: |(PDY1 + PDY2·dfz)·LMUY| over dfz in :data:`FRICTION_DFZ` (eqs 4.E13, 4.E23).
+MU_MAX = 10.0
+FRICTION_DFZ = (-0.5, 0.0, 1.0)
+#: An extension coefficient beyond this multiple of its form's fitting bounds is absurd
+#: (:data:`mftire.mf.extensions.FORMS`; e.g. C1 = 1e300 gives forces of 1e304 N).
+EXTENSION_BOUND_FACTOR = 1e3
+#: Known values of the string keys (a warning otherwise; they do not change the numbers).
+TYRESIDES = ("LEFT", "RIGHT", "SYMMETRIC", "UNKNOWN")
+
+
+def _show(v: Any) -> str:
+    """A number as the user wrote it (no ``np.float64(...)``)."""
+    return f"{float(v):g}" if _number(v) or hasattr(v, "__float__") else repr(v)
+
+
+def value_errors(flat: Mapping[str, Any], extensions: Mapping[str, Any] | None = None) -> list[str]:
+    """The errors of :data:`PARAMETER_LIMITS`, :data:`RANGE_PAIRS`, :data:`MU_MAX` and the extension
+    coefficients for flat SI values (absent keys are not checked); one string per problem."""
+    out: list[str] = []
+    for lim in PARAMETER_LIMITS:
+        v = flat.get(lim.key)
+        if _number(v) and math.isfinite(float(v)) and not lim.holds(float(v)):
+            out.append(f"{lim.key} = {_show(v)} must be {lim.op} {lim.bound:g} ({lim.why})")
+    for lo_key, hi_key, unit in RANGE_PAIRS:
+        lo, hi = flat.get(lo_key), flat.get(hi_key)
+        if _number(lo) and _number(hi) and math.isfinite(float(lo)) and math.isfinite(float(hi)) and lo >= hi:
+            u = f" {unit}" if unit != "-" else ""
+            out.append(f"{lo_key} = {_show(lo)}{u} is not below {hi_key} = {_show(hi)}{u} (inverted range: "
+                       "mode 1xx would clip every input to one value)")
+    for force, (d1, d2, scale) in (("Fx", ("PDX1", "PDX2", "LMUX")), ("Fy", ("PDY1", "PDY2", "LMUY"))):
+        a, b, lam = flat.get(d1), flat.get(d2, 0.0), flat.get(scale, 1.0)
+        if not (_number(a) and _number(b) and _number(lam)):
+            continue
+        mu = max(abs((float(a) + float(b) * d) * float(lam)) for d in FRICTION_DFZ)
+        if math.isfinite(mu) and mu > MU_MAX:
+            out.append(f"peak friction of {force} {mu:.3g} ({d1} = {_show(a)}, {d2} = {_show(b)}, {scale} = "
+                       f"{_show(lam)}) is far beyond rubber (limit {MU_MAX:g}; eqs 4.E13, 4.E23)")
+    out += _extension_errors(extensions)
+    return out
+
+
+def _extension_errors(section: Mapping[str, Any] | None) -> list[str]:
+    if not section:
+        return []
+    from mftire.mf.extensions import parse_section
+
+    try:
+        ext = parse_section(section)
+    except MftireInputError:
+        return []  # the section's own errors are raised where it is parsed
+    out = []
+    for t in ext.terms:
+        for key in t.coefficient_keys:
+            v = t.numbers.get(key, 0.0)
+            lo, hi = t.bounds(key)
+            limit = EXTENSION_BOUND_FACTOR * max(abs(lo), abs(hi), 1.0)
+            if _number(v) and math.isfinite(float(v)) and abs(float(v)) > limit:
+                out.append(f"[{SECTION_EXT}] {key} = {_show(v)} is absurd for a {t.form.name} term (fitting bounds "
+                           f"{lo:g} .. {hi:g}; limit |{key}| <= {limit:g})")
+        scale = t.numbers.get(t.key("SCALE"))
+        if _number(scale) and float(scale) == 0.0:
+            out.append(f"[{SECTION_EXT}] {t.key('SCALE')} = 0: z = (u - REF)/SCALE divides by it")
+    return out
+
+
+SECTION_EXT = "MFTIRE_EXTENSIONS"
+
+
 class TirCheckError(MftireInputError):
     """A ``.tir`` file that cannot be used: a required section or key missing, a non-physical value."""
 
@@ -258,12 +360,8 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
         rep.errors.append(f"non-finite value(s): {', '.join(f'{k} = {flat[k]}' for k in bad[:6])}"
                           + (f" and {len(bad) - 6} more" if len(bad) > 6 else ""))
     file_units = getattr(params, "file_units", None) or {}
-    for key, must in (("FNOMIN", "> 0"), ("UNLOADED_RADIUS", "> 0"), ("WIDTH", ">= 0"), ("RIM_RADIUS", ">= 0")):
-        v = flat.get(key)
-        if not _number(v) or not math.isfinite(float(v)):
-            continue
-        if (must == "> 0" and v <= 0) or (must == ">= 0" and v < 0):
-            rep.errors.append(f"{key} = {v:g} must be {must}")
+    ext_section = secs.get(SECTION_EXT) if isinstance(secs, Mapping) else None
+    rep.errors += value_errors(flat, ext_section if isinstance(ext_section, Mapping) else None)
     odd, hints = [], []
     for key, (lo, hi) in PLAUSIBLE.items():
         v = flat.get(key)
@@ -279,9 +377,17 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
     r0, rim = flat.get("UNLOADED_RADIUS"), flat.get("RIM_RADIUS")
     if _number(r0) and _number(rim) and 0 < r0 <= rim:
         rep.warnings.append(f"RIM_RADIUS = {rim:g} m is not below UNLOADED_RADIUS = {r0:g} m")
-    fzmin, fzmax = flat.get("FZMIN"), flat.get("FZMAX")
-    if _number(fzmin) and _number(fzmax) and fzmin >= fzmax:
-        rep.warnings.append(f"FZMIN = {fzmin:g} N is not below FZMAX = {fzmax:g} N")
+    fmt = flat.get("PROPERTY_FILE_FORMAT")
+    if isinstance(fmt, str):
+        from mftire.iotools.tir import FORMAT_MODELS, GENERIC_FORMATS, OTHER_MODELS, format_token
+
+        token = format_token(fmt)
+        if token not in FORMAT_MODELS and token not in GENERIC_FORMATS and token not in OTHER_MODELS:
+            rep.warnings.append(f"PROPERTY_FILE_FORMAT = {fmt!r} is not a format mftire knows ('USER', 'PAC2002', "
+                                "'MF_05', 'MF_52', 'MF_61', 'MF_62'); FITTYP decides the model")
+    side = flat.get("TYRESIDE")
+    if isinstance(side, str) and side.strip().upper() not in TYRESIDES:
+        rep.warnings.append(f"TYRESIDE = {side!r} is not one of {', '.join(TYRESIDES)}")
     kz = flat.get("VERTICAL_STIFFNESS")
     if _number(kz) and math.isfinite(float(kz)) and kz <= 0:
         rep.warnings.append(f"VERTICAL_STIFFNESS = {kz:g} N/m: the deflection, the loaded and effective rolling "
@@ -291,7 +397,7 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
         rep.warnings.append(f"{', '.join(k for k in ZERO_MZ if k in flat)} = 0: Mz is identically zero (the file "
                             "has no aligning-moment characteristic)")
     for force, keys, kind, mode in (ZERO_PEAK["Fx"], ZERO_PEAK["Fy"]):
-        zero = [k for k in keys if _number(flat.get(k)) and flat[k] == 0]
+        zero = [k for k in (*keys, f"LMU{force[1].upper()}") if _number(flat.get(k)) and flat[k] == 0]
         if zero:
             rep.warnings.append(f"{' = '.join(zero)} = 0: {force} is identically zero (the file has no {kind} "
                                 f"characteristic, as a fit for USE_MODE {mode} has)")
@@ -313,6 +419,7 @@ def check_tyre(tyre: Any) -> CheckReport:
     return check_parameters(tyre.parameters, source=getattr(tyre.parameters, "path", None) or tyre.name)
 
 
-__all__ = ["COEFFICIENT_SECTIONS", "CORE_KEYS", "CheckReport", "OPTIONAL_SECTIONS", "OPTIONAL_SECTIONS_6X",
-           "PLAUSIBLE", "REQUIRED_KEYS", "REQUIRED_SECTIONS", "TirCheckError", "WARN_MISSING", "ZERO_MZ",
-           "check_parameters", "check_tyre", "checked", "required_keys"]
+__all__ = ["COEFFICIENT_SECTIONS", "CORE_KEYS", "CheckReport", "EXTENSION_BOUND_FACTOR", "Limit", "MU_MAX",
+           "OPTIONAL_SECTIONS", "OPTIONAL_SECTIONS_6X", "PARAMETER_LIMITS", "PLAUSIBLE", "RANGE_PAIRS",
+           "REQUIRED_KEYS", "REQUIRED_SECTIONS", "TirCheckError", "WARN_MISSING", "ZERO_MZ", "check_parameters",
+           "check_tyre", "checked", "required_keys", "value_errors"]
