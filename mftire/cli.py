@@ -52,9 +52,20 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 def evaluate_columns(result: pd.DataFrame, n_inputs: int) -> pd.DataFrame:
     """``result`` (the ``n_inputs`` input columns, then the model outputs) with every output
     whose name is also an input column (a measured ``Fx``, the echoed ``Fz``) renamed
-    ``<name>_model`` (``Fx_model``), so that no two columns share a name."""
+    ``<name>_model`` (``Fx_model``; ``Fx_model_2`` when the input has a ``Fx_model`` too, and so on),
+    so that no two columns share a name."""
     inputs = [str(c) for c in result.columns[:n_inputs]]
-    outputs = [f"{c}_model" if str(c) in inputs else str(c) for c in result.columns[n_inputs:]]
+    taken = set(inputs)
+    outputs = []
+    for c in map(str, result.columns[n_inputs:]):
+        name, n = c, 1
+        if name in taken:
+            name = f"{c}_model"
+            while name in taken:
+                n += 1
+                name = f"{c}_model_{n}"
+        taken.add(name)
+        outputs.append(name)
     return result.set_axis([*inputs, *outputs], axis=1)
 
 

@@ -128,7 +128,7 @@ def export_fmu(
     cc = find_compiler(compiler)  # fail early, before any work
     flat, name, spec = _load(tir)
     ident = model_identifier or model_identifier_for(name)
-    if not re.match(r"^[A-Za-z_][A-Za-z0-9_]*$", ident):
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", ident):
         raise FMUExportError(f"model identifier {ident!r} is not a C identifier")
     variables, files = generate_sources(flat, ident, fmi_version, use_mode, spec)
     platform, suffix = _platform(fmi_version)

@@ -292,7 +292,7 @@ def export_transient_fmu(
     cc = find_compiler(compiler)
     flat, name = _check_transient(tir)
     ident = model_identifier or model_identifier_for(name + "_transient")
-    if not re.match(r"^[A-Za-z_][A-Za-z0-9_]*$", ident):
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", ident):
         raise FMUExportError(f"model identifier {ident!r} is not a C identifier")
     variables, files = generate_transient_sources(flat, ident, use_mode)
     platform, suffix = _platform(2)

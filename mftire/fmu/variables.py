@@ -54,7 +54,7 @@ DEFAULT_USE_MODE = 111
 #: Parameters whose change means a different model: ``fixed`` (set before initialisation only).
 FIXED_PARAMETERS = frozenset({"FITTYP"})
 
-_IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 #: FMI unit name -> (SI base-unit exponents kg, m, s, rad) for every unit the table uses.
 UNITS: dict[str, dict[str, int]] = {
@@ -233,7 +233,7 @@ def variable_table(
     )  # fmt: skip
     standard = {p.key: p for p in PARAMETERS if p.unit != "str"}
     keys = list(standard) + [
-        k for k in flat if k not in standard and k not in ext_keys and _IDENT.match(k) and _number(flat[k])
+        k for k in flat if k not in standard and k not in ext_keys and _IDENT.fullmatch(k) and _number(flat[k])
     ]
     for key in keys:
         row = standard.get(key)

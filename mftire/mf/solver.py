@@ -69,8 +69,8 @@ def unsupported_message(fittyp) -> str:
 
 
 def _clean(name: str, x: np.ndarray, fill: float) -> np.ndarray:
-    """Replace NaN by ``fill`` with a warning (documented input policy)."""
-    bad = np.isnan(x)
+    """Replace NaN (and infinite values, treated as NaN) by ``fill`` with a warning (documented input policy)."""
+    bad = ~np.isfinite(x)
     if bad.any():
         warnings.warn(
             f"{int(bad.sum())} NaN value(s) in input '{name}' replaced by {fill}.", MFLimitWarning, stacklevel=4
@@ -147,7 +147,7 @@ def prepare(
         P = np.full(shape, float(p["INFLPRES"]))
     else:
         P = np.broadcast_to(np.asarray(P, dtype=float), shape)
-        P = np.where(np.isnan(P) | (P <= 0.0), float(p["INFLPRES"]), P)
+        P = np.where(~np.isfinite(P) | (P <= 0.0), float(p["INFLPRES"]), P)
     if omega is not None:
         omega = np.broadcast_to(np.asarray(omega, dtype=float), shape)
         omega = None if not np.any(omega) else _clean("omega", np.array(omega), 0.0)
