@@ -704,6 +704,12 @@ def fit_tir(
             elif r.n_nan:
                 messages.append(f"stage {stage.number} {stage.name}: {r.n_nan} rows without {channel} skipped")
 
+    if not any(r.status == "fitted" for r in results):
+        few = [r for r in results if r.message.startswith("too few points")]
+        if few:
+            r = few[0]
+            raise MftireInputError(f"{len(table)} data point(s) are too few for the stages asked for: stage {r.number} "
+                                   f"{r.name} [{r.channel}]: {r.message}; nothing fitted")
     fitted = tmpl.copy()
     identified: list[str] = []
     not_identified: dict[str, str] = {}
