@@ -65,10 +65,11 @@ def warn_units(tyre: Any, Fz, alpha, gamma=0.0, P=None, Vx=None) -> None:
     if P is not None and "P" not in warned:
         top = _largest(P, absolute=False)
         if 0.0 < top < UNIT_LIMITS["P"]:
+            from mftire.iotools.units import unit_factor  # the one unit table
+
             unit = "bar" if top < 15.0 else "psi" if top < 100.0 else "kPa"
-            factor = {"bar": "1e5", "psi": "6894.76", "kPa": "1000"}[unit]
             warn("P", f"every inflation pressure P is below {UNIT_LIMITS['P']:g} Pa (largest {top:g}): P is in "
-                      f"pascals, the values look like {unit} (multiply by {factor})")
+                      f"pascals, the values look like {unit} (multiply by {unit_factor(unit, 'pressure'):.6g})")
     if Vx is not None and "Vx" not in warned:
         top = _largest(Vx, absolute=True)
         if top > UNIT_LIMITS["Vx"]:

@@ -178,10 +178,8 @@ def _alias_hint(df: pd.DataFrame, column: str) -> str:
             continue
         unit_txt = unit if unit is not None else SI_UNITS[column]
         note = "" if unit is not None else " (check its unit and sign convention first)"
-        return (
-            f"; column {name!r} looks like {column}{note}: use "
-            f"mftire.iotools.sweeps.to_schema(df, {{{name!r}: ({column!r}, {unit_txt!r})}})"
-        )
+        convert = f"convert it from {unit_txt} to {SI_UNITS[column]} and " if unit is not None else ""
+        return f"; column {name!r} looks like {column}{note}: {convert}rename it {column}"
     return ""
 
 
@@ -382,7 +380,7 @@ def validate_sweeps(
         raise MftireInputError(
             f"{name}: missing required column(s) {', '.join(missing)} "
             f"(SI units: {', '.join(f'{c} [{SI_UNITS[c]}]' for c in missing)}){hints}"
-            + ("" if hints else "; pass defaults={...} for inputs held constant")
+            + ("" if hints else "; an input held constant can be a column of one value")
         )
     for col in MEASURED_COLUMNS + OPTIONAL_INPUT_COLUMNS:
         if col not in out.columns:
