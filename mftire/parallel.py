@@ -101,10 +101,13 @@ class Executor:
             for x in items:
                 yield fn(x)
             return
-        from concurrent.futures import ProcessPoolExecutor
-
-        with ProcessPoolExecutor(max_workers=n) as pool:
-            yield from pool.map(fn, items)
+        pool = _process_pool(n)
+        try:
+            yield from pool.map(_Task(fn), items)
+        except BaseException:  # Ctrl-C, SIGTERM, an error, the consumer gone: stop the workers now
+            _stop(pool, interrupted=True)
+            raise
+        _stop(pool, interrupted=False)
 
     def start_map(self, fn: Callable[[T], R], items: Iterable[T]) -> Pending[R]:
         """Start ``fn`` on each item now and return at once; :meth:`Pending.result` gives the results
@@ -129,22 +132,19 @@ class Executor:
         if not self.scheduler and self.workers <= 1:
             yield self
             return
-        if self.scheduler:
-            pool: Any = _dask_client(str(self.scheduler))
-        else:
-            from concurrent.futures import ProcessPoolExecutor
-
-            pool = ProcessPoolExecutor(max_workers=self.workers)
+        pool: Any = _dask_client(str(self.scheduler)) if self.scheduler else _process_pool(self.workers)
         ex = Executor(jobs=self.jobs, scheduler=self.scheduler)
         object.__setattr__(ex, "_pool", pool)  # frozen: the open pool is not a field (not compared, not in repr)
+        interrupted = True
         try:
             yield ex
+            interrupted = False
         finally:
             object.__setattr__(ex, "_pool", None)
             if self.scheduler:
                 pool.close()
             else:
-                pool.shutdown(wait=True, cancel_futures=True)
+                _stop(pool, interrupted)
 
     def map(self, fn: Callable[[T], R], items: Iterable[T]) -> list[R]:
         """``list(self.imap(fn, items))``: all results, in the order of ``items``."""
@@ -190,7 +190,90 @@ def _submit_all(pool: Any, fn: Callable[[T], R], items: list[T]) -> list:
     """Futures of ``fn`` on each item: a process pool or a Dask client."""
     if hasattr(pool, "gather"):  # a Dask client; pure=False: no hashing of large arguments
         return list(pool.map(fn, items, pure=False)) if items else []
-    return [pool.submit(fn, x) for x in items]
+    task = _Task(fn)
+    return [pool.submit(task, x) for x in items]
+
+
+# ------------------------------------------------------------------ local workers and interrupts
+#
+# Ctrl-C reaches every process of the terminal's group and SIGTERM the parent only; either way the
+# parent (mftire.cli.main turns SIGTERM into a KeyboardInterrupt) stops the workers at once: each is
+# sent SIGTERM, which a worker turns into an exception, so its own clean-up runs (temporary build
+# folders, a compiler it started), then it exits; one still alive after STOP_SECONDS is killed.
+
+#: Seconds a stopped worker gets to clean up before it is killed.
+STOP_SECONDS = 1.5
+_IN_TASK = False  # in a worker process: a task is running (a stop request unwinds it)
+
+
+class _Stopped(BaseException):
+    """SIGTERM in a worker process: unwinds the task (its ``finally`` blocks run), then the worker exits."""
+
+
+def _worker_init() -> None:
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C and stops the workers
+
+    def stop(signum, frame):
+        if _IN_TASK:
+            raise _Stopped()
+        os._exit(143)  # idle: nothing to clean up
+
+    signal.signal(signal.SIGTERM, stop)
+
+
+@dataclass(frozen=True)
+class _Task(Generic[T, R]):
+    """A task as a worker runs it: a stop request ends the worker process after the task's clean-up (a
+    worker would otherwise report the exception and wait for the next task)."""
+
+    fn: Callable[[T], R]
+
+    def __call__(self, x: T) -> R:
+        global _IN_TASK
+        _IN_TASK = True
+        try:
+            return self.fn(x)
+        except _Stopped:
+            os._exit(143)
+        finally:
+            _IN_TASK = False
+
+
+def _process_pool(n: int) -> Any:
+    from concurrent.futures import ProcessPoolExecutor
+
+    return ProcessPoolExecutor(max_workers=n, initializer=_worker_init)
+
+
+def _stop(pool: Any, interrupted: bool) -> None:
+    """Shut a process pool down: wait for its tasks, or (``interrupted``) stop its workers now."""
+    if not interrupted:
+        pool.shutdown(wait=True, cancel_futures=True)
+        return
+    import time
+
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        with _suppress():
+            p.terminate()
+    deadline = time.monotonic() + STOP_SECONDS
+    for p in procs:
+        with _suppress():
+            p.join(max(0.0, deadline - time.monotonic()))
+    for p in procs:
+        with _suppress():
+            if p.is_alive():
+                p.kill()
+                p.join(1.0)
+
+
+def _suppress():
+    import contextlib
+
+    return contextlib.suppress(OSError, ValueError, AttributeError)
 
 
 def _collect(futures: list) -> Iterator:
