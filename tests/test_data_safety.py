@@ -58,7 +58,24 @@ def ws(tmp_path_factory) -> Path:
         df = synthetic_sweeps(tyre, [4000.0, 6000.0], [0.0], n_kappa=15, n_alpha=15, n_combined=5, seed=1)
     df.to_csv(d / "sweeps.csv", index=False)
     (d / "fe_braking.csv").write_text("kind,Fz,Vx,P,kappa,Fx\nbraking,4000,10,2e5,-0.05,-3000\n")
+    _tiny_ttc(d / "run.dat")
     return d
+
+
+def _tiny_ttc(path: Path) -> None:
+    """A raw TTC-style run: two load levels, one slip-angle sweep each (SAE axes, metric units)."""
+    from mftire.iotools.rig import TTC_CHANNELS
+
+    units = "s kph rpm deg deg cm cm kPa N N N N-m N-m - - degC degC degC degC degC -".split()
+    rows, t = [], 0.0
+    for fz in (-1000.0, -1500.0):
+        for k in range(40):
+            v = dict(ET=t, V=40.0, N=300.0, SA=-6 + 12 * k / 39, IA=0.0, RL=30.0, RE=31.0, P=80.0, FX=0.0,
+                     FY=100.0 * (k - 20), FZ=fz, MX=0.0, MZ=0.5 * (k - 20), NFX=0.0, NFY=0.0, RST=30.0, TSTI=50.0,
+                     TSTC=51.0, TSTO=52.0, AMBTMP=25.0, SR=0.0)
+            rows.append("\t".join(f"{v[c]:g}" for c in TTC_CHANNELS))
+            t += 0.1
+    path.write_text("title\n" + "\t".join(TTC_CHANNELS) + "\n" + "\t".join(units) + "\n" + "\n".join(rows) + "\n")
 
 
 class Run:
@@ -117,16 +134,18 @@ def _commands(r: Run, out: str) -> dict[str, list[str]]:
                      "--output", out],
         "fe-campaign": ["fe", "campaign", "--quick", "--output", out],
         "fe-identify": ["fe", "identify", r.p("fe_braking.csv"), "--mu-p", "1", "--output", out],
+        "import": ["import", r.p("run.dat"), "--output", out],
+        "import-report": ["import", r.p("run.dat"), "--output", r.p("new.csv"), "--report", out],
     }
 
 
 FOLDER_OUTPUTS = {"fit-report", "diagnose", "compare", "demo", "fe-campaign"}
 ALL = ["evaluate", "convert", "plot", "plot-csv", "fit", "fit-report", "export-fmu", "diagnose", "compare", "demo",
-       "fe-sweep", "fe-campaign", "fe-identify"]
+       "fe-sweep", "fe-campaign", "fe-identify", "import", "import-report"]
 INPUTS = {"evaluate": ["tyre.tir", "points.csv"], "convert": ["tyre.tir"], "plot": ["tyre.tir"],
           "plot-csv": ["tyre.tir"], "fit": ["sweeps.csv", "tyre.tir"], "export-fmu": ["tyre.tir"],
           "fe-identify": ["fe_braking.csv"], "fit-report": ["sweeps.csv"], "diagnose": ["sweeps.csv", "tyre.tir"],
-          "compare": ["sweeps.csv", "tyre.tir"]}
+          "compare": ["sweeps.csv", "tyre.tir"], "import": ["run.dat"], "import-report": ["run.dat"]}
 
 
 # --------------------------------------------------------------------------- outputs
@@ -564,3 +583,296 @@ def test_dev_stdout_redirected_by_the_shell_is_written_through(run):
     assert res.returncode == 0, res.stderr
     lines = log.read_text().splitlines()
     assert lines[0] == "kept" and lines[1].startswith("Fz,kappa,alpha,gamma,Fx") and len(lines) == 4
+
+
+# =========================================================================== issue 24: second round
+#
+# The adversarial families: output (out), names, .tir (tir), data, API (api), FMU (fmu); the test
+# names carry the family.  Every CLI case asserts the exit code, a one-line message, unchanged
+# inputs and no file left behind (Run above), unless it says otherwise.
+
+
+def _tir_with(path: Path, values: dict, section: str | None = None) -> Path:
+    """MF61 with ``values`` set (SI), written to ``path``."""
+    from mftire.iotools.tir import write_tir
+
+    params = read_tir(MF61)
+    for k, v in values.items():
+        params.set(k, v, section=section)
+    write_tir(params, path)
+    return path
+
+
+# --------------------------------------------------------------------------- out: one write path
+
+FILE_COMMANDS = ["evaluate", "convert", "plot-csv", "fit", "export-fmu", "fe-sweep", "fe-identify", "import",
+                 "import-report"]
+
+
+@pytest.mark.parametrize("cmd", FILE_COMMANDS)
+def test_out_trailing_slash_on_a_file_output_is_refused_up_front(run, cmd):
+    run(_commands(run, run.p("newdir") + "/")[cmd], 2, "names a folder; this output is a file")
+
+
+def test_out_import_report_and_output_must_differ(run):
+    run(["import", run.p("run.dat"), "--output", run.p("x.csv"), "--report", run.p("x.csv")], 2, "also output")
+
+
+def test_out_fit_output_and_report_folder_must_differ(run):
+    argv = ["fit", run.p("sweeps.csv"), "--template", run.p("tyre.tir"), "--output", run.p("x"), "--report", run.p("x")]
+    run(argv, 2, "the same file is also output")
+
+
+def test_out_import_writes_the_table_and_the_report_apart(run):
+    import json
+
+    argv = ["import", run.p("run.dat"), "--output", run.p("s.csv"), "--report", run.p("r.json")]
+    run(argv, 0, created={"s.csv", "r.json"})
+    table = pd.read_csv(run.p("s.csv"))
+    assert {"Fz", "alpha", "Fy"} <= set(table.columns) and len(table) > 40
+    assert json.loads(Path(run.p("r.json")).read_text())["n_sweeps"] == 2
+    run(argv, 2, "exists; use --force")
+    run(argv + ["--force"], 0, created={"s.csv", "r.json"})
+
+
+def _appearing(monkeypatch, content: bytes = b"theirs") -> list[str]:
+    """Another run writes the output while this one works: the file appears just before the final rename."""
+    from mftire.iotools import output
+
+    real, hit = output.final_rename, []
+
+    def racing(tmp: str, path: str) -> None:
+        if not hit:
+            hit.append(path)
+            Path(path).write_bytes(content)
+        real(tmp, path)
+
+    monkeypatch.setattr(output, "final_rename", racing)
+    return hit
+
+
+@pytest.mark.parametrize("force", [False, True])
+@pytest.mark.parametrize("cmd", ["convert", "evaluate", "import", "fit"])
+def test_out_a_file_that_appears_meanwhile_is_not_replaced_without_force(run, monkeypatch, cmd, force):
+    out = run.p("out.csv" if cmd in ("evaluate", "import") else "out.tir")
+    argv = _commands(run, out)[cmd] + (["--force"] if force else [])
+    hit = _appearing(monkeypatch)
+    run.capsys.readouterr()
+    rc = main(argv)
+    err = run.capsys.readouterr().err
+    assert hit == [out] or os.path.realpath(hit[0]) == os.path.realpath(out)
+    if force:
+        assert rc == 0 and Path(out).read_bytes() != b"theirs"
+    else:
+        assert rc == 2 and Path(out).read_bytes() == b"theirs"  # the other run's result is kept
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and "appeared while this command ran" in lines[0] and "--force" in lines[0]
+    assert not [n for n in _listing(run.root) if n.endswith(".tmp") or "/.mftire" in n]
+
+
+def test_out_rename_noreplace(tmp_path):
+    from mftire.iotools.output import rename_noreplace
+
+    (tmp_path / "a").write_text("new")
+    (tmp_path / "b").write_text("old")
+    with pytest.raises(FileExistsError):
+        rename_noreplace(str(tmp_path / "a"), str(tmp_path / "b"))
+    assert (tmp_path / "a").read_text() == "new" and (tmp_path / "b").read_text() == "old"
+    rename_noreplace(str(tmp_path / "a"), str(tmp_path / "c"))
+    assert not (tmp_path / "a").exists() and (tmp_path / "c").read_text() == "new"
+
+
+def test_out_a_command_writes_only_its_checked_outputs(tmp_path):
+    from mftire.iotools.atomic import write_text_atomic
+    from mftire.iotools.output import command_scope
+
+    inp = tmp_path / "in.csv"
+    inp.write_text("x")
+    with command_scope():
+        plan = OutputPlan([inp], force=False)
+        plan.folder(tmp_path / "rep")
+        plan.file(tmp_path / "out.csv")
+        write_text_atomic(tmp_path / "rep" / "anything.md", "ok")  # inside the checked folder
+        write_text_atomic(tmp_path / "out.csv", "1")
+        write_text_atomic(tmp_path / "out.csv", "2")  # a file this run wrote may be rewritten
+        with pytest.raises(mftire.errors.MftireInputError, match="not an output of this command"):
+            write_text_atomic(tmp_path / "elsewhere.csv", "no")
+        with pytest.raises(mftire.errors.MftireInputError, match="is the input file"):
+            write_text_atomic(inp, "no")
+    assert (tmp_path / "out.csv").read_text() == "2" and inp.read_text() == "x"
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["anything.md", "in.csv", "out.csv", "rep"]
+    write_text_atomic(tmp_path / "elsewhere.csv", "library")  # no command: the library replaces as asked
+    assert (tmp_path / "elsewhere.csv").read_text() == "library"
+
+
+# --------------------------------------------------------------------------- names from data
+
+HOSTILE = ["x/../../../../elsewhere/PWNED_run", "/..", "..", ".", "", "/etc/passwd", "a\\b", "C:\\x", "\x00nul",
+           "line\nbreak", "-rf", ".hidden", "résumé", "a" * 300, "$x^2$", "a b", "%2e%2e%2f", "~/x", "a/./b",
+           "temp [°C]", "con", "....//....//x"]
+
+
+@pytest.mark.parametrize("label", HOSTILE)
+def test_names_a_label_from_data_is_a_safe_file_name(label):
+    import re
+
+    from mftire.iotools.output import safe_name
+
+    name = safe_name(label)
+    assert re.fullmatch(r"[A-Za-z0-9._-]+", name) and ".." not in name, name
+    assert not name.startswith((".", "-")) and len(name) <= 70
+    assert os.path.basename(name) == name and name not in (".", "..")
+
+
+def test_names_are_unique_within_a_command():
+    from mftire.iotools.output import command_scope, safe_name
+
+    with command_scope():
+        names = [safe_name(x) for x in ("a/b", "a_b", "a?b", "Fz", "fz", "a/b")]
+    assert names[0] == names[5]  # the same label, the same name
+    assert len({n.lower() for n in names[:5]}) == 5  # distinct labels never share a name (any letter case)
+
+
+def test_names_hostile_columns_stay_inside_the_diagnosis_folder(run):
+    df = pd.read_csv(run.p("sweeps.csv"))
+    z = np.linspace(-1.0, 1.0, len(df))
+    df["x/../../../../elsewhere/PWNED_run"] = z  # explains the Fy residual: plotted
+    df["Fy"] = df["Fy"] * (1.0 + 0.1 * z)
+    df["/.."] = np.cos(7.0 * z)
+    df["$bad"] = np.sin(3.0 * z)
+    df.to_csv(run.p("hostile.csv"), index=False)
+    out = run.root / "a" / "b" / "diag"
+    run(["diagnose", run.p("hostile.csv"), "--tir", run.p("tyre.tir"), "--output", str(out), "--permutations", "9"],
+        0, created=set())
+    written = {str(p.relative_to(run.root)) for p in run.root.rglob("*") if p.is_file()}
+    outside = {w for w in written if not w.startswith("a/b/diag/")} - {"tyre.tir", "points.csv", "sweeps.csv",
+                                                                        "fe_braking.csv", "run.dat", "hostile.csv"}
+    assert outside == set() and not list(run.root.parent.rglob("*PWNED*")) or \
+        all(str(p).startswith(str(out)) for p in run.root.parent.rglob("*PWNED*"))
+    assert any(p.name.startswith("residual_vs_x_elsewhere_PWNED_run") for p in out.iterdir())
+
+
+def test_names_figures_of_hostile_labels_do_not_crash(tmp_path):
+    from types import SimpleNamespace
+
+    from mftire.diagnosis.report import _figures
+    from mftire.iotools.output import command_scope
+
+    x = np.linspace(0.0, 1.0, 50)
+    labels = ["/..", "$x^", "a/../../b", "x" * 200]
+    df = pd.DataFrame({**{lab: x * (i + 1) for i, lab in enumerate(labels)}, "residual_Fy": np.sin(5 * x)})
+    ranking = [SimpleNamespace(variable=lab, channel="Fy", score=0.5, significant=True) for lab in labels]
+    result = SimpleNamespace(data=df, ranking=ranking, effect=None, train=None)
+    out = tmp_path / "d"
+    with command_scope():
+        OutputPlan((), False).folder(out)
+        _figures(result, str(out))
+    assert sorted(p.name for p in tmp_path.rglob("*"))[0] == "d" and len(list(out.iterdir())) == 4
+    assert all(p.parent == out for p in tmp_path.rglob("*.png"))
+
+
+# --------------------------------------------------------------------------- .tir: one parameter check
+
+VALUE_ERRORS = {  # values that made a channel NaN or absurd, and the message
+    "NOMPRES=0": ({"NOMPRES": 0.0}, "NOMPRES = 0 must be > 0"),
+    "NOMPRES<0": ({"NOMPRES": -2e5}, "NOMPRES = -200000 must be > 0"),
+    "LFZO=0": ({"LFZO": 0.0}, "LFZO = 0 must be > 0"),
+    "LONGVL=0": ({"LONGVL": 0.0}, "LONGVL = 0 must be > 0"),
+    "VXLOW=0": ({"VXLOW": 0.0}, "VXLOW = 0 must be > 0"),
+    "LMUX<0": ({"LMUX": -1.0}, "LMUX = -1 must be >= 0"),
+    "ALPMIN>ALPMAX": ({"ALPMIN": 0.5, "ALPMAX": -0.5}, "ALPMIN = 0.5 rad is not below ALPMAX = -0.5 rad"),
+    "PRESMIN>PRESMAX": ({"PRESMIN": 4e5, "PRESMAX": 2e5}, "PRESMIN = 400000 Pa is not below PRESMAX"),
+    "KPUMIN>KPUMAX": ({"KPUMIN": 1.0, "KPUMAX": -1.0}, "KPUMIN = 1 is not below KPUMAX = -1"),
+    "CAMMIN>CAMMAX": ({"CAMMIN": 0.1, "CAMMAX": -0.1}, "CAMMIN = 0.1 rad is not below CAMMAX"),
+    "FZMIN>FZMAX": ({"FZMIN": 9000.0, "FZMAX": 100.0}, "FZMIN = 9000 N is not below FZMAX = 100 N"),
+    "mu=1e6": ({"PDX1": 1e6}, "peak friction of Fx 1e+06"),
+    "muy=-50": ({"PDY1": -50.0}, "peak friction of Fy"),
+    "extension=1e300": (None, "EXT1_C1 = 1e+300 is absurd"),
+}
+
+
+def _bad_tir(r: Run, case: str) -> str:
+    values, _ = VALUE_ERRORS[case]
+    if values is None:
+        from test_fmu_guards import extension_entries
+
+        entries = {**extension_entries(["Vs"]), "EXT1_C1": 1e300}
+        return str(_tir_with(Path(r.p("tyre.tir")), entries, section="MFTIRE_EXTENSIONS"))
+    return str(_tir_with(Path(r.p("tyre.tir")), values))
+
+
+@pytest.mark.parametrize("case", sorted(VALUE_ERRORS))
+@pytest.mark.parametrize("cmd", ["info", "evaluate"])
+def test_tir_constants_that_break_a_channel_are_errors(run, cmd, case):
+    _bad_tir(run, case)
+    msg = VALUE_ERRORS[case][1]
+    if cmd == "info":
+        run.capsys.readouterr()
+        assert main(["info", run.p("tyre.tir")]) == 2
+        out = run.capsys.readouterr().out
+        assert any(ln.startswith("  error: ") and msg in ln for ln in out.splitlines()) and "np.float64" not in out
+    else:
+        run(_commands(run, run.p("o.csv"))["evaluate"], 2, run.p("tyre.tir"), msg)
+
+
+@pytest.mark.parametrize("case", ["NOMPRES=0", "LFZO=0", "KPUMIN>KPUMAX"])
+def test_tir_fit_refuses_a_broken_template(run, case):
+    _bad_tir(run, case)
+    run(_commands(run, run.p("f.tir"))["fit"], 2, VALUE_ERRORS[case][1])
+
+
+@pytest.mark.parametrize("key,value,text", [("LMUX", 0.0, "LMUX = 0: Fx is identically zero"),
+                                            ("LMUY", 0.0, "LMUY = 0: Fy is identically zero"),
+                                            ("PROPERTY_FILE_FORMAT", "FOO", "PROPERTY_FILE_FORMAT = 'FOO' is not a "
+                                             "format mftire knows"),
+                                            ("TYRESIDE", "MIDDLE", "TYRESIDE = 'MIDDLE' is not one of")])
+def test_tir_suspicious_values_warn_and_fail_info_strict(run, key, value, text):
+    _tir_with(Path(run.p("tyre.tir")), {key: value})
+    run.capsys.readouterr()
+    assert main(["info", run.p("tyre.tir")]) == 0
+    assert f"warning: {text}" in run.capsys.readouterr().out
+    assert main(["info", run.p("tyre.tir"), "--strict"]) == 1
+    with pytest.warns(MftireTirWarning, match=text.split(":")[0]):
+        mftire.load(run.p("tyre.tir"))
+
+
+def test_tir_misspelled_key_did_you_mean(run):
+    text = MF61.read_text()
+    lines = [("LMUXX" + ln[4:]) if ln.split("=")[0].strip() == "LMUX" else ln for ln in text.splitlines(True)]
+    Path(run.p("tyre.tir")).write_text("".join(lines))
+    with pytest.warns(Warning, match="LMUXX in \\[SCALING_COEFFICIENTS\\] is not a key mftire knows: did you mean "
+                      "LMUX\\? \\(LMUXX is ignored; LMUX takes its default\\)"):
+        mftire.load(run.p("tyre.tir"))
+    err = run(["info", run.p("tyre.tir"), "--strict"], 2, "did you mean LMUX?", "strict reading")
+    assert "line " in err
+    err = run(_commands(run, run.p("o.csv"))["evaluate"] + ["--strict"], 2, "did you mean LMUX?")
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le", "utf-16-be"])
+def test_tir_utf16_files_are_read(run, encoding):
+    Path(run.p("tyre.tir")).write_bytes(MF61.read_text().encode(encoding))
+    run.capsys.readouterr()
+    assert main(["info", run.p("tyre.tir"), "--strict"]) == 0
+    assert "checks:\n  all passed" in run.capsys.readouterr().out
+    assert read_tir(run.p("tyre.tir")).flat()["PKY1"] == read_tir(MF61).flat()["PKY1"]
+
+
+def test_tir_binary_file_is_named_as_such(run):
+    Path(run.p("tyre.tir")).write_bytes(bytes(range(256)) * 8)
+    run(["info", run.p("tyre.tir")], 2, "binary data (control characters): not a text .tir file")
+
+
+def test_tir_limits_table_names_known_keys():
+    from mftire.iotools.tir_checks import PARAMETER_LIMITS, RANGE_PAIRS
+    from mftire.parameters import BY_KEY
+
+    keys = [lim.key for lim in PARAMETER_LIMITS] + [k for pair in RANGE_PAIRS for k in pair[:2]]
+    assert all(k in BY_KEY for k in keys) and len(set(keys)) == len(keys)
+    flat = with_defaults_of(MF61)
+    assert all(lim.holds(flat[lim.key]) for lim in PARAMETER_LIMITS)  # the defaults and MF61 pass
+
+
+def with_defaults_of(path: Path) -> dict:
+    from mftire.parameters import with_defaults
+
+    return with_defaults(read_tir(path))

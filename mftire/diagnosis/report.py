@@ -245,5 +245,8 @@ def write_report(result: DiagnosisResult, outdir: str | os.PathLike) -> dict:
 
 
 def _text(label: object) -> str:
-    """A label from data as plain figure text (a ``$`` would start matplotlib's mathtext)."""
-    return str(label).replace("$", r"\$")
+    """A label from data as plain figure text: a ``$`` would start matplotlib's mathtext, and a very long
+    name would squeeze the axes away."""
+    text = str(label)
+    text = text if len(text) <= 40 else text[:39] + "…"
+    return text.replace("$", r"\$")

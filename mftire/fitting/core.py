@@ -645,6 +645,9 @@ def fit_tir(
         raise ValueError(f"jacobian must be 'exact' or '2-point', not {jacobian!r}")
     say = _progress_printer(progress)
     tmpl = _as_template(template)
+    from mftire.input_checks import check_constants  # the one parameter check (mftire.iotools.tir_checks)
+
+    check_constants(with_defaults(tmpl), getattr(tmpl, "path", None) or "template", tmpl.sections.get(SECTION))
     if tmpl.fittyp not in (61, 62):
         raise MftireInputError(
             f"template FITTYP {tmpl.get('FITTYP')!r}: fitting needs an MF 6.1 or 6.2 template (FITTYP 61 or 62)"

@@ -205,8 +205,8 @@ def safe_name(label: object, max_length: int = 60) -> str:
     unique among the labels it has given (``Fz`` and ``fz`` on a case-insensitive disk: ``fz_2``).
     """
     text = str(label)
-    slug = _SLUG_BAD.sub("_", text).lstrip("._-")
-    slug = re.sub(r"_+", "_", slug).strip("_")[:max_length] or "x"
+    slug = re.sub(r"\.{2,}", "_", _SLUG_BAD.sub("_", text)).lstrip("._-")
+    slug = re.sub(r"_+", "_", slug).strip("_")[:max_length].rstrip(".") or "x"
     if slug != text:
         slug = f"{slug}_{hashlib.sha1(text.encode('utf-8', 'surrogatepass')).hexdigest()[:6]}"
     scope = _SCOPE.get()
@@ -288,21 +288,17 @@ class OutputPlan:
         if self._scope is not None:
             self._scope.force = self._scope.force or force
 
-    def _not_an_input(self, path: str, shown: str, overlap: bool = True) -> None:
+    def _not_an_input(self, path: str, shown: str) -> None:
         real, ident = _identity(path)
         for name, (ireal, iident) in self._inputs.items():
             if real == ireal or (ident is not None and ident == iident):
                 raise MftireInputError(f"{shown}: output is the input file {name}; choose another output path")
         if real in self._outputs:
             raise MftireInputError(f"{shown.rstrip(os.sep)}: the same file is also output {self._outputs[real]}")
-        for other, name in self._outputs.items() if overlap else ():  # a file in an output folder, or around one
-            if name.endswith(os.sep) and _inside(real, [other]) or shown.endswith(os.sep) and _inside(other, [real]):
-                raise MftireInputError(f"{shown.rstrip(os.sep)}: overlaps output {name.rstrip(os.sep)}; "
-                                       "choose separate outputs")
         self._outputs[real] = shown
 
     def file(self, path: str | os.PathLike, *, stdout: bool = False, figure: bool = False,
-             replace_ok: bool = False, _in_folder: bool = False) -> str:
+             replace_ok: bool = False) -> str:
         """Check one output file; returns it as ``str``.
 
         ``stdout``: ``-`` is allowed (standard output).  ``figure``: the suffix must be
@@ -320,7 +316,7 @@ class OutputPlan:
             raise MftireInputError(f"{path}: names a folder; this output is a file (give a file name)")
         if figure:
             figure_format(path)
-        self._not_an_input(path, path, overlap=not _in_folder)
+        self._not_an_input(path, path)
         if writes_through(path):
             return path  # a device, FIFO or /dev/stdout: written through (rule 3)
         if self._scope is not None:
@@ -358,7 +354,7 @@ class OutputPlan:
         if self._scope is not None:
             self._scope.folders.add(_real(path))
         for name in names:
-            self.file(os.path.join(path, name), replace_ok=True, _in_folder=True)
+            self.file(os.path.join(path, name), replace_ok=True)
         return path
 
 

@@ -184,7 +184,8 @@ def read_numeric_csv(path: str, required: Sequence[str], optional: Sequence[str]
         if bad.any():
             i = int(np.flatnonzero(bad.to_numpy())[0])
             cell = raw.iloc[i]
-            what = "empty or NaN" if pd.isna(cell) or str(cell).strip().lower() == "nan" else f"{cell!r}"
+            what = ("empty or NaN" if pd.isna(cell) or str(cell).strip().lower() == "nan" else
+                    f"{float(cell):g}" if isinstance(cell, (int, float, np.number)) else f"{cell!r}")
             raise MftireInputError(
                 f"{path}: column '{col}', row {i + 1} (line {i + 2}): {what} is not a finite number"
             )

@@ -647,6 +647,9 @@ def _split_value(rest: str) -> tuple[Value, bool, str | None]:
     return (raw if number is None else number), False, comment
 
 
+_CONTROL_RE = re.compile(r"[\x00-\x08\x0e-\x1f\x7f]")
+
+
 def _decode(data: bytes) -> str:
     """The file's text: UTF-16 (with a byte-order mark, or ASCII text saved as UTF-16 without
     one, as some Windows editors do), else UTF-8, else Latin-1."""
@@ -1048,9 +1051,10 @@ def read_tir(path: str | os.PathLike[str], strict: bool = False) -> TirParameter
     """
     data = Path(path).read_bytes()
     text = _decode(data)
-    if text.count("\0") > max(4, len(text) // 20):  # a few NULs may sit in a quoted value; many: binary
-        line = text.count("\n", 0, text.index("\0")) + 1
-        raise TirError("binary data (NUL bytes): not a text .tir file", os.fspath(path), line)
+    control = _CONTROL_RE.findall(text)
+    if len(control) > max(4, len(text) // 20):  # a few may sit in a quoted value; many: a binary file
+        line = text.count("\n", 0, text.index(control[0])) + 1
+        raise TirError("binary data (control characters): not a text .tir file", os.fspath(path), line)
     return parse_tir(text, path=os.fspath(path), strict=strict)
 
 
