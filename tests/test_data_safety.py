@@ -1100,3 +1100,92 @@ def test_fmu_export_of_a_mapping_takes_the_check(run):
     with pytest.raises(FMUExportError, match="NOMPRES = 0 must be > 0"):
         export_fmu({**read_tir(MF61).flat(), "NOMPRES": 0.0}, run.p("t.fmu"))
     assert not Path(run.p("t.fmu")).exists()
+
+
+# --------------------------------------------------------------------------- processes: signals to the parent
+
+
+def _descendants(pid: int) -> list[tuple[int, str]]:
+    """(pid, command name) of every live process below ``pid`` (Linux /proc)."""
+    children: dict[int, list[tuple[int, str]]] = {}
+    for d in os.listdir("/proc"):
+        if not d.isdigit():
+            continue
+        try:
+            text = Path(f"/proc/{d}/stat").read_text()
+        except OSError:
+            continue
+        rest = text[text.rindex(")") + 2:].split()
+        if rest[0] != "Z":
+            children.setdefault(int(rest[1]), []).append((int(d), text[text.index("(") + 1:text.rindex(")")]))
+    out, todo = [], [pid]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            out.append(child)
+            todo.append(child[0])
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        text = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return text[text.rindex(")") + 2] != "Z"
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux /proc")
+@pytest.mark.parametrize("sig", ["SIGTERM", "SIGINT"])
+@pytest.mark.parametrize("cmd", ["demo", "export-fmu"])
+def test_fmu_and_demo_signal_to_the_parent_stops_everything_within_3_s(tmp_path, cmd, sig):
+    """SIGTERM or SIGINT to the parent alone, while workers (demo) or the C compiler (export-fmu) run:
+    the parent exits within 3 s, no worker or compiler is left, no temporary or build folder stays."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    if cmd == "export-fmu":
+        from conftest import have_c_compiler
+
+        if not have_c_compiler():
+            pytest.skip("no C compiler")
+    tmpdir = tmp_path / "tmp"
+    tmpdir.mkdir()
+    out = tmp_path / ("demo" if cmd == "demo" else "t.fmu")
+    argv = (["demo", "--quick", "--jobs", "2", "--output", str(out)] if cmd == "demo" else
+            ["export-fmu", str(MF61), "--output", str(out)])
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1]), "TMPDIR": str(tmpdir)}
+    proc = subprocess.Popen([sys.executable, "-m", "mftire.cli", *argv], env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        wanted = ("python",) if cmd == "demo" else ("cc", "gcc", "clang", "cc1", "as", "collect2", "ld")
+        start = time.monotonic()
+        while time.monotonic() - start < 120 and proc.poll() is None:
+            if any(name.startswith(wanted) for _, name in _descendants(proc.pid)):
+                break
+            time.sleep(0.01)
+        assert proc.poll() is None, "the command ended before the signal"
+        time.sleep(0.3 if cmd == "demo" else 0.0)
+        running = _descendants(proc.pid)
+        assert running
+        t0 = time.monotonic()
+        os.kill(proc.pid, getattr(signal, sig))
+        proc.wait(10)
+        elapsed = time.monotonic() - t0
+        err = proc.stderr.read()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert elapsed < 3.0, elapsed
+    assert proc.returncode == (143 if sig == "SIGTERM" else 130), err
+    assert err.strip().splitlines()[-1] == f"mftire {cmd}: {'terminated' if sig == 'SIGTERM' else 'interrupted'}"
+    deadline = time.monotonic() + 3.0 - elapsed
+    while time.monotonic() < deadline and any(_alive(p) for p, _ in running):
+        time.sleep(0.05)
+    assert not [(p, n) for p, n in running if _alive(p)]  # no worker, no compiler left
+    assert list(tmpdir.iterdir()) == []  # no mftire-fmu-* build folder, no compiler temporaries
+    if cmd == "export-fmu":
+        assert not out.exists()
+    else:
+        assert not [p for p in out.rglob("*") if p.name.endswith(".tmp") or p.name.startswith(".")]
