@@ -29,7 +29,7 @@ def _lateral(fz: float, n: int = 25, gamma: float = 0.0, **extra: float) -> pd.D
     a = np.deg2rad(np.linspace(-10, 10, n))
     return pd.DataFrame({
         "Fz": fz, "kappa": 0.0, "alpha": a, "gamma": gamma, "Vx": 16.7, "P": 2.2e5,
-        "Fy": -fz * np.sin(1.3 * np.arctan(9 * a)), "Mz": -60 * np.sin(2 * np.arctan(7 * a)), **extra,
+        "Fy": -fz * np.sin(1.3 * np.arctan(9 * a)), "Mz": 60 * np.sin(2 * np.arctan(7 * a)), **extra,  # ISO W signs
     })
 
 
