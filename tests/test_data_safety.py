@@ -1189,3 +1189,12 @@ def test_fmu_and_demo_signal_to_the_parent_stops_everything_within_3_s(tmp_path,
         assert not out.exists()
     else:
         assert not [p for p in out.rglob("*") if p.name.endswith(".tmp") or p.name.startswith(".")]
+
+
+@pytest.mark.parametrize("column", ["Fy", "Mz"])
+def test_data_fit_refuses_sae_signed_forces(run, column):
+    df = pd.read_csv(run.p("sweeps.csv"))
+    df[column] = -df[column]
+    df.to_csv(run.p("sae.csv"), index=False)
+    argv = ["fit", run.p("sae.csv"), "--template", run.p("tyre.tir"), "--output", run.p("f.tir")]
+    run(argv, 2, f"column '{column}'", "has the wrong sign", "SAE-signed data?")
