@@ -311,9 +311,9 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _one_line(exc: BaseException) -> str:
-    """The message of ``exc`` on one line (an OSError names its file once)."""
+    """The message of ``exc`` on one line (a compiler's output, for one, has several: joined with " | ")."""
     text = str(exc)
-    return " ".join(text.split("\n")) if "\n" in text else text
+    return " | ".join(ln.strip() for ln in text.splitlines() if ln.strip()) if "\n" in text else text
 
 
 def _broken_pipe() -> int:

@@ -823,8 +823,6 @@ def test_tir_fit_refuses_a_broken_template(run, case):
 
 @pytest.mark.parametrize("key,value,text", [("LMUX", 0.0, "LMUX = 0: Fx is identically zero"),
                                             ("LMUY", 0.0, "LMUY = 0: Fy is identically zero"),
-                                            ("PROPERTY_FILE_FORMAT", "FOO", "PROPERTY_FILE_FORMAT = 'FOO' is not a "
-                                             "format mftire knows"),
                                             ("TYRESIDE", "MIDDLE", "TYRESIDE = 'MIDDLE' is not one of")])
 def test_tir_suspicious_values_warn_and_fail_info_strict(run, key, value, text):
     _tir_with(Path(run.p("tyre.tir")), {key: value})
@@ -834,6 +832,15 @@ def test_tir_suspicious_values_warn_and_fail_info_strict(run, key, value, text):
     assert main(["info", run.p("tyre.tir"), "--strict"]) == 1
     with pytest.warns(MftireTirWarning, match=text.split(":")[0]):
         mftire.load(run.p("tyre.tir"))
+
+
+def test_tir_unknown_format_name_warns_and_strict_refuses(run):
+    _tir_with(Path(run.p("tyre.tir")), {"PROPERTY_FILE_FORMAT": "FOO"})
+    with pytest.warns(Warning, match="PROPERTY_FILE_FORMAT = 'FOO' is not a format mftire knows"):
+        mftire.load(run.p("tyre.tir"))
+    err = run(["info", run.p("tyre.tir")], 0)
+    assert "warning: " in err and "'FOO' is not a format mftire knows" in err
+    run(["info", run.p("tyre.tir"), "--strict"], 2, "'FOO' is not a format mftire knows", "strict reading")
 
 
 def test_tir_misspelled_key_did_you_mean(run):

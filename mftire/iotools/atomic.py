@@ -20,6 +20,9 @@ import sys
 import tempfile
 from collections.abc import Iterator
 
+from mftire.iotools import output as _output
+from mftire.iotools.output import writes_through
+
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[str]:
@@ -55,29 +58,12 @@ def atomic_path(path: str | os.PathLike) -> Iterator[str]:
     try:
         yield tmp
         os.chmod(tmp, mode)
-        from mftire.iotools.output import final_rename  # the running command's policy (output.py, rule 8)
-
-        final_rename(tmp, path)
+        _output.final_rename(tmp, path)  # the running command's policy (output.py, rule 8)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         _removedirs(created)
         raise
-
-
-def writes_through(path: str | os.PathLike) -> bool:
-    """True when ``path`` is written *through* instead of replaced: it is (or links to) a
-    character device or a FIFO, or it names a descriptor of this process (``/dev/stdout``,
-    ``/dev/fd/N``, ``/proc/self/fd/N``; even when the shell redirected it to a regular file,
-    which must then be filled, not swapped for a new file the shell does not hold)."""
-    name = os.path.abspath(os.fspath(path))
-    if name in ("/dev/stdout", "/dev/stderr") or name.startswith(("/dev/fd/", "/proc/self/fd/")):
-        return os.path.exists(name)
-    try:
-        mode = os.stat(name).st_mode
-    except OSError:
-        return False
-    return stat.S_ISCHR(mode) or stat.S_ISFIFO(mode)
 
 
 def _descriptor(path: str) -> int | None:

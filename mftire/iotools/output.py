@@ -58,7 +58,6 @@ import tempfile
 from collections.abc import Iterable, Iterator
 
 from mftire.errors import MftireInputError
-from mftire.iotools.atomic import writes_through
 
 #: Figure formats by file suffix (matplotlib's writers).
 FIGURE_FORMATS = {
@@ -224,6 +223,21 @@ def safe_name(label: object, max_length: int = 60) -> str:
     return slug
 
 
+def writes_through(path: str | os.PathLike) -> bool:
+    """True when ``path`` is written *through* instead of replaced: it is (or links to) a
+    character device or a FIFO, or it names a descriptor of this process (``/dev/stdout``,
+    ``/dev/fd/N``, ``/proc/self/fd/N``; even when the shell redirected it to a regular file,
+    which must then be filled, not swapped for a new file the shell does not hold)."""
+    name = os.path.abspath(os.fspath(path))
+    if name in ("/dev/stdout", "/dev/stderr") or name.startswith(("/dev/fd/", "/proc/self/fd/")):
+        return os.path.exists(name)
+    try:
+        mode = os.stat(name).st_mode
+    except OSError:
+        return False
+    return stat.S_ISCHR(mode) or stat.S_ISFIFO(mode)
+
+
 def _identity(path: str) -> tuple[str, tuple[int, int] | None]:
     real = os.path.realpath(path)
     try:
@@ -359,4 +373,4 @@ class OutputPlan:
 
 
 __all__ = ["FIGURE_FORMATS", "FORCE_HELP", "OutputPlan", "add_force_option", "command_scope", "figure_format",
-           "final_rename", "rename_noreplace", "safe_name"]
+           "final_rename", "rename_noreplace", "safe_name", "writes_through"]

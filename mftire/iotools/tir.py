@@ -997,6 +997,13 @@ def _check_fittyp(params: TirParameters, where: dict, section_line: dict, source
             if strict:
                 raise FittypError(reason + " (strict reading)", source, fline[0], fline[1])
             warnings.warn(TirWarning(f"{source}, line {fline[0]}: {reason}"), stacklevel=4)
+        elif named is None and token not in GENERIC_FORMATS and fmt is not None:
+            fline = next((where[k] for k in where if k[1] == "PROPERTY_FILE_FORMAT"), (lineno, line))
+            reason = (f"PROPERTY_FILE_FORMAT = {fmt!r} is not a format mftire knows ('USER', 'PAC2002', 'MF_05', "
+                      f"'MF_52', 'MF_61', 'MF_62'); FITTYP = {fittyp} ({model}) decides")
+            if strict:
+                raise FittypError(reason + " (strict reading)", source, fline[0], fline[1])
+            warnings.warn(TirWarning(f"{source}, line {fline[0]}: {reason}"), stacklevel=4)
         return
     if token in FORMAT_MODELS:
         return

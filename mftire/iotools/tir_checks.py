@@ -377,14 +377,6 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
     r0, rim = flat.get("UNLOADED_RADIUS"), flat.get("RIM_RADIUS")
     if _number(r0) and _number(rim) and 0 < r0 <= rim:
         rep.warnings.append(f"RIM_RADIUS = {rim:g} m is not below UNLOADED_RADIUS = {r0:g} m")
-    fmt = flat.get("PROPERTY_FILE_FORMAT")
-    if isinstance(fmt, str):
-        from mftire.iotools.tir import FORMAT_MODELS, GENERIC_FORMATS, OTHER_MODELS, format_token
-
-        token = format_token(fmt)
-        if token not in FORMAT_MODELS and token not in GENERIC_FORMATS and token not in OTHER_MODELS:
-            rep.warnings.append(f"PROPERTY_FILE_FORMAT = {fmt!r} is not a format mftire knows ('USER', 'PAC2002', "
-                                "'MF_05', 'MF_52', 'MF_61', 'MF_62'); FITTYP decides the model")
     side = flat.get("TYRESIDE")
     if isinstance(side, str) and side.strip().upper() not in TYRESIDES:
         rep.warnings.append(f"TYRESIDE = {side!r} is not one of {', '.join(TYRESIDES)}")
