@@ -34,8 +34,8 @@ EVALUATE_ARGUMENTS = ("Fz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "omega
 def warn_units(tyre: Any, Fz, alpha, gamma=0.0, P=None, Vx=None) -> None:
     """One :class:`~mftire.errors.MftireUnitWarning` per tyre and cause, in every use mode, for inputs
     that look like the wrong unit or sign: degrees (|alpha| > 1.5 rad, |gamma| > 1 rad), kN (every Fz
-    below 5 % of FNOMIN), the SAE sign (every Fz negative or zero, some below -5 % of FNOMIN: not a
-    lift-off), bar/psi/kPa (every P below 0.2 bar),
+    below 5 % of FNOMIN), the SAE sign (every Fz of a batch negative or zero, some below -5 % of FNOMIN:
+    not a lift-off; one point alone may be a wheel lifting), bar/psi/kPa (every P below 0.2 bar),
     km/h or mm/s (|Vx| above 250 m/s).  In modes 1xx the limits then clip, with their own warning."""
     warned = tyre.__dict__.setdefault("_unit_warned", set())
 
@@ -58,7 +58,7 @@ def warn_units(tyre: Any, Fz, alpha, gamma=0.0, P=None, Vx=None) -> None:
         if "Fz" not in warned and 0.0 < top < limit:
             warn("Fz", f"every vertical load Fz is below {limit:g} N (5 % of FNOMIN = {tyre.flat['FNOMIN']:g} "
                        f"N; largest {top:g}): Fz is in newtons, the values look like kN (multiply by 1000)")
-        elif "Fz-sign" not in warned and top <= 0.0 and _largest(Fz, absolute=True) > limit:
+        elif "Fz-sign" not in warned and top <= 0.0 and np.size(Fz) > 1 and _largest(Fz, absolute=True) > limit:
             warn("Fz-sign", "every vertical load Fz is negative or zero: in ISO/TYDEX W axes a load on the road is "
                             "positive (SAE files record it as negative: multiply by -1); negative loads mean "
                             "lift-off and give zero forces")

@@ -1046,7 +1046,8 @@ def test_api_turn_slip_at_standstill_takes_its_limit(mode):
 
 
 @pytest.mark.parametrize("kw,text", [({"gamma": 4.0}, "gamma is in radians"), ({"P": 30.0}, "look like psi"),
-                                     ({"Fz": -4000.0}, "negative or zero"), ({"Vx": 1e308}, "Vx is in m/s")])
+                                     ({"Fz": np.array([-4000.0, -6000.0])}, "negative or zero"),
+                                     ({"Vx": 1e308}, "Vx is in m/s")])
 @pytest.mark.parametrize("mode", [111, 211])
 def test_api_unit_warnings_in_every_mode(kw, text, mode):
     tyre = mftire.load(MF61)
