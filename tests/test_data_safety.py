@@ -623,6 +623,11 @@ def test_out_fit_output_and_report_folder_must_differ(run):
     run(argv, 2, "the same file is also output")
 
 
+@pytest.mark.parametrize("sign", ["Fy=2", "Fy=0", "Fy=x", "=-1"])
+def test_data_import_sign_must_be_a_sign(run, sign):
+    run(["import", run.p("run.dat"), "--output", run.p("i.csv"), "--sign", sign], 2, "expected COLUMN=-1 or COLUMN=1")
+
+
 def test_out_import_writes_the_table_and_the_report_apart(run):
     import json
 

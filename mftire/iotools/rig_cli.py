@@ -19,9 +19,12 @@ def _parse_signs(items: Sequence[str] | None) -> dict[str, float]:
     for raw in items or ():
         col, _, val = raw.partition("=")
         try:
-            out[col.strip()] = float(val)
+            sign = float(val)
         except ValueError:
-            raise MftireInputError(f"--sign {raw!r}: expected COLUMN=-1 or COLUMN=1") from None
+            sign = 0.0
+        if sign not in (-1.0, 1.0) or not col.strip():
+            raise MftireInputError(f"--sign {raw!r}: expected COLUMN=-1 or COLUMN=1 (a sign, not a scale)")
+        out[col.strip()] = sign
     return out
 
 
