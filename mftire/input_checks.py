@@ -95,7 +95,8 @@ def _largest(x, absolute: bool) -> float:
 
 def check_input_types(values: Mapping[str, Any]) -> None:
     """Refuse inputs that would become silent numbers: ``None`` (for an input without a default),
-    booleans, dates and times, masked arrays with masked points, and pandas objects whose indexes
+    booleans, complex numbers, dates and times, ragged sequences, masked arrays with masked points, and
+    pandas objects whose indexes
     differ (they would be combined by position).  :class:`TypeError` / :class:`ValueError` saying why."""
     indexed: list[tuple[str, Any]] = []
     for name, v in values.items():
@@ -105,6 +106,8 @@ def check_input_types(values: Mapping[str, Any]) -> None:
             raise TypeError(f"{name} is None: give a number or an array (in SI units)")
         if isinstance(v, (bool, np.bool_)):
             raise TypeError(f"{name} = {v!r} is a boolean, not a number (in SI units)")
+        if isinstance(v, (complex, np.complexfloating)):
+            raise TypeError(f"{name} = {v!r} is a complex number; give a real one (in SI units)")
         if isinstance(v, np.ma.MaskedArray):
             if np.ma.getmaskarray(v).any():
                 raise ValueError(f"{name} is a masked array with {int(np.ma.getmaskarray(v).sum())} masked "
@@ -117,12 +120,15 @@ def check_input_types(values: Mapping[str, Any]) -> None:
         if isinstance(v, (list, tuple)):
             try:
                 v = np.asarray(v)
-            except (TypeError, ValueError):  # ragged: the evaluator's own check says so
-                continue
+            except (TypeError, ValueError):
+                raise ValueError(f"{name} is a ragged sequence (rows of different lengths): give a number or "
+                                 "an array of one shape") from None
         dtype = getattr(v, "dtype", None)
         kind = getattr(dtype, "kind", None)
         if kind == "b":
             raise TypeError(f"{name} holds booleans, not numbers (in SI units)")
+        if kind == "c":
+            raise TypeError(f"{name} holds complex numbers; give real ones (in SI units)")
         if kind in ("M", "m") or isinstance(v, (np.datetime64, np.timedelta64)) or _is_datetime(v):
             raise TypeError(f"{name} holds dates or times, not numbers (in SI units)")
         if kind == "O":
