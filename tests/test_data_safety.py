@@ -781,7 +781,7 @@ def test_names_figures_of_hostile_labels_do_not_crash(tmp_path):
 VALUE_ERRORS = {  # values that made a channel NaN or absurd, and the message
     "NOMPRES=0": ({"NOMPRES": 0.0}, "NOMPRES = 0 must be > 0"),
     "NOMPRES<0": ({"NOMPRES": -2e5}, "NOMPRES = -200000 must be > 0"),
-    "LFZO=0": ({"LFZO": 0.0}, "LFZO = 0 must be > 0"),
+    "LFZO=0": ({"LFZO": 0.0}, "LFZO = 0 must be >= 0.001"),
     "LONGVL=0": ({"LONGVL": 0.0}, "LONGVL = 0 must be > 0"),
     "VXLOW=0": ({"VXLOW": 0.0}, "VXLOW = 0 must be > 0"),
     "LMUX<0": ({"LMUX": -1.0}, "LMUX = -1 must be >= 0"),
@@ -790,6 +790,9 @@ VALUE_ERRORS = {  # values that made a channel NaN or absurd, and the message
     "KPUMIN>KPUMAX": ({"KPUMIN": 1.0, "KPUMAX": -1.0}, "KPUMIN = 1 is not below KPUMAX = -1"),
     "CAMMIN>CAMMAX": ({"CAMMIN": 0.1, "CAMMAX": -0.1}, "CAMMIN = 0.1 rad is not below CAMMAX"),
     "FZMIN>FZMAX": ({"FZMIN": 9000.0, "FZMAX": 100.0}, "FZMIN = 9000 N is not below FZMAX = 100 N"),
+    "LFZO=1e-9": ({"LFZO": 1e-9}, "LFZO = 1e-09 must be >= 0.001"),
+    "PKX2=1e308": ({"PKX2": 1e308}, "PKX2 = 1e+308: beyond any Magic Formula coefficient"),
+    "RHY2=-1e308": ({"RHY2": -1e308}, "RHY2 = -1e+308: beyond any Magic Formula coefficient"),
     "mu=1e6": ({"PDX1": 1e6}, "peak friction of Fx 1e+06"),
     "muy=-50": ({"PDY1": -50.0}, "peak friction of Fy"),
     "extension=1e300": (None, "EXT1_C1 = 1e+300 is absurd"),

@@ -728,7 +728,8 @@ def parse_tir(text: str, path: Any = None, strict: bool = False) -> TirParameter
             raise fail(cls, f"{reason} (strict reading)", lineno, line)
         default = None
         if used and p is not None:
-            default = "NOMPRES" if key == "INFLPRES" else f"{p.default:g}" + ("" if p.unit == "-" else f" {p.unit}")
+            default = ("NOMPRES" if key == "INFLPRES" else repr(p.default) if isinstance(p.default, str)
+                       else f"{p.default:g}" + ("" if p.unit == "-" else f" {p.unit}"))
         tolerated.append((lineno, reason, line, key, default))
 
     tolerated: list[tuple[int, str, str, str, str | None]] = []

@@ -133,7 +133,8 @@ PARAMETER_LIMITS: tuple[Limit, ...] = (
     Limit("WIDTH", ">=", 0.0, "a width is not negative"),
     Limit("RIM_RADIUS", ">=", 0.0, "a radius is not negative"),
     Limit("NOMPRES", ">", 0.0, "dpi = (P - NOMPRES)/NOMPRES (eq 4.E2b): Fx, My and Cz come out NaN"),
-    Limit("LFZO", ">", 0.0, "Fz0' = LFZO·FNOMIN divides dfz (eqs 4.E1, 4.E2a): every force comes out NaN"),
+    Limit("LFZO", ">=", 1e-3, "Fz0' = LFZO·FNOMIN divides dfz (eqs 4.E1, 4.E2a): every force comes out NaN "
+          "or overflows"),
     Limit("LONGVL", ">", 0.0, "the default speed and Vs/LONGVL (eq 4.E7): Re and the speed terms come out NaN"),
     Limit("VXLOW", ">", 0.0, "the low-speed reduction divides by it: NaN at standstill"),
     Limit("LMUX", ">=", 0.0, "a negative friction scale turns Fx against the slip"),
@@ -151,6 +152,9 @@ FRICTION_DFZ = (-0.5, 0.0, 1.0)
 #: An extension coefficient beyond this multiple of its form's fitting bounds is absurd
 #: (:data:`mftire.mf.extensions.FORMS`; e.g. C1 = 1e300 gives forces of 1e304 N).
 EXTENSION_BOUND_FACTOR = 1e3
+#: A Magic Formula coefficient or scaling factor beyond this magnitude is absurd: it overflows a channel
+#: (the largest in real files is about 2e3: RBY4, PEY5).
+COEFFICIENT_MAX = 1e6
 #: Known values of the string keys (a warning otherwise; they do not change the numbers).
 TYRESIDES = ("LEFT", "RIGHT", "SYMMETRIC", "UNKNOWN")
 
@@ -182,8 +186,20 @@ def value_errors(flat: Mapping[str, Any], extensions: Mapping[str, Any] | None =
         if math.isfinite(mu) and mu > MU_MAX:
             out.append(f"peak friction of {force} {mu:.3g} ({d1} = {_show(a)}, {d2} = {_show(b)}, {scale} = "
                        f"{_show(lam)}) is far beyond rubber (limit {MU_MAX:g}; eqs 4.E13, 4.E23)")
+    huge = [k for k, v in flat.items() if k in _BOUNDED_KEYS and _number(v) and math.isfinite(float(v))
+            and abs(float(v)) > COEFFICIENT_MAX]
+    if huge:
+        out.append(f"{', '.join(f'{k} = {_show(flat[k])}' for k in huge[:4])}"
+                   + (f" and {len(huge) - 4} more" if len(huge) > 4 else "")
+                   + f": beyond any Magic Formula coefficient (|value| <= {COEFFICIENT_MAX:g}); a channel would "
+                   "overflow")
     out += _extension_errors(extensions)
     return out
+
+
+#: Keys of the force and moment coefficients and the scaling factors (:data:`COEFFICIENT_MAX`).
+_BOUNDED_KEYS = frozenset(p.key for p in PARAMETERS if p.section in (*COEFFICIENT_SECTIONS, "SCALING_COEFFICIENTS")
+                          and p.unit != "str")
 
 
 def _extension_errors(section: Mapping[str, Any] | None) -> list[str]:
@@ -414,4 +430,4 @@ def check_tyre(tyre: Any) -> CheckReport:
 __all__ = ["COEFFICIENT_SECTIONS", "CORE_KEYS", "CheckReport", "EXTENSION_BOUND_FACTOR", "Limit", "MU_MAX",
            "OPTIONAL_SECTIONS", "OPTIONAL_SECTIONS_6X", "PARAMETER_LIMITS", "PLAUSIBLE", "RANGE_PAIRS",
            "REQUIRED_KEYS", "REQUIRED_SECTIONS", "TirCheckError", "WARN_MISSING", "ZERO_MZ", "check_parameters",
-           "check_tyre", "checked", "required_keys", "value_errors"]
+           "check_tyre", "checked", "required_keys", "value_errors", "COEFFICIENT_MAX"]
