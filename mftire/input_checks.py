@@ -151,7 +151,7 @@ def _is_datetime(x: Any) -> bool:
 def check_keywords(given: Mapping[str, Any], required: Sequence[str]) -> None:
     """Extra keyword arguments must be variables the tyre's extensions need; else a
     :class:`TypeError` with the likely intended name."""
-    from mftire.iotools.sweeps import _ALIASES  # common names of the schema quantities (one table)
+    from mftire.iotools.sweeps import COLUMN_ALIASES  # common names of the schema quantities (one table)
 
     extra = [k for k in given if k not in required]
     if not extra:
@@ -159,7 +159,7 @@ def check_keywords(given: Mapping[str, Any], required: Sequence[str]) -> None:
     name = extra[0]
     known = [*EVALUATE_ARGUMENTS, *required]
     low = name.lower()
-    guess = next((q for q, names in _ALIASES.items() if low in names and q in known), None)
+    guess = next((q for q, names in COLUMN_ALIASES.items() if low in names and q in known), None)
     guess = guess or next((k for k in known if k.lower() == low), None)
     if guess is None:
         close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
@@ -184,11 +184,43 @@ def check_constants(flat: Mapping[str, float], path: Any = None, extensions: Map
         v = flat[key]
         if not np.isfinite(v):
             raise TirCheckError(f"{where}{key} = {float(v):g} must be > 0")
-    errors = value_errors(flat, extensions)
+    errors = value_errors(flat) + extension_errors(extensions)
     if errors:
         more = f" (and {len(errors) - 1} more problem(s); see mftire info)" if len(errors) > 1 else ""
         raise TirCheckError(f"{where}{errors[0]}{more}")
 
 
-__all__ = ["EVALUATE_ARGUMENTS", "UNIT_LIMITS", "check_constants", "check_input_types", "check_keywords",
-           "warn_units"]
+#: An extension coefficient beyond this multiple of its form's fitting bounds is absurd
+#: (:data:`mftire.mf.extensions.FORMS`; e.g. C1 = 1e300 gives forces of 1e304 N).
+EXTENSION_BOUND_FACTOR = 1e3
+
+
+def extension_errors(section: Mapping[str, Any] | None) -> list[str]:
+    """Absurd terms of an ``[MFTIRE_EXTENSIONS]`` section: a coefficient beyond
+    :data:`EXTENSION_BOUND_FACTOR` times its form's fitting bounds, a zero ``SCALE``."""
+    if not section:
+        return []
+    from mftire.errors import MftireInputError
+    from mftire.mf.extensions import SECTION, parse_section
+
+    try:
+        ext = parse_section(section)
+    except MftireInputError:
+        return []  # the section's own errors are raised where it is parsed
+    out = []
+    for t in ext.terms:
+        for key in t.coefficient_keys:
+            v = t.numbers.get(key, 0.0)
+            lo, hi = t.bounds(key)
+            limit = EXTENSION_BOUND_FACTOR * max(abs(lo), abs(hi), 1.0)
+            if isinstance(v, (int, float)) and math.isfinite(float(v)) and abs(float(v)) > limit:
+                out.append(f"[{SECTION}] {key} = {float(v):g} is absurd for a {t.form.name} term (fitting bounds "
+                           f"{lo:g} .. {hi:g}; limit |{key}| <= {limit:g})")
+        scale = t.numbers.get(t.key("SCALE"))
+        if isinstance(scale, (int, float)) and float(scale) == 0.0:
+            out.append(f"[{SECTION}] {t.key('SCALE')} = 0: z = (u - REF)/SCALE divides by it")
+    return out
+
+
+__all__ = ["EVALUATE_ARGUMENTS", "EXTENSION_BOUND_FACTOR", "UNIT_LIMITS", "check_constants", "check_input_types",
+           "check_keywords", "extension_errors", "warn_units"]

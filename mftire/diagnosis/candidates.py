@@ -28,8 +28,8 @@ import numpy as np
 import pandas as pd
 
 from mftire.iotools.columns import NOT_VARIABLES
-from mftire.iotools.sweeps import group_sweeps
 from mftire.mf.basic import slip_speed
+from mftire.segmentation.grouping import group_sweeps
 
 #: Derived candidates, in a fixed order.
 DERIVED = ("Vs", "Vx", "P", "Fz_dev", "sign_alpha", "sign_kappa", "sweep_dir", "sequence", "energy")

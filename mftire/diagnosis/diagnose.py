@@ -21,7 +21,6 @@ Procedure (:func:`diagnose`)
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -50,8 +49,9 @@ from mftire.diagnosis.ranking import (
     rank_candidates,
 )
 from mftire.errors import MftireInputError
-from mftire.fitting.data import noise_std
-from mftire.iotools.sweeps import MEASURED_COLUMNS
+from mftire.fitting.weights import noise_std
+from mftire.iotools.sweeps import MEASURED_COLUMNS, fit_rows
+from mftire.progress import reporter
 from mftire.tyre import Tyre, TyreLike, as_tyre
 
 
@@ -95,11 +95,6 @@ class DiagnosisResult:
             return head + "; no extension reduced the residual"
         kind = "physical extension" if e.physical else "GENERIC correction (not physics)"
         return head + f"; {kind} '{e.name}' removes {100 * e.removed:.0f} % of the training residual"
-
-
-def _progress(msg: str, enabled: bool) -> None:
-    if enabled:
-        print(f"[diagnose] {msg}", file=sys.stderr, flush=True)
 
 
 def _model(tyre: Tyre, df: pd.DataFrame) -> dict[str, np.ndarray]:
@@ -344,9 +339,10 @@ def _diagnose(
     ranking_kwargs: Mapping | None,
 ) -> DiagnosisResult:
     tyre = as_tyre(tyre)
-    if progress is None:
-        progress = sys.stderr.isatty()
-    df = with_sweeps(data.reset_index(drop=True))
+    say = reporter(progress, "mftire diagnose")
+    # the sweep rows; rows an importer kept outside the sweeps (fit_row False: warm-up, load ramps) are
+    # left out until the candidates use them (issue 21)
+    df = with_sweeps(fit_rows(data).reset_index(drop=True))
     chans, not_measured = measured_channels(df, channels or MEASURED_COLUMNS)
     if not chans:
         raise MftireInputError("no measured channel (Fx, Fy, Mz, Mx, My) with data to diagnose"
@@ -356,7 +352,7 @@ def _diagnose(
     cands = candidates(df)
     by_name = {c.name: c for c in cands}
     variables = _variables_for(tyre, df)
-    _progress(f"{len(df)} rows, {df['sweep_id'].nunique()} sweeps, channels {', '.join(chans)}", progress)
+    say(f"{len(df)} rows, {df['sweep_id'].nunique()} sweeps, channels {', '.join(chans)}")
 
     model = _model(tyre, df)
     R0 = tyre["UNLOADED_RADIUS"]
@@ -376,13 +372,13 @@ def _diagnose(
             residuals[ch] = normalised_residual(ch, y, model[ch], Fz, R0)
     X0 = baseline_features(df["kappa"].to_numpy(float), df["alpha"].to_numpy(float), df["gamma"].to_numpy(float),
                            Fz, tyre["FNOMIN"])  # fmt: skip
-    _progress(f"ranking {len(cands)} candidates", progress)
+    say(f"ranking {len(cands)} candidates")
     ranking = rank_candidates(residuals, peaks, X0, cands, df["sweep_id"].to_numpy(), n_perm=n_perm, seed=seed,
                               **(ranking_kwargs or {}))  # fmt: skip
     for name, c in by_name.items():
         if name not in df.columns:
             df[name] = c.values
-    _progress("profiling the scaling factors per sweep", progress)
+    say("profiling the scaling factors per sweep")
     cand_values = {c.name: c.values for c in cands if c.name not in HISTORY_CANDIDATES}
     profiles = profile_factors(tyre, df, cand_values, [c for c in chans if c in ("Fx", "Fy")], noise, seed=seed)
     significant = [e for e in ranking if e.significant]
@@ -401,7 +397,7 @@ def _diagnose(
     column, values = holdout[0], list(holdout[1])
     test = holdout_mask(df, column, values)
     train = ~test
-    _progress(f"holding out {column} = {values} ({int(test.sum())} rows)", progress)
+    say(f"holding out {column} = {values} ({int(test.sum())} rows)")
 
     group = [e for e in significant if e.score >= 0.6 * top.score][:3]
     group += [e for e in significant if e.channel in PROFILE_CHANNELS and e not in group][:2]
@@ -431,7 +427,7 @@ def _diagnose(
         prob.variables = {k: np.asarray(val)[train] for k, val in variables.items()}
         prob = drop_outliers(prob)
         v = prob.df["_cand"].to_numpy(float)
-        _progress(f"fitting effects for {e.variable}", progress)
+        say(f"fitting effects for {e.variable}")
         eff_ch = [ch for ch, sc in e.channel_scores.items() if sc >= max(0.05, 0.25 * e.score)] or [e.channel]
         # held-out folds: the levels of a sweep-level candidate (a level never seen in training, as the
         # held-out condition), else groups of sweeps
@@ -465,7 +461,7 @@ def _diagnose(
                                profiles=profiles)  # fmt: skip
     effect, cause, context = best
     # the chosen candidate's best laws and the control, refitted with every MF coefficient
-    _progress(f"refitting every coefficient with the laws of {effect.variable}", progress)
+    say(f"refitting every coefficient with the laws of {effect.variable}")
     prob, law_fits, eff_ch, folds, in_blocks, control_cv = context
     refined, extended, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv)
     if refined is None:

@@ -1,6 +1,6 @@
 """Map a candidate variable to model extensions, fit them, and choose one.
 
-An effect is a law of :data:`LAWS`: MF scaling factors times a form of
+An effect is a law of :data:`EFFECTS_FOR`: MF scaling factors times a form of
 :mod:`mftire.mf.extensions` in the candidate's variable (or the standard pressure terms).
 Each is fitted by bounded least squares on the
 training data (gross outliers removed; each channel on the rows where it is a primary
@@ -656,7 +656,7 @@ def _full_refit(data: pd.DataFrame, tyre: Tyre) -> Tyre:
     stages (:data:`REFIT_STAGES`), with the fitter's own start values; Mx and My stay as fitted."""
     import warnings
 
-    from mftire.fitting.core import fit_tir
+    from mftire.fitting.fitter import fit_tir
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

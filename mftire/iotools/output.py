@@ -44,7 +44,6 @@ commands:
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import contextvars
 import ctypes
@@ -66,11 +65,6 @@ FIGURE_FORMATS = {
 }  # fmt: skip
 
 FORCE_HELP = "replace existing output files (and write into a non-empty output folder); default: refuse"
-
-
-def add_force_option(parser: argparse.ArgumentParser) -> None:
-    """Add the common ``--force`` option to a sub-command."""
-    parser.add_argument("--force", "-f", action="store_true", help=FORCE_HELP)
 
 
 def figure_format(path: str | os.PathLike) -> str:
@@ -372,5 +366,5 @@ class OutputPlan:
         return path
 
 
-__all__ = ["FIGURE_FORMATS", "FORCE_HELP", "OutputPlan", "add_force_option", "command_scope", "figure_format",
-           "final_rename", "rename_noreplace", "safe_name", "writes_through"]
+__all__ = ["FIGURE_FORMATS", "FORCE_HELP", "OutputPlan", "command_scope", "figure_format", "final_rename",
+           "rename_noreplace", "safe_name", "writes_through"]

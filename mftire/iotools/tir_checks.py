@@ -121,9 +121,6 @@ _QUANTITY = {"FNOMIN": ("FORCE",), "UNLOADED_RADIUS": ("LENGTH",), "NOMPRES": ("
              "INFLPRES": ("PRESSURE", "FORCE", "LENGTH")}
 
 
-#: An extension coefficient beyond this multiple of its form's fitting bounds is absurd
-#: (:data:`mftire.mf.extensions.FORMS`; e.g. C1 = 1e300 gives forces of 1e304 N).
-EXTENSION_BOUND_FACTOR = 1e3
 #: Known values of the string keys (a warning otherwise; they do not change the numbers).
 TYRESIDES = ("LEFT", "RIGHT", "SYMMETRIC", "UNKNOWN")
 
@@ -133,9 +130,10 @@ def _show(v: Any) -> str:
     return f"{float(v):g}" if _number(v) or hasattr(v, "__float__") else repr(v)
 
 
-def value_errors(flat: Mapping[str, Any], extensions: Mapping[str, Any] | None = None) -> list[str]:
-    """The errors of :data:`PARAMETER_LIMITS`, :data:`RANGE_PAIRS`, :data:`MU_MAX` and the extension
-    coefficients for flat SI values (absent keys are not checked); one string per problem."""
+def value_errors(flat: Mapping[str, Any]) -> list[str]:
+    """The errors of :data:`PARAMETER_LIMITS`, :data:`RANGE_PAIRS`, :data:`MU_MAX`, :data:`COEFFICIENT_MAX`
+    for flat SI values (absent keys are not checked); one string per problem.  The extension coefficients
+    are checked one layer up (:func:`mftire.input_checks.extension_errors`: they need the model's forms)."""
     out: list[str] = []
     failed: set[str] = set()
     for lim in PARAMETER_LIMITS:  # the first bound a key fails is reported
@@ -164,40 +162,12 @@ def value_errors(flat: Mapping[str, Any], extensions: Mapping[str, Any] | None =
                    + (f" and {len(huge) - 4} more" if len(huge) > 4 else "")
                    + f": beyond any Magic Formula coefficient (|value| <= {COEFFICIENT_MAX:g}, exponents "
                    f"{', '.join(EXPONENT_KEYS)} <= {EXPONENT_MAX:g}); a channel would overflow")
-    out += _extension_errors(extensions)
     return out
 
 
 #: Keys of the force and moment coefficients and the scaling factors (:data:`COEFFICIENT_MAX`).
 _BOUNDED_KEYS = frozenset(p.key for p in PARAMETERS if p.section in (*COEFFICIENT_SECTIONS, "SCALING_COEFFICIENTS")
                           and p.unit != "str")
-
-
-def _extension_errors(section: Mapping[str, Any] | None) -> list[str]:
-    if not section:
-        return []
-    from mftire.mf.extensions import parse_section
-
-    try:
-        ext = parse_section(section)
-    except MftireInputError:
-        return []  # the section's own errors are raised where it is parsed
-    out = []
-    for t in ext.terms:
-        for key in t.coefficient_keys:
-            v = t.numbers.get(key, 0.0)
-            lo, hi = t.bounds(key)
-            limit = EXTENSION_BOUND_FACTOR * max(abs(lo), abs(hi), 1.0)
-            if _number(v) and math.isfinite(float(v)) and abs(float(v)) > limit:
-                out.append(f"[{SECTION_EXT}] {key} = {_show(v)} is absurd for a {t.form.name} term (fitting bounds "
-                           f"{lo:g} .. {hi:g}; limit |{key}| <= {limit:g})")
-        scale = t.numbers.get(t.key("SCALE"))
-        if _number(scale) and float(scale) == 0.0:
-            out.append(f"[{SECTION_EXT}] {t.key('SCALE')} = 0: z = (u - REF)/SCALE divides by it")
-    return out
-
-
-SECTION_EXT = "MFTIRE_EXTENSIONS"
 
 
 class TirCheckError(MftireInputError):
@@ -347,8 +317,7 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
         rep.errors.append(f"non-finite value(s): {', '.join(f'{k} = {flat[k]}' for k in bad[:6])}"
                           + (f" and {len(bad) - 6} more" if len(bad) > 6 else ""))
     file_units = getattr(params, "file_units", None) or {}
-    ext_section = secs.get(SECTION_EXT) if isinstance(secs, Mapping) else None
-    rep.errors += value_errors(flat, ext_section if isinstance(ext_section, Mapping) else None)
+    rep.errors += value_errors(flat)
     odd, hints = [], []
     for key, (lo, hi) in PLAUSIBLE.items():
         v = flat.get(key)
@@ -398,7 +367,7 @@ def check_tyre(tyre: Any) -> CheckReport:
     return check_parameters(tyre.parameters, source=getattr(tyre.parameters, "path", None) or tyre.name)
 
 
-__all__ = ["COEFFICIENT_SECTIONS", "CORE_KEYS", "CheckReport", "EXTENSION_BOUND_FACTOR", "Limit", "MU_MAX",
+__all__ = ["COEFFICIENT_SECTIONS", "CORE_KEYS", "CheckReport", "Limit", "MU_MAX",
            "OPTIONAL_SECTIONS", "OPTIONAL_SECTIONS_6X", "PARAMETER_LIMITS", "PLAUSIBLE", "RANGE_PAIRS",
            "REQUIRED_KEYS", "REQUIRED_SECTIONS", "TirCheckError", "WARN_MISSING", "ZERO_MZ", "check_parameters",
            "check_tyre", "checked", "required_keys", "value_errors", "COEFFICIENT_MAX"]

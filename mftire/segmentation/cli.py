@@ -1,4 +1,4 @@
-"""``mftire import RAW --output SWEEPS.csv``: the command line of :mod:`mftire.iotools.rig`.
+"""``mftire import RAW --output SWEEPS.csv``: the command line of :mod:`mftire.segmentation.rig_segments`.
 
 Kept apart from the importer so that registering the command (``mftire --help``) does
 not load pandas.
@@ -31,7 +31,8 @@ def _parse_signs(items: Sequence[str] | None) -> dict[str, float]:
 def _cmd_import(args: argparse.Namespace) -> int:
     from mftire.iotools.atomic import write_text_atomic
     from mftire.iotools.output import OutputPlan
-    from mftire.iotools.rig import import_rig, parse_map_options
+    from mftire.iotools.rig import parse_map_options
+    from mftire.segmentation.rig_segments import import_rig
 
     plan = OutputPlan([args.raw, args.columns_map], args.force)  # every output checked before any work
     plan.file(args.output)
@@ -49,8 +50,9 @@ def _cmd_import(args: argparse.Namespace) -> int:
     if args.report:
         write_text_atomic(args.report, json.dumps(rep.to_dict(), indent=1, default=float) + "\n")
     print(str(rep))
-    print(f"mftire import: wrote {args.output} ({len(table)} points, {rep.n_sweeps} sweeps, {rep.seconds:.1f} s)",
-          file=sys.stdout)
+    left = len(table) - rep.n_points
+    print(f"mftire import: wrote {args.output} ({rep.n_points} points in {rep.n_sweeps} sweeps, {left} rows outside "
+          f"the sweeps kept with fit_row = False, {rep.seconds:.1f} s)", file=sys.stdout)
     return 0
 
 
@@ -79,7 +81,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--warmup", default="auto", metavar="auto|none|SECONDS",
                    help="warm-up to drop: auto (first segment when its condition recurs), none, or seconds")
     p.add_argument("--report", metavar="REPORT.json", help="also write the import report as JSON")
-    from mftire.iotools.output import add_force_option
+    from mftire.cli_options import add_force_option
 
     add_force_option(p)
     p.set_defaults(func=_cmd_import)
