@@ -321,7 +321,7 @@ def _frame_evaluate(self: Tyre, df: pd.DataFrame, mode: int = 111, name: str = "
     missing = [c for c in _FRAME_REQUIRED if c not in kw]
     missing += [v for v in self.required_variables if v not in df.columns]
     if missing:
-        from mftire.iotools.tables import missing_columns_hint
+        from mftire.iotools.loaders import missing_columns_hint
 
         raise MftireInputError(
             f"{name}: missing column(s) {', '.join(missing)} (have: {', '.join(map(str, df.columns))})"

@@ -1226,8 +1226,8 @@ def test_tir_mutated_constants_are_refused_or_evaluate_finite(tmp_path):
     seed): each is refused with one line naming the file, or it evaluates to finite forces and moments."""
     import random
 
+    from mftire.iotools.evaluator_keys import evaluator_keys
     from mftire.iotools.tir import write_tir
-    from mftire.mf.usedkeys import evaluator_keys
     from mftire.parameters import BY_KEY
 
     keys = sorted(k for k in evaluator_keys() if k != "FITTYP" and k in BY_KEY and BY_KEY[k].unit != "str")
