@@ -587,3 +587,9 @@ COEFFICIENT_MAX = 1e6
 #: Coefficients that are exponents (Kxk = Fz·(PKX1 + PKX2·dfz)·exp(PKX3·dfz), eq 4.E15; My ∝ (Fz/FNOMIN)^QSY7
 #: (P/NOMPRES)^QSY8, eq 4.E70): beyond this magnitude they overflow over the load range.
 EXPONENT_KEYS, EXPONENT_MAX = ("PKX3", "QSY7", "QSY8"), 100.0
+
+
+def parameter_bounds() -> tuple[tuple[str, str], ...]:
+    """:data:`PARAMETER_LIMITS` as ``(key, "> 0")`` pairs (``op bound``), the form the FMU's generated C
+    check of its tunable parameters reads (``mftire.mf.spec.PARAMETER_BOUNDS``)."""
+    return tuple((lim.key, f"{lim.op} {lim.bound:g}") for lim in PARAMETER_LIMITS)
