@@ -886,6 +886,9 @@ def test_tir_limits_table_names_known_keys():
     assert all(k in BY_KEY for k in keys)
     flat = with_defaults_of(MF61)
     assert all(lim.holds(flat[lim.key]) for lim in PARAMETER_LIMITS)  # the defaults and MF61 pass
+    from mftire.parameters import parameter_bounds
+
+    assert ("NOMPRES", "> 0") in parameter_bounds() and ("LFZO", ">= 0.001") in parameter_bounds()  # the FMU's form
 
 
 def with_defaults_of(path: Path) -> dict:
