@@ -8,14 +8,15 @@ input print one line naming the file, column and row, and exit with code 2.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import TYPE_CHECKING
 
 from mftire.data import default_tir  # noqa: F401  (moved to mftire.data; kept importable from here)
-from mftire.errors import MftireError
+from mftire.errors import MftireError, Terminated
 
 if TYPE_CHECKING:  # pandas, scipy, matplotlib and the feature packages load when a command needs them
     import pandas as pd
@@ -64,9 +65,20 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 def evaluate_columns(result: pd.DataFrame, n_inputs: int) -> pd.DataFrame:
     """``result`` (the ``n_inputs`` input columns, then the model outputs) with every output
     whose name is also an input column (a measured ``Fx``, the echoed ``Fz``) renamed
-    ``<name>_model`` (``Fx_model``), so that no two columns share a name."""
+    ``<name>_model`` (``Fx_model``; ``Fx_model_2`` when the input has a ``Fx_model`` too, and so on),
+    so that no two columns share a name."""
     inputs = [str(c) for c in result.columns[:n_inputs]]
-    outputs = [f"{c}_model" if str(c) in inputs else str(c) for c in result.columns[n_inputs:]]
+    taken = set(inputs)
+    outputs = []
+    for c in map(str, result.columns[n_inputs:]):
+        name, n = c, 1
+        if name in taken:
+            name = f"{c}_model"
+            while name in taken:
+                n += 1
+                name = f"{c}_model_{n}"
+        taken.add(name)
+        outputs.append(name)
     return result.set_axis([*inputs, *outputs], axis=1)
 
 
@@ -104,6 +116,9 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
     params = read_tir(args.tir, strict=args.strict)
     report = check_parameters(params)
+    from mftire.input_checks import extension_errors  # the model layer's check of [MFTIRE_EXTENSIONS]
+
+    report.errors += extension_errors(params.sections.get("MFTIRE_EXTENSIONS"))
     try:
         print(tyre_info(Tyre(params)))
     except MftireError:  # a file the evaluator cannot take (FNOMIN = 0): the checks say why
@@ -325,15 +340,39 @@ def _one_line_warning(prefix: str) -> _OneLineWarnings:
     return _OneLineWarnings(prefix)
 
 
+@contextlib.contextmanager
+def _sigterm_interrupts() -> Iterator[None]:
+    """While a command runs, SIGTERM raises :class:`~mftire.errors.Terminated` (a KeyboardInterrupt) in the
+    main thread, as Ctrl-C does, so that worker processes, the C compiler and temporary folders are
+    stopped and removed on the way out; the previous handler is restored after."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise Terminated()
+
+    old = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     import warnings
+
+    from mftire.iotools.output import command_scope
 
     parser = build_parser()
     args = parser.parse_args(argv)
     prefix = f"mftire {args.command}"
     shown = _one_line_warning(prefix)
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), command_scope(), _sigterm_interrupts():
             warnings.showwarning = shown
             for category in _own_warnings():  # every one reaches `shown`, which prints each once with its count
                 warnings.simplefilter("always", category)
@@ -343,13 +382,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (MftireError, OSError) as exc:
         if isinstance(exc, BrokenPipeError):
             return _broken_pipe()
-        print(f"{prefix}: error: {exc}", file=sys.stderr)
+        print(f"{prefix}: error: {_one_line(exc)}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"{prefix}: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        terminated = isinstance(exc, Terminated)
+        print(f"{prefix}: {'terminated' if terminated else 'interrupted'}", file=sys.stderr)
+        return 143 if terminated else 130
     finally:
         shown.repeats()
+
+
+def _one_line(exc: BaseException) -> str:
+    """The message of ``exc`` on one line (a compiler's output, for one, has several: joined with " | ")."""
+    text = str(exc)
+    return " | ".join(ln.strip() for ln in text.splitlines() if ln.strip()) if "\n" in text else text
 
 
 def _broken_pipe() -> int:

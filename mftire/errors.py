@@ -21,3 +21,8 @@ class MftireTirWarning(MftireWarning):
 
 class MftireUnitWarning(MftireWarning):
     """Inputs that look like the wrong unit (degrees for radians, kN for N); see :mod:`mftire.tyre`."""
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM during a command (:func:`mftire.cli.main`): raised like Ctrl-C's KeyboardInterrupt so that
+    workers, compilers and temporary folders are cleaned up on the way out."""

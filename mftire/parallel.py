@@ -190,10 +190,13 @@ class Executor:
                 if progress is not None:
                     progress(i + 1, len(items))
             return
-        from concurrent.futures import ProcessPoolExecutor
-
-        with ProcessPoolExecutor(max_workers=n) as pool:
+        pool = _process_pool(n)
+        try:
             yield from _collect(self, pool, _submit_all(pool, fn, items, progress), items, labels)
+        except BaseException:  # Ctrl-C, SIGTERM, an error, the consumer gone: stop the workers now
+            _stop(pool, interrupted=True)
+            raise
+        _stop(pool, interrupted=False)
 
     def start_map(self, fn: Callable[[T], R], items: Iterable[T], *, labels: Sequence[str] | Callable | None = None,
                   progress: Callable[[int, int], None] | None = None) -> Pending[R]:
@@ -222,9 +225,7 @@ class Executor:
         if self.scheduler:
             cm: Any = _dask_client(str(self.scheduler), self.quiet, self.tune_workers)
         else:
-            from concurrent.futures import ProcessPoolExecutor
-
-            cm = _pool_cm(ProcessPoolExecutor(max_workers=self.workers))
+            cm = _pool_cm(_process_pool(self.workers))
         with cm as pool:
             ex = Executor(jobs=self.jobs, scheduler=self.scheduler, worker_timeout=self.worker_timeout,
                           quiet=self.quiet, tune_workers=self.tune_workers)
@@ -270,10 +271,14 @@ class Executor:
 
 @contextmanager
 def _pool_cm(pool: Any) -> Iterator[Any]:
+    """A local process pool for a session: shut down at the end, its workers stopped at once on an error or
+    an interrupt (:func:`_stop`)."""
+    interrupted = True
     try:
         yield pool
+        interrupted = False
     finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+        _stop(pool, interrupted)
 
 
 class Pending(Generic[R]):
@@ -304,6 +309,88 @@ class Pending(Generic[R]):
         """Cancel the tasks not started yet (results are then not available)."""
         for f in self._futures or ():
             f.cancel()
+
+
+# ------------------------------------------------------------------ local workers and interrupts
+#
+# Ctrl-C reaches every process of the terminal's group and SIGTERM the parent only; either way the
+# parent (mftire.cli.main turns SIGTERM into a KeyboardInterrupt) stops the workers at once: each is
+# sent SIGTERM, which a worker turns into an exception, so its own clean-up runs (temporary build
+# folders, a compiler it started), then it exits; one still alive after STOP_SECONDS is killed.
+
+#: Seconds a stopped worker gets to clean up before it is killed.
+STOP_SECONDS = 1.5
+_IN_TASK = False  # in a worker process: a task is running (a stop request unwinds it)
+
+
+class _Stopped(BaseException):
+    """SIGTERM in a worker process: unwinds the task (its ``finally`` blocks run), then the worker exits."""
+
+
+def _worker_init() -> None:
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C and stops the workers
+
+    def stop(signum, frame):
+        if _IN_TASK:
+            raise _Stopped()
+        os._exit(143)  # idle: nothing to clean up
+
+    signal.signal(signal.SIGTERM, stop)
+
+
+@dataclass(frozen=True)
+class _Task(Generic[T, R]):
+    """A task as a worker runs it: a stop request ends the worker process after the task's clean-up (a
+    worker would otherwise report the exception and wait for the next task)."""
+
+    fn: Callable[[T], R]
+
+    def __call__(self, x: T) -> R:
+        global _IN_TASK
+        _IN_TASK = True
+        try:
+            return self.fn(x)
+        except _Stopped:
+            os._exit(143)
+        finally:
+            _IN_TASK = False
+
+
+def _process_pool(n: int) -> Any:
+    from concurrent.futures import ProcessPoolExecutor
+
+    return ProcessPoolExecutor(max_workers=n, initializer=_worker_init)
+
+
+def _stop(pool: Any, interrupted: bool) -> None:
+    """Shut a process pool down: wait for its tasks, or (``interrupted``) stop its workers now."""
+    if not interrupted:
+        pool.shutdown(wait=True, cancel_futures=True)
+        return
+    import time
+
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        with _suppress():
+            p.terminate()
+    deadline = time.monotonic() + STOP_SECONDS
+    for p in procs:
+        with _suppress():
+            p.join(max(0.0, deadline - time.monotonic()))
+    for p in procs:
+        with _suppress():
+            if p.is_alive():
+                p.kill()
+                p.join(1.0)
+
+
+def _suppress():
+    import contextlib
+
+    return contextlib.suppress(OSError, ValueError, AttributeError)
 
 
 def _run_labelled(fn: Callable[[T], R], x: T, label: str) -> R:
@@ -337,7 +424,8 @@ def _submit_all(pool: Any, fn: Callable[[T], R], items: list[T], progress: Calla
     if hasattr(pool, "gather"):  # a Dask client; pure=False: no hashing of large arguments
         futures = list(pool.map(fn, items, pure=False))
     else:
-        futures = [pool.submit(fn, x) for x in items]
+        task = _Task(fn)  # a stop request ends the worker after the task's clean-up
+        futures = [pool.submit(task, x) for x in items]
     if progress is not None:
         lock, done = threading.Lock(), [0]
 
@@ -402,7 +490,7 @@ def _stream(ex: Executor, pool: Any, fn: Callable, items: Iterable, window: int,
     dask = hasattr(pool, "gather")
     try:
         for i, x in enumerate(items):
-            fut = pool.submit(fn, x, pure=False) if dask else pool.submit(fn, x)
+            fut = pool.submit(fn, x, pure=False) if dask else pool.submit(_Task(fn), x)
             fut.add_done_callback(tick)
             inflight.append((fut, _label(labels, i, x, n) if labels is not None else f"task {i + 1}"))
             while len(inflight) >= window:

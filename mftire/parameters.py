@@ -41,6 +41,7 @@ m, N, rad, kg, s and Pa (see :data:`UNIT_DIMENSIONS`).
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass as _dataclass
 from typing import Any, NamedTuple
 
 
@@ -532,3 +533,63 @@ def with_defaults(params: Any) -> dict[str, float]:
     if not _is_number(flat.get("INFLPRES")):
         out["INFLPRES"] = out["NOMPRES"]
     return out
+
+
+# --------------------------------------------------------------------------- limits of the values
+#
+# The one table of the values that make a channel non-finite or absurd.  mftire.iotools.tir_checks
+# checks every file and mapping against it (evaluate, info, fit's template, export-fmu, Tyre); the FMU's
+# C check of its tunable parameters is generated from it.
+
+
+@_dataclass(frozen=True)
+class Limit:
+    """A constant's bound: ``key op bound`` must hold (``op`` is ``">"`` or ``">="``)."""
+
+    key: str
+    op: str
+    bound: float
+    why: str
+
+    def holds(self, value: float) -> bool:
+        return value > self.bound if self.op == ">" else value >= self.bound
+
+
+#: The one table of constants whose value makes a channel non-finite or absurd: an error in every
+#: consumer (``evaluate``, ``info``, ``fit``'s template, ``export-fmu``, :class:`mftire.Tyre` from a
+#: mapping, and the FMU's tunable parameters, whose C check is generated from this table).
+PARAMETER_LIMITS: tuple[Limit, ...] = (
+    Limit("FNOMIN", ">", 0.0, "every equation divides by the nominal load (eqs 4.E1, 4.E2a)"),
+    Limit("FNOMIN", ">=", 1.0, "dfz = (Fz - Fz0')/Fz0' (eq 4.E2a) then overflows the load terms"),
+    Limit("UNLOADED_RADIUS", ">", 0.0, "the moments, radii and relaxation lengths scale with it"),
+    Limit("WIDTH", ">=", 0.0, "a width is not negative"),
+    Limit("RIM_RADIUS", ">=", 0.0, "a radius is not negative"),
+    Limit("NOMPRES", ">", 0.0, "dpi = (P - NOMPRES)/NOMPRES (eq 4.E2b): Fx, My and Cz come out NaN"),
+    Limit("LFZO", ">=", 1e-3, "Fz0' = LFZO·FNOMIN divides dfz (eqs 4.E1, 4.E2a): every force comes out NaN "
+          "or overflows"),
+    Limit("LONGVL", ">", 0.0, "the default speed and Vs/LONGVL (eq 4.E7): Re and the speed terms come out NaN"),
+    Limit("VXLOW", ">", 0.0, "the low-speed reduction divides by it: NaN at standstill"),
+    Limit("LMUX", ">=", 0.0, "a negative friction scale turns Fx against the slip"),
+    Limit("LMUY", ">=", 0.0, "a negative friction scale turns Fy against the slip"),
+)
+#: Ranges whose lower end must be below the upper end (mode 1xx clips every input into them).
+RANGE_PAIRS: tuple[tuple[str, str, str], ...] = (
+    ("FZMIN", "FZMAX", "N"), ("KPUMIN", "KPUMAX", "-"), ("ALPMIN", "ALPMAX", "rad"), ("CAMMIN", "CAMMAX", "rad"),
+    ("PRESMIN", "PRESMAX", "Pa"),
+)  # fmt: skip
+#: Peak friction coefficient beyond any rubber (racing slicks reach about 2): |(PDX1 + PDX2·dfz)·LMUX| and
+#: |(PDY1 + PDY2·dfz)·LMUY| over dfz in :data:`FRICTION_DFZ` (eqs 4.E13, 4.E23).
+MU_MAX = 10.0
+FRICTION_DFZ = (-0.5, 0.0, 1.0)
+#: A Magic Formula coefficient or scaling factor beyond this magnitude is absurd: it overflows a channel
+#: (the largest in real files is about 2e3: RBY4, PEY5).
+COEFFICIENT_MAX = 1e6
+#: Coefficients that are exponents (Kxk = Fz·(PKX1 + PKX2·dfz)·exp(PKX3·dfz), eq 4.E15; My ∝ (Fz/FNOMIN)^QSY7
+#: (P/NOMPRES)^QSY8, eq 4.E70): beyond this magnitude they overflow over the load range.
+EXPONENT_KEYS, EXPONENT_MAX = ("PKX3", "QSY7", "QSY8"), 100.0
+
+
+def parameter_bounds() -> tuple[tuple[str, str], ...]:
+    """:data:`PARAMETER_LIMITS` as ``(key, "> 0")`` pairs (``op bound``), the form the FMU's generated C
+    check of its tunable parameters reads (``mftire.mf.spec.PARAMETER_BOUNDS``)."""
+    return tuple((lim.key, f"{lim.op} {lim.bound:g}") for lim in PARAMETER_LIMITS)

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any, Union
 
 import numpy as np
 
-from mftire.input_checks import UNIT_LIMITS, check_keywords, warn_units
+from mftire.input_checks import UNIT_LIMITS, check_input_types, check_keywords, warn_units
 from mftire.iotools.tir import TirParameters, as_parameters, read_tir
 from mftire.mf import kernel, pac2002
 from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
@@ -80,7 +80,8 @@ class Tyre:
             self.flat = pac2002.prepare(self.flat)
         from mftire.input_checks import check_constants
 
-        check_constants(self.flat, getattr(params, "path", None))
+        check_constants(self.flat, getattr(params, "path", None) or name,
+                        self.parameters.sections.get(SECTION))  # the one parameter check (tir_checks)
         self.flat = FlatParameters(self.flat)  # a dict that counts its changes (the kernel's cache)
         ext = self.parameters.sections.get(SECTION)
         #: The ``[MFTIRE_EXTENSIONS]`` section (model extensions), or None.
@@ -236,8 +237,10 @@ class Tyre:
             ):
                 pt = self._point = _point_state(self)
             if pt is not None:
-                if not (-pt.alpha_limit <= alpha <= pt.alpha_limit and (Fz >= pt.fz_limit or Fz <= 0.0)):
-                    warn_units(self, Fz, alpha)  # a unit warning is possible: the one check
+                if not (-pt.alpha_limit <= alpha <= pt.alpha_limit and (Fz >= pt.fz_limit or Fz == 0.0)
+                        and -pt.gamma_limit <= gamma <= pt.gamma_limit and (P is None or P >= pt.p_limit)
+                        and (Vx is None or -pt.vx_limit <= Vx <= pt.vx_limit)):
+                    warn_units(self, Fz, alpha, gamma, P, Vx)  # a unit warning is possible: the one check
                 out = pt.evaluate(Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode)
                 if out is None:  # the C code refused the mode or FITTYP: the path that raises
                     out = MFResult(evaluate_arrays(flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode,
@@ -250,7 +253,9 @@ class Tyre:
             variables = {**{k: v for k, v in self.variable_defaults.items() if k not in variables}, **variables}
         if variables:
             check_keywords(variables, self.required_variables)
-        warn_units(self, Fz, alpha)
+        check_input_types({"Fz": Fz, "kappa": kappa, "alpha": alpha, "gamma": gamma, "phit": phit, "Vx": Vx,
+                           "P": P, "omega": omega, **variables})
+        warn_units(self, Fz, alpha, gamma, P, Vx)
         out = evaluate_arrays(
             self.flat, Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode, self.extension_set, variables or None,
             channels, backend,
@@ -272,7 +277,8 @@ class _Point:
     while ``flat`` is the tyre's parameter dict at ``version``, ``ext`` its extension set and
     ``lib`` the kernel library in use."""
 
-    __slots__ = ("flat", "version", "ext", "lib", "evaluate", "fz_limit", "alpha_limit")
+    __slots__ = ("flat", "version", "ext", "lib", "evaluate", "fz_limit", "alpha_limit", "gamma_limit", "p_limit",
+                 "vx_limit")
 
     def __reduce__(self):  # a copied or unpickled tyre prepares its own (addresses, the library)
         return _no_point, ()
@@ -302,6 +308,7 @@ def _point_state(tyre: Tyre) -> _Point | None:
     pt.flat, pt.version, pt.ext, pt.lib, pt.evaluate = flat, flat.version, ext, lib, evaluate
     # warn_units can warn only outside these bounds (a NaN is outside too)
     pt.fz_limit, pt.alpha_limit = UNIT_LIMITS["Fz"] * flat["FNOMIN"], UNIT_LIMITS["alpha"]
+    pt.gamma_limit, pt.p_limit, pt.vx_limit = UNIT_LIMITS["gamma"], UNIT_LIMITS["P"], UNIT_LIMITS["Vx"]
     return pt
 
 
@@ -333,8 +340,11 @@ def _frame_evaluate(self: Tyre, df: pd.DataFrame, mode: int = 111, name: str = "
     missing = [c for c in _FRAME_REQUIRED if c not in kw]
     missing += [v for v in self.required_variables if v not in df.columns and v not in self.variable_defaults]
     if missing:
+        from mftire.iotools.loaders import missing_columns_hint
+
         raise MftireInputError(
             f"{name}: missing column(s) {', '.join(missing)} (have: {', '.join(map(str, df.columns))})"
+            + missing_columns_hint(df.columns, missing)
         )
     variables = {v: df[v].to_numpy(dtype=float) for v in self.required_variables if v in df.columns}
     return self.evaluate(**kw, mode=mode, **variables)

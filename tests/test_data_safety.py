@@ -58,7 +58,24 @@ def ws(tmp_path_factory) -> Path:
         df = synthetic_sweeps(tyre, [4000.0, 6000.0], [0.0], n_kappa=15, n_alpha=15, n_combined=5, seed=1)
     df.to_csv(d / "sweeps.csv", index=False)
     (d / "fe_braking.csv").write_text("kind,Fz,Vx,P,kappa,Fx\nbraking,4000,10,2e5,-0.05,-3000\n")
+    _tiny_ttc(d / "run.dat")
     return d
+
+
+def _tiny_ttc(path: Path) -> None:
+    """A raw TTC-style run: two load levels, one slip-angle sweep each (SAE axes, metric units)."""
+    from mftire.iotools.rig import TTC_CHANNELS
+
+    units = "s kph rpm deg deg cm cm kPa N N N N-m N-m - - degC degC degC degC degC -".split()
+    rows, t = [], 0.0
+    for fz in (-1000.0, -1500.0):
+        for k in range(40):
+            v = dict(ET=t, V=40.0, N=300.0, SA=-6 + 12 * k / 39, IA=0.0, RL=30.0, RE=31.0, P=80.0, FX=0.0,
+                     FY=100.0 * (k - 20), FZ=fz, MX=0.0, MZ=0.5 * (k - 20), NFX=0.0, NFY=0.0, RST=30.0, TSTI=50.0,
+                     TSTC=51.0, TSTO=52.0, AMBTMP=25.0, SR=0.0)
+            rows.append("\t".join(f"{v[c]:g}" for c in TTC_CHANNELS))
+            t += 0.1
+    path.write_text("title\n" + "\t".join(TTC_CHANNELS) + "\n" + "\t".join(units) + "\n" + "\n".join(rows) + "\n")
 
 
 class Run:
@@ -117,16 +134,18 @@ def _commands(r: Run, out: str) -> dict[str, list[str]]:
                      "--output", out],
         "fe-campaign": ["fe", "campaign", "--quick", "--output", out],
         "fe-identify": ["fe", "identify", r.p("fe_braking.csv"), "--mu-p", "1", "--output", out],
+        "import": ["import", r.p("run.dat"), "--output", out],
+        "import-report": ["import", r.p("run.dat"), "--output", r.p("new.csv"), "--report", out],
     }
 
 
 FOLDER_OUTPUTS = {"fit-report", "diagnose", "compare", "demo", "fe-campaign"}
 ALL = ["evaluate", "convert", "plot", "plot-csv", "fit", "fit-report", "export-fmu", "diagnose", "compare", "demo",
-       "fe-sweep", "fe-campaign", "fe-identify"]
+       "fe-sweep", "fe-campaign", "fe-identify", "import", "import-report"]
 INPUTS = {"evaluate": ["tyre.tir", "points.csv"], "convert": ["tyre.tir"], "plot": ["tyre.tir"],
           "plot-csv": ["tyre.tir"], "fit": ["sweeps.csv", "tyre.tir"], "export-fmu": ["tyre.tir"],
           "fe-identify": ["fe_braking.csv"], "fit-report": ["sweeps.csv"], "diagnose": ["sweeps.csv", "tyre.tir"],
-          "compare": ["sweeps.csv", "tyre.tir"]}
+          "compare": ["sweeps.csv", "tyre.tir"], "import": ["run.dat"], "import-report": ["run.dat"]}
 
 
 # --------------------------------------------------------------------------- outputs
@@ -564,3 +583,678 @@ def test_dev_stdout_redirected_by_the_shell_is_written_through(run):
     assert res.returncode == 0, res.stderr
     lines = log.read_text().splitlines()
     assert lines[0] == "kept" and lines[1].startswith("Fz,kappa,alpha,gamma,Fx") and len(lines) == 4
+
+
+# =========================================================================== issue 24: second round
+#
+# The adversarial families: output (out), names, .tir (tir), data, API (api), FMU (fmu); the test
+# names carry the family.  Every CLI case asserts the exit code, a one-line message, unchanged
+# inputs and no file left behind (Run above), unless it says otherwise.
+
+
+def _tir_with(path: Path, values: dict, section: str | None = None) -> Path:
+    """MF61 with ``values`` set (SI), written to ``path``."""
+    from mftire.iotools.tir import write_tir
+
+    params = read_tir(MF61)
+    for k, v in values.items():
+        params.set(k, v, section=section)
+    write_tir(params, path)
+    return path
+
+
+# --------------------------------------------------------------------------- out: one write path
+
+FILE_COMMANDS = ["evaluate", "convert", "plot-csv", "fit", "export-fmu", "fe-sweep", "fe-identify", "import",
+                 "import-report"]
+
+
+@pytest.mark.parametrize("cmd", FILE_COMMANDS)
+def test_out_trailing_slash_on_a_file_output_is_refused_up_front(run, cmd):
+    run(_commands(run, run.p("newdir") + "/")[cmd], 2, "names a folder; this output is a file")
+
+
+def test_out_import_report_and_output_must_differ(run):
+    run(["import", run.p("run.dat"), "--output", run.p("x.csv"), "--report", run.p("x.csv")], 2, "also output")
+
+
+def test_out_fit_output_and_report_folder_must_differ(run):
+    argv = ["fit", run.p("sweeps.csv"), "--template", run.p("tyre.tir"), "--output", run.p("x"), "--report", run.p("x")]
+    run(argv, 2, "the same file is also output")
+
+
+@pytest.mark.parametrize("sign", ["Fy=2", "Fy=0", "Fy=x", "=-1"])
+def test_data_import_sign_must_be_a_sign(run, sign):
+    run(["import", run.p("run.dat"), "--output", run.p("i.csv"), "--sign", sign], 2, "expected COLUMN=-1 or COLUMN=1")
+
+
+def test_out_import_writes_the_table_and_the_report_apart(run):
+    import json
+
+    argv = ["import", run.p("run.dat"), "--output", run.p("s.csv"), "--report", run.p("r.json")]
+    run(argv, 0, created={"s.csv", "r.json"})
+    table = pd.read_csv(run.p("s.csv"))
+    assert {"Fz", "alpha", "Fy"} <= set(table.columns) and len(table) > 40
+    assert json.loads(Path(run.p("r.json")).read_text())["n_sweeps"] == 2
+    run(argv, 2, "exists; use --force")
+    run(argv + ["--force"], 0, created={"s.csv", "r.json"})
+
+
+def _appearing(monkeypatch, content: bytes = b"theirs") -> list[str]:
+    """Another run writes the output while this one works: the file appears just before the final rename."""
+    from mftire.iotools import output
+
+    real, hit = output.final_rename, []
+
+    def racing(tmp: str, path: str) -> None:
+        if not hit:
+            hit.append(path)
+            Path(path).write_bytes(content)
+        real(tmp, path)
+
+    monkeypatch.setattr(output, "final_rename", racing)
+    return hit
+
+
+@pytest.mark.parametrize("force", [False, True])
+@pytest.mark.parametrize("cmd", ["convert", "evaluate", "import", "fit"])
+def test_out_a_file_that_appears_meanwhile_is_not_replaced_without_force(run, monkeypatch, cmd, force):
+    out = run.p("out.csv" if cmd in ("evaluate", "import") else "out.tir")
+    argv = _commands(run, out)[cmd] + (["--force"] if force else [])
+    hit = _appearing(monkeypatch)
+    run.capsys.readouterr()
+    rc = main(argv)
+    err = run.capsys.readouterr().err
+    assert hit == [out] or os.path.realpath(hit[0]) == os.path.realpath(out)
+    if force:
+        assert rc == 0 and Path(out).read_bytes() != b"theirs"
+    else:
+        assert rc == 2 and Path(out).read_bytes() == b"theirs"  # the other run's result is kept
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and "appeared while this command ran" in lines[0] and "--force" in lines[0]
+    assert not [n for n in _listing(run.root) if n.endswith(".tmp") or "/.mftire" in n]
+
+
+def test_out_rename_noreplace(tmp_path):
+    from mftire.iotools.output import rename_noreplace
+
+    (tmp_path / "a").write_text("new")
+    (tmp_path / "b").write_text("old")
+    with pytest.raises(FileExistsError):
+        rename_noreplace(str(tmp_path / "a"), str(tmp_path / "b"))
+    assert (tmp_path / "a").read_text() == "new" and (tmp_path / "b").read_text() == "old"
+    rename_noreplace(str(tmp_path / "a"), str(tmp_path / "c"))
+    assert not (tmp_path / "a").exists() and (tmp_path / "c").read_text() == "new"
+
+
+def test_out_a_command_writes_only_its_checked_outputs(tmp_path):
+    from mftire.iotools.atomic import write_text_atomic
+    from mftire.iotools.output import command_scope
+
+    inp = tmp_path / "in.csv"
+    inp.write_text("x")
+    with command_scope():
+        plan = OutputPlan([inp], force=False)
+        plan.folder(tmp_path / "rep")
+        plan.file(tmp_path / "out.csv")
+        write_text_atomic(tmp_path / "rep" / "anything.md", "ok")  # inside the checked folder
+        write_text_atomic(tmp_path / "out.csv", "1")
+        write_text_atomic(tmp_path / "out.csv", "2")  # a file this run wrote may be rewritten
+        with pytest.raises(mftire.errors.MftireInputError, match="not an output of this command"):
+            write_text_atomic(tmp_path / "elsewhere.csv", "no")
+        with pytest.raises(mftire.errors.MftireInputError, match="is the input file"):
+            write_text_atomic(inp, "no")
+    assert (tmp_path / "out.csv").read_text() == "2" and inp.read_text() == "x"
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["anything.md", "in.csv", "out.csv", "rep"]
+    write_text_atomic(tmp_path / "elsewhere.csv", "library")  # no command: the library replaces as asked
+    assert (tmp_path / "elsewhere.csv").read_text() == "library"
+
+
+# --------------------------------------------------------------------------- names from data
+
+HOSTILE = ["x/../../../../elsewhere/PWNED_run", "/..", "..", ".", "", "/etc/passwd", "a\\b", "C:\\x", "\x00nul",
+           "line\nbreak", "-rf", ".hidden", "résumé", "a" * 300, "$x^2$", "a b", "%2e%2e%2f", "~/x", "a/./b",
+           "temp [°C]", "con", "....//....//x"]
+
+
+@pytest.mark.parametrize("label", HOSTILE)
+def test_names_a_label_from_data_is_a_safe_file_name(label):
+    import re
+
+    from mftire.iotools.output import safe_name
+
+    name = safe_name(label)
+    assert re.fullmatch(r"[A-Za-z0-9._-]+", name) and ".." not in name, name
+    assert not name.startswith((".", "-")) and len(name) <= 70
+    assert os.path.basename(name) == name and name not in (".", "..")
+
+
+def test_names_are_unique_within_a_command():
+    from mftire.iotools.output import command_scope, safe_name
+
+    with command_scope():
+        names = [safe_name(x) for x in ("a/b", "a_b", "a?b", "Fz", "fz", "a/b")]
+    assert names[0] == names[5]  # the same label, the same name
+    assert len({n.lower() for n in names[:5]}) == 5  # distinct labels never share a name (any letter case)
+
+
+def test_names_hostile_columns_stay_inside_the_diagnosis_folder(run):
+    df = pd.read_csv(run.p("sweeps.csv"))
+    z = np.linspace(-1.0, 1.0, len(df))
+    df["x/../../../../elsewhere/PWNED_run"] = z  # explains the Fy residual: plotted
+    df["Fy"] = df["Fy"] * (1.0 + 0.1 * z)
+    df["/.."] = np.cos(7.0 * z)
+    df["$bad"] = np.sin(3.0 * z)
+    df.to_csv(run.p("hostile.csv"), index=False)
+    out = run.root / "a" / "b" / "diag"
+    run(["diagnose", run.p("hostile.csv"), "--tir", run.p("tyre.tir"), "--output", str(out), "--permutations", "9"],
+        0, created=set())
+    written = {str(p.relative_to(run.root)) for p in run.root.rglob("*") if p.is_file()}
+    outside = {w for w in written if not w.startswith("a/b/diag/")} - {"tyre.tir", "points.csv", "sweeps.csv",
+                                                                        "fe_braking.csv", "run.dat", "hostile.csv"}
+    assert outside == set()
+    assert all(p.parent == out for p in run.root.parent.rglob("*PWNED*"))  # nothing above the output folder
+    assert any(p.name.startswith("residual_vs_x_elsewhere_PWNED_run") for p in out.iterdir())
+
+
+def test_names_figures_of_hostile_labels_do_not_crash(tmp_path):
+    from types import SimpleNamespace
+
+    from mftire.diagnosis.report import _figures
+    from mftire.iotools.output import command_scope
+
+    x = np.linspace(0.0, 1.0, 50)
+    labels = ["/..", "$x^", "a/../../b", "x" * 200]
+    df = pd.DataFrame({**{lab: x * (i + 1) for i, lab in enumerate(labels)}, "residual_Fy": np.sin(5 * x)})
+    ranking = [SimpleNamespace(variable=lab, channel="Fy", score=0.5, significant=True) for lab in labels]
+    result = SimpleNamespace(data=df, ranking=ranking, effect=None, train=None)
+    out = tmp_path / "d"
+    with command_scope():
+        OutputPlan((), False).folder(out)
+        _figures(result, str(out))
+    assert sorted(p.name for p in tmp_path.rglob("*"))[0] == "d" and len(list(out.iterdir())) == 4
+    assert all(p.parent == out for p in tmp_path.rglob("*.png"))
+
+
+# --------------------------------------------------------------------------- .tir: one parameter check
+
+VALUE_ERRORS = {  # values that made a channel NaN or absurd, and the message
+    "NOMPRES=0": ({"NOMPRES": 0.0}, "NOMPRES = 0 must be > 0"),
+    "NOMPRES<0": ({"NOMPRES": -2e5}, "NOMPRES = -200000 must be > 0"),
+    "LFZO=0": ({"LFZO": 0.0}, "LFZO = 0 must be >= 0.001"),
+    "LONGVL=0": ({"LONGVL": 0.0}, "LONGVL = 0 must be > 0"),
+    "VXLOW=0": ({"VXLOW": 0.0}, "VXLOW = 0 must be > 0"),
+    "LMUX<0": ({"LMUX": -1.0}, "LMUX = -1 must be >= 0"),
+    "ALPMIN>ALPMAX": ({"ALPMIN": 0.5, "ALPMAX": -0.5}, "ALPMIN = 0.5 rad is not below ALPMAX = -0.5 rad"),
+    "PRESMIN>PRESMAX": ({"PRESMIN": 4e5, "PRESMAX": 2e5}, "PRESMIN = 400000 Pa is not below PRESMAX"),
+    "KPUMIN>KPUMAX": ({"KPUMIN": 1.0, "KPUMAX": -1.0}, "KPUMIN = 1 is not below KPUMAX = -1"),
+    "CAMMIN>CAMMAX": ({"CAMMIN": 0.1, "CAMMAX": -0.1}, "CAMMIN = 0.1 rad is not below CAMMAX"),
+    "FZMIN>FZMAX": ({"FZMIN": 9000.0, "FZMAX": 100.0}, "FZMIN = 9000 N is not below FZMAX = 100 N"),
+    "LFZO=1e-9": ({"LFZO": 1e-9}, "LFZO = 1e-09 must be >= 0.001"),
+    "FNOMIN=1e-3": ({"FNOMIN": 1e-3}, "FNOMIN = 0.001 must be >= 1"),
+    "PKX2=1e308": ({"PKX2": 1e308}, "PKX2 = 1e+308: beyond any Magic Formula coefficient"),
+    "RHY2=-1e308": ({"RHY2": -1e308}, "RHY2 = -1e+308: beyond any Magic Formula coefficient"),
+    "mu=1e6": ({"PDX1": 1e6}, "peak friction of Fx 1e+06"),
+    "muy=-50": ({"PDY1": -50.0}, "peak friction of Fy"),
+    "extension=1e300": (None, "EXT1_C1 = 1e+300 is absurd"),
+}
+
+
+def _bad_tir(r: Run, case: str) -> str:
+    values, _ = VALUE_ERRORS[case]
+    if values is None:
+        from test_fmu_guards import extension_entries
+
+        entries = {**extension_entries(["Vs"]), "EXT1_C1": 1e300}
+        return str(_tir_with(Path(r.p("tyre.tir")), entries, section="MFTIRE_EXTENSIONS"))
+    return str(_tir_with(Path(r.p("tyre.tir")), values))
+
+
+@pytest.mark.parametrize("case", sorted(VALUE_ERRORS))
+@pytest.mark.parametrize("cmd", ["info", "evaluate"])
+def test_tir_constants_that_break_a_channel_are_errors(run, cmd, case):
+    _bad_tir(run, case)
+    msg = VALUE_ERRORS[case][1]
+    if cmd == "info":
+        run.capsys.readouterr()
+        assert main(["info", run.p("tyre.tir")]) == 2
+        out = run.capsys.readouterr().out
+        assert any(ln.startswith("  error: ") and msg in ln for ln in out.splitlines()) and "np.float64" not in out
+    else:
+        run(_commands(run, run.p("o.csv"))["evaluate"], 2, run.p("tyre.tir"), msg)
+
+
+@pytest.mark.parametrize("case", ["NOMPRES=0", "LFZO=0", "KPUMIN>KPUMAX"])
+def test_tir_fit_refuses_a_broken_template(run, case):
+    _bad_tir(run, case)
+    run(_commands(run, run.p("f.tir"))["fit"], 2, VALUE_ERRORS[case][1])
+
+
+@pytest.mark.parametrize("key,value,text", [("LMUX", 0.0, "LMUX = 0: Fx is identically zero"),
+                                            ("LMUY", 0.0, "LMUY = 0: Fy is identically zero"),
+                                            ("TYRESIDE", "MIDDLE", "TYRESIDE = 'MIDDLE' is not one of")])
+def test_tir_suspicious_values_warn_and_fail_info_strict(run, key, value, text):
+    _tir_with(Path(run.p("tyre.tir")), {key: value})
+    run.capsys.readouterr()
+    assert main(["info", run.p("tyre.tir")]) == 0
+    assert f"warning: {text}" in run.capsys.readouterr().out
+    assert main(["info", run.p("tyre.tir"), "--strict"]) == 1
+    with pytest.warns(MftireTirWarning, match=text.split(":")[0]):
+        mftire.load(run.p("tyre.tir"))
+
+
+def test_tir_unknown_format_name_warns_and_strict_refuses(run):
+    _tir_with(Path(run.p("tyre.tir")), {"PROPERTY_FILE_FORMAT": "FOO"})
+    with pytest.warns(Warning, match="PROPERTY_FILE_FORMAT = 'FOO' is not a format mftire knows"):
+        mftire.load(run.p("tyre.tir"))
+    err = run(["info", run.p("tyre.tir")], 0)
+    assert "warning: " in err and "'FOO' is not a format mftire knows" in err
+    run(["info", run.p("tyre.tir"), "--strict"], 2, "'FOO' is not a format mftire knows", "strict reading")
+
+
+def test_tir_misspelled_key_did_you_mean(run):
+    text = MF61.read_text()
+    lines = [("LMUXX" + ln[4:]) if ln.split("=")[0].strip() == "LMUX" else ln for ln in text.splitlines(True)]
+    Path(run.p("tyre.tir")).write_text("".join(lines))
+    with pytest.warns(Warning, match="LMUXX in \\[SCALING_COEFFICIENTS\\] is not a key mftire knows: did you mean "
+                      "LMUX\\? \\(LMUXX is ignored; LMUX takes its default\\)"):
+        mftire.load(run.p("tyre.tir"))
+    err = run(["info", run.p("tyre.tir"), "--strict"], 2, "did you mean LMUX?", "strict reading")
+    assert "line " in err
+    err = run(_commands(run, run.p("o.csv"))["evaluate"] + ["--strict"], 2, "did you mean LMUX?")
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le", "utf-16-be"])
+def test_tir_utf16_files_are_read(run, encoding):
+    Path(run.p("tyre.tir")).write_bytes(MF61.read_text().encode(encoding))
+    run.capsys.readouterr()
+    assert main(["info", run.p("tyre.tir"), "--strict"]) == 0
+    assert "checks:\n  all passed" in run.capsys.readouterr().out
+    assert read_tir(run.p("tyre.tir")).flat()["PKY1"] == read_tir(MF61).flat()["PKY1"]
+
+
+def test_tir_binary_file_is_named_as_such(run):
+    Path(run.p("tyre.tir")).write_bytes(bytes(range(256)) * 8)
+    run(["info", run.p("tyre.tir")], 2, "binary data (control characters): not a text .tir file")
+
+
+def test_tir_limits_table_names_known_keys():
+    from mftire.iotools.tir_checks import PARAMETER_LIMITS, RANGE_PAIRS
+    from mftire.parameters import BY_KEY
+
+    keys = [lim.key for lim in PARAMETER_LIMITS] + [k for pair in RANGE_PAIRS for k in pair[:2]]
+    assert all(k in BY_KEY for k in keys)
+    flat = with_defaults_of(MF61)
+    assert all(lim.holds(flat[lim.key]) for lim in PARAMETER_LIMITS)  # the defaults and MF61 pass
+    from mftire.parameters import parameter_bounds
+
+    assert ("NOMPRES", "> 0") in parameter_bounds() and ("LFZO", ">= 0.001") in parameter_bounds()  # the FMU's form
+
+
+def with_defaults_of(path: Path) -> dict:
+    from mftire.parameters import with_defaults
+
+    return with_defaults(read_tir(path))
+
+
+# --------------------------------------------------------------------------- data: CSV inputs of the commands
+
+
+def _csv(r: Run, name: str, text: str) -> str:
+    Path(r.p(name)).write_text(text)
+    return r.p(name)
+
+
+def _evaluate(r: Run, name: str, *extra: str) -> list[str]:
+    return ["evaluate", r.p("tyre.tir"), "--input", r.p(name), "--output", r.p("o.csv"), *extra]
+
+
+WARNED_INPUTS = {  # CSV, mode, the one-line warning
+    "sae-Fz": ("Fz,kappa,alpha,gamma\n-4000,0,0.05,0\n-6000,-0.1,0,0\n", "111", "every vertical load Fz is negative"),
+    "gamma-deg-211": ("Fz,kappa,alpha,gamma\n4000,0,0.05,3\n4000,0,0.05,-4\n", "211", "gamma is in radians"),
+    "gamma-deg-111": ("Fz,kappa,alpha,gamma\n4000,0,0.05,3\n4000,0,0.05,-4\n", "111", "gamma is in radians"),
+    "P-psi-211": ("Fz,kappa,alpha,gamma,P\n4000,-0.1,0,0,32\n", "211", "the values look like psi"),
+    "P-kPa-111": ("Fz,kappa,alpha,gamma,P\n4000,-0.1,0,0,220\n", "111", "the values look like kPa"),
+    "P-bar-211": ("Fz,kappa,alpha,gamma,P\n4000,-0.1,0,0,2.2\n", "211", "the values look like bar"),
+    "Vx-huge": ("Fz,kappa,alpha,gamma,Vx\n4000,0,0.05,0,1e308\n", "111", "Vx is in m/s"),
+    "alpha-deg-211": ("Fz,kappa,alpha,gamma\n4000,0,5,0\n", "211", "alpha is in radians"),
+    "alpha-1e308": ("Fz,kappa,alpha,gamma\n4000,0,1e308,0\n", "111", "beyond any angle"),  # no numpy overflow
+}
+
+
+@pytest.mark.parametrize("case", sorted(WARNED_INPUTS))
+def test_data_unit_and_sign_slips_warn_in_every_mode(run, case):
+    text, mode, warning = WARNED_INPUTS[case]
+    _csv(run, "in.csv", text)
+    err = run(_evaluate(run, "in.csv", "--mode", mode), 0, created={"o.csv"})
+    lines = err.strip().splitlines()
+    assert any(warning in ln for ln in lines), err
+    assert all(ln.startswith("mftire evaluate: warning: ") for ln in lines), err  # one line each, ours only
+    assert "overflow encountered" not in err and "np.float64" not in err
+    out = pd.read_csv(run.p("o.csv"))
+    if case in ("Vx-huge", "alpha-1e308"):
+        return
+    assert np.isfinite(out[["Fx", "Fy", "Mz"]].to_numpy()).all()
+
+
+def test_data_evaluate_never_writes_two_columns_of_one_name(run):
+    _csv(run, "in.csv", "Fz,kappa,alpha,gamma,Fx,Fx_model,Fx_model_2\n4000,-0.1,0,0,1,2,3\n")
+    run(_evaluate(run, "in.csv"), 0, created={"o.csv"})
+    header = Path(run.p("o.csv")).read_text().splitlines()[0].split(",")
+    assert len(header) == len(set(header)) and "Fx_model_3" in header
+    out = pd.read_csv(run.p("o.csv"))
+    assert out["Fx_model"].tolist() == [2] and out["Fx_model_2"].tolist() == [3]  # the user's values, by name
+
+
+@pytest.mark.parametrize("header,hint", [("fz,kappa,alpha,gamma", "column 'fz' looks like Fz"),
+                                         ("Fz,Kappa,alpha,gamma", "column 'Kappa' looks like kappa"),
+                                         ("Fz,kappa,SA,gamma", "column 'SA' looks like alpha in 'deg'")])
+def test_data_evaluate_names_the_rename(run, header, hint):
+    _csv(run, "in.csv", header + "\n4000,0,0.05,0\n")
+    run(_evaluate(run, "in.csv"), 2, "missing column(s)", hint, "rename")
+
+
+def test_data_infinite_cell_is_named_without_numpy_repr(run):
+    _csv(run, "in.csv", "Fz,kappa,alpha,gamma\n4000,inf,0.05,0\n")
+    run(_evaluate(run, "in.csv"), 2, "column 'kappa', row 1 (line 2): inf is not a finite number")
+
+
+def test_data_fit_on_a_few_rows_is_an_error_naming_the_minimum(run):
+    pd.read_csv(run.p("sweeps.csv")).head(5).to_csv(run.p("few.csv"), index=False)
+    argv = ["fit", run.p("few.csv"), "--template", run.p("tyre.tir"), "--output", run.p("f.tir")]
+    run(argv, 2, "too few for the stages asked for", "needed", "nothing fitted")
+
+
+@pytest.mark.parametrize("weight", ["0", "-1", "inf", "nan", "x"])
+def test_data_fit_weights_must_be_finite_and_positive(run, weight):
+    argv = _commands(run, run.p("f.tir"))["fit"] + ["--weights", f"sweeps={weight}"]
+    run(argv, 2, "--weights: weight of 'sweeps'")
+
+
+def test_data_fit_weight_of_one_source_has_no_effect(run):
+    base = _commands(run, run.p("a.tir"))["fit"] + ["--stages", "1,2"]
+    run(base, 0, created={"a.tir"})
+    heavy = _commands(run, run.p("b.tir"))["fit"] + ["--stages", "1,2", "--weights", "sweeps=1e308"]
+    run(heavy, 0, created={"b.tir"})
+    assert read_tir(run.p("a.tir")).flat() == read_tir(run.p("b.tir")).flat()
+
+
+# --------------------------------------------------------------------------- api: odd inputs of Tyre.evaluate
+
+
+@pytest.fixture(scope="module")
+def mf61():
+    return mftire.load(MF61)
+
+
+API_REFUSED = {
+    "None": ({"Fz": None}, TypeError, "Fz is None"),
+    "gamma None": ({"gamma": None}, TypeError, "gamma is None"),
+    "bool": ({"Fz": True}, TypeError, "Fz = True is a boolean"),
+    "numpy bool": ({"kappa": np.bool_(False)}, TypeError, "is a boolean"),
+    "bool array": ({"alpha": np.array([True, False])}, TypeError, "alpha holds booleans"),
+    "datetime64": ({"Fz": np.datetime64("2020-01-01")}, TypeError, "holds dates or times"),
+    "datetime64 array": ({"Vx": np.array(["2020-01-01"], dtype="datetime64[D]")}, TypeError, "dates or times"),
+    "timedelta": ({"P": np.timedelta64(3, "s")}, TypeError, "dates or times"),
+    "python datetime": ({"Fz": __import__("datetime").datetime(2020, 1, 1)}, TypeError, "dates or times"),
+    "list with None": ({"Fz": [4000.0, None]}, TypeError, "NoneType values"),
+    "complex": ({"Fz": 4000.0 + 1j}, TypeError, "is a complex number"),
+    "complex array": ({"kappa": np.array([0.1 + 0j])}, TypeError, "holds complex numbers"),
+    "ragged": ({"alpha": [[0.1], [0.1, 0.2]]}, ValueError, "ragged sequence"),
+    "masked": ({"Fz": np.ma.masked_array([4000.0, 5000.0], [False, True])}, ValueError, "1 masked point"),
+    "misaligned": ({"Fz": pd.Series([4000.0, 5000.0], index=[0, 1]), "kappa": pd.Series([0.0, -0.1], index=[1, 2])},
+                   ValueError, "different indexes"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(API_REFUSED))
+def test_api_odd_inputs_are_refused(mf61, case):
+    kw, exc, text = API_REFUSED[case]
+    args = {"Fz": 4000.0, "kappa": -0.05, "alpha": 0.02, **kw}
+    with pytest.raises(exc, match=text):
+        mf61.evaluate(**args)
+
+
+def test_api_plain_masked_and_aligned_inputs_are_taken(mf61):
+    ref = mf61.evaluate(np.array([4000.0, 5000.0]), np.array([0.0, -0.1]), 0.02)
+    out = mf61.evaluate(np.ma.masked_array([4000.0, 5000.0], [False, False]), np.array([0.0, -0.1]), 0.02)
+    np.testing.assert_array_equal(out["Fx"], ref["Fx"])
+    idx = [7, 9]
+    out = mf61.evaluate(pd.Series([4000.0, 5000.0], index=idx), pd.Series([0.0, -0.1], index=idx), 0.02)
+    np.testing.assert_array_equal(out["Fx"], ref["Fx"])
+
+
+@pytest.mark.parametrize("mode", [111, 211])
+@pytest.mark.parametrize("name", ["Fz", "kappa", "alpha", "gamma", "Vx", "P"])
+def test_api_infinite_inputs_are_treated_as_nan(mf61, name, mode):
+    base = {"Fz": np.array([4000.0, 5000.0]), "kappa": np.array([-0.05, 0.0]), "alpha": np.array([0.02, 0.03]),
+            "gamma": np.zeros(2), "Vx": np.full(2, 15.0), "P": np.full(2, 2.4e5)}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for backend in ("kernel", "numpy") if mftire.mf.kernel.load() is not None else ("numpy",):
+            res = []
+            for bad in (np.inf, np.nan):
+                kw = {**base, name: np.array([base[name][0], bad])}
+                res.append(mf61.evaluate(**kw, mode=mode, backend=backend))
+            for k in ("Fx", "Fy", "Mz", "Mx", "My", "Re"):
+                assert np.isfinite(res[0][k]).all(), (backend, k)
+                np.testing.assert_array_equal(res[0][k], res[1][k])  # inf gives what NaN gives
+
+
+@pytest.mark.parametrize("mode", [112, 122, 212, 222])
+def test_api_turn_slip_at_standstill_takes_its_limit(mode):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for label in ("MF61", "MF62", "MF52"):
+            tyre = mftire.load(REFERENCE_TYRES[label])
+            for backend in ("kernel", "numpy") if mftire.mf.kernel.load() is not None else ("numpy",):
+                out = tyre.evaluate(np.array([4000.0, 3000.0]), np.array([0.0, -0.1]), 0.05, 0.0, 0.1, Vx=0.0,
+                                    mode=mode, backend=backend)
+                for k in ("Fy", "Mz", "Mx", "Fx", "My"):
+                    assert np.isfinite(out[k]).all(), (label, backend, k)
+                ahead, back = (tyre.evaluate(np.array([4000.0, 3000.0]), np.array([0.0, -0.1]), 0.05, 0.0, 0.1,
+                                             Vx=v, mode=mode, backend=backend)["Fy"] for v in (1e-9, -1e-9))
+                if mode < 200:  # the low-speed reduction makes the spin vanish: continuous through Vx = 0
+                    np.testing.assert_allclose(out["Fy"], ahead, atol=1e-3)
+                elif mode == 212:  # without limits the spin shift changes sign with Vx (eq 4.86): at 0 it lies between
+                    assert np.all((np.minimum(ahead, back) - 1e-9 <= out["Fy"]) & (out["Fy"] <= np.maximum(ahead, back)
+                                                                                + 1e-9))
+
+
+@pytest.mark.parametrize("kw,text", [({"gamma": 4.0}, "gamma is in radians"), ({"P": 30.0}, "look like psi"),
+                                     ({"Fz": np.array([-4000.0, -6000.0])}, "negative or zero"),
+                                     ({"Vx": 1e308}, "Vx is in m/s")])
+@pytest.mark.parametrize("mode", [111, 211])
+def test_api_unit_warnings_in_every_mode(kw, text, mode):
+    tyre = mftire.load(MF61)
+    args = {"Fz": 4000.0, "kappa": -0.05, "alpha": 0.02, **kw}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        tyre.evaluate(**args, mode=mode)
+    assert any(issubclass(w.category, MftireUnitWarning) and text in str(w.message) for w in caught)
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)]  # no numpy overflow leaks
+
+
+def test_api_tyre_from_a_mapping_takes_the_one_parameter_check():
+    flat = read_tir(MF61).flat()
+    for key, value, text in (("NOMPRES", 0.0, "NOMPRES = 0 must be > 0"), ("LFZO", 0.0, "LFZO = 0"),
+                             ("ALPMIN", 2.0, "ALPMIN = 2 rad is not below ALPMAX")):
+        with pytest.raises(TirCheckError, match=text):
+            mftire.Tyre({**flat, key: value})
+    from mftire.fitting import fit_tir
+
+    with pytest.raises(TirCheckError, match="LONGVL = 0"):
+        fit_tir(pd.DataFrame({"Fz": [4000.0]}), {**flat, "LONGVL": 0.0})
+
+
+def test_api_evaluate_frame_names_the_rename(mf61):
+    with pytest.raises(mftire.errors.MftireInputError, match="column 'Fz_kN' looks like Fz in 'kN'"):
+        mf61.evaluate_frame(pd.DataFrame({"Fz_kN": [4.0], "kappa": [0.0], "alpha": [0.0]}))
+
+
+# --------------------------------------------------------------------------- fmu: export refuses what the FMU would
+
+
+@pytest.mark.parametrize("case", sorted(VALUE_ERRORS))
+def test_fmu_export_refuses_constants_that_break_a_channel(run, case):
+    _bad_tir(run, case)
+    run(_commands(run, run.p("t.fmu"))["export-fmu"], 2, VALUE_ERRORS[case][1])
+
+
+@pytest.mark.parametrize("ident", ["tyre\n", "ty re", "1tyre", "tyre;"])
+def test_fmu_model_identifier_must_be_a_whole_c_identifier(run, ident):
+    from mftire.fmu.build import FMUExportError
+    from mftire.fmu.export import export_fmu
+
+    try:
+        from mftire.fmu.build import find_compiler
+
+        find_compiler()
+    except FMUExportError:
+        pytest.skip("no C compiler")
+    with pytest.raises(FMUExportError, match="is not a C identifier"):
+        export_fmu(MF61, run.p("t.fmu"), model_identifier=ident)
+    assert not Path(run.p("t.fmu")).exists()
+
+
+def test_fmu_export_of_a_mapping_takes_the_check(run):
+    from mftire.fmu.build import FMUExportError
+    from mftire.fmu.export import export_fmu
+
+    with pytest.raises(FMUExportError, match="NOMPRES = 0 must be > 0"):
+        export_fmu({**read_tir(MF61).flat(), "NOMPRES": 0.0}, run.p("t.fmu"))
+    assert not Path(run.p("t.fmu")).exists()
+
+
+# --------------------------------------------------------------------------- processes: signals to the parent
+
+
+def _descendants(pid: int) -> list[tuple[int, str]]:
+    """(pid, command name) of every live process below ``pid`` (Linux /proc)."""
+    children: dict[int, list[tuple[int, str]]] = {}
+    for d in os.listdir("/proc"):
+        if not d.isdigit():
+            continue
+        try:
+            text = Path(f"/proc/{d}/stat").read_text()
+        except OSError:
+            continue
+        rest = text[text.rindex(")") + 2:].split()
+        if rest[0] != "Z":
+            children.setdefault(int(rest[1]), []).append((int(d), text[text.index("(") + 1:text.rindex(")")]))
+    out, todo = [], [pid]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            out.append(child)
+            todo.append(child[0])
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        text = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return text[text.rindex(")") + 2] != "Z"
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux /proc")
+@pytest.mark.parametrize("sig", ["SIGTERM", "SIGINT"])
+@pytest.mark.parametrize("cmd", ["demo", "export-fmu"])
+def test_fmu_and_demo_signal_to_the_parent_stops_everything_within_3_s(tmp_path, cmd, sig):
+    """SIGTERM or SIGINT to the parent alone, while workers (demo) or the C compiler (export-fmu) run:
+    the parent exits within 3 s, no worker or compiler is left, no temporary or build folder stays."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    if cmd == "export-fmu":
+        from conftest import have_c_compiler
+
+        if not have_c_compiler():
+            pytest.skip("no C compiler")
+    tmpdir = tmp_path / "tmp"
+    tmpdir.mkdir()
+    out = tmp_path / ("demo" if cmd == "demo" else "t.fmu")
+    argv = (["demo", "--quick", "--jobs", "2", "--output", str(out)] if cmd == "demo" else
+            ["export-fmu", str(MF61), "--output", str(out)])
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1]), "TMPDIR": str(tmpdir)}
+    proc = subprocess.Popen([sys.executable, "-m", "mftire.cli", *argv], env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        wanted = ("python",) if cmd == "demo" else ("cc", "gcc", "clang", "cc1", "as", "collect2", "ld")
+        start = time.monotonic()
+        while time.monotonic() - start < 120 and proc.poll() is None:
+            if any(name.startswith(wanted) for _, name in _descendants(proc.pid)):
+                break
+            time.sleep(0.01)
+        assert proc.poll() is None, "the command ended before the signal"
+        time.sleep(0.3 if cmd == "demo" else 0.0)
+        running = _descendants(proc.pid)
+        assert running
+        t0 = time.monotonic()
+        os.kill(proc.pid, getattr(signal, sig))
+        proc.wait(10)
+        elapsed = time.monotonic() - t0
+        err = proc.stderr.read()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert elapsed < 3.0, elapsed
+    assert proc.returncode == (143 if sig == "SIGTERM" else 130), err
+    assert err.strip().splitlines()[-1] == f"mftire {cmd}: {'terminated' if sig == 'SIGTERM' else 'interrupted'}"
+    deadline = time.monotonic() + 3.0 - elapsed
+    while time.monotonic() < deadline and any(_alive(p) for p, _ in running):
+        time.sleep(0.05)
+    assert not [(p, n) for p, n in running if _alive(p)]  # no worker, no compiler left
+    assert list(tmpdir.iterdir()) == []  # no mftire-fmu-* build folder, no compiler temporaries
+    if cmd == "export-fmu":
+        assert not out.exists()
+    else:
+        assert not [p for p in out.rglob("*") if p.name.endswith(".tmp") or p.name.startswith(".")]
+
+
+@pytest.mark.parametrize("column", ["Fy", "Mz"])
+def test_data_fit_refuses_sae_signed_forces(run, column):
+    df = pd.read_csv(run.p("sweeps.csv"))
+    df[column] = -df[column]
+    df.to_csv(run.p("sae.csv"), index=False)
+    argv = ["fit", run.p("sae.csv"), "--template", run.p("tyre.tir"), "--output", run.p("f.tir")]
+    run(argv, 2, f"column '{column}'", "has the wrong sign", "SAE-signed data?")
+
+
+def test_tir_mutated_constants_are_refused_or_evaluate_finite(tmp_path):
+    """150 files with one to three values of the evaluator's keys set to adversarial numbers (fixed
+    seed): each is refused with one line naming the file, or it evaluates to finite forces and moments."""
+    import random
+
+    from mftire.iotools.evaluator_keys import evaluator_keys
+    from mftire.iotools.tir import write_tir
+    from mftire.parameters import BY_KEY
+
+    keys = sorted(k for k in evaluator_keys() if k != "FITTYP" and k in BY_KEY and BY_KEY[k].unit != "str")
+    values = [0.0, -1.0, 1e308, -1e308, 1e-320, 1e6, -1e6, 1e3, -1e3, 1e-9, 5.0, -5.0, 1e5, 9e99]
+    rng = random.Random(24)
+    bases = [read_tir(REFERENCE_TYRES[label]) for label in ("MF61", "MF52", "MF62")]
+    refused = 0
+    for i in range(150):
+        params = rng.choice(bases).copy()
+        for _ in range(rng.randint(1, 3)):
+            params.set(rng.choice(keys), rng.choice(values))
+        path = tmp_path / f"m{i}.tir"
+        write_tir(params, path)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                tyre = mftire.load(path)
+            except mftire.errors.MftireError as exc:
+                refused += 1
+                assert str(path) in str(exc) and "\n" not in str(exc) and "np.float64" not in str(exc)
+                continue
+            with np.errstate(all="raise"):  # no numpy floating-point warning may leak either
+                out = tyre.evaluate(np.array([2000.0, 4000.0, 8000.0]), np.array([-0.1, 0.0, 0.05]),
+                                    np.array([0.02, -0.1, 0.0]), gamma=0.02)
+        bad = [c for c in ("Fx", "Fy", "Mz", "Mx", "My") if not np.isfinite(out[c]).all()]
+        assert not bad, (path.name, bad, [ln for ln in path.read_text().splitlines() if "1e" in ln][:5])
+    assert 20 < refused < 130  # both outcomes are exercised

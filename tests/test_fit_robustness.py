@@ -66,12 +66,10 @@ def test_missing_channel_skips_stage(tyre):
 def test_too_few_points_message(tyre):
     df = _data(tyre, loads=(1.0,))
     few = df[(df["run"] == 0) & (df.index % 5 == 0)]  # 5 points of the kappa sweep
-    res = fit_tir(few, tyre, stages="longitudinal")
-    st = res.stages[0]
-    assert st.status == "skipped"
-    assert "too few points" in st.message and "5" in st.message
-    assert not res.success
-    assert res.flat["PDX1"] == with_defaults(tyre)["PDX1"]
+    # nothing could be fitted: an error naming the minimum, not the template returned as a fit (issue 24)
+    with pytest.raises(MftireInputError, match=r"too few for the stages asked for: stage 1 longitudinal \[Fx\]: "
+                       r"too few points: 5 pure longitudinal rows with Fx, at least \d+ needed"):
+        fit_tir(few, tyre, stages="longitudinal")
 
 
 def test_no_rows_for_stage_message(tyre):
@@ -152,11 +150,14 @@ def test_weights_parsing():
     assert parse_weights("fe=1, measured=5") == {"fe": 1.0, "measured": 5.0}
     with pytest.raises(MftireInputError, match="SOURCE=WEIGHT"):
         parse_weights("fe")
-    with pytest.raises(MftireInputError, match="finite number >= 0"):
-        parse_weights("fe=-1")
+    for bad in ("fe=-1", "fe=0", "fe=inf", "fe=nan"):
+        with pytest.raises(MftireInputError, match="finite number > 0"):
+            parse_weights(bad)
     df = pd.DataFrame({"source": ["fe", "rig", "rig"], "file": ["a.csv", "b.csv", "b.csv"]})
-    np.testing.assert_array_equal(row_weights(df, {"rig": 4.0}), [1.0, 4.0, 4.0])
-    np.testing.assert_array_equal(row_weights(df, {"a": 2.0}), [2.0, 1.0, 1.0])  # file stem
+    # relative between sources, scaled to a mean of 1 (issue 24: one source, any weight, no effect)
+    np.testing.assert_allclose(row_weights(df, {"rig": 4.0}), np.array([1.0, 4.0, 4.0]) / 3.0)
+    np.testing.assert_allclose(row_weights(df, {"a": 2.0}), np.array([2.0, 1.0, 1.0]) * 3 / 4)  # file stem
+    np.testing.assert_array_equal(row_weights(df.assign(source="rig"), {"rig": 1e308}), [1.0, 1.0, 1.0])
     with pytest.raises(MftireInputError, match="available: a.csv, b.csv, fe, rig"):
         row_weights(df, {"trailer": 1.0})
 

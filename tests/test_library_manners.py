@@ -145,3 +145,31 @@ def test_warning_filters_only_inside_catch_warnings():
     for path in _py_files():
         visit(ast.parse(path.read_text(encoding="utf-8")), [], path)
     assert bad == []
+
+
+def test_cli_main_restores_signal_handlers_and_the_output_scope(tmp_path, capsys):
+    """``mftire.cli.main`` turns SIGTERM into an interrupt and holds writes to the command's outputs only
+    while the command runs (issue 24); afterwards the caller's handlers and free writes are back."""
+    import signal
+
+    from mftire.cli import main
+    from mftire.iotools import output
+    from mftire.iotools.atomic import write_text_atomic
+
+    def mine(signum, frame):  # the caller's own handler
+        pass
+
+    old = signal.signal(signal.SIGTERM, mine)
+    try:
+        before = (signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT), output._SCOPE.get())
+        points = tmp_path / "p.csv"
+        points.write_text("Fz,kappa,alpha,gamma\n4000,0,0.05,0\n")
+        assert main(["evaluate", str(REFERENCE_TYRES["MF61"]), "--input", str(points), "--output",
+                     str(tmp_path / "o.csv")]) == 0
+        assert main(["info", str(tmp_path / "missing.tir")]) == 2
+        assert (signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT), output._SCOPE.get()) == before
+        assert before[0] is mine and before[2] is None
+        write_text_atomic(tmp_path / "free.txt", "a library write after a command is not held")
+    finally:
+        signal.signal(signal.SIGTERM, old)
+    capsys.readouterr()

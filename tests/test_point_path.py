@@ -260,10 +260,12 @@ def test_errors_are_the_general_paths():
         old.evaluate(4000.0, 0.0, 0.0)
     # other scalar types take the general path, with the same numbers
     ref = tyre.evaluate(4000.0, 0.1, 0.05, gamma=0.0)
-    for other in (np.float32(0.1), True):
+    for other in (np.float32(0.1), np.int32(1)):
         out = tyre.evaluate(4000.0, float(other), 0.05, gamma=0.0)
         alt = tyre.evaluate(4000.0, other, 0.05, gamma=0.0)
         assert list(alt) == list(out) and all(_same_bits(alt[k], out[k]) for k in out)
+    with pytest.raises(TypeError, match="kappa = True is a boolean"):  # a boolean is no slip (issue 24)
+        tyre.evaluate(4000.0, True, 0.05, gamma=0.0)
     assert ref == tyre.evaluate(np.float64(4000.0), 0.1, 0.05, gamma=0)
 
 

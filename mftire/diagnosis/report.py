@@ -11,6 +11,7 @@ from matplotlib import colormaps
 
 from mftire.diagnosis.diagnose import DiagnosisResult
 from mftire.iotools.atomic import atomic_path, write_text_atomic
+from mftire.iotools.output import safe_name
 from mftire.iotools.tir import write_tir
 from mftire.iotools.units import PLOT_UNITS, axis_label
 from mftire.plotting import subplots
@@ -173,7 +174,7 @@ def ranking_figure(ranking):
 
     fig, ax = subplots(figsize=(8, 0.35 * max(len(ranking), 4) + 1.4), constrained_layout=True)
     by_score = sorted(ranking, key=lambda r: r.score)  # highest score on top
-    ax.barh([f"{r.variable} ({r.channel})" for r in by_score], [r.score for r in by_score],
+    ax.barh([f"{_text(r.variable)} ({r.channel})" for r in by_score], [r.score for r in by_score],
             color=["tab:red" if r.significant else "tab:gray" for r in by_score])
     ax.set_xlabel("score: share of the residual variance explained beyond the MF inputs (CV) [-]")
     ax.set_ylabel("candidate variable (channel)")
@@ -249,11 +250,12 @@ def _figures(result: DiagnosisResult, outdir: str) -> None:
             ax.plot(x, ya, ".", ms=2, alpha=0.3, color="tab:orange")
             ax.plot(*_binned(x, ya), "s-", color="tab:orange", label="after (binned mean)")
         ax.axhline(0, color="k", lw=0.8)
-        ax.set_xlabel(axis_label(r.variable))
+        ax.set_xlabel(_text(axis_label(r.variable)))
         ax.set_ylabel(f"{r.channel} data − model [{PLOT_UNITS[r.channel]}]")
-        ax.set_title(f"residual of {r.channel} against {r.variable} (score {r.score:.2f})")
+        ax.set_title(f"residual of {r.channel} against {_text(r.variable)} (score {r.score:.2f})")
         ax.legend()
-        with atomic_path(os.path.join(outdir, f"residual_vs_{r.variable}.png")) as tmp:
+        # a column name is data, never a path (mftire.iotools.output.safe_name)
+        with atomic_path(os.path.join(outdir, f"residual_vs_{safe_name(r.variable)}.png")) as tmp:
             fig.savefig(tmp, format="png", dpi=100)
 
     fig = before_after_figure(result)
@@ -288,3 +290,11 @@ def write_report(result: DiagnosisResult, outdir: str | os.PathLike) -> dict:
 
         plot_profiles(result, outdir)
     return doc
+
+
+def _text(label: object) -> str:
+    """A label from data as plain figure text: a ``$`` would start matplotlib's mathtext, and a very long
+    name would squeeze the axes away."""
+    text = str(label)
+    text = text if len(text) <= 40 else text[:39] + "…"
+    return text.replace("$", r"\$")

@@ -642,6 +642,9 @@ def fit_tir(
         raise ValueError(f"jacobian must be 'exact' or '2-point', not {jacobian!r}")
     say = _progress_printer(progress)
     tmpl = _as_template(template)
+    from mftire.input_checks import check_constants  # the one parameter check (mftire.iotools.tir_checks)
+
+    check_constants(with_defaults(tmpl), getattr(tmpl, "path", None) or "template", tmpl.sections.get(SECTION))
     if tmpl.fittyp not in (61, 62):
         raise MftireInputError(
             f"template FITTYP {tmpl.get('FITTYP')!r}: fitting needs an MF 6.1 or 6.2 template (FITTYP 61 or 62)"
@@ -701,6 +704,12 @@ def fit_tir(
             elif r.n_nan:
                 messages.append(f"stage {stage.number} {stage.name}: {r.n_nan} rows without {channel} skipped")
 
+    if not any(r.status == "fitted" for r in results):
+        few = [r for r in results if r.message.startswith("too few points")]
+        if few:
+            r = few[0]
+            raise MftireInputError(f"{len(table)} data point(s) are too few for the stages asked for: stage {r.number} "
+                                   f"{r.name} [{r.channel}]: {r.message}; nothing fitted")
     fitted = tmpl.copy()
     identified: list[str] = []
     not_identified: dict[str, str] = {}

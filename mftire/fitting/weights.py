@@ -39,7 +39,7 @@ def parse_weights(spec: str | Mapping[str, float] | None) -> dict[str, float]:
     Raises
     ------
     MftireInputError
-        On a malformed item or a negative / non-finite weight.
+        On a malformed item or a zero, negative or non-finite weight.
     """
     if spec is None or spec == "":
         return {}
@@ -60,14 +60,15 @@ def parse_weights(spec: str | Mapping[str, float] | None) -> dict[str, float]:
             w = float(value)
         except (TypeError, ValueError):
             raise MftireInputError(f"--weights: weight of {key!r} is not a number: {value!r}") from None
-        if not np.isfinite(w) or w < 0:
-            raise MftireInputError(f"--weights: weight of {key!r} must be a finite number >= 0, got {value!r}")
+        if not np.isfinite(w) or w <= 0:
+            raise MftireInputError(f"--weights: weight of {key!r} must be a finite number > 0, got {value!r}")
         out[str(key)] = w
     return out
 
 
 def row_weights(df: pd.DataFrame, weights: Mapping[str, float]) -> np.ndarray:
-    """Per-row weight from ``{source or file name: weight}`` (1 where not listed).
+    """Per-row weight from ``{source or file name: weight}`` (1 where not listed), scaled to a mean of 1:
+    weights are relative between sources (one source, any weight: all 1).
 
     A key matches the ``source`` column, or the ``file`` column by base name or stem.
 
@@ -89,7 +90,7 @@ def row_weights(df: pd.DataFrame, weights: Mapping[str, float]) -> np.ndarray:
             avail = sorted(set(src) | set(base))
             raise MftireInputError(f"--weights: no data with source or file {key!r}; available: {', '.join(avail)}")
         w[hit] = value
-    return w
+    return w / np.max(w) / np.mean(w / np.max(w))  # relative between sources: mean 1, one source has no effect
 
 
 def noise_std(y: np.ndarray, x: np.ndarray, groups: np.ndarray | None = None) -> float:

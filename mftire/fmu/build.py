@@ -251,12 +251,42 @@ def compile_sources(src_dir: Path, out_path: Path, compiler: str | None = None) 
         extra = ["-include", str(pin_file)]
     cmd = [*cc, *CFLAGS, *extra, "-I", str(src_dir), *c_files, "-o", str(out_path), *LIBS]
     try:
-        res = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+        # its own process group: an interrupt (Ctrl-C, SIGTERM to mftire) stops the driver and its cc1/as/ld
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                start_new_session=True)
     except OSError as exc:
         raise FMUExportError(f"C compiler {cc[0]!r} could not be run: {exc}") from None
-    if res.returncode != 0:
-        tail = "\n".join((res.stderr or res.stdout).strip().splitlines()[-15:])
-        raise FMUExportError(f"compiling the FMU failed ({' '.join(cc)} exit {res.returncode}):\n{tail}")
+    try:
+        stdout, stderr = proc.communicate(timeout=300)
+    except subprocess.TimeoutExpired:
+        _kill_group(proc)
+        raise FMUExportError(f"compiling the FMU took over 300 s ({' '.join(cc)}); stopped") from None
+    except BaseException:  # Ctrl-C, SIGTERM: no compiler is left running
+        _kill_group(proc)
+        raise
+    if proc.returncode != 0:
+        tail = "\n".join((stderr or stdout).strip().splitlines()[-15:])
+        raise FMUExportError(f"compiling the FMU failed ({' '.join(cc)} exit {proc.returncode}):\n{tail}")
+
+
+def _kill_group(proc: subprocess.Popen) -> None:
+    """Stop a process started with ``start_new_session`` and everything it started: SIGTERM (a compiler
+    then removes its own temporary files), SIGKILL after a second."""
+    import signal
+
+    for sig, wait in ((signal.SIGTERM, 1.0), (signal.SIGKILL, None)):
+        try:
+            os.killpg(proc.pid, sig)
+        except OSError:
+            proc.kill()
+        try:
+            proc.wait(wait)
+            break
+        except subprocess.TimeoutExpired:
+            continue
+    for stream in (proc.stdout, proc.stderr):
+        if stream is not None:
+            stream.close()
 
 
 def _windows_dll(src: Path, dll: Path) -> Path | None:

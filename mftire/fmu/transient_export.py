@@ -342,7 +342,7 @@ def export_transient_fmu(
         ident = model_identifier_for(name + "_transient", vt.guid(table, fmi_version))
     else:
         ident = model_identifier
-    if not re.match(r"^[A-Za-z_][A-Za-z0-9_]*$", ident):
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", ident):
         raise FMUExportError(f"model identifier {ident!r} is not a C identifier")
     variables, files = generate_transient_sources(flat, ident, use_mode, fmi_version)
     platform, suffix = _platform(fmi_version)

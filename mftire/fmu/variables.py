@@ -56,7 +56,7 @@ FIXED_PARAMETERS = frozenset({"FITTYP"})
 #: has one mode variable, the integer parameter ``useMode`` (its start value is the export's ``use_mode``).
 NOT_PARAMETERS = frozenset({"USE_MODE"})
 
-_IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 #: FMI unit name -> (SI base-unit exponents kg, m, s, rad) for every unit the table uses.
 UNITS: dict[str, dict[str, int]] = {
@@ -219,8 +219,8 @@ def variable_table(
     )  # fmt: skip
     standard = {p.key: p for p in PARAMETERS if p.unit != "str" and p.key not in NOT_PARAMETERS}
     keys = list(standard) + [
-        k for k in flat if k not in standard and k not in NOT_PARAMETERS and k not in ext_keys and _IDENT.match(k)
-        and _number(flat[k])
+        k for k in flat if k not in standard and k not in NOT_PARAMETERS and k not in ext_keys
+        and _IDENT.fullmatch(k) and _number(flat[k])
     ]  # fmt: skip
     for key in keys:
         row = standard.get(key)

@@ -1,5 +1,9 @@
 """Atomic file writes: write to a temporary file beside the target, then rename.
 
+The rename is :func:`mftire.iotools.output.final_rename`: while a command runs it refuses
+files that are not the command's outputs and, without ``--force``, does not replace a file
+that appeared meanwhile; in library use it is :func:`os.replace`.
+
 A failed write leaves the target untouched, and readers never see a half-written
 file (and no temporary file is left behind).  The new file keeps the permissions of the file it replaces (0644 for a new
 file).
@@ -15,6 +19,9 @@ import stat
 import sys
 import tempfile
 from collections.abc import Iterator
+
+from mftire.iotools import output as _output
+from mftire.iotools.output import writes_through
 
 
 @contextlib.contextmanager
@@ -51,27 +58,12 @@ def atomic_path(path: str | os.PathLike) -> Iterator[str]:
     try:
         yield tmp
         os.chmod(tmp, mode)
-        os.replace(tmp, path)
+        _output.final_rename(tmp, path)  # the running command's policy (output.py, rule 8)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         _removedirs(created)
         raise
-
-
-def writes_through(path: str | os.PathLike) -> bool:
-    """True when ``path`` is written *through* instead of replaced: it is (or links to) a
-    character device or a FIFO, or it names a descriptor of this process (``/dev/stdout``,
-    ``/dev/fd/N``, ``/proc/self/fd/N``; even when the shell redirected it to a regular file,
-    which must then be filled, not swapped for a new file the shell does not hold)."""
-    name = os.path.abspath(os.fspath(path))
-    if name in ("/dev/stdout", "/dev/stderr") or name.startswith(("/dev/fd/", "/proc/self/fd/")):
-        return os.path.exists(name)
-    try:
-        mode = os.stat(name).st_mode
-    except OSError:
-        return False
-    return stat.S_ISCHR(mode) or stat.S_ISFIFO(mode)
 
 
 def _descriptor(path: str) -> int | None:

@@ -61,23 +61,43 @@ def check_columns(df: pd.DataFrame, name: str = "sweep data", tydex: bool = Fals
             continue
         if tydex and label in tydex_keys and tydex_keys[label] in df.columns:
             continue
-        low = label.strip().lower()
-        target, unit = (_LOWER[low], None) if low in _LOWER else _OTHER_NAMES.get(low, (None, None))
-        if target is None:
-            m = _UNIT_RE.match(label)
-            if m and (m.group(2) is not None or is_known_unit(m.group(3))):
-                stem = m.group(1).lower()
-                target = _LOWER.get(stem) or _OTHER_NAMES.get(stem, (None,))[0]
-                unit = m.group(2) or m.group(3)
-        if target is None:
-            continue
-        how = f" in {unit!r}" if unit else ""
-        bad.append(f"{label!r} (looks like {target}{how}; the schema wants {target!r} in SI units)")
+        hint = column_hint(label)
+        if hint:
+            bad.append(f"{label!r} ({hint})")
     if bad:
         raise MftireInputError(
             f"{name}: unknown column(s) {', '.join(bad)}; rename/convert them, e.g. with "
             "mftire.iotools.sweeps.to_schema, or drop them"
         )
+
+
+def _looks_like(label: str) -> tuple[str | None, str | None]:
+    """``(schema column, unit)`` that a column name looks like (``fz``, ``SA``, ``Fz [kN]``), or Nones."""
+    low = label.strip().lower()
+    target, unit = (_LOWER[low], None) if low in _LOWER else _OTHER_NAMES.get(low, (None, None))
+    if target is None:
+        m = _UNIT_RE.match(label)
+        if m and (m.group(2) is not None or is_known_unit(m.group(3))):
+            stem = m.group(1).lower()
+            target = _LOWER.get(stem) or _OTHER_NAMES.get(stem, (None,))[0]
+            unit = m.group(2) or m.group(3)
+    return target, unit
+
+
+def column_hint(label: str, wanted: Sequence[str] | None = None) -> str:
+    """``"looks like Fz in 'kN'; the schema wants 'Fz' in SI units"`` for a column name that looks like
+    a schema quantity (restricted to ``wanted`` when given), else ``""``."""
+    target, unit = _looks_like(str(label))
+    if target is None or target == label or (wanted is not None and target not in wanted):
+        return ""
+    how = f" in {unit!r}" if unit else ""
+    return f"looks like {target}{how}; the schema wants {target!r} in SI units"
+
+
+def missing_columns_hint(columns: Sequence[object], missing: Sequence[str]) -> str:
+    """``"; column 'fz' looks like Fz ..."`` for the present columns that look like a missing one."""
+    hints = [f"column {str(c)!r} {h}" for c in columns if (h := column_hint(str(c), missing))]
+    return ("; " + "; ".join(hints) + ": rename (and convert) it") if hints else ""
 
 
 def _read_one(path: str) -> pd.DataFrame:
@@ -162,6 +182,7 @@ def check_numeric_columns(df: pd.DataFrame, path: str, required: Sequence[str], 
     if missing:
         raise MftireInputError(
             f"{path}: missing column(s) {', '.join(missing)} (have: {', '.join(df.columns)})"
+            + missing_columns_hint(df.columns, missing)
         )
     for col in [*required, *(c for c in optional if c in df.columns)]:
         raw = df[col]
@@ -170,7 +191,8 @@ def check_numeric_columns(df: pd.DataFrame, path: str, required: Sequence[str], 
         if bad.any():
             i = first_row + int(np.flatnonzero(bad.to_numpy())[0])
             cell = raw.iloc[i - first_row]
-            what = "empty or NaN" if pd.isna(cell) or str(cell).strip().lower() == "nan" else f"{cell!r}"
+            what = ("empty or NaN" if pd.isna(cell) or str(cell).strip().lower() == "nan" else
+                    f"{float(cell):g}" if isinstance(cell, (int, float, np.number)) else f"{cell!r}")
             raise MftireInputError(
                 f"{path}: column '{col}', row {i + 1} (line {i + 2}): {what} is not a finite number"
             )

@@ -197,10 +197,8 @@ def _alias_hint(df: pd.DataFrame, column: str) -> str:
             continue
         unit_txt = unit if unit is not None else SI_UNITS[column]
         note = "" if unit is not None else " (check its unit and sign convention first)"
-        return (
-            f"; column {name!r} looks like {column}{note}: use "
-            f"mftire.iotools.sweeps.to_schema(df, {{{name!r}: ({column!r}, {unit_txt!r})}})"
-        )
+        convert = f"convert it from {unit_txt} to {SI_UNITS[column]} and " if unit is not None else ""
+        return f"; column {name!r} looks like {column}{note}: {convert}rename it {column}"
     return ""
 
 
@@ -327,6 +325,18 @@ def _check_si(df: pd.DataFrame, name: str, measured: Sequence[str]) -> None:
     v = robust_max("Vx")
     if v > 100.0:
         fail("Vx", f"|Vx| reaches {v:.3g} m/s", "it looks like km/h: divide by 3.6")
+    # signs: in ISO/TYDEX W axes Fy opposes a small slip angle and Mz follows it (pneumatic trail,
+    # Pacejka 2012 §4.3.2); SAE-signed forces with ISO angles give the opposite at nearly every point
+    a_all = df["alpha"].to_numpy(dtype=float)
+    small = (np.abs(a_all) > 0.02) & (np.abs(a_all) < 0.1) & (np.abs(df["kappa"].to_numpy(dtype=float)) < 0.02)
+    for col, want, says in (("Fy", -1.0, "opposes"), ("Mz", 1.0, "follows")):
+        if col in measured and small.sum() >= 10:
+            prod = np.sign(df[col].to_numpy(dtype=float)[small] * a_all[small]) * want
+            prod = prod[np.isfinite(prod)]
+            if prod.size >= 10 and np.mean(prod < 0) > 0.9:
+                fail(col, f"at {prod.size} points of small slip angle (1 to 6 deg) {col} has the wrong sign",
+                     f"in ISO/TYDEX W axes {col} {says} the slip angle; SAE-signed data? flip {col} "
+                     "(or alpha) to ISO")
     # forces in kN: peak lateral/longitudinal force far below what the slip implies
     fz_med = float(np.median(np.abs(fz))) if fz.size else 0.0
     for col, slip, span in (("Fy", "alpha", 0.05), ("Fx", "kappa", 0.05)):
@@ -401,7 +411,7 @@ def validate_sweeps(
         raise MftireInputError(
             f"{name}: missing required column(s) {', '.join(missing)} "
             f"(SI units: {', '.join(f'{c} [{SI_UNITS[c]}]' for c in missing)}){hints}"
-            + ("" if hints else "; pass defaults={...} for inputs held constant")
+            + ("" if hints else "; an input held constant can be a column of one value")
         )
     for col in MEASURED_COLUMNS + OPTIONAL_INPUT_COLUMNS:
         if col not in out.columns:

@@ -159,7 +159,9 @@ __all__ = [
     "TirParameters",
     "TirTable",
     "TirWarning",
+    "KNOWN_EXTRA_KEYS",
     "UnknownFittypError",
+    "UnknownKeyError",
     "UnknownUnitError",
     "UnsupportedFormatError",
     "format_token",
@@ -261,6 +263,10 @@ class MissingFittypError(FittypError):
 
 class UnsupportedFormatError(FittypError):
     """``PROPERTY_FILE_FORMAT`` names another tyre model (PAC-TIME, PAC89, Fiala, ...)."""
+
+
+class UnknownKeyError(TirError):
+    """A key of a standard section that looks like a misspelled standard key (strict reading)."""
 
 
 class TirWarning(UserWarning):
@@ -641,7 +647,25 @@ def _split_value(rest: str) -> tuple[Value, bool, str | None]:
     return (raw if number is None else number), False, comment
 
 
+_CONTROL_RE = re.compile(r"[\x00-\x08\x0e-\x1f\x7f]")
+
+
 def _decode(data: bytes) -> str:
+    """The file's text: UTF-16 (with a byte-order mark, or ASCII text saved as UTF-16 without
+    one, as some Windows editors do), else UTF-8, else Latin-1."""
+    utf16 = None
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        utf16 = "utf-16"
+    elif len(data) >= 4 and data[1::2][:64].count(0) > 24 and data[0::2][:64].count(0) == 0:
+        utf16 = "utf-16-le"
+    elif len(data) >= 4 and data[0::2][:64].count(0) > 24 and data[1::2][:64].count(0) == 0:
+        utf16 = "utf-16-be"
+    if utf16 is not None:
+        try:
+            text = data.decode(utf16)
+            return text[1:] if text.startswith("\ufeff") else text
+        except UnicodeDecodeError:
+            pass
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError:
@@ -704,7 +728,8 @@ def parse_tir(text: str, path: Any = None, strict: bool = False) -> TirParameter
             raise fail(cls, f"{reason} (strict reading)", lineno, line)
         default = None
         if used and p is not None:
-            default = "NOMPRES" if key == "INFLPRES" else f"{p.default:g}" + ("" if p.unit == "-" else f" {p.unit}")
+            default = ("NOMPRES" if key == "INFLPRES" else repr(p.default) if isinstance(p.default, str)
+                       else f"{p.default:g}" + ("" if p.unit == "-" else f" {p.unit}"))
         tolerated.append((lineno, reason, line, key, default))
 
     tolerated: list[tuple[int, str, str, str, str | None]] = []
@@ -821,7 +846,46 @@ def parse_tir(text: str, path: Any = None, strict: bool = False) -> TirParameter
 
     _convert_units(params, where, section_line, source, strict)
     _check_fittyp(params, where, section_line, source, lines, strict)
+    misspelled = _misspelled_keys(params, where)
+    if misspelled and strict:
+        lineno, line, reason = misspelled[0]
+        raise fail(UnknownKeyError, reason + " (strict reading)", lineno, line)
+    if misspelled:
+        warnings.warn(TirWarning(f"{source}: " + "; ".join(f"line {n}: {r}" for n, _, r in misspelled)), stacklevel=3)
     return params
+
+
+#: Keys outside the parameter table that real files carry (MF-Tyre/MF-Swift and Adams exports): never
+#: reported as misspelled.
+KNOWN_EXTRA_KEYS = frozenset({
+    "FE_METHOD", "MFSAFE1", "MFSAFE2", "MFSAFE3", "BELT_DYNAMICS", "CONTACT_MODEL", "BOTTOMING_RADIUS",
+    "DYNAMIC_STIFFNESS", "DYNAMIC_DAMPING", "LKG", "LCZ", "LIP", "PTX4", "QPX1", "PTY3", "QPZ1", "QPZ2", "MESSAGES",
+    "LOCAL_SOLVER", "LOCAL_SOLVER_HP",
+})  # fmt: skip
+
+
+def _misspelled_keys(params: TirParameters, where: dict) -> list[tuple[int, str, str]]:
+    """Keys of a standard section that are no key mftire knows but are one typo away from a key of
+    that section (``LMUXX`` for ``LMUX``): ``(line number, line, reason)`` each.  Such a key is
+    ignored, so the key meant silently takes its default; other unknown keys (vendor additions)
+    are kept quietly."""
+    import difflib
+
+    section_keys: dict[str, list[str]] = {}
+    for p in BY_KEY.values():
+        section_keys.setdefault(p.section, []).append(p.key)
+    out = []
+    for (section, key), (lineno, line) in where.items():
+        base = _base_name(section)
+        if base not in section_keys or base == "MDI_HEADER" or key in BY_KEY or key in KNOWN_EXTRA_KEYS:
+            continue
+        close = difflib.get_close_matches(key, section_keys[base], n=1, cutoff=0.8)
+        if close:
+            body = params.sections.get(section)
+            taken = isinstance(body, dict) and close[0] in body
+            out.append((lineno, line, f"{key} in [{base}] is not a key mftire knows: did you mean {close[0]}? "
+                        f"({key} is ignored" + ("" if taken else f"; {close[0]} takes its default") + ")"))
+    return sorted(out)
 
 
 def _warn_tolerated(source: str, tolerated: list[tuple[int, str, str, str, str | None]]) -> None:
@@ -934,6 +998,13 @@ def _check_fittyp(params: TirParameters, where: dict, section_line: dict, source
             if strict:
                 raise FittypError(reason + " (strict reading)", source, fline[0], fline[1])
             warnings.warn(TirWarning(f"{source}, line {fline[0]}: {reason}"), stacklevel=4)
+        elif named is None and token not in GENERIC_FORMATS and fmt is not None:
+            fline = next((where[k] for k in where if k[1] == "PROPERTY_FILE_FORMAT"), (lineno, line))
+            reason = (f"PROPERTY_FILE_FORMAT = {fmt!r} is not a format mftire knows ('USER', 'PAC2002', 'MF_05', "
+                      f"'MF_52', 'MF_61', 'MF_62'); FITTYP = {fittyp} ({model}) decides")
+            if strict:
+                raise FittypError(reason + " (strict reading)", source, fline[0], fline[1])
+            warnings.warn(TirWarning(f"{source}, line {fline[0]}: {reason}"), stacklevel=4)
         return
     if token in FORMAT_MODELS:
         return
@@ -987,7 +1058,12 @@ def read_tir(path: str | os.PathLike[str], strict: bool = False) -> TirParameter
         If the file cannot be read.
     """
     data = Path(path).read_bytes()
-    return parse_tir(_decode(data), path=os.fspath(path), strict=strict)
+    text = _decode(data)
+    control = _CONTROL_RE.findall(text)
+    if len(control) > max(4, len(text) // 20):  # a few may sit in a quoted value; many: a binary file
+        line = text.count("\n", 0, text.index(control[0])) + 1
+        raise TirError("binary data (control characters): not a text .tir file", os.fspath(path), line)
+    return parse_tir(text, path=os.fspath(path), strict=strict)
 
 
 # --------------------------------------------------------------------- writing

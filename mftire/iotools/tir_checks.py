@@ -55,7 +55,17 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from mftire.errors import MftireInputError, MftireTirWarning
-from mftire.parameters import PARAMETERS
+from mftire.parameters import (  # the one table of limits lives with the keys (mftire.parameters)
+    COEFFICIENT_MAX,
+    EXPONENT_KEYS,
+    EXPONENT_MAX,
+    FRICTION_DFZ,
+    MU_MAX,
+    PARAMETER_LIMITS,
+    PARAMETERS,
+    RANGE_PAIRS,
+    Limit,
+)
 
 #: Sections every file needs.
 REQUIRED_SECTIONS = ("DIMENSION", "VERTICAL", "LONGITUDINAL_COEFFICIENTS", "LATERAL_COEFFICIENTS",
@@ -109,6 +119,55 @@ ZERO_PEAK = {"Fx": ("Fx", ("PCX1", "PDX1"), "longitudinal", 2), "Fy": ("Fy", ("P
 _UNITS = {"FNOMIN": "N", "UNLOADED_RADIUS": "m", "NOMPRES": "Pa", "INFLPRES": "Pa"}
 _QUANTITY = {"FNOMIN": ("FORCE",), "UNLOADED_RADIUS": ("LENGTH",), "NOMPRES": ("PRESSURE", "FORCE", "LENGTH"),
              "INFLPRES": ("PRESSURE", "FORCE", "LENGTH")}
+
+
+#: Known values of the string keys (a warning otherwise; they do not change the numbers).
+TYRESIDES = ("LEFT", "RIGHT", "SYMMETRIC", "UNKNOWN")
+
+
+def _show(v: Any) -> str:
+    """A number as the user wrote it (no ``np.float64(...)``)."""
+    return f"{float(v):g}" if _number(v) or hasattr(v, "__float__") else repr(v)
+
+
+def value_errors(flat: Mapping[str, Any]) -> list[str]:
+    """The errors of :data:`PARAMETER_LIMITS`, :data:`RANGE_PAIRS`, :data:`MU_MAX`, :data:`COEFFICIENT_MAX`
+    for flat SI values (absent keys are not checked); one string per problem.  The extension coefficients
+    are checked one layer up (:func:`mftire.input_checks.extension_errors`: they need the model's forms)."""
+    out: list[str] = []
+    failed: set[str] = set()
+    for lim in PARAMETER_LIMITS:  # the first bound a key fails is reported
+        v = flat.get(lim.key)
+        if lim.key not in failed and _number(v) and math.isfinite(float(v)) and not lim.holds(float(v)):
+            failed.add(lim.key)
+            out.append(f"{lim.key} = {_show(v)} must be {lim.op} {lim.bound:g} ({lim.why})")
+    for lo_key, hi_key, unit in RANGE_PAIRS:
+        lo, hi = flat.get(lo_key), flat.get(hi_key)
+        if _number(lo) and _number(hi) and math.isfinite(float(lo)) and math.isfinite(float(hi)) and lo >= hi:
+            u = f" {unit}" if unit != "-" else ""
+            out.append(f"{lo_key} = {_show(lo)}{u} is not below {hi_key} = {_show(hi)}{u} (inverted range: "
+                       "mode 1xx would clip every input to one value)")
+    for force, (d1, d2, scale) in (("Fx", ("PDX1", "PDX2", "LMUX")), ("Fy", ("PDY1", "PDY2", "LMUY"))):
+        a, b, lam = flat.get(d1), flat.get(d2, 0.0), flat.get(scale, 1.0)
+        if not (_number(a) and _number(b) and _number(lam)):
+            continue
+        mu = max(abs((float(a) + float(b) * d) * float(lam)) for d in FRICTION_DFZ)
+        if math.isfinite(mu) and mu > MU_MAX:
+            out.append(f"peak friction of {force} {mu:.3g} ({d1} = {_show(a)}, {d2} = {_show(b)}, {scale} = "
+                       f"{_show(lam)}) is far beyond rubber (limit {MU_MAX:g}; eqs 4.E13, 4.E23)")
+    huge = [k for k, v in flat.items() if k in _BOUNDED_KEYS and _number(v) and math.isfinite(float(v))
+            and abs(float(v)) > (EXPONENT_MAX if k in EXPONENT_KEYS else COEFFICIENT_MAX)]
+    if huge:
+        out.append(f"{', '.join(f'{k} = {_show(flat[k])}' for k in huge[:4])}"
+                   + (f" and {len(huge) - 4} more" if len(huge) > 4 else "")
+                   + f": beyond any Magic Formula coefficient (|value| <= {COEFFICIENT_MAX:g}, exponents "
+                   f"{', '.join(EXPONENT_KEYS)} <= {EXPONENT_MAX:g}); a channel would overflow")
+    return out
+
+
+#: Keys of the force and moment coefficients and the scaling factors (:data:`COEFFICIENT_MAX`).
+_BOUNDED_KEYS = frozenset(p.key for p in PARAMETERS if p.section in (*COEFFICIENT_SECTIONS, "SCALING_COEFFICIENTS")
+                          and p.unit != "str")
 
 
 class TirCheckError(MftireInputError):
@@ -258,12 +317,7 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
         rep.errors.append(f"non-finite value(s): {', '.join(f'{k} = {flat[k]}' for k in bad[:6])}"
                           + (f" and {len(bad) - 6} more" if len(bad) > 6 else ""))
     file_units = getattr(params, "file_units", None) or {}
-    for key, must in (("FNOMIN", "> 0"), ("UNLOADED_RADIUS", "> 0"), ("WIDTH", ">= 0"), ("RIM_RADIUS", ">= 0")):
-        v = flat.get(key)
-        if not _number(v) or not math.isfinite(float(v)):
-            continue
-        if (must == "> 0" and v <= 0) or (must == ">= 0" and v < 0):
-            rep.errors.append(f"{key} = {v:g} must be {must}")
+    rep.errors += value_errors(flat)
     odd, hints = [], []
     for key, (lo, hi) in PLAUSIBLE.items():
         v = flat.get(key)
@@ -279,9 +333,9 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
     r0, rim = flat.get("UNLOADED_RADIUS"), flat.get("RIM_RADIUS")
     if _number(r0) and _number(rim) and 0 < r0 <= rim:
         rep.warnings.append(f"RIM_RADIUS = {rim:g} m is not below UNLOADED_RADIUS = {r0:g} m")
-    fzmin, fzmax = flat.get("FZMIN"), flat.get("FZMAX")
-    if _number(fzmin) and _number(fzmax) and fzmin >= fzmax:
-        rep.warnings.append(f"FZMIN = {fzmin:g} N is not below FZMAX = {fzmax:g} N")
+    side = flat.get("TYRESIDE")
+    if isinstance(side, str) and side.strip().upper() not in TYRESIDES:
+        rep.warnings.append(f"TYRESIDE = {side!r} is not one of {', '.join(TYRESIDES)}")
     kz = flat.get("VERTICAL_STIFFNESS")
     if _number(kz) and math.isfinite(float(kz)) and kz <= 0:
         rep.warnings.append(f"VERTICAL_STIFFNESS = {kz:g} N/m: the deflection, the loaded and effective rolling "
@@ -291,7 +345,7 @@ def check_parameters(params: Any, source: str | None = None, sections: bool | No
         rep.warnings.append(f"{', '.join(k for k in ZERO_MZ if k in flat)} = 0: Mz is identically zero (the file "
                             "has no aligning-moment characteristic)")
     for force, keys, kind, mode in (ZERO_PEAK["Fx"], ZERO_PEAK["Fy"]):
-        zero = [k for k in keys if _number(flat.get(k)) and flat[k] == 0]
+        zero = [k for k in (*keys, f"LMU{force[1].upper()}") if _number(flat.get(k)) and flat[k] == 0]
         if zero:
             rep.warnings.append(f"{' = '.join(zero)} = 0: {force} is identically zero (the file has no {kind} "
                                 f"characteristic, as a fit for USE_MODE {mode} has)")
@@ -313,6 +367,7 @@ def check_tyre(tyre: Any) -> CheckReport:
     return check_parameters(tyre.parameters, source=getattr(tyre.parameters, "path", None) or tyre.name)
 
 
-__all__ = ["COEFFICIENT_SECTIONS", "CORE_KEYS", "CheckReport", "OPTIONAL_SECTIONS", "OPTIONAL_SECTIONS_6X",
-           "PLAUSIBLE", "REQUIRED_KEYS", "REQUIRED_SECTIONS", "TirCheckError", "WARN_MISSING", "ZERO_MZ",
-           "check_parameters", "check_tyre", "checked", "required_keys"]
+__all__ = ["COEFFICIENT_SECTIONS", "CORE_KEYS", "CheckReport", "Limit", "MU_MAX",
+           "OPTIONAL_SECTIONS", "OPTIONAL_SECTIONS_6X", "PARAMETER_LIMITS", "PLAUSIBLE", "RANGE_PAIRS",
+           "REQUIRED_KEYS", "REQUIRED_SECTIONS", "TirCheckError", "WARN_MISSING", "ZERO_MZ", "check_parameters",
+           "check_tyre", "checked", "required_keys", "value_errors", "COEFFICIENT_MAX"]

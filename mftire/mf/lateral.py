@@ -89,6 +89,7 @@ def fy0(
         BHyp = KyRp0 / (CHyp * DHyp * Kya0_prime)  # eq 4.88
         x = BHyp * R0 * c.phi
         SHyp = DHyp * np.sin(CHyp * np.arctan(x - EHyp * (x - np.arctan(x)))) * np.sign(c.Vx)  # eq 4.80
+        SHyp = np.where(DHyp == 0.0, 0.0, SHyp)  # standstill: DHyp = 0, BHyp infinite; the limit is 0
         zeta0 = 0.0  # eq 4.83
         zeta4 = 1.0 + SHyp - SVyg / Kya_prime  # eq 4.84
     else:

@@ -68,8 +68,8 @@ _NAN_TEXT = next(w.text for w in spec.WARNINGS if w.input is not None)  # fill 0
 
 
 def _clean(name: str, x: np.ndarray, fill: float) -> np.ndarray:
-    """Replace NaN by ``fill`` with a warning (documented input policy)."""
-    bad = np.isnan(x)
+    """Replace NaN (and infinite values, treated as NaN) by ``fill`` with a warning (documented input policy)."""
+    bad = ~np.isfinite(x)
     if bad.any():
         warnings.warn(_NAN_TEXT.format(n=int(bad.sum()), input=name), MFLimitWarning, stacklevel=4)
         x = np.where(bad, fill, x)
@@ -144,7 +144,7 @@ def prepare(
         P = np.full(shape, float(p["INFLPRES"]))
     else:
         P = np.broadcast_to(np.asarray(P, dtype=float), shape)
-        P = np.where(np.isnan(P) | (P <= 0.0), float(p["INFLPRES"]), P)
+        P = np.where(~np.isfinite(P) | (P <= 0.0), float(p["INFLPRES"]), P)
     if omega is not None:
         omega = np.broadcast_to(np.asarray(omega, dtype=float), shape)
         omega = None if not np.any(omega) else _clean("omega", np.array(omega), 0.0)

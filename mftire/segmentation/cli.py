@@ -19,17 +19,25 @@ def _parse_signs(items: Sequence[str] | None) -> dict[str, float]:
     for raw in items or ():
         col, _, val = raw.partition("=")
         try:
-            out[col.strip()] = float(val)
+            sign = float(val)
         except ValueError:
-            raise MftireInputError(f"--sign {raw!r}: expected COLUMN=-1 or COLUMN=1") from None
+            sign = 0.0
+        if sign not in (-1.0, 1.0) or not col.strip():
+            raise MftireInputError(f"--sign {raw!r}: expected COLUMN=-1 or COLUMN=1 (a sign, not a scale)")
+        out[col.strip()] = sign
     return out
 
 
 def _cmd_import(args: argparse.Namespace) -> int:
     from mftire.iotools.atomic import write_text_atomic
+    from mftire.iotools.output import OutputPlan
     from mftire.iotools.rig import parse_map_options
     from mftire.segmentation.rig_segments import import_rig
 
+    plan = OutputPlan([args.raw, args.columns_map], args.force)  # every output checked before any work
+    plan.file(args.output)
+    if args.report:
+        plan.file(args.report)
     columns = parse_map_options(args.map or [])
     warm: str | float = args.warmup
     try:
@@ -73,5 +81,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--warmup", default="auto", metavar="auto|none|SECONDS",
                    help="warm-up to drop: auto (first segment when its condition recurs), none, or seconds")
     p.add_argument("--report", metavar="REPORT.json", help="also write the import report as JSON")
+    from mftire.cli_options import add_force_option
+
+    add_force_option(p)
     p.set_defaults(func=_cmd_import)
     return p

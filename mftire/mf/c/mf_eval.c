@@ -564,7 +564,8 @@ MF_FN void fy0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double 
         KyRp0 = Kyg0 / (1.0 - c->eps_gamma); /* eq 4.89 */
         BHyp = KyRp0 / (CHyp * DHyp * Kya0_prime); /* eq 4.88 */
         x = BHyp * R0 * c->phi;
-        SHyp = DHyp * sin(CHyp * atan(x - EHyp * (x - atan(x)))) * sgn(c->Vx); /* eq 4.80 */
+        /* eq 4.80; at standstill DHyp = 0 and BHyp is infinite: SHyp takes its limit 0 */
+        SHyp = DHyp == 0.0 ? 0.0 : DHyp * sin(CHyp * atan(x - EHyp * (x - atan(x)))) * sgn(c->Vx);
         zeta0 = 0.0; /* eq 4.83 */
         zeta4 = 1.0 + SHyp - SVyg / Kya_prime; /* eq 4.84 */
     } else {
@@ -1140,7 +1141,7 @@ MF_FN void apply_extensions(const ExtTable *ext, const MFParams *p, const Cond *
 
 MF_FN double clean(Ctx *m, int kind, double x, double fill)
 {
-    if (isnan(x)) {
+    if (!isfinite(x)) { /* an infinite input is treated as NaN (mftire.mf.solver._clean) */
         flag(m, kind);
         return fill;
     }
@@ -1183,7 +1184,7 @@ MF_FN double prepare_point(const MFParams *p, Ctx *m, const MFInputs *in, Cond *
     phit = clean(m, MF_W_NAN_PHIT, in->phit, 0.0);
     Vx = clean(m, MF_W_NAN_VX, in->Vx, 0.0);
     P = in->P;
-    if (isnan(P) || P <= 0.0) P = p->INFLPRES;
+    if (!isfinite(P) || P <= 0.0) P = p->INFLPRES;
     condition_inputs(p, m, Fz, kappa, alpha, gamma, phit, Vx, P, c);
     return mf_dpi(p, c->P); /* eq 4.E2b */
 }

@@ -153,12 +153,12 @@ static void load_block(Block *B, const double *const *in, const long *step, long
             for (i = 0; i < lanes; i++) dst[i] = 0.0;
         } else if (step[k] == 0) {
             for (i = 0; i < lanes; i++) dst[i] = in[k][0];
-            count = isnan(in[k][0]) ? nb : 0;
+            count = !isfinite(in[k][0]) ? nb : 0;
         } else {
             copy(dst, in[k] + start, nb);
             for (i = nb; i < lanes; i++) dst[i] = dst[0];
             if (nan)
-                for (i = 0; i < nb; i++) count += isnan(dst[i]);
+                for (i = 0; i < nb; i++) count += !isfinite(dst[i]);
         }
         if (nan) nan[k] += count;
     }
@@ -170,10 +170,10 @@ MF_INLINE void radius_inputs(const MFParams *p, Ctx *m, const Block *B, int i, d
                              double *Vx, double *dpi)
 {
     double F = B->in[0][i], P = B->in[6][i];
-    *Fz = isnan(F) || F < 0.0 ? 0.0 : F;
-    *kappa = isnan(B->in[1][i]) ? 0.0 : B->in[1][i];
-    *Vx = isnan(B->in[5][i]) ? 0.0 : B->in[5][i];
-    if (isnan(P) || P <= 0.0) P = p->INFLPRES;
+    *Fz = !isfinite(F) || F < 0.0 ? 0.0 : F;
+    *kappa = !isfinite(B->in[1][i]) ? 0.0 : B->in[1][i];
+    *Vx = !isfinite(B->in[5][i]) ? 0.0 : B->in[5][i];
+    if (!isfinite(P) || P <= 0.0) P = p->INFLPRES;
     if (m->limits) P = limit_pressure(p, m, P);
     *dpi = mf_dpi(p, P); /* eq 4.E2b */
 }
@@ -205,7 +205,7 @@ static MF_CLONES int radius_block(const MFParams *restrict p, int limits, int om
             radius_inputs(p, &m, B, i, &Fz, &kap[i], &vx[i], &dpi);
             defl[i] = re_load_deflection(p, Fz, dpi);
             Re = p->UNLOADED_RADIUS * MF_RE_START;
-            if (omega_given) re_given_omega(p, defl[i], isnan(w) ? 0.0 : w, &Re, &Romega, &omega);
+            if (omega_given) re_given_omega(p, defl[i], !isfinite(w) ? 0.0 : w, &Re, &Romega, &omega);
             B->Re[i] = Re;
             B->Romega[i] = Romega;
             B->omega[i] = omega;
@@ -347,7 +347,7 @@ static void evaluate_scalar(const MFParams *p, const Ctx *mode, const ExtTable *
         lane_point(B, i, &pt);
         clean_data(&m, &pt, data);
         dpi = prepare_point(p, &m, &pt, &c);
-        omega_in = isnan(pt.omega) ? 0.0 : pt.omega;
+        omega_in = !isfinite(pt.omega) ? 0.0 : pt.omega;
         effective_rolling_radius(p, &c, dpi, omega_given, omega_in, &kk, &B->Re[i], &B->Romega[i], &B->omega[i]);
         c.omega = B->omega[i];
         memset(&o, 0, sizeof o);
@@ -453,7 +453,7 @@ MF_KERNEL_API int mf_kernel_evaluate(const double *params, const int *terms, int
     mode.batch_camber = 0;
     for (i = 0; i < n && !mode.batch_camber; i++) {
         double g = in[3][i * step[3]];
-        g = isnan(g) ? 0.0 : g;
+        g = !isfinite(g) ? 0.0 : g;
         if (mode.limits) g = limit_camber(p, g);
         mode.batch_camber = g != 0.0;
     }
