@@ -32,6 +32,8 @@ from mftire.diagnosis.candidates import Candidate, candidates, time_column, with
 from mftire.diagnosis.effects import (
     FIT_CHANNELS,
     HISTORY_CANDIDATES,
+    CHANNEL_WORSE_NOISE,
+    CHANNEL_WORSE_REL,
     MAX_RESIDUAL_VS_CONTROL,
     EffectFit,
     choose_effect,
@@ -85,8 +87,14 @@ class DiagnosisResult:
     not_measured: dict[str, str] = field(default_factory=dict)  #: channel -> why it was left out
     profiles: Profiles | None = None  #: per-sweep scaling-factor profiles
     confounding: list[str] = field(default_factory=list)  #: what the cause is confounded with, in words
+    #: the candidate named as the cause when no law was accepted ("cause named, no law found"), else None
+    cause: str | None = None
 
     def summary(self) -> str:
+        if not self.significant and self.cause is not None:
+            return (f"cause named, no law found: {self.cause} explains the residual, but no law in it predicts "
+                    "held-out data better than refitting the model without it on every scored channel; the model "
+                    "is left unchanged (see the per-sweep profiles)")  # fmt: skip
         if not self.significant:
             return "no significant effect: the residual is not explained by any candidate beyond the MF inputs"
         e = self.effect
@@ -428,6 +436,7 @@ def _diagnose(
         second = profiles.second_variable(variable, cand_values) if len(np.unique(v)) <= 3 else None
         dtr = dtrain.assign(_cand=v)
         prob = make_problem(tyre, dtr, chans)
+        prob.noise = {ch: noise[ch] / prob.scale[ch] for ch in prob.channels if np.isfinite(noise.get(ch, np.nan))}
         prob.variables = {k: np.asarray(val)[train] for k, val in variables.items()}
         prob = drop_outliers(prob)
         v = prob.df["_cand"].to_numpy(float)
@@ -439,8 +448,10 @@ def _diagnose(
         kinds = prob.df["sweep_var"].to_numpy() if "sweep_var" in prob.df.columns else None
         folds = level_folds(v, prob.df["sweep_id"].to_numpy(), c.sweep_level, blocks=blocks, kinds=kinds)
         n_levels = int(np.unique(np.round(v[np.isfinite(v)], 9)).size)
+        # the laws act on the channels where the candidate is significant (a law that helps Fy is not put on Fx)
+        law_ch = [ch for ch in eff_ch if ch in ("Fx", "Fy")] or chans
         laws = [(var, law, v if var == variable else None)
-                for var, law in effects_for(variable, derived, monotone, n_levels, families, chans, second)]
+                for var, law in effects_for(variable, derived, monotone, n_levels, families, law_ch, second)]
         chosen, fits = choose_effect(prob, laws, n_pressures, control, eff_ch, folds)
         control = fits[0]
         tried += fits[1:] if len(tried) else fits
@@ -448,12 +459,12 @@ def _diagnose(
             continue
         if note:
             chosen.messages.insert(0, note)
-        by_law = {law.name: (law, val) for _, law, val in laws}
-        ranked = sorted((f for f in fits[1:] if np.isfinite(f.heldout) and f.heldout < 1.0 and f.name in by_law),
-                        key=lambda f: f.heldout)  # fmt: skip
+        by_var = {var: val for var, _, val in laws}
+        ranked = sorted((f for f in fits[1:] if np.isfinite(f.heldout) and f.heldout < 1.0 and not f.rejected
+                         and f.law is not None), key=lambda f: f.heldout)  # fmt: skip
         ranked = [chosen] + [f for f in ranked if f is not chosen]
-        found.append((chosen, e, (prob, [(f, *by_law[f.name]) for f in ranked], eff_ch, folds, blocks is not None,
-                                  control.cv)))  # fmt: skip
+        found.append((chosen, e, (prob, [(f, f.law, by_var.get(f.variable)) for f in ranked], eff_ch, folds,
+                                  blocks is not None, control.cv, dict(control.cv_channels))))  # fmt: skip
     # the lowest held-out error wins; a better-ranked candidate within 10 % of it is preferred
     lowest = min((f.heldout for f, _, _ in found), default=np.inf)
     best = next((t for t in found if t[0].heldout <= 1.1 * lowest), None)
@@ -462,18 +473,19 @@ def _diagnose(
                "than refitting the model without it")
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
-                               profiles=profiles)  # fmt: skip
+                               profiles=profiles, cause=top.variable)  # fmt: skip
     effect, cause, context = best
     # the chosen candidate's best laws and the control, refitted with every MF coefficient
     _progress(f"refitting every coefficient with the laws of {effect.variable}", progress)
-    prob, law_fits, eff_ch, folds, in_blocks, control_cv = context
-    refined, extended, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv)
+    prob, law_fits, eff_ch, folds, in_blocks, control_cv, control_channels = context
+    refined, extended, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv,
+                                             control_channels)
     if refined is None:
         msg = ("no significant effect: the best laws did not beat the control once every coefficient was "
                "refitted (" + "; ".join(notes) + ")")
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
-                               profiles=profiles)  # fmt: skip
+                               profiles=profiles, cause=cause.variable)  # fmt: skip
     effect = refined
     named = [e for e in ranking if e.variable == effect.variable and e.significant]
     if named and effect.variable != cause.variable:  # e.g. a slip-speed law chosen for Vx: the cause is Vs
@@ -489,6 +501,18 @@ def _diagnose(
         + profiles.confounding(effect.variable)))  # fmt: skip
     dtest = df[test].reset_index(drop=True)
     errors = channel_errors(dtest, _model(tyre, dtest), _model(extended, dtest), chans)
+    # never worse: on the held-out condition no channel may lose to the model as given beyond its noise
+    worse = [e.channel for e in errors
+             if e.n * e.rms_after**2 > (1.0 + CHANNEL_WORSE_REL) * e.n * e.rms_before**2
+             + CHANNEL_WORSE_NOISE * e.n * noise.get(e.channel, 0.0) ** 2]  # fmt: skip
+    if worse:
+        msg = (f"cause named, no law found: the law {effect.name} in {effect.variable} beat the control on the "
+               f"held-out folds, but on the held-out condition {column} = {values} it made "
+               f"{', '.join(worse)} worse than the model as given; the model is left unchanged")  # fmt: skip
+        return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
+                               errors, None, tried + [effect], messages=[msg], data=df, train=train,
+                               not_measured=not_measured, profiles=profiles, confounding=confounding,
+                               cause=cause.variable)  # fmt: skip
     full_after = _model(extended, df)
     for ch in chans:
         df[f"residual_after_{ch}"] = df[ch].to_numpy(float) - full_after[ch]

@@ -151,6 +151,10 @@ class EffectFit:
     heldout: float = float("nan")  #: held-out-sweep error relative to the control refit [-]
     cv: float = float("nan")  #: held-out-sweep error (sum of squared weighted residuals) [-]
     targets: tuple[str, ...] = ()  #: scaling factors (or offsets) the law acts on
+    #: held-out-fold error per channel: channel -> (sum of squared weighted residuals, held-out rows)
+    cv_channels: dict[str, tuple[float, int]] = field(default_factory=dict)
+    law: Law | None = None  #: the law fitted
+    rejected: bool = False  #: a scored channel was worse on held-out folds than under the control
 
     @property
     def removed(self) -> float:
@@ -231,6 +235,8 @@ class _Problem:
     scale: dict[str, float]
     variables: dict[str, np.ndarray]
     weights: np.ndarray
+    #: noise standard deviation of each channel in units of its scale (0: unknown)
+    noise: dict[str, float] = field(default_factory=dict)
     #: the arrays of :meth:`targets`, made once (``df`` and ``weights`` are not changed in place)
     _targets: tuple | None = field(default=None, init=False, repr=False, compare=False)
 
@@ -276,14 +282,16 @@ def drop_outliers(prob: _Problem, limit: float = 10.0) -> _Problem:
         return prob
     keep = ~bad
     return _Problem(prob.tyre, d[keep].reset_index(drop=True), prob.channels, prob.scale,
-                    {k: np.asarray(v)[keep] for k, v in prob.variables.items()}, prob.weights[keep])  # fmt: skip
+                    {k: np.asarray(v)[keep] for k, v in prob.variables.items()}, prob.weights[keep],
+                    prob.noise)  # fmt: skip
 
 
 def take(prob: _Problem, rows: np.ndarray) -> _Problem:
     """The problem restricted to ``rows`` (a boolean mask or indices)."""
     idx = np.flatnonzero(rows) if np.asarray(rows).dtype == bool else np.asarray(rows)
     return _Problem(prob.tyre, prob.df.iloc[idx].reset_index(drop=True), prob.channels, prob.scale,
-                    {k: np.asarray(v)[idx] for k, v in prob.variables.items()}, prob.weights[idx])  # fmt: skip
+                    {k: np.asarray(v)[idx] for k, v in prob.variables.items()}, prob.weights[idx],
+                    prob.noise)  # fmt: skip
 
 
 def subsample(prob: _Problem, max_rows: int = MAX_ROWS) -> tuple[_Problem, np.ndarray]:
@@ -293,7 +301,8 @@ def subsample(prob: _Problem, max_rows: int = MAX_ROWS) -> tuple[_Problem, np.nd
         return prob, np.arange(n)
     idx = np.unique(np.linspace(0, n - 1, max_rows).round().astype(int))
     sub = _Problem(prob.tyre, prob.df.iloc[idx].reset_index(drop=True), prob.channels, prob.scale,
-                   {k: np.asarray(v)[idx] for k, v in prob.variables.items()}, prob.weights[idx])  # fmt: skip
+                   {k: np.asarray(v)[idx] for k, v in prob.variables.items()}, prob.weights[idx],
+                   prob.noise)  # fmt: skip
     return sub, idx
 
 
@@ -483,7 +492,7 @@ def fit_effect(
     section = {k: v for k, v in section.items() if k not in base_section}
     params = {kk: float(vv) for kk, vv in zip(keys, res.x[: len(keys)], strict=True)}
     fit = EffectFit(law.name, variable, True, params, section, standard, ss0, ss1, float(bic), k, messages,
-                    targets=law.targets)
+                    targets=law.targets, law=law)
     if term is not None:
         fit.messages.append(f"term: {term.describe()}")
     return fit
@@ -567,9 +576,11 @@ def heldout_error(
     prob: _Problem, law: Law, variable: str, values: np.ndarray | None, n_pressures: int,
     warm: Mapping[str, float] | None, pressure_channels: Sequence[str] | None, folds: np.ndarray | None = None,
     extra_keys: Sequence[str] = (),
+    per_channel: dict[str, tuple[float, int]] | None = None,
 ) -> float:
     """Sum of squared weighted residuals on held-out rows: each label of ``folds`` held out in
-    turn (default ``CV_FOLDS`` groups of whole sweeps; rows labelled -1 are never held out)."""
+    turn (default ``CV_FOLDS`` groups of whole sweeps; rows labelled -1 are never held out).
+    ``per_channel`` (a dict, filled): channel -> (its share of the sum, its held-out rows)."""
     from mftire.diagnosis.ranking import fold_of_groups
 
     if folds is None:
@@ -584,7 +595,48 @@ def heldout_error(
                          extra_keys=extra_keys)
         r = fit_residuals(te, fit, v_te)
         total += float(r @ r)
+        if per_channel is not None:
+            y, masks, _ = te.targets()
+            for ch, part in zip(te.channels, r.reshape(len(te.channels), -1), strict=True):
+                ss, n = per_channel.get(ch, (0.0, 0))
+                per_channel[ch] = (ss + float(part @ part), n + int((masks[ch] & np.isfinite(y[ch])).sum()))
     return total
+
+
+#: A scored channel may be worse on the held-out folds than under the control refit by at most this
+#: share of the control's error ...
+CHANNEL_WORSE_REL = 0.02
+#: ... plus this share of the channel's noise variance per held-out row (what noise alone moves).
+CHANNEL_WORSE_NOISE = 0.05
+
+
+def worse_channels(fit: Mapping[str, tuple[float, int]], control: Mapping[str, tuple[float, int]],
+                   noise: Mapping[str, float] | None = None) -> list[str]:
+    """The channels whose held-out-fold error under a law (``fit``: channel -> (SS, rows)) exceeds the
+    control's beyond its noise: SS_law > (1 + :data:`CHANNEL_WORSE_REL`)·SS_control +
+    :data:`CHANNEL_WORSE_NOISE`·rows·σ².  A law that makes any scored channel worse on data it was not
+    fitted on is never accepted (issue 21: a diagnosis that makes the model worse must never happen)."""
+    out = []
+    for ch, (ss_c, n) in control.items():
+        if ch not in fit:
+            continue
+        sigma = float((noise or {}).get(ch, 0.0))
+        if fit[ch][0] > (1.0 + CHANNEL_WORSE_REL) * ss_c + CHANNEL_WORSE_NOISE * n * sigma**2:
+            out.append(ch)
+    return out
+
+
+def trimmed(law: Law, worse: Sequence[str]) -> Law | None:
+    """``law`` without the targets that act on the channels ``worse`` (None when nothing is left): a law
+    acts only on the channels it helps (a friction law in temperature that helps Fy is not applied to Fx)."""
+    from mftire.mf.extensions import TARGET_CHANNELS
+
+    keep = tuple(t for t in law.targets if not set(TARGET_CHANNELS.get(t, ())) & set(worse))
+    if not keep or keep == law.targets or law.name in ("pressure", "none"):
+        return None
+    suffix = "_" + "_".join(sorted({c for t in keep for c in TARGET_CHANNELS[t]}))
+    return dataclasses.replace(law, name=law.name + suffix.lower() if not law.name.endswith(suffix.lower())
+                               else law.name, targets=keep)  # fmt: skip
 
 
 def choose_effect(
@@ -622,17 +674,36 @@ def choose_effect(
     all_fits = [control] + [f for f, _, _ in fits]
     if not good:
         return None, all_fits
-    cv_control = heldout_error(prob, CONTROL, "", None, n_pressures, None, effect_channels, folds)
+    per_c: dict[str, tuple[float, int]] = {}
+    cv_control = heldout_error(prob, CONTROL, "", None, n_pressures, None, effect_channels, folds, per_channel=per_c)
     control.messages.append(f"held-out-sweep error {cv_control:.4g}")
     control.cv = cv_control
+    control.cv_channels = per_c
     scored = []
-    for fit, v, law in good:
-        cv = heldout_error(prob, law, fit.variable, v, n_pressures, control.standard, effect_channels, folds)
+    queue = [(fit, v, law) for fit, v, law in good]
+    while queue:
+        fit, v, law = queue.pop(0)
+        per: dict[str, tuple[float, int]] = {}
+        cv = heldout_error(prob, law, fit.variable, v, n_pressures, control.standard, effect_channels, folds,
+                           per_channel=per)  # fmt: skip
         fit.messages.append(f"held-out-sweep error {cv:.4g} (control {cv_control:.4g})")
         fit.heldout = cv / cv_control if cv_control > 0 else np.inf
         fit.cv = cv
+        fit.cv_channels = per
+        worse = worse_channels(per, per_c, prob.noise)
+        fit.rejected = bool(worse)
+        if worse:
+            fit.messages.append(f"rejected: held-out error worse than the control on {', '.join(worse)}")
+            narrow = trimmed(law, worse)
+            if narrow is not None:  # the same law on the channels it helps only
+                nf = fit_effect(prob, narrow, fit.variable, v, n_pressures, warm=control.standard,
+                                pressure_channels=effect_channels)  # fmt: skip
+                all_fits.append(nf)
+                if nf.n_params > 0 and _beats(nf, control):
+                    queue.append((nf, v, narrow))
+            continue
         scored.append((cv, fit))
-    if min(cv for cv, _ in scored) > MAX_RESIDUAL_VS_CONTROL * cv_control:
+    if not scored or min(cv for cv, _ in scored) > MAX_RESIDUAL_VS_CONTROL * cv_control:
         return None, all_fits
     return _parsimonious(scored)[1], all_fits
 
@@ -667,6 +738,7 @@ def _full_refit(data: pd.DataFrame, tyre: Tyre) -> Tyre:
 def refine_effect(
     prob: _Problem, fits: Sequence[tuple[EffectFit, Law, np.ndarray | None]], n_pressures: int,
     effect_channels: Sequence[str] | None, folds: np.ndarray | None, local_control_cv: float = float("nan"),
+    local_control_channels: Mapping[str, tuple[float, int]] | None = None,
 ) -> tuple[EffectFit | None, Tyre | None, list[str]]:
     """Refit the best laws and the control with every MF coefficient (the staged fitter), then choose
     among them by held-out-sweep error, each model's law and main coefficients refitted on each fold.
@@ -679,6 +751,8 @@ def refine_effect(
     without an effect; a full refit without an effect) by :data:`MAX_RESIDUAL_VS_CONTROL`: an effect must
     explain what refitting the model cannot.  Among those within :data:`PARSIMONY` of the lowest held-out
     error, the law with the fewest coefficients wins (then the lowest error).
+    A variant whose held-out error on any scored channel is worse than its control's beyond the noise
+    (:func:`worse_channels`) is never chosen.
     Returns ``(chosen, extended tyre, messages)``; chosen is None when no law beats the control by
     :data:`MAX_RESIDUAL_VS_CONTROL` on held-out sweeps.
     """
@@ -689,15 +763,18 @@ def refine_effect(
     cols = [c for c in prob.df.columns if not str(c).startswith(("residual_", "_"))]
     train = prob.df[cols]  # the training rows without gross outliers, subsampled
     control_tyre = _full_refit(train, base)
+    full_channels: dict[str, tuple[float, int]] = {}
     cv_full = heldout_error(replace_tyre(prob, control_tyre), CONTROL, "", None, n_pressures, None,
-                            effect_channels, folds)  # fmt: skip
+                            effect_channels, folds, per_channel=full_channels)  # fmt: skip
+    local_channels = dict(local_control_channels or {}) if np.isfinite(local_control_cv) else full_channels
     cv_local = local_control_cv if np.isfinite(local_control_cv) else cv_full
     messages = [f"control, the main coefficients refitted without an effect: held-out-sweep error {cv_local:.4g}",
                 f"control, every coefficient refitted without an effect: held-out-sweep error {cv_full:.4g}"]
     # each law as fitted locally (its held-out error from choose_effect) and refitted in full; each variant
     # must beat the control refitted the same way
-    options: list[tuple[float, EffectFit, Tyre, float]] = [(f.cv, f, f.apply(base), cv_local) for f, _, _ in fits
-                                                           if np.isfinite(f.cv)]  # fmt: skip
+    options: list[tuple[float, EffectFit, Tyre, float]] = [
+        (f.cv, f, f.apply(base), cv_local) for f, _, _ in fits
+        if np.isfinite(f.cv) and not f.rejected and not worse_channels(f.cv_channels, local_channels, prob.noise)]
     base_terms = {t.index for t in base.extension_set.terms}
     for fit, _law, values in list(fits)[:REFINE_LAWS]:
         tyre = _full_refit(train, fit.apply(base))
@@ -705,10 +782,15 @@ def refine_effect(
         p = replace_tyre(prob, tyre)
         if values is not None and fit.variable not in BUILTIN_VARIABLES:
             p.variables = {**p.variables, fit.variable: np.asarray(values)}
-        cv = heldout_error(p, CONTROL, "", None, n_pressures, None, effect_channels, folds, extra_keys=keys)
+        per: dict[str, tuple[float, int]] = {}
+        cv = heldout_error(p, CONTROL, "", None, n_pressures, None, effect_channels, folds, extra_keys=keys,
+                           per_channel=per)  # fmt: skip
+        worse = worse_channels(per, full_channels, prob.noise)
         messages.append(f"{fit.name} in {fit.variable}: held-out-sweep error {cv:.4g} with every coefficient "
-                        f"refitted, {fit.cv:.4g} with the main coefficients")  # fmt: skip
-        options.append((cv, fit, tyre, cv_full))
+                        f"refitted, {fit.cv:.4g} with the main coefficients"
+                        + (f"; worse than the control on {', '.join(worse)}: not chosen" if worse else ""))
+        if not worse:
+            options.append((cv, fit, tyre, cv_full))
     eligible = [o for o in options if o[0] <= MAX_RESIDUAL_VS_CONTROL * o[3]]
     if not eligible:
         return None, None, messages

@@ -110,6 +110,23 @@ BUILTIN_VARIABLES: dict[str, tuple[str, str]] = {
 #: Input names of the evaluator that an external variable may not take.
 RESERVED_VARIABLES = ("phit", "omega", "mode", "muRoad")
 
+#: Words that make a column name an identifier (a run, sweep, segment, row, file or record
+#: number): a label that only numbers things is never a law variable.  On new data the numbers
+#: are different, and a law in them extrapolates without meaning (issue 21).
+IDENTIFIER_WORDS = frozenset({
+    "run", "runs", "sweep", "sweeps", "segment", "seg", "row", "rows", "file", "files", "id", "ids", "idx", "index",
+    "number", "num", "nr", "no", "count", "counter", "record", "rec", "sequence", "seq", "trial", "uid", "key",
+})  # fmt: skip
+
+
+def identifier_name(name: str) -> bool:
+    """True when ``name`` names an identifier: one of its words (split at ``_``, ``-``, ``.``, spaces,
+    digits and camel-case humps) is in :data:`IDENTIFIER_WORDS` (``run``, ``sweep_id``, ``RunNumber``,
+    ``seg_no``, ``file3``)."""
+    words = re.findall(r"[A-Z]?[a-z]+|[A-Z]+(?![a-z])", re.sub(r"[^A-Za-z]+", " ", str(name)))
+    return any(w.lower() in IDENTIFIER_WORDS for w in words)
+
+
 #: Most levels of a ``table`` form.
 MAX_LEVELS = 8
 #: Most external (data) variables of one tyre (FMU inputs).
@@ -326,7 +343,13 @@ def _check_variable(name: object, key: str) -> str:
         raise MftireInputError(
             f"[{SECTION}] {key} = {name!r}: that name is an input of the evaluator; name the variable differently"
         )
-    if name.lower() in ("energy", "sequence"):
+    if identifier_name(name):
+        raise MftireInputError(
+            f"[{SECTION}] {key} = {name!r}: an identifier (a run, sweep, segment, row or file number) cannot be a "
+            "law variable: on new data the numbers differ and the law extrapolates without meaning; use the "
+            "physical quantity it stands for (elapsed time, accumulated friction work, temperature, wear)"
+        )
+    if name.lower() in ("energy",):
         raise MftireInputError(
             f"[{SECTION}] {key} = {name!r}: a quantity that needs measured history cannot be a model variable; "
             "use a measured column (time, run index, temperature)"
@@ -479,6 +502,7 @@ def required_variables(section: Mapping[str, object] | None) -> list[str]:
 
 
 __all__ = [
-    "BUILTIN_VARIABLES", "Extension", "ExtensionSet", "FORMS", "Form", "OFFSET_TARGETS", "SCALING_TARGETS",
+    "BUILTIN_VARIABLES", "Extension", "ExtensionSet", "FORMS", "Form", "IDENTIFIER_WORDS", "OFFSET_TARGETS",
+    "SCALING_TARGETS", "identifier_name",
     "SECTION", "TARGETS", "make_extension", "parse_section", "required_variables",
 ]  # fmt: skip
