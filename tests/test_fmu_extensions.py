@@ -61,6 +61,15 @@ CASES: dict[str, tuple[str, dict]] = {
                               **_term(2, "LMX LVMX LMY", "linear", "sign_alpha", c1=0.1),
                               **_term(3, "LCX LCY LHX LHY LVX LVY", "linear", "gamma", scale=0.05, c1=0.2),
                               **_term(4, "LXAL LYKA LVYKA LKYC LEY LFZO", "quadratic", "kappa", c1=0.2, c2=0.3)}),
+    "hinge_temperature": ("JuliaMF61", _term(1, "LMUY LKY", "hinge", "temperature", ref=50.0, scale=20.0, min=0.0,
+                                             max=120.0, c1=-0.08, c2=0.5)),
+    "direction_offset": ("JuliaMF62", {**_term(1, "FY_OFFSET", "direction", "sweep_dir", c1=0.02),
+                                       **_term(2, "LMUX", "direction", "sweep_dir", c1=-0.03)}),
+    "input_laws": ("JuliaMF61", {**_term(1, "P_FACTOR", "linear", "temperature", ref=20.0, scale=50.0, min=0.0,
+                                         max=120.0, c1=0.08),
+                                 **_term(2, "ALPHA_OFFSET", "linear", "time", ref=0.0, scale=1000.0, c1=0.01),
+                                 **_term(3, "GAMMA_OFFSET", "quadratic", "temperature", ref=20.0, scale=50.0,
+                                         c1=0.005, c2=0.002)}),
     "all": ("JuliaMF62", {
         **_term(1, "LMUX LMUY", "decay", "Vs", scale=16.7, c1=0.3),
         **_term(2, "LMUX LMUY", "saturating", "time", scale=300.0, c1=-0.15, c2=1.0),
@@ -73,7 +82,7 @@ CASES: dict[str, tuple[str, dict]] = {
 
 #: external variable -> (low, high) of its random values
 DATA_RANGES = {"time": (-50.0, 3000.0), "temperature": (-20.0, 140.0), ODD_NAME: (-10.0, 200.0),
-               "surface": (-0.5, 2.7), "wet": (0.0, 1.0)}  # fmt: skip
+               "surface": (-0.5, 2.7), "wet": (0.0, 1.0), "sweep_dir": (-1.0, 1.0)}  # fmt: skip
 MODES = (111, 121, 211, 112, 110, 222)
 N_POINTS = 300  # per case and interface
 

@@ -39,7 +39,7 @@ from mftire.mf.extensions import (
     BUILTIN_VARIABLES,
     FORMS,
     MAX_EXTERNAL,
-    OFFSET_TARGETS,
+    TARGET_CODES,
     SECTION,
     TARGETS,
     Extension,
@@ -341,8 +341,7 @@ def extension_header(variables: list[Variable], extensions: ExtensionSet | None 
         return f"MF_PIDX({field})"
 
     lines += [
-        "#define MF_TARGET_FX_OFFSET (-1)",
-        "#define MF_TARGET_FY_OFFSET (-2)",
+        *(f"#define MF_TARGET_{name} ({code})" for name, code in TARGET_CODES.items()),
         "#define MF_PIDX(f) ((int)(offsetof(MFParams, f) / sizeof(double)))",
         "",
         "typedef struct {",
@@ -357,7 +356,7 @@ def extension_header(variables: list[Variable], extensions: ExtensionSet | None 
     if not runtime:
         lines.append("static const MFTerm MF_TERMS[MF_N_TERMS] = {")
     for t in terms:
-        tg = ", ".join("MF_TARGET_" + x if x in OFFSET_TARGETS else idx(x) for x in t.targets)
+        tg = ", ".join("MF_TARGET_" + x if x in TARGET_CODES else idx(x) for x in t.targets)
         two = t.variable2 is not None
         f2 = [idx(t.key(n)) for n in ("REF2", "SCALE2", "MIN2", "MAX2")] if two else [idx(t.key("REF"))] * 4
         first = (t.level_keys or t.coefficient_keys)[0]

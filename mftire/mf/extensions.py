@@ -44,6 +44,10 @@ form             f                                               use
 ``table``        1 + C_k, k the level L_k nearest to u           a categorical variable (road surface)
 ``interaction``  1 + C1·z + C2·z·z2                              a condition flag times a variable
                                                                  (grip loss on wet growing with speed)
+``hinge``        1 + C1·max(z − C2, 0)                           a change above a threshold C2 (grip
+                                                                 loss above a temperature)
+``direction``    1 + C1·sgn(z)                                   hysteresis: changes sign with the
+                                                                 sweep direction (v = sweep_dir)
 ===============  ==============================================  ====================================
 
 Friction factors act where the book puts friction modifications (eq 4.E7: the file's
@@ -78,7 +82,20 @@ SCALING_TARGETS: tuple[str, ...] = (
 )  # fmt: skip
 #: Force offsets an extension may add: ``Fz·(f − 1)`` [N].
 OFFSET_TARGETS: tuple[str, ...] = ("FX_OFFSET", "FY_OFFSET")
-TARGETS: tuple[str, ...] = SCALING_TARGETS + OFFSET_TARGETS
+#: Input laws: a measured MF input corrected by a law of a column, applied to the conditioned inputs
+#: before the force and moment equations (a mis-measured input is one of the most common rig effects):
+#: ``ALPHA_OFFSET`` alpha + (f − 1) [rad] (a slip-angle offset, e.g. a toe misalignment drifting with
+#: time), ``GAMMA_OFFSET`` gamma + (f − 1) [rad] (a camber offset), ``P_FACTOR`` P·f (an effective
+#: inflation pressure, e.g. P·(1 + C1·(T − T0)) when the logged pressure stays at the cold value; Gay-Lussac:
+#: at constant volume P/T is constant).  The effective pressure enters every force and moment equation
+#: through dpi (Pacejka 2012 eq 4.E2b); the loaded radius and contact patch keep the logged pressure.
+INPUT_TARGETS: tuple[str, ...] = ("ALPHA_OFFSET", "GAMMA_OFFSET", "P_FACTOR")
+TARGETS: tuple[str, ...] = SCALING_TARGETS + OFFSET_TARGETS + INPUT_TARGETS
+
+#: Codes of the targets that are not scaling factors in the C term table (``MF_TARGET_*`` of the generated
+#: ``mf_ext_gen.h``; scaling factors are indices into ``MFParams``, >= 0).
+TARGET_CODES: dict[str, int] = {"FX_OFFSET": -1, "FY_OFFSET": -2, "ALPHA_OFFSET": -3, "GAMMA_OFFSET": -4,
+                                "P_FACTOR": -5}  # fmt: skip
 
 #: Channels each target acts on (the fitter fits a term in the first stage of these).
 TARGET_CHANNELS: dict[str, tuple[str, ...]] = {
@@ -86,6 +103,7 @@ TARGET_CHANNELS: dict[str, tuple[str, ...]] = {
     **{k: ("Fy",) for k in ("LCY", "LMUY", "LEY", "LKY", "LKYC", "LHY", "LVY", "LYKA", "LVYKA", "FY_OFFSET")},
     **{k: ("Mz",) for k in ("LTR", "LRES", "LKZC", "LS")},
     "LMX": ("Mx",), "LVMX": ("Mx",), "LMY": ("My",), "LFZO": ("Fx", "Fy"),
+    "ALPHA_OFFSET": ("Fy", "Mz"), "GAMMA_OFFSET": ("Fy", "Mz"), "P_FACTOR": ("Fx", "Fy", "Mz"),
 }  # fmt: skip
 
 #: Variables the evaluator derives from its own (conditioned) inputs: name -> (meaning,
@@ -119,10 +137,17 @@ IDENTIFIER_WORDS = frozenset({
 })  # fmt: skip
 
 
+#: Physical variables whose names hold an identifier word: the sweep direction (+1 while the swept slip
+#: increases, −1 while it decreases), the variable of the ``direction`` (hysteresis) form.
+NOT_IDENTIFIERS = frozenset({"sweep_dir", "sweep_direction"})
+
+
 def identifier_name(name: str) -> bool:
     """True when ``name`` names an identifier: one of its words (split at ``_``, ``-``, ``.``, spaces,
     digits and camel-case humps) is in :data:`IDENTIFIER_WORDS` (``run``, ``sweep_id``, ``RunNumber``,
-    ``seg_no``, ``file3``)."""
+    ``seg_no``, ``file3``); not the sweep direction (:data:`NOT_IDENTIFIERS`)."""
+    if str(name).strip().lower() in NOT_IDENTIFIERS:
+        return False
     words = re.findall(r"[A-Z]?[a-z]+|[A-Z]+(?![a-z])", re.sub(r"[^A-Za-z]+", " ", str(name)))
     return any(w.lower() in IDENTIFIER_WORDS for w in words)
 
@@ -164,6 +189,16 @@ def _interaction(u, z, z2, ref, c):
     return 1.0 + c[0] * z + c[1] * z * z2
 
 
+def _hinge(u, z, z2, ref, c):
+    # a change that starts at a threshold z = C2 (a grip loss above a temperature): piecewise linear
+    return 1.0 + c[0] * np.maximum(z - c[1], 0.0)
+
+
+def _direction(u, z, z2, ref, c):
+    # hysteresis: a factor (or offset) that changes sign with the sweep direction sgn(z)
+    return 1.0 + c[0] * np.sign(z)
+
+
 @dataclass(frozen=True)
 class Form:
     """One functional form f(u; C) of an extension (neutral: every coefficient 0 -> f = 1).
@@ -200,6 +235,10 @@ FORMS: dict[str, Form] = {
              "1.0 + mf_ext_table(u, c, n)", _table),
         Form("interaction", "1 + C1·z + C2·z·z2", 2, ((-2.0, 2.0), (-2.0, 2.0)), (0.0, 0.0),
              "1.0 + c[0] * z + c[1] * z * z2", _interaction, two_variables=True),
+        Form("hinge", "1 + C1·max(z − C2, 0)", 2, ((-2.0, 2.0), (-3.0, 3.0)), (0.0, 0.0),
+             "1.0 + c[0] * fmax(z - c[1], 0.0)", _hinge),
+        Form("direction", "1 + C1·sgn(z)", 1, ((-0.5, 0.5),), (0.0,),
+             "1.0 + c[0] * (double)((z > 0.0) - (z < 0.0))", _direction),
     )
 }  # fmt: skip
 
@@ -388,7 +427,8 @@ class ExtensionSet:
         """Effective parameters: ``(q, offsets)``.
 
         ``q`` is ``p`` with each targeted scaling factor replaced by λ·Π f (arrays);
-        ``offsets`` maps ``FX_OFFSET``/``FY_OFFSET`` to the factor sum Σ(f − 1).
+        ``offsets`` maps ``FX_OFFSET``/``FY_OFFSET``, ``ALPHA_OFFSET``/``GAMMA_OFFSET`` to the sum
+        Σ(f − 1) and ``P_FACTOR`` to the product Π f (:func:`apply_input_laws`).
         ``variables`` holds every variable the terms read (builtin and external).
         """
         q = dict(p)
@@ -398,7 +438,9 @@ class ExtensionSet:
             v2 = _lookup(variables, t.variable2, t) if t.variable2 is not None else None
             f = t.factor(v, v2, p)
             for target in t.targets:
-                if target in OFFSET_TARGETS:
+                if target == "P_FACTOR":
+                    offsets[target] = offsets.get(target, 1.0) * f
+                elif target in OFFSET_TARGETS or target in INPUT_TARGETS:
                     offsets[target] = offsets.get(target, 0.0) + (f - 1.0)
                 else:
                     q[target] = q[target] * f
@@ -496,13 +538,27 @@ def builtin_variables(p: Mapping[str, float], c) -> dict[str, np.ndarray]:
     }  # fmt: skip
 
 
+def apply_input_laws(c, offsets: Mapping[str, np.ndarray]):
+    """The conditioned inputs ``c`` (:class:`mftire.mf.inputs.Conditions`) with the input laws of
+    ``offsets`` (:data:`INPUT_TARGETS`) applied: alpha + offset, gamma + offset, P·factor (``c``
+    itself when there is none)."""
+    if not any(k in offsets for k in INPUT_TARGETS):
+        return c
+    import dataclasses
+
+    return dataclasses.replace(
+        c, alpha=c.alpha + offsets.get("ALPHA_OFFSET", 0.0), gamma=c.gamma + offsets.get("GAMMA_OFFSET", 0.0),
+        P=c.P * offsets.get("P_FACTOR", 1.0))  # fmt: skip
+
+
 def required_variables(section: Mapping[str, object] | None) -> list[str]:
     """External variables (input columns) the section's terms need besides the MF inputs."""
     return parse_section(section).external_variables
 
 
 __all__ = [
-    "BUILTIN_VARIABLES", "Extension", "ExtensionSet", "FORMS", "Form", "IDENTIFIER_WORDS", "OFFSET_TARGETS",
+    "BUILTIN_VARIABLES", "Extension", "ExtensionSet", "FORMS", "Form", "IDENTIFIER_WORDS", "INPUT_TARGETS", "TARGET_CODES",
+    "OFFSET_TARGETS", "apply_input_laws",
     "SCALING_TARGETS", "identifier_name",
     "SECTION", "TARGETS", "make_extension", "parse_section", "required_variables",
 ]  # fmt: skip

@@ -27,7 +27,7 @@ from mftire.errors import MftireError, MftireInputError
 from mftire.mf import kernel, pac2002, turnslip
 from mftire.mf.aligning import aligning_terms, mz0, mz_combined, zero_camber_lateral
 from mftire.mf.basic import basic
-from mftire.mf.extensions import ExtensionSet, builtin_variables, parse_section
+from mftire.mf.extensions import ExtensionSet, apply_input_laws, builtin_variables, parse_section
 from mftire.mf.family import PAC2002_CODE, is_pac2002
 from mftire.mf.inputs import Conditions, MFLimitWarning, condition_inputs, turn_slip_spin
 from mftire.mf.lateral import fy0, fy_combined
@@ -219,7 +219,7 @@ def channels(
     offsets = offsets or {}
     with np.errstate(all="ignore"):
         if out.b is None:
-            c = pre.c
+            c = apply_input_laws(pre.c, offsets)  # input laws of the model extensions (alpha, gamma, P)
             if m.turn_slip:
                 phi, eps_gamma = turn_slip_spin(q, c)
                 c = dataclasses.replace(c, phi=phi, eps_gamma=eps_gamma)
@@ -254,7 +254,7 @@ def channels(
                 else:
                     out.Mz, out.t, out.Mzr = mz0(q, m, c, b, terms)
         if "Mx" in todo:
-            out.Mx = mx(q, c, pre.dpi, out.Fy)
+            out.Mx = mx(q, c, b.dpi if "P_FACTOR" in offsets else pre.dpi, out.Fy)
         if "My" in todo:
             out.My = my(q, c, out.Fx)
     return out
