@@ -316,7 +316,7 @@ def test_fitting_model_clips_curvature_as_the_fitted_file_evaluates():
         assert not any(issubclass(w.category, MFLimitWarning) for w in seen)  # silent while fitting
 
 
-# --------------------------------------------------------------------------- issue 21: identifiers, new forms, input laws
+# ------------------------------------------------------------ issue 21: identifiers, new forms, input laws
 
 
 @pytest.mark.parametrize("name", ["run", "sweep_id", "RunNumber", "seg_no", "file3", "row", "test_index", "Sequence"])

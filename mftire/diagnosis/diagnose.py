@@ -30,10 +30,10 @@ import pandas as pd
 
 from mftire.diagnosis.candidates import Candidate, candidates, time_column, with_sweeps
 from mftire.diagnosis.effects import (
-    FIT_CHANNELS,
-    HISTORY_CANDIDATES,
     CHANNEL_WORSE_NOISE,
     CHANNEL_WORSE_REL,
+    FIT_CHANNELS,
+    HISTORY_CANDIDATES,
     MAX_RESIDUAL_VS_CONTROL,
     EffectFit,
     choose_effect,

@@ -557,8 +557,7 @@ def required_variables(section: Mapping[str, object] | None) -> list[str]:
 
 
 __all__ = [
-    "BUILTIN_VARIABLES", "Extension", "ExtensionSet", "FORMS", "Form", "IDENTIFIER_WORDS", "INPUT_TARGETS", "TARGET_CODES",
-    "OFFSET_TARGETS", "apply_input_laws",
-    "SCALING_TARGETS", "identifier_name",
-    "SECTION", "TARGETS", "make_extension", "parse_section", "required_variables",
+    "BUILTIN_VARIABLES", "Extension", "ExtensionSet", "FORMS", "Form", "IDENTIFIER_WORDS", "INPUT_TARGETS",
+    "OFFSET_TARGETS", "SCALING_TARGETS", "SECTION", "TARGETS", "TARGET_CODES", "apply_input_laws", "identifier_name",
+    "make_extension", "parse_section", "required_variables",
 ]  # fmt: skip
