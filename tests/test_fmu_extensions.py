@@ -325,6 +325,37 @@ def test_nan_data_input_is_zeroed_with_a_warning(build):
         assert w in logged, (w, logged)
 
 
+@pytest.mark.parametrize("mode", [111, 11])
+def test_extension_variable_beyond_its_fitted_range_is_clamped_with_a_warning_in_modes_1xx(build, mode):
+    """The "all" case's LKX·LKY term was fitted on temperature -10..120: at 200 the FMU and Python clamp it to
+    120 and warn in mode 111; in mode 011 (no limits) both extrapolate, silently.  (Its LTR term has no
+    stored range: Mz moves on.)"""
+    from mftire.fmu.host import FMUTyre
+    from mftire.mf.extensions import EXT_RANGE_WARNING
+
+    _, unzipdir = build("all")
+    tyre = _tyre("all")
+    pt = dict(Fz=4000.0, kappa=0.05, alpha=0.03, gamma=0.01, phit=0.0, Vx=15.0, P=2.4e5, omega=0.0, muRoad=1.0)
+    with FMUTyre(unzipdir, "ME", start_values={"useMode": mode}) as fmu:
+        got = fmu.evaluate(**pt, time=100.0, temperature=200.0)
+        logged = " | ".join(m for s, c, m in fmu.messages if s == 1)
+    py_warnings: list[str] = []
+    ref = _python(tyre, pt, {"time": 100.0, "temperature": 200.0}, mode, record=py_warnings)
+    edge = _python(tyre, pt, {"time": 100.0, "temperature": 120.0}, mode)
+    assert max(_rel_errors(tyre.flat, got, ref).values()) <= 1e-9
+    if mode // 100 == 1:
+        assert (ref["Fx"], ref["Fy"]) == (edge["Fx"], edge["Fy"])
+        assert EXT_RANGE_WARNING in py_warnings and EXT_RANGE_WARNING in logged
+    else:
+        assert ref["Fx"] != edge["Fx"]
+        assert EXT_RANGE_WARNING not in py_warnings and EXT_RANGE_WARNING not in logged
+    # Tyre.evaluate (compiled kernel or numpy) says the same
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        tyre.evaluate(4000.0, 0.05, 0.03, 0.01, mode=mode, time=100.0, temperature=[20.0, 200.0])
+    assert (EXT_RANGE_WARNING in [str(w.message) for w in caught]) == (mode // 100 == 1)
+
+
 # --------------------------------------------------------------------------- sources and errors
 
 

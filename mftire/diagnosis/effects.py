@@ -356,22 +356,21 @@ def law_term(law: Law, variable: str, v: np.ndarray | None, tyre: Tyre, index: i
              v2: np.ndarray | None = None) -> Extension:
     """The extension term of ``law`` in ``variable`` (values ``v`` for data columns), numbered ``index``.
 
-    Data variables are normalised by their median and standard deviation and clipped to
-    the fitted range; the slip-speed decay is eq 4.E7 with z = Vs/LONGVL.
+    Data variables are normalised by their median and standard deviation; every variable's training range
+    is stored (``MIN``/``MAX``: evaluation clamps to it in modes 1xx); the slip-speed decay is eq 4.E7
+    with z = Vs/LONGVL; the direction form reads the sign of the sweep direction.
     """
     numbers: dict[str, float] = {}
+    vv = np.asarray(v, float)[np.isfinite(v)] if v is not None else np.zeros(0)
+    if vv.size:
+        # the range seen in training: evaluation clamps to it in modes 1xx, with a warning (no extrapolation)
+        numbers.update(MIN=float(vv.min()), MAX=float(vv.max()))
     if law.form == "decay":
         numbers.update(REF=0.0, SCALE=float(tyre["LONGVL"]))
-    elif variable in BUILTIN_VARIABLES and variable in ("sign_alpha", "sign_kappa"):
+    elif law.form == "direction" or variable in ("sign_alpha", "sign_kappa"):
         numbers.update(REF=0.0, SCALE=1.0)
-    elif v is not None and np.isfinite(v).any():
-        vv = np.asarray(v, float)[np.isfinite(v)]
-        sc = float(np.std(vv)) or 1.0
-        span = float(vv.max() - vv.min())
-        # clipped half a span beyond the fitted range: a level just beyond the data is predicted,
-        # a wild extrapolation is not
-        numbers.update(REF=float(np.median(vv)), SCALE=sc, MIN=float(vv.min()) - 0.5 * span,
-                       MAX=float(vv.max()) + 0.5 * span)
+    elif vv.size:
+        numbers.update(REF=float(np.median(vv)), SCALE=float(np.std(vv)) or 1.0)
         if law.form == "saturating":
             numbers.update(REF=float(vv.min()))
         if law.form == "table":
@@ -379,7 +378,8 @@ def law_term(law: Law, variable: str, v: np.ndarray | None, tyre: Tyre, index: i
                 numbers[f"L{i}"] = float(lev)
     if law.variable2 is not None and v2 is not None:
         vv2 = np.asarray(v2, float)[np.isfinite(v2)]
-        numbers.update(REF2=float(np.min(vv2)), SCALE2=float(np.std(vv2)) or 1.0)
+        numbers.update(REF2=float(np.min(vv2)), SCALE2=float(np.std(vv2)) or 1.0, MIN2=float(np.min(vv2)),
+                       MAX2=float(np.max(vv2)))  # fmt: skip
         return make_extension(index, law.targets, law.form, variable, variable2=law.variable2, **numbers)
     return make_extension(index, law.targets, law.form, variable, **numbers)
 

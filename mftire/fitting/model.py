@@ -73,7 +73,7 @@ class Model:
 
     def channels(self, q: Mapping[str, float], want: tuple[str, ...], given: Channels | None = None) -> Channels:
         """Pieces 2 and 3 for parameters ``q``: the channels ``want`` (see :func:`mftire.mf.solver.channels`)."""
-        qq, offsets = scaled(q, self.extensions, self.pre)
+        qq, offsets = scaled(q, self.extensions, self.pre, warn=False)
         if given is None:
             given = self._given_basic(qq)
         return channels(qq, self.pre, offsets, want, given)

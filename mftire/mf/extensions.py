@@ -152,6 +152,10 @@ def identifier_name(name: str) -> bool:
     return any(w.lower() in IDENTIFIER_WORDS for w in words)
 
 
+#: The warning of a variable outside the range its term was fitted on (modes 1xx; the FMU's C says the same).
+EXT_RANGE_WARNING = ("Model extension variable outside the range it was fitted on (EXTn_MIN..EXTn_MAX). Values "
+                     "have been saturated.")  # fmt: skip
+
 #: Most levels of a ``table`` form.
 MAX_LEVELS = 8
 #: Most external (data) variables of one tyre (FMU inputs).
@@ -322,19 +326,29 @@ class Extension:
     def variables(self) -> tuple[str, ...]:
         return (self.variable,) if self.variable2 is None else (self.variable, self.variable2)
 
-    def factor(self, v: np.ndarray, v2: np.ndarray | None, q: Mapping[str, float] | None = None) -> np.ndarray:
-        """f(v) of this term (q: flat parameters overriding the stored coefficient values)."""
-        u = np.minimum(np.maximum(v, self.value("MIN", q)), self.value("MAX", q))
+    def factor(self, v: np.ndarray, v2: np.ndarray | None, q: Mapping[str, float] | None = None,
+               clip: bool = True) -> np.ndarray:
+        """f(v) of this term (q: flat parameters overriding the stored coefficient values); ``clip``: the
+        variables clamped to the range the term was fitted on (``MIN``..``MAX``, :meth:`outside`)."""
+        u = np.minimum(np.maximum(v, self.value("MIN", q)), self.value("MAX", q)) if clip else v
         ref = self.value("REF", q)
         z = (u - ref) / self.value("SCALE", q)
         z2 = 0.0
         if self.variable2 is not None and v2 is not None:
-            u2 = np.minimum(np.maximum(v2, self.value("MIN2", q)), self.value("MAX2", q))
+            u2 = np.minimum(np.maximum(v2, self.value("MIN2", q)), self.value("MAX2", q)) if clip else v2
             z2 = (u2 - self.value("REF2", q)) / self.value("SCALE2", q)
         c = [q[k] if q is not None and k in q else self.numbers.get(k, 0.0) for k in self.coefficient_keys]
         if self.form.name == "table":
             c = [self.numbers[k] for k in self.level_keys] + c
         return self.form.fn(u, z, z2, ref, c)
+
+    def outside(self, v: np.ndarray, v2: np.ndarray | None, q: Mapping[str, float] | None = None) -> bool:
+        """True when a value of a variable lies outside the range the term was fitted on."""
+        with np.errstate(invalid="ignore"):
+            out = bool(np.any((v < self.value("MIN", q)) | (v > self.value("MAX", q))))
+            if self.variable2 is not None and v2 is not None:
+                out |= bool(np.any((v2 < self.value("MIN2", q)) | (v2 > self.value("MAX2", q))))
+        return out
 
     def describe(self) -> str:
         """One line: ``LMUX·LMUY × decay(Vs)``."""
@@ -423,8 +437,14 @@ class ExtensionSet:
             out.update(t.section())
         return out
 
-    def scale(self, p: Mapping[str, float], variables: Mapping[str, np.ndarray]) -> tuple[dict, dict]:
+    def scale(self, p: Mapping[str, float], variables: Mapping[str, np.ndarray], limits: bool = True,
+              warn: bool = False) -> tuple[dict, dict]:
         """Effective parameters: ``(q, offsets)``.
+
+        ``limits`` (modes 1xx): each variable is clamped to the range its term was fitted on
+        (``EXTn_MIN``..``EXTn_MAX``), as the Magic Formula clamps its own inputs to the file's ranges;
+        ``warn``: an :class:`~mftire.mf.inputs.MFLimitWarning` says so when a value was outside.  Without
+        ``limits`` (modes 0xx) the law extrapolates.
 
         ``q`` is ``p`` with each targeted scaling factor replaced by λ·Π f (arrays);
         ``offsets`` maps ``FX_OFFSET``/``FY_OFFSET``, ``ALPHA_OFFSET``/``GAMMA_OFFSET`` to the sum
@@ -436,7 +456,13 @@ class ExtensionSet:
         for t in self.terms:
             v = _lookup(variables, t.variable, t)
             v2 = _lookup(variables, t.variable2, t) if t.variable2 is not None else None
-            f = t.factor(v, v2, p)
+            if limits and warn and t.outside(v, v2, p):
+                import warnings
+
+                from mftire.mf.inputs import MFLimitWarning
+
+                warnings.warn(EXT_RANGE_WARNING, MFLimitWarning, stacklevel=4)
+            f = t.factor(v, v2, p, clip=limits)
             for target in t.targets:
                 if target == "P_FACTOR":
                     offsets[target] = offsets.get(target, 1.0) * f
@@ -557,7 +583,7 @@ def required_variables(section: Mapping[str, object] | None) -> list[str]:
 
 
 __all__ = [
-    "BUILTIN_VARIABLES", "Extension", "ExtensionSet", "FORMS", "Form", "IDENTIFIER_WORDS", "INPUT_TARGETS",
+    "BUILTIN_VARIABLES", "EXT_RANGE_WARNING", "Extension", "ExtensionSet", "FORMS", "Form", "IDENTIFIER_WORDS", "INPUT_TARGETS",
     "OFFSET_TARGETS", "SCALING_TARGETS", "SECTION", "TARGETS", "TARGET_CODES", "apply_input_laws", "identifier_name",
     "make_extension", "parse_section", "required_variables",
 ]  # fmt: skip

@@ -76,6 +76,7 @@ _TERM_INTS = 2 + _N_TARGETS + 2 + 8 + 2
 
 # Warning kinds of mf_eval.h, in the order the numpy path issues them.
 _W_ALPHA_LOW, _W_ALPHA_HIGH, _W_GAMMA_LOW, _W_GAMMA_HIGH = 7, 8, 9, 10
+_W_EXT_RANGE = 28  # MF_W_EXT_RANGE: a model-extension variable outside its fitted range
 _W_FZ_HIGH, _W_FZ_LOW, _W_P_LOW, _W_P_HIGH, _W_KAPPA_LOW, _W_KAPPA_HIGH, _W_LOW_SPEED = 11, 12, 13, 14, 15, 16, 17
 _W_CURVATURE = ((18, "Ex", "4.E14"), (20, "Exa", "4.E56"), (19, "Ey", "4.E24"), (21, "Eyk", "4.E64"),
                 (22, "Et", "4.E44"), (27, "Ey", "4.E24"))  # fmt: skip  # 27: Ey of the zero-camber Fy0 in Mz
@@ -141,7 +142,7 @@ def load(path: str | os.PathLike | None = None):
             continue
         sizes = (ctypes.c_long * 5)()
         lib.mf_kernel_sizes(sizes)
-        if tuple(sizes) != (len(PARAM_KEYS), _N_IN, len(OUTPUTS), 28, _TERM_INTS):
+        if tuple(sizes) != (len(PARAM_KEYS), _N_IN, len(OUTPUTS), _W_EXT_RANGE + 1, _TERM_INTS):
             tried.append(f"{cand}: unexpected layout {tuple(sizes)}")
             continue
         f = lib.mf_kernel_evaluate
@@ -540,6 +541,10 @@ def _issue_warnings(p, nan, mask: int, external: Sequence[str], omega_given: boo
             warn(f"{label} {where} the limit {key}={p[key]}. Values have been saturated.")
     if mask >> _W_LOW_SPEED & 1:
         warn(f"Speed input Vx below the limit VXLOW={p['VXLOW']}. Low speed mode activated.")
+    if mask >> _W_EXT_RANGE & 1:
+        from mftire.mf.extensions import EXT_RANGE_WARNING
+
+        warn(EXT_RANGE_WARNING)
     for kind, name, eq in _W_CURVATURE:
         if mask >> kind & 1:
             warn(f"{name} over limit (>1), eq {eq}; clipped to 1.")

@@ -159,18 +159,19 @@ def prepare(
 
 
 def scaled(
-    p: Mapping[str, float], extensions: ExtensionSet | None, pre: Prepared
+    p: Mapping[str, float], extensions: ExtensionSet | None, pre: Prepared, warn: bool = True
 ) -> tuple[dict, dict[str, np.ndarray]]:
     """Piece 2: effective parameters ``(q, offsets)`` (see :meth:`ExtensionSet.scale`).
 
     Without extensions ``q`` is ``p`` itself and ``offsets`` is empty.  Extension
     coefficients (``EXTn_C1`` ...) are taken from ``p`` when it holds them, so a fitter
-    can vary them like any coefficient.
+    can vary them like any coefficient.  In modes 1xx the extension variables are clamped to the
+    ranges their terms were fitted on, with an :class:`~mftire.mf.inputs.MFLimitWarning` when ``warn``.
     """
     if not extensions:
         return p, {}
     with np.errstate(all="ignore"):
-        return extensions.scale(p, pre.all_variables(p))
+        return extensions.scale(p, pre.all_variables(p), limits=pre.mode.limits, warn=warn)
 
 
 @dataclass

@@ -136,6 +136,11 @@ void mf_warning_text(const MFParams *p, int kind, char *buf, unsigned long n)
         snprintf(buf, n, "Speed input Vx below the limit VXLOW=%.17g. Low speed mode activated.", p->VXLOW);
         return;
     }
+    if (kind == MF_W_EXT_RANGE) { /* mftire.mf.extensions.EXT_RANGE_WARNING */
+        snprintf(buf, n, "Model extension variable outside the range it was fitted on (EXTn_MIN..EXTn_MAX). "
+                         "Values have been saturated.");
+        return;
+    }
     for (k = 0; k < sizeof curv / sizeof curv[0]; k++)
         if (curv[k].kind == kind) {
             snprintf(buf, n, "%s over limit (>1), eq %s; clipped to 1.", curv[k].name, curv[k].eq);
@@ -1103,8 +1108,8 @@ MF_FN double mf_ext_table(double u, const double *c, int n)
  * off[3] the slip-angle and camber offsets and off[4] the pressure factor of the input laws.
  * The term fields are read as doubles from p's storage at the indices of the table (in the
  * array kernel the storage runs on past MFParams with the numbers of the terms). */
-MF_FN void apply_extensions(const ExtTable *ext, const MFParams *p, const Cond *c, const double *data, MFParams *q,
-                             double *off)
+MF_FN void apply_extensions(const ExtTable *ext, const MFParams *p, Ctx *m, const Cond *c, const double *data,
+                             MFParams *q, double *off)
 {
     const double *P = (const double *)p;
     double *Q = (double *)q;
@@ -1114,10 +1119,19 @@ MF_FN void apply_extensions(const ExtTable *ext, const MFParams *p, const Cond *
     off[4] = 1.0;
     for (i = 0; i < ext->n; i++) {
         const MFTerm *t = &ext->terms[i];
-        double u = clip(mf_ext_var(t->var, p, c, data), P[t->min], P[t->max]);
-        double z = (u - P[t->ref]) / P[t->scale], z2 = 0.0, f;
+        /* modes 1xx: the variables clamped to the range the term was fitted on, with a warning */
+        double u = mf_ext_var(t->var, p, c, data), z, z2 = 0.0, f;
+        if (m->limits) {
+            if (u < P[t->min] || u > P[t->max]) flag(m, MF_W_EXT_RANGE);
+            u = clip(u, P[t->min], P[t->max]);
+        }
+        z = (u - P[t->ref]) / P[t->scale];
         if (t->var2 >= 0) {
-            double u2 = clip(mf_ext_var(t->var2, p, c, data), P[t->min2], P[t->max2]);
+            double u2 = mf_ext_var(t->var2, p, c, data);
+            if (m->limits) {
+                if (u2 < P[t->min2] || u2 > P[t->max2]) flag(m, MF_W_EXT_RANGE);
+                u2 = clip(u2, P[t->min2], P[t->max2]);
+            }
             z2 = (u2 - P[t->ref2]) / P[t->scale2];
         }
         f = mf_ext_form(t->form, u, z, z2, P[t->ref], P + t->c0, t->n);
@@ -1208,7 +1222,7 @@ MF_FN void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c, 
     MFParams q; /* p with the extension terms applied to its scaling factors */
     Cond ce; /* c with the input laws applied (extensions.py apply_input_laws) */
     if (ext->n > 0) {
-        apply_extensions(ext, p, c, data, &q, off);
+        apply_extensions(ext, p, m, c, data, &q, off);
         p = &q;
         if (off[2] != 0.0 || off[3] != 0.0 || off[4] != 1.0) {
             ce = *c;

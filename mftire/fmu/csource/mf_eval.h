@@ -56,6 +56,7 @@ enum {
     MF_W_EX, MF_W_EY, MF_W_EXA, MF_W_EYK, MF_W_ET,
     MF_W_NAN_DATA0, MF_W_NAN_DATA1, MF_W_NAN_DATA2, MF_W_NAN_DATA3, /* NaN in MFInputs.data[0..3] */
     MF_W_EY0, /* Ey clipped in the zero-camber Fy0 of the aligning moment (a second warning, as in Python) */
+    MF_W_EXT_RANGE, /* a model-extension variable outside its fitted range EXTn_MIN..MAX, clamped (modes 1xx) */
     MF_W_COUNT
 };
 
