@@ -325,10 +325,10 @@ def test_nan_data_input_is_zeroed_with_a_warning(build):
         assert w in logged, (w, logged)
 
 
-@pytest.mark.parametrize("mode", [111, 11])
+@pytest.mark.parametrize("mode", [111, 211])
 def test_extension_variable_beyond_its_fitted_range_is_clamped_with_a_warning_in_modes_1xx(build, mode):
     """The "all" case's LKX·LKY term was fitted on temperature -10..120: at 200 the FMU and Python clamp it to
-    120 and warn in mode 111; in mode 011 (no limits) both extrapolate, silently.  (Its LTR term has no
+    120 and warn in mode 111; in mode 211 (no limits) both extrapolate, silently.  (Its LTR term has no
     stored range: Mz moves on.)"""
     from mftire.fmu.host import FMUTyre
     from mftire.mf.extensions import EXT_RANGE_WARNING

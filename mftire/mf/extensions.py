@@ -444,7 +444,7 @@ class ExtensionSet:
         ``limits`` (modes 1xx): each variable is clamped to the range its term was fitted on
         (``EXTn_MIN``..``EXTn_MAX``), as the Magic Formula clamps its own inputs to the file's ranges;
         ``warn``: an :class:`~mftire.mf.inputs.MFLimitWarning` says so when a value was outside.  Without
-        ``limits`` (modes 0xx) the law extrapolates.
+        ``limits`` (modes 2xx) the law extrapolates.
 
         ``q`` is ``p`` with each targeted scaling factor replaced by λ·Π f (arrays);
         ``offsets`` maps ``FX_OFFSET``/``FY_OFFSET``, ``ALPHA_OFFSET``/``GAMMA_OFFSET`` to the sum
@@ -583,7 +583,7 @@ def required_variables(section: Mapping[str, object] | None) -> list[str]:
 
 
 __all__ = [
-    "BUILTIN_VARIABLES", "EXT_RANGE_WARNING", "Extension", "ExtensionSet", "FORMS", "Form", "IDENTIFIER_WORDS", "INPUT_TARGETS",
-    "OFFSET_TARGETS", "SCALING_TARGETS", "SECTION", "TARGETS", "TARGET_CODES", "apply_input_laws", "identifier_name",
-    "make_extension", "parse_section", "required_variables",
+    "BUILTIN_VARIABLES", "EXT_RANGE_WARNING", "Extension", "ExtensionSet", "FORMS", "Form", "IDENTIFIER_WORDS",
+    "INPUT_TARGETS", "OFFSET_TARGETS", "SCALING_TARGETS", "SECTION", "TARGETS", "TARGET_CODES", "apply_input_laws",
+    "identifier_name", "make_extension", "parse_section", "required_variables",
 ]  # fmt: skip
