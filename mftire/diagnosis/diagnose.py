@@ -35,6 +35,7 @@ from mftire.diagnosis.effects import (
     FIT_CHANNELS,
     HISTORY_CANDIDATES,
     MAX_RESIDUAL_VS_CONTROL,
+    PRESSURE_COEFFICIENTS,
     EffectFit,
     choose_effect,
     drop_outliers,
@@ -42,6 +43,7 @@ from mftire.diagnosis.effects import (
     make_problem,
     primary_rows,
     refine_effect,
+    restricted,
 )
 from mftire.diagnosis.holdout import default_holdout, holdout_mask, levels
 from mftire.diagnosis.profile import CONFOUND_R, Profiles, profile_factors
@@ -275,6 +277,18 @@ def _profile_candidates(profiles: Profiles, ranking: list[CandidateScore], by_na
     return out
 
 
+def input_laws(tyre: Tyre, channels: Sequence[str], variable: str) -> list[str]:
+    """The input laws (:data:`mftire.mf.extensions.INPUT_TARGETS`) worth trying for ``variable``: an effective
+    pressure when the file has pressure terms (:data:`~mftire.diagnosis.effects.PRESSURE_COEFFICIENTS`) and the
+    candidate is not the pressure itself; a slip-angle and a camber offset when Fy is measured."""
+    out = []
+    if variable not in ("P", "dpi") and any(float(tyre.flat.get(k, 0.0)) != 0.0 for k in PRESSURE_COEFFICIENTS):
+        out.append("P_FACTOR")
+    if "Fy" in channels:
+        out += ["ALPHA_OFFSET", "GAMMA_OFFSET"]
+    return out
+
+
 def _variables_for(tyre: Tyre, df: pd.DataFrame) -> dict[str, np.ndarray]:
     """The columns the model's extensions read (closed variables: always data columns)."""
     missing = [v for v in tyre.required_variables if v not in df.columns]
@@ -433,7 +447,8 @@ def _diagnose(
         v = c.values[train]
         monotone = bool(np.all(np.diff(v) >= 0)) or variable == time_column(df)
         families = profiles.families_for(variable) or ["friction"]
-        second = profiles.second_variable(variable, cand_values) if len(np.unique(v)) <= 3 else None
+        # a second variable of an interaction: another column or an MF input (dfz, gamma, Vx, P)
+        second = profiles.second_variable(variable, {k: x for k, x in cand_values.items() if k != variable})
         dtr = dtrain.assign(_cand=v)
         prob = make_problem(tyre, dtr, chans)
         prob.noise = {ch: noise[ch] / prob.scale[ch] for ch in prob.channels if np.isfinite(noise.get(ch, np.nan))}
@@ -449,9 +464,15 @@ def _diagnose(
         folds = level_folds(v, prob.df["sweep_id"].to_numpy(), c.sweep_level, blocks=blocks, kinds=kinds)
         n_levels = int(np.unique(np.round(v[np.isfinite(v)], 9)).size)
         # the laws act on the channels where the candidate is significant (a law that helps Fy is not put on Fx)
-        law_ch = [ch for ch in eff_ch if ch in ("Fx", "Fy")] or chans
+        law_ch = [ch for ch in eff_ch if ch in ("Fx", "Fy")] or [ch for ch in eff_ch if ch in chans] or chans
+        scores = e.channel_scores
+        if "Mz" in eff_ch and scores.get("Mz", 0.0) >= max(scores.get("Fx", 0.0), scores.get("Fy", 0.0)):
+            # an aligning-moment effect: the trail and residual torque (Pacejka 2012 eqs 4.E33-4.E47)
+            families = ["trail", "residual_torque"] if law_ch == ["Mz"] else [*families, "trail"]
+            law_ch = list(dict.fromkeys([*law_ch, "Mz"]))
+        inputs = input_laws(tyre, chans, variable)
         laws = [(var, law, v if var == variable else None)
-                for var, law in effects_for(variable, derived, monotone, n_levels, families, law_ch, second)]
+                for var, law in effects_for(variable, derived, monotone, n_levels, families, law_ch, second, inputs)]
         chosen, fits = choose_effect(prob, laws, n_pressures, control, eff_ch, folds)
         control = fits[0]
         tried += fits[1:] if len(tried) else fits
@@ -486,6 +507,8 @@ def _diagnose(
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
                                profiles=profiles, cause=cause.variable)  # fmt: skip
+    # the law acts on its channels only: every other coefficient stays as the model has it
+    extended, refined = restricted(tyre, extended, refined)
     effect = refined
     named = [e for e in ranking if e.variable == effect.variable and e.significant]
     if named and effect.variable != cause.variable:  # e.g. a slip-speed law chosen for Vx: the cause is Vs

@@ -34,6 +34,7 @@ from mftire.mf.extensions import (
     BUILTIN_VARIABLES,
     MAX_LEVELS,
     SECTION,
+    TARGET_CHANNELS,
     Extension,
     ExtensionSet,
     make_extension,
@@ -64,12 +65,21 @@ FAMILY_TARGETS = {
     "curvature": {"Fx": ("LEX",), "Fy": ("LEY",)},
     "shape": {"Fx": ("LCX",), "Fy": ("LCY",)},
     "shift": {"Fx": ("FX_OFFSET",), "Fy": ("FY_OFFSET",)},
+    # the aligning moment (Pacejka 2012 eqs 4.E33-4.E47): pneumatic trail and residual torque
+    "trail": {"Mz": ("LTR",)},
+    "residual_torque": {"Mz": ("LRES",)},
 }
+#: Input laws (:data:`mftire.mf.extensions.INPUT_TARGETS`) tried with a family: an effective inflation
+#: pressure with friction or stiffness (it acts through the MF's pressure terms, eqs 4.E2b, 4.E13, 4.E15,
+#: 4.E23, 4.E25), a slip-angle or camber offset with a shift (it moves the curves sideways).
+INPUT_LAWS = {"friction": ("P_FACTOR",), "stiffness": ("P_FACTOR",), "shift": ("ALPHA_OFFSET", "GAMMA_OFFSET")}
+#: Standard coefficients through which an effective pressure acts (none non-zero: no pressure input law).
+PRESSURE_COEFFICIENTS = ("PPX1", "PPX2", "PPX3", "PPX4", "PPY1", "PPY2", "PPY3", "PPY4", "PPZ1")
 
 
 def family_targets(family: str, channels: Sequence[str]) -> tuple[str, ...]:
-    """The scaling factors of ``family`` for the force channels present (friction: LMUX, LMUY)."""
-    out = [t for ch in ("Fx", "Fy") if ch in channels for t in FAMILY_TARGETS[family][ch]]
+    """The scaling factors of ``family`` for the channels present (friction: LMUX, LMUY)."""
+    out = [t for ch in ("Fx", "Fy", "Mz") if ch in channels for t in FAMILY_TARGETS[family].get(ch, ())]
     return tuple(out) or tuple(t for ts in FAMILY_TARGETS[family].values() for t in ts)
 
 #: Laws tried for each derived candidate (data columns: see :func:`effects_for`);
@@ -177,18 +187,28 @@ def _tyre_with(tyre: Tyre, standard: Mapping[str, float], section: Mapping[str, 
 
 def effects_for(
     variable: str, derived: bool, monotone: bool, n_levels: int = 99, families: Sequence[str] = ("friction",),
-    channels: Sequence[str] = ("Fx", "Fy"), second: str | None = None,
+    channels: Sequence[str] = ("Fx", "Fy"), second: str | None = None, inputs: Sequence[str] = (),
 ) -> tuple[tuple[str, Law], ...]:
     """Laws to try for a candidate, as ``(variable read, law)``.
 
-    Derived candidates: their documented laws (:data:`EFFECTS_FOR`).  Data columns, for
+    Derived candidates: their documented laws (:data:`EFFECTS_FOR`); the sweep direction: hysteresis,
+    a ``direction`` law on the force offsets and the friction of ``channels``.  Data columns, for
     each family of scaling factors the per-sweep profiles link to the variable (friction
     when none): a saturating law when the variable never decreases along the sequence
-    (fade or warm-up with time), linear and quadratic laws, a per-level table when it has
-    at most :data:`mftire.mf.extensions.MAX_LEVELS` levels, and, for a flag with a second
-    variable ``second``, the interaction of the two.
+    (fade or warm-up with time), linear and quadratic laws, a hinge (a change above a threshold) for a
+    continuous variable, a per-level table when it has at most 5 levels, the interaction with a second
+    variable ``second`` (a data column or an MF input: dfz, gamma, Vx, P), and the input laws ``inputs``
+    of the family (:data:`INPUT_LAWS`; linear).
     """
     laws: list[tuple[str, Law]] = list(EFFECTS_FOR.get(variable, ())) if derived else []
+    if variable == "sweep_dir":  # hysteresis between up and down sweeps, in the families of the channels
+        fams = list(families) + (["shift"] if {"Fx", "Fy"} & set(channels) else [])
+        for fam in dict.fromkeys(fams):
+            tg = tuple(t for t in family_targets(fam, channels)
+                       if set(TARGET_CHANNELS.get(t, ())) & set(channels))  # fmt: skip
+            if tg:
+                laws.append(("sweep_dir", Law(f"hysteresis_{fam}", tg, "direction")))
+        return tuple(laws)
     for fam in families:
         tg = family_targets(fam, channels)
         if derived and fam == "friction" and laws:
@@ -201,10 +221,17 @@ def effects_for(
         laws.append((variable, Law(f"{fam}_variable", tg, "linear")))
         if n_levels >= 4:
             laws.append((variable, Law(f"{fam}_variable_quadratic", tg, "quadratic")))
+        if n_levels >= 8 and not derived:
+            laws.append((variable, Law(f"{fam}_threshold", tg, "hinge")))
         if 2 <= n_levels <= min(MAX_LEVELS, 5) and not derived:
             laws.append((variable, Law(f"{fam}_levels", tg, "table")))
-        if second is not None and n_levels <= 3:
+        if second is not None:
             laws.append((variable, Law(f"{fam}_interaction", tg, "interaction", variable2=second)))
+        for target in INPUT_LAWS.get(fam, ()):
+            name = {"P_FACTOR": "effective_pressure", "ALPHA_OFFSET": "slip_angle_offset",
+                    "GAMMA_OFFSET": "camber_offset"}[target]  # fmt: skip
+            if target in inputs and all(law.name != name for _, law in laws):
+                laws.append((variable, Law(name, (target,), "linear")))
     return tuple(laws)
 
 
@@ -430,6 +457,9 @@ def fit_effect(
             v2 = prob.variables.get(law.variable2)
             if v2 is None and law.variable2 in prob.df.columns:
                 v2 = prob.df[law.variable2].to_numpy(float)
+            elif v2 is None and law.variable2 == "dfz":
+                fz0 = float(tyre["LFZO"]) * float(tyre["FNOMIN"])
+                v2 = (prob.df["Fz"].to_numpy(float) - fz0) / fz0  # eq 4.E2a
         term = law_term(law, variable, values, tyre, index, v2)
         keys = list(term.coefficient_keys)
         x0 = [term.start(k) for k in keys]
@@ -802,6 +832,47 @@ def refine_effect(
                         standard, fit.ss_before, fit.ss_after, fit.bic, fit.n_params, [*fit.messages, *messages],
                         heldout=cv / cv_control if cv_control > 0 else np.inf, targets=fit.targets, cv=cv)  # fmt: skip
     return refined, tyre, messages
+
+
+def _channel_of(stage: str, key: str) -> str | None:
+    if stage == "longitudinal":
+        return "Fx"
+    if stage == "lateral":
+        return "Fy"
+    if stage in ("aligning", "combined_mz"):
+        return "Mz"
+    if stage == "combined":
+        return "Fx" if key[2:3] == "X" else "Fy"
+    return None
+
+
+#: The fitter's coefficients of each force and moment channel (:mod:`mftire.fitting.stages`): pure and combined
+#: slip of Fx (Pacejka 2012 eqs 4.E9-4.E18, 4.E50-4.E57), of Fy (4.E19-4.E30, 4.E58-4.E67), and Mz (4.E31-4.E49,
+#: 4.E71-4.E78).
+CHANNEL_COEFFICIENTS: dict[str, frozenset[str]] = {
+    ch: frozenset(c.key for st in STAGES for c in st.coefficients if _channel_of(st.name, c.key) == ch)
+    for ch in ("Fx", "Fy", "Mz")
+}
+
+
+def law_channels(fit: EffectFit) -> tuple[str, ...]:
+    """The channels a law acts on (:data:`mftire.mf.extensions.TARGET_CHANNELS` of its targets); empty for the
+    pressure law (the standard pressure terms of every channel)."""
+    return tuple(dict.fromkeys(ch for t in fit.targets for ch in TARGET_CHANNELS.get(t, ()) if ch in FIT_CHANNELS))
+
+
+def restricted(base: Tyre, extended: Tyre, fit: EffectFit) -> tuple[Tyre, EffectFit]:
+    """The extended model acting on the law's channels only: the base model, the law's terms, and the
+    refitted coefficients of the channels the law acts on (:func:`law_channels`); every other coefficient
+    as the base model has it, so that a law on Fy leaves Fx exactly as it was.  Returns the tyre and the
+    effect with its changed standard coefficients restricted the same way."""
+    chans = law_channels(fit)
+    if not chans:
+        return extended, fit
+    allowed = frozenset().union(*(CHANNEL_COEFFICIENTS[ch] for ch in chans))
+    standard = {k: v for k, v in fit.standard.items() if k in allowed}
+    section = {k: v for k, v in (extended.extensions or {}).items() if k not in (base.extensions or {})}
+    return _tyre_with(base, standard, section), dataclasses.replace(fit, standard=standard, section=section)
 
 
 def replace_tyre(prob: _Problem, tyre: Tyre) -> _Problem:
