@@ -201,6 +201,8 @@ EXTENDED = {
     **_term(1, "LMUX LMUY", "decay", "Vs", scale=16.7, c1=0.4),
     **_term(2, "LKX LKY LTR", "linear", "temperature", ref=50.0, scale=25.0, c1=-0.1),
     **_term(3, "FX_OFFSET", "linear", "sign_kappa", c1=0.005),
+    **_term(4, "P_FACTOR ALPHA_OFFSET", "hinge", "temperature", ref=50.0, scale=25.0, min=0.0, max=90.0, c1=0.02,
+            c2=-0.5),
 }
 
 

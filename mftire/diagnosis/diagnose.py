@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from mftire.diagnosis.candidates import Candidate, candidates, time_column, with_sweeps
+from mftire.diagnosis.candidates import FIT_ROW, Candidate, candidates, time_column, with_sweeps
 from mftire.diagnosis.effects import (
     CHANNEL_WORSE_NOISE,
     CHANNEL_WORSE_REL,
@@ -40,6 +40,7 @@ from mftire.diagnosis.effects import (
     choose_effect,
     drop_outliers,
     effects_for,
+    final_fit,
     make_problem,
     primary_rows,
     refine_effect,
@@ -56,6 +57,7 @@ from mftire.diagnosis.ranking import (
 from mftire.errors import MftireInputError
 from mftire.fitting.data import noise_std
 from mftire.iotools.sweeps import MEASURED_COLUMNS
+from mftire.mf.extensions import BUILTIN_VARIABLES
 from mftire.tyre import Tyre, TyreLike, as_tyre
 
 
@@ -277,6 +279,27 @@ def _profile_candidates(profiles: Profiles, ranking: list[CandidateScore], by_na
     return out
 
 
+def fit_rows(data: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame | None]:
+    """The grouped rows the fit uses, and all grouped rows when the data carry the importer's ``fit_row`` flag
+    with some rows False (warm-up, load-ramp and dropped segments kept for the diagnosis), else None.
+
+    The accumulated candidates (``energy``: the friction work, ``sequence``) are computed over all rows, in
+    their order, because a thermal or test-order effect builds up most where the tyre is warmed up; the
+    residual ranking and the laws use the rows the fit uses.  Without the column every row is a fit row."""
+    if FIT_ROW not in data.columns:
+        return with_sweeps(data), None
+    flag = data[FIT_ROW]
+    if flag.isna().any() or not set(pd.unique(flag)) <= {True, False}:
+        raise MftireInputError(f"column '{FIT_ROW}' must be True/False (rows the fit uses), not {flag.dtype}")
+    flag = flag.astype(bool)
+    if flag.all():
+        return with_sweeps(data.drop(columns=[FIT_ROW])), None
+    if not flag.any():
+        raise MftireInputError(f"column '{FIT_ROW}' is False on every row: no row to diagnose")
+    full = with_sweeps(data.drop(columns=[FIT_ROW])).assign(**{FIT_ROW: flag.to_numpy()})
+    return full[full[FIT_ROW]].drop(columns=[FIT_ROW]).reset_index(drop=True), full
+
+
 def input_laws(tyre: Tyre, channels: Sequence[str], variable: str) -> list[str]:
     """The input laws (:data:`mftire.mf.extensions.INPUT_TARGETS`) worth trying for ``variable``: an effective
     pressure when the file has pressure terms (:data:`~mftire.diagnosis.effects.PRESSURE_COEFFICIENTS`) and the
@@ -368,14 +391,21 @@ def _diagnose(
     tyre = as_tyre(tyre)
     if progress is None:
         progress = sys.stderr.isatty()
-    df = with_sweeps(data.reset_index(drop=True))
+    df, flagged = fit_rows(data.reset_index(drop=True))
     chans, not_measured = measured_channels(df, channels or MEASURED_COLUMNS)
     if not chans:
         raise MftireInputError("no measured channel (Fx, Fy, Mz, Mx, My) with data to diagnose"
                                + "".join(f"; {c}: {why}" for c, why in not_measured.items()))
     if holdout is not None:  # a held-out level given by the user must exist, whatever the ranking finds
         holdout_mask(df, holdout[0], list(holdout[1]))
-    cands = candidates(df)
+    if flagged is None:
+        cands = candidates(df)
+    else:  # the accumulators (friction work, position in the sequence) run through the flagged rows too
+        keep = flagged[FIT_ROW].to_numpy(bool)
+        cands = [Candidate(c.name, c.values[keep], c.derived, c.sweep_level) for c in candidates(flagged)]
+        cands = [c for c in cands if np.nanstd(c.values) > 0]
+        _progress(f"{int((~keep).sum())} rows flagged fit_row = False (warm-up, load ramps) used for the "
+                  "accumulated candidates", progress)  # fmt: skip
     by_name = {c.name: c for c in cands}
     variables = _variables_for(tyre, df)
     _progress(f"{len(df)} rows, {df['sweep_id'].nunique()} sweeps, channels {', '.join(chans)}", progress)
@@ -417,8 +447,8 @@ def _diagnose(
     top = significant[0]
     if holdout is None:
         pref = [top.variable] if by_name[top.variable].sweep_level and top.variable in df.columns else []
-        ch = top.channel if top.channel in residuals else next(iter(residuals))
-        misfit = np.where(primary_rows(df, ch), residuals[ch] ** 2, np.nan)
+        ch = top.channel if top.channel in residuals else next(iter(residuals), None)
+        misfit = None if ch is None else np.where(primary_rows(df, ch), residuals[ch] ** 2, np.nan)
         holdout = default_holdout(df, pref, misfit)
     column, values = holdout[0], list(holdout[1])
     test = holdout_mask(df, column, values)
@@ -485,7 +515,7 @@ def _diagnose(
                          and f.law is not None), key=lambda f: f.heldout)  # fmt: skip
         ranked = [chosen] + [f for f in ranked if f is not chosen]
         found.append((chosen, e, (prob, [(f, f.law, by_var.get(f.variable)) for f in ranked], eff_ch, folds,
-                                  blocks is not None, control.cv, dict(control.cv_channels))))  # fmt: skip
+                                  blocks is not None, control.cv, dict(control.cv_channels), control)))  # fmt: skip
     # the lowest held-out error wins; a better-ranked candidate within 10 % of it is preferred
     lowest = min((f.heldout for f, _, _ in found), default=np.inf)
     best = next((t for t in found if t[0].heldout <= 1.1 * lowest), None)
@@ -498,17 +528,20 @@ def _diagnose(
     effect, cause, context = best
     # the chosen candidate's best laws and the control, refitted with every MF coefficient
     _progress(f"refitting every coefficient with the laws of {effect.variable}", progress)
-    prob, law_fits, eff_ch, folds, in_blocks, control_cv, control_channels = context
+    prob, law_fits, eff_ch, folds, in_blocks, control_cv, control_channels, local_control = context
     refined, extended, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv,
-                                             control_channels)
+                                             control_channels, local_control)  # fmt: skip
     if refined is None:
         msg = ("no significant effect: the best laws did not beat the control once every coefficient was "
                "refitted (" + "; ".join(notes) + ")")
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
                                profiles=profiles, cause=cause.variable)  # fmt: skip
-    # the law acts on its channels only: every other coefficient stays as the model has it
+    # the law acts on its channels only: every other coefficient stays as the model has it; the control is
+    # restricted the same way
+    control_tyre = refined.control_tyre
     extended, refined = restricted(tyre, extended, refined)
+    control_tyre, _ = restricted(tyre, control_tyre, refined)
     effect = refined
     named = [e for e in ranking if e.variable == effect.variable and e.significant]
     if named and effect.variable != cause.variable:  # e.g. a slip-speed law chosen for Vx: the cause is Vs
@@ -522,20 +555,37 @@ def _diagnose(
         confounding_notes(df[train].reset_index(drop=True), effect.variable, cvals[train],
                           effect.heldout if in_blocks else None)
         + profiles.confounding(effect.variable)))  # fmt: skip
+    # the held-out condition: the law's model and the control, both refitted without it, per channel
     dtest = df[test].reset_index(drop=True)
-    errors = channel_errors(dtest, _model(tyre, dtest), _model(extended, dtest), chans)
-    # never worse: on the held-out condition no channel may lose to the model as given beyond its noise
+    errors = channel_errors(dtest, _model(control_tyre, dtest), _model(extended, dtest), chans)
+    # never worse: no channel may lose to the control beyond its noise, and the scored channels together must gain
     worse = [e.channel for e in errors
              if e.n * e.rms_after**2 > (1.0 + CHANNEL_WORSE_REL) * e.n * e.rms_before**2
              + CHANNEL_WORSE_NOISE * e.n * noise.get(e.channel, 0.0) ** 2]  # fmt: skip
-    if worse:
+    scored = [e for e in errors if e.channel in FIT_CHANNELS]
+    gain = sum(e.rms_pct_before**2 - e.rms_pct_after**2 for e in scored)  # peak-normalised, pooled
+    if worse or gain <= 0.0:
+        why = f"made {', '.join(worse)} worse than" if worse else "did not improve on"
         msg = (f"cause named, no law found: the law {effect.name} in {effect.variable} beat the control on the "
-               f"held-out folds, but on the held-out condition {column} = {values} it made "
-               f"{', '.join(worse)} worse than the model as given; the model is left unchanged")  # fmt: skip
+               f"held-out folds, but on the held-out condition {column} = {values} it {why} the model refitted "
+               "without it; the model is left unchanged")  # fmt: skip
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                errors, None, tried + [effect], messages=[msg], data=df, train=train,
                                not_measured=not_measured, profiles=profiles, confounding=confounding,
                                cause=cause.variable)  # fmt: skip
+    # validated: the same law refitted the same way on every row (the held-out condition too)
+    _progress(f"refitting {effect.name} in {effect.variable} on every row", progress)
+    pall = make_problem(tyre, df.assign(_cand=cvals), chans)
+    pall.noise = dict(prob.noise)
+    pall.variables = {k: np.asarray(val) for k, val in variables.items()}
+    pall = drop_outliers(pall)
+    values_all = pall.df["_cand"].to_numpy(float) if effect.variable not in BUILTIN_VARIABLES else None
+    extended, _ = restricted(tyre, final_fit(pall, effect, values_all, n_pressures, eff_ch), effect)
+    effect.standard = {k: float(v) for k, v in extended.flat.items() if k in tyre.flat and v != tyre.flat[k]}
+    effect.section = {k: v for k, v in (extended.extensions or {}).items() if k not in (tyre.extensions or {})}
+    effect.parameters = {k: float(v) for k, v in effect.section.items() if isinstance(v, float) and "_C" in k}
+    effect.messages.append(f"held out: {column} = {values} (the law's model and the control refitted without "
+                           "it); the model written is the law refitted on every row")  # fmt: skip
     full_after = _model(extended, df)
     for ch in chans:
         df[f"residual_after_{ch}"] = df[ch].to_numpy(float) - full_after[ch]

@@ -165,6 +165,8 @@ class EffectFit:
     cv_channels: dict[str, tuple[float, int]] = field(default_factory=dict)
     law: Law | None = None  #: the law fitted
     rejected: bool = False  #: a scored channel was worse on held-out folds than under the control
+    refit: str = "main"  #: how the chosen model was refitted: its "main" coefficients or "all" (staged fitter)
+    control_tyre: Tyre | None = field(default=None, repr=False)  #: the control refitted the same way
 
     @property
     def removed(self) -> float:
@@ -769,6 +771,7 @@ def refine_effect(
     prob: _Problem, fits: Sequence[tuple[EffectFit, Law, np.ndarray | None]], n_pressures: int,
     effect_channels: Sequence[str] | None, folds: np.ndarray | None, local_control_cv: float = float("nan"),
     local_control_channels: Mapping[str, tuple[float, int]] | None = None,
+    local_control: EffectFit | None = None,
 ) -> tuple[EffectFit | None, Tyre | None, list[str]]:
     """Refit the best laws and the control with every MF coefficient (the staged fitter), then choose
     among them by held-out-sweep error, each model's law and main coefficients refitted on each fold.
@@ -784,7 +787,9 @@ def refine_effect(
     A variant whose held-out error on any scored channel is worse than its control's beyond the noise
     (:func:`worse_channels`) is never chosen.
     Returns ``(chosen, extended tyre, messages)``; chosen is None when no law beats the control by
-    :data:`MAX_RESIDUAL_VS_CONTROL` on held-out sweeps.
+    :data:`MAX_RESIDUAL_VS_CONTROL` on held-out sweeps.  The chosen effect's ``refit`` says how its model
+    was refitted (``"main"`` coefficients or ``"all"``) and ``control_tyre`` is the control refitted the
+    same way on the same rows (:func:`final_fit` refits the chosen way on every row).
     """
     base = prob.tyre
     prob, idx = subsample(prob)
@@ -802,8 +807,9 @@ def refine_effect(
                 f"control, every coefficient refitted without an effect: held-out-sweep error {cv_full:.4g}"]
     # each law as fitted locally (its held-out error from choose_effect) and refitted in full; each variant
     # must beat the control refitted the same way
-    options: list[tuple[float, EffectFit, Tyre, float]] = [
-        (f.cv, f, f.apply(base), cv_local) for f, _, _ in fits
+    local_tyre = local_control.apply(base) if local_control is not None else control_tyre
+    options: list[tuple] = [
+        (f.cv, f, f.apply(base), cv_local, local_tyre, "main") for f, _, _ in fits
         if np.isfinite(f.cv) and not f.rejected and not worse_channels(f.cv_channels, local_channels, prob.noise)]
     base_terms = {t.index for t in base.extension_set.terms}
     for fit, _law, values in list(fits)[:REFINE_LAWS]:
@@ -820,18 +826,35 @@ def refine_effect(
                         f"refitted, {fit.cv:.4g} with the main coefficients"
                         + (f"; worse than the control on {', '.join(worse)}: not chosen" if worse else ""))
         if not worse:
-            options.append((cv, fit, tyre, cv_full))
+            options.append((cv, fit, tyre, cv_full, control_tyre, "all"))
     eligible = [o for o in options if o[0] <= MAX_RESIDUAL_VS_CONTROL * o[3]]
     if not eligible:
         return None, None, messages
-    cv, fit, tyre, cv_control = _parsimonious(eligible)
+    cv, fit, tyre, cv_control, ctrl, how = _parsimonious(eligible)
     section = {k: v for k, v in (tyre.extensions or {}).items() if k not in (base.extensions or {})}
     standard = {k: float(v) for k, v in tyre.flat.items() if k in base.flat and v != base.flat[k]}
     refined = EffectFit(fit.name, fit.variable, fit.physical,
                         {k: float(v) for k, v in section.items() if isinstance(v, float) and "_C" in k}, section,
                         standard, fit.ss_before, fit.ss_after, fit.bic, fit.n_params, [*fit.messages, *messages],
-                        heldout=cv / cv_control if cv_control > 0 else np.inf, targets=fit.targets, cv=cv)  # fmt: skip
+                        heldout=cv / cv_control if cv_control > 0 else np.inf, targets=fit.targets, cv=cv,
+                        law=fit.law, refit=how, control_tyre=ctrl)  # fmt: skip
     return refined, tyre, messages
+
+
+def final_fit(prob: _Problem, effect: EffectFit, values: np.ndarray | None, n_pressures: int,
+              effect_channels: Sequence[str] | None) -> Tyre:
+    """The chosen law refitted on every row ``prob`` holds (the training rows and the held-out condition),
+    the way it was chosen (``effect.refit``): its coefficients with the main coefficients
+    (:func:`fit_effect`), or with every coefficient (the staged fitter), started from the law's values."""
+    base = prob.tyre
+    if effect.refit == "all" or effect.law is None:
+        sub, idx = subsample(prob)
+        cols = [c for c in sub.df.columns if not str(c).startswith(("residual_", "_"))]
+        return _full_refit(sub.df[cols], _tyre_with(base, {}, effect.section))
+    sub, idx = subsample(prob)
+    v = None if values is None else np.asarray(values)[idx]
+    fit = fit_effect(sub, effect.law, effect.variable, v, n_pressures, pressure_channels=effect_channels)
+    return fit.apply(base)
 
 
 def _channel_of(stage: str, key: str) -> str | None:
