@@ -213,6 +213,15 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
         kk = min(k, len(g))
         rank = g["v"].rank(method="first").to_numpy()
         label.update(zip(g.index, np.minimum((rank - 1) * kk // len(g), kk - 1).astype(int), strict=True))
+    if kinds is not None and blocks is not None:
+        # a kind never held out inside the blocks (one sweep of it per block: cornering at each load) is
+        # held out by ranges across the blocks, so that every channel is tested on held-out sweeps
+        kind_of = pd.Series(np.asarray(kinds)).groupby(np.asarray(sweeps)).first()
+        for _, g in means.assign(kind=kind_of.reindex(means.index).to_numpy()).groupby("kind"):
+            if len(g) >= 2 and all(label[s] < 0 for s in g.index):
+                kk = min(k, len(g))
+                rank = g["v"].rank(method="first").to_numpy()
+                label.update(zip(g.index, np.minimum((rank - 1) * kk // len(g), kk - 1).astype(int), strict=True))
     out = np.array([label[s] for s in sweeps])
     return out if np.unique(out[out >= 0]).size >= 2 else None
 
