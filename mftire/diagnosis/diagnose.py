@@ -538,25 +538,52 @@ def _diagnose(
     # the chosen candidate's best laws and the control, refitted with every MF coefficient
     _progress(f"refitting every coefficient with the laws of {effect.variable}", progress)
     prob, law_fits, eff_ch, folds, in_blocks, control_cv, control_channels, local_control = context
-    refined, extended, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv,
-                                             control_channels, local_control)  # fmt: skip
-    if refined is None:
+    variants, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv, control_channels,
+                                    local_control)  # fmt: skip
+    if not variants:
         msg = ("no significant effect: the best laws did not beat the control once every coefficient was "
                "refitted (" + "; ".join(notes) + ")")
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
                                profiles=profiles, cause=cause.variable)  # fmt: skip
-    # the law acts on its channels only: every other coefficient stays as the model has it; the control is
-    # restricted the same way
-    control_tyre = refined.control_tyre
-    extended, refined = restricted(tyre, extended, refined)
-    control_tyre, _ = restricted(tyre, control_tyre, refined)
-    effect = refined
+    # the held-out condition: each variant's model and its control, both refitted without it, per channel; the
+    # first variant (in order of preference) that no channel finds worse beyond its noise and that improves the
+    # scored channels together is accepted.  A law acts on its channels only: every other coefficient stays as
+    # the model has it, the control is restricted the same way.
+    dtest = df[test].reset_index(drop=True)
+    rejected: list[str] = []
+    accepted = None
+    for refined, extended in variants:
+        ext_r, eff_r = restricted(tyre, extended, refined)
+        ctrl_r, _ = restricted(tyre, refined.control_tyre, refined)
+        errs = channel_errors(dtest, _model(ctrl_r, dtest), _model(ext_r, dtest), chans)
+        worse = [e.channel for e in errs
+                 if e.n * e.rms_after**2 > (1.0 + CHANNEL_WORSE_REL) * e.n * e.rms_before**2
+                 + CHANNEL_WORSE_NOISE * e.n * noise.get(e.channel, 0.0) ** 2]  # fmt: skip
+        gain = sum(e.rms_pct_before**2 - e.rms_pct_after**2 for e in errs if e.channel in FIT_CHANNELS)
+        if not worse and gain > 0.0:
+            accepted = (eff_r, ext_r, errs)
+            break
+        what = ", ".join(f"{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g}" for e in errs
+                         if e.channel in worse)  # fmt: skip
+        rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) "
+                        + (f"made {what}" if worse else "did not improve"))
+    effect = variants[0][0]
     named = [e for e in ranking if e.variable == effect.variable and e.significant]
     if named and effect.variable != cause.variable:  # e.g. a slip-speed law chosen for Vx: the cause is Vs
         cause = named[0]
     ranking.remove(cause)
     ranking.insert(0, cause)
+    if accepted is None:
+        msg = (f"cause named, no law found: the laws that beat the control on the held-out folds lost to the model "
+               f"refitted without them on the held-out condition {column} = {values}: " + "; ".join(rejected)
+               + "; the model is left unchanged")  # fmt: skip
+        return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
+                               [], None, tried + [v[0] for v in variants], messages=[msg], data=df, train=train,
+                               not_measured=not_measured, profiles=profiles, cause=cause.variable)  # fmt: skip
+    effect, extended, errors = accepted
+    if rejected:
+        effect.messages.append("not chosen on the held-out condition: " + "; ".join(rejected))
 
     # extended: the refined tyre; its variables are columns of the data (closed variables)
     cvals = df[effect.variable].to_numpy(float) if effect.variable in df.columns else by_name[cause.variable].values
@@ -564,24 +591,6 @@ def _diagnose(
         confounding_notes(df[train].reset_index(drop=True), effect.variable, cvals[train],
                           effect.heldout if in_blocks else None)
         + profiles.confounding(effect.variable)))  # fmt: skip
-    # the held-out condition: the law's model and the control, both refitted without it, per channel
-    dtest = df[test].reset_index(drop=True)
-    errors = channel_errors(dtest, _model(control_tyre, dtest), _model(extended, dtest), chans)
-    # never worse: no channel may lose to the control beyond its noise, and the scored channels together must gain
-    worse = [e.channel for e in errors
-             if e.n * e.rms_after**2 > (1.0 + CHANNEL_WORSE_REL) * e.n * e.rms_before**2
-             + CHANNEL_WORSE_NOISE * e.n * noise.get(e.channel, 0.0) ** 2]  # fmt: skip
-    scored = [e for e in errors if e.channel in FIT_CHANNELS]
-    gain = sum(e.rms_pct_before**2 - e.rms_pct_after**2 for e in scored)  # peak-normalised, pooled
-    if worse or gain <= 0.0:
-        why = f"made {', '.join(worse)} worse than" if worse else "did not improve on"
-        msg = (f"cause named, no law found: the law {effect.name} in {effect.variable} beat the control on the "
-               f"held-out folds, but on the held-out condition {column} = {values} it {why} the model refitted "
-               "without it; the model is left unchanged")  # fmt: skip
-        return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
-                               errors, None, tried + [effect], messages=[msg], data=df, train=train,
-                               not_measured=not_measured, profiles=profiles, confounding=confounding,
-                               cause=cause.variable)  # fmt: skip
     # validated: the same law refitted the same way on every row (the held-out condition too)
     _progress(f"refitting {effect.name} in {effect.variable} on every row", progress)
     pall = make_problem(tyre, df.assign(_cand=cvals), chans)

@@ -680,9 +680,7 @@ def trimmed(law: Law, worse: Sequence[str]) -> Law | None:
     keep = tuple(t for t in law.targets if not set(TARGET_CHANNELS.get(t, ())) & set(worse))
     if not keep or keep == law.targets or law.name in ("pressure", "none"):
         return None
-    suffix = "_" + "_".join(sorted({c for t in keep for c in TARGET_CHANNELS[t]}))
-    return dataclasses.replace(law, name=law.name + suffix.lower() if not law.name.endswith(suffix.lower())
-                               else law.name, targets=keep)  # fmt: skip
+    return dataclasses.replace(law, targets=keep)  # the same law (name, form) on fewer targets
 
 
 def choose_effect(
@@ -810,7 +808,7 @@ def refine_effect(
     effect_channels: Sequence[str] | None, folds: np.ndarray | None, local_control_cv: float = float("nan"),
     local_control_channels: Mapping[str, tuple[float, int]] | None = None,
     local_control: EffectFit | None = None,
-) -> tuple[EffectFit | None, Tyre | None, list[str]]:
+) -> tuple[list[tuple[EffectFit, Tyre]], list[str]]:
     """Refit the best laws and the control with every MF coefficient (the staged fitter), then choose
     among them by held-out-sweep error, each model's law and main coefficients refitted on each fold.
 
@@ -824,10 +822,10 @@ def refine_effect(
     error, the law with the fewest coefficients wins (then the lowest error).
     A variant whose held-out error on any scored channel is worse than its control's beyond the noise
     (:func:`worse_channels`) is never chosen.
-    Returns ``(chosen, extended tyre, messages)``; chosen is None when no law beats the control by
-    :data:`MAX_RESIDUAL_VS_CONTROL` on held-out sweeps.  The chosen effect's ``refit`` says how its model
-    was refitted (``"main"`` coefficients or ``"all"``) and ``control_tyre`` is the control refitted the
-    same way on the same rows (:func:`final_fit` refits the chosen way on every row).
+    Returns ``([(effect, extended tyre), ...], messages)``: the variants that beat their control by
+    :data:`MAX_RESIDUAL_VS_CONTROL` on held-out sweeps, the preferred first (empty: none).  An effect's
+    ``refit`` says how its model was refitted (``"main"`` coefficients or ``"all"``) and ``control_tyre`` is
+    the control refitted the same way on the same rows (:func:`final_fit` refits the chosen way on every row).
     """
     base = prob.tyre
     prob, idx = subsample(prob)
@@ -880,18 +878,28 @@ def refine_effect(
         if not worse:
             options.append((cv / cv_c if cv_c > 0 else np.inf, fit, tyre, cv_c, control_tyre, "all"))
     eligible = [o for o in options if o[0] <= MAX_RESIDUAL_VS_CONTROL]
-    if not eligible:
-        return None, None, messages
-    ratio, fit, tyre, cv_control, ctrl, how = _parsimonious(eligible)
-    cv = ratio * cv_control
-    section = {k: v for k, v in (tyre.extensions or {}).items() if k not in (base.extensions or {})}
-    standard = {k: float(v) for k, v in tyre.flat.items() if k in base.flat and v != base.flat[k]}
-    refined = EffectFit(fit.name, fit.variable, fit.physical,
-                        {k: float(v) for k, v in section.items() if isinstance(v, float) and "_C" in k}, section,
-                        standard, fit.ss_before, fit.ss_after, fit.bic, fit.n_params, [*fit.messages, *messages],
-                        heldout=cv / cv_control if cv_control > 0 else np.inf, targets=fit.targets, cv=cv,
-                        law=fit.law, refit=how, control_tyre=ctrl)  # fmt: skip
-    return refined, tyre, messages
+    out = []
+    for ratio, fit, tyre, cv_control, ctrl, how in _ranked(eligible):
+        section = {k: v for k, v in (tyre.extensions or {}).items() if k not in (base.extensions or {})}
+        standard = {k: float(v) for k, v in tyre.flat.items() if k in base.flat and v != base.flat[k]}
+        refined = EffectFit(fit.name, fit.variable, fit.physical,
+                            {k: float(v) for k, v in section.items() if isinstance(v, float) and "_C" in k}, section,
+                            standard, fit.ss_before, fit.ss_after, fit.bic, fit.n_params, [*fit.messages, *messages],
+                            heldout=ratio, targets=fit.targets, cv=ratio * cv_control, law=fit.law, refit=how,
+                            control_tyre=ctrl)  # fmt: skip
+        out.append((refined, tyre))
+    return out, messages
+
+
+def _ranked(options: Sequence[tuple]) -> list[tuple]:
+    """``options`` in the order of preference of :func:`_parsimonious` (the preferred first, then the
+    preferred of the rest ...)."""
+    rest, out = list(options), []
+    while rest:
+        best = _parsimonious(rest)
+        out.append(best)
+        rest = [o for o in rest if o is not best]
+    return out
 
 
 def final_fit(prob: _Problem, effect: EffectFit, values: np.ndarray | None, n_pressures: int,
@@ -945,9 +953,10 @@ def refit_channels_of(law: Law) -> tuple[str, ...] | None:
 
 
 def law_channels(fit: EffectFit) -> tuple[str, ...]:
-    """The channels a law acts on (:data:`mftire.mf.extensions.TARGET_CHANNELS` of its targets); empty for the
-    pressure law (the standard pressure terms of every channel)."""
-    return tuple(dict.fromkeys(ch for t in fit.targets for ch in TARGET_CHANNELS.get(t, ()) if ch in FIT_CHANNELS))
+    """The channels whose coefficients a law's model changes: those its targets act on, and Mz with a force
+    (:func:`refit_channels_of`); empty for the pressure law (the standard pressure terms of every channel)."""
+    chans = refit_channels_of(Law(fit.name, fit.targets, "")) if fit.targets else None
+    return chans or ()
 
 
 def restricted(base: Tyre, extended: Tyre, fit: EffectFit) -> tuple[Tyre, EffectFit]:
