@@ -50,9 +50,13 @@ def test_identifiers_are_never_candidates(base_df):
 def test_worse_channels_and_trimmed_law():
     control = {"Fx": (1.0, 100), "Fy": (1.0, 100)}
     assert worse_channels({"Fx": (0.5, 100), "Fy": (1.01, 100)}, control) == []
-    assert worse_channels({"Fx": (0.5, 100), "Fy": (1.2, 100)}, control) == ["Fy"]
-    # within the noise: 5 % of the noise variance per held-out row
-    assert worse_channels({"Fx": (0.5, 100), "Fy": (1.2, 100)}, control, {"Fy": 0.25}) == []
+    assert worse_channels({"Fx": (0.5, 100), "Fy": (1.03, 100)}, control) == ["Fy"]
+    # within the noise: 2 % of the noise's sum of squares, never more than 2 % of the control's
+    assert worse_channels({"Fx": (0.5, 100), "Fy": (1.03, 100)}, control, {"Fy": 0.25}) == []
+    assert worse_channels({"Fx": (0.5, 100), "Fy": (1.05, 100)}, control, {"Fy": 10.0}) == ["Fy"]
+    # a fold may lose by twice the allowance of the whole, no more
+    folds = {"Fy": (1.0, 100), "Fy#0": (0.5, 50), "Fy#1": (0.5, 50)}
+    assert worse_channels({"Fy": (1.0, 100), "Fy#0": (0.4, 50), "Fy#1": (0.6, 50)}, folds) == ["Fy"]
     law = Law("friction_variable", ("LMUX", "LMUY"), "linear")
     narrow = trimmed(law, ["Fx"])
     assert narrow is not None and narrow.targets == ("LMUY",)

@@ -30,8 +30,6 @@ import pandas as pd
 
 from mftire.diagnosis.candidates import FIT_ROW, Candidate, candidates, time_column, with_sweeps
 from mftire.diagnosis.effects import (
-    CHANNEL_WORSE_NOISE,
-    CHANNEL_WORSE_REL,
     FIT_CHANNELS,
     HISTORY_CANDIDATES,
     MAX_RESIDUAL_VS_CONTROL,
@@ -41,6 +39,7 @@ from mftire.diagnosis.effects import (
     drop_outliers,
     effects_for,
     final_fit,
+    is_worse,
     make_problem,
     primary_rows,
     refine_effect,
@@ -557,9 +556,8 @@ def _diagnose(
         ext_r, eff_r = restricted(tyre, extended, refined)
         ctrl_r, _ = restricted(tyre, refined.control_tyre, refined)
         errs = channel_errors(dtest, _model(ctrl_r, dtest), _model(ext_r, dtest), chans)
-        worse = [e.channel for e in errs
-                 if e.n * e.rms_after**2 > (1.0 + CHANNEL_WORSE_REL) * e.n * e.rms_before**2
-                 + CHANNEL_WORSE_NOISE * e.n * noise.get(e.channel, 0.0) ** 2]  # fmt: skip
+        worse = [e.channel for e in errs if is_worse(e.n * e.rms_after**2, e.n * e.rms_before**2, e.n,
+                                                     noise.get(e.channel, 0.0))]  # fmt: skip
         gain = sum(e.rms_pct_before**2 - e.rms_pct_after**2 for e in errs if e.channel in FIT_CHANNELS)
         if not worse and gain > 0.0:
             accepted = (eff_r, ext_r, errs)

@@ -643,18 +643,26 @@ def heldout_error(
     return total
 
 
-#: A scored channel may be worse on the held-out folds than under the control refit by at most this
-#: share of the control's error ...
+#: A scored channel may be worse on held-out data than under the control refit by at most this share of
+#: the control's sum of squares ...
 CHANNEL_WORSE_REL = 0.02
-#: ... plus this share of the channel's noise variance per held-out row (what noise alone moves).
-CHANNEL_WORSE_NOISE = 0.05
+#: ... plus this share of the noise's (its estimate per row times the rows, never more than the control's
+#: own sum of squares: a noise estimate from a few sweeps must not license a real loss).
+CHANNEL_WORSE_NOISE = 0.02
+
+
+def is_worse(ss: float, ss_control: float, n: int, sigma: float, scale: float = 1.0) -> bool:
+    """True when a channel's sum of squared held-out residuals ``ss`` exceeds the control's ``ss_control``
+    beyond ``scale`` × (:data:`CHANNEL_WORSE_REL`·SS_control + :data:`CHANNEL_WORSE_NOISE`·min(n·σ²,
+    SS_control)) (``n`` held-out rows, ``sigma`` the channel's noise)."""
+    allowance = CHANNEL_WORSE_REL * ss_control + CHANNEL_WORSE_NOISE * min(n * sigma**2, ss_control)
+    return ss > ss_control + scale * allowance
 
 
 def worse_channels(fit: Mapping[str, tuple[float, int]], control: Mapping[str, tuple[float, int]],
                    noise: Mapping[str, float] | None = None) -> list[str]:
     """The channels whose held-out-fold error under a law (``fit``: channel -> (SS, rows)) exceeds the
-    control's beyond its noise: SS_law > (1 + :data:`CHANNEL_WORSE_REL`)·SS_control +
-    :data:`CHANNEL_WORSE_NOISE`·rows·σ², over the folds together and (with twice the allowance) in each fold
+    control's beyond its noise (:func:`is_worse`), over the folds together and (with twice the allowance) in each fold
     (keys ``"Fy#2"``): a law that helps on some held-out ranges and hurts on others is not consistent.  A law
     that makes any scored channel worse on data it was not fitted on is never accepted (issue 21: a diagnosis
     that makes the model worse must never happen)."""
@@ -665,9 +673,7 @@ def worse_channels(fit: Mapping[str, tuple[float, int]], control: Mapping[str, t
             continue
         sigma = float((noise or {}).get(ch, 0.0))
         # a fold ("Fy#2") may lose by no more than twice the allowance of the whole
-        rel, abs_ = (CHANNEL_WORSE_REL, CHANNEL_WORSE_NOISE) if "#" not in key else (2 * CHANNEL_WORSE_REL,
-                                                                                     2 * CHANNEL_WORSE_NOISE)
-        if fit[key][0] > (1.0 + rel) * ss_c + abs_ * n * sigma**2:
+        if is_worse(fit[key][0], ss_c, n, sigma, 2.0 if "#" in key else 1.0):
             out.append(ch)
     return out
 
