@@ -556,8 +556,10 @@ def _diagnose(
         ext_r, eff_r = restricted(tyre, extended, refined)
         ctrl_r, _ = restricted(tyre, refined.control_tyre, refined)
         errs = channel_errors(dtest, _model(ctrl_r, dtest), _model(ext_r, dtest), chans)
-        worse = [e.channel for e in errs if is_worse(e.n * e.rms_after**2, e.n * e.rms_before**2, e.n,
-                                                     noise.get(e.channel, 0.0))]  # fmt: skip
+        # the scored channels, those the laws are fitted on (Mx and My follow the forces through models of
+        # their own and are reported, not scored)
+        worse = [e.channel for e in errs if e.channel in FIT_CHANNELS
+                 and is_worse(e.n * e.rms_after**2, e.n * e.rms_before**2, e.n, noise.get(e.channel, 0.0))]
         gain = sum(e.rms_pct_before**2 - e.rms_pct_after**2 for e in errs if e.channel in FIT_CHANNELS)
         if not worse and gain > 0.0:
             accepted = (eff_r, ext_r, errs)
