@@ -11,12 +11,22 @@ Procedure (:func:`diagnose`)
 3. No significant candidate: "no significant effect", nothing changes.
 4. Otherwise a condition is held out (``holdout`` or an interior level of the top
    candidate, else of load, speed or pressure).  For the significant candidates
-   close to the top, laws on the affected families of scaling factors are fitted on the
-   remaining data (:mod:`mftire.diagnosis.effects`) and compared by their error on
-   held-out sweeps with a control refit; the candidate whose law predicts best is the
-   cause, and is listed first, with what it is confounded with (:meth:`Profiles.confounding`).
-5. Before/after errors on the held-out condition per channel: RMS, RMS in % of the
-   channel's peak, and the share of residual variance removed.
+   close to the top, laws on the affected families of the affected channels are fitted on the
+   remaining data (:mod:`mftire.diagnosis.effects`), each refitting the main coefficients of the
+   channels it acts on, and compared on held-out folds (contiguous ranges or levels of the
+   candidate, every sweep kind kept) with the control refitted the same way without a law; a law
+   that makes any scored channel (Fx, Fy, Mz) worse than the control beyond its noise, over the folds
+   or in one of them, is never chosen (:func:`~mftire.diagnosis.effects.worse_channels`).
+5. The held-out condition: each surviving law's model and its control, both fitted without it, per
+   channel; the first law (in order of preference) that makes no scored channel worse and improves
+   them together is refitted on every row and written.  Its model changes only the coefficients of
+   the channels the law acts on.  When none holds: "cause named, no law found", the model unchanged.
+6. Before/after errors on the held-out condition per channel (before: the control): RMS, RMS in % of
+   the channel's peak, and the share of residual variance removed.
+
+Identifiers are never candidates (:func:`mftire.diagnosis.candidates.is_identifier`).  With the
+importer's ``fit_row`` column, the accumulated candidates run through the flagged rows too
+(:func:`fit_rows`).
 """
 
 from __future__ import annotations
