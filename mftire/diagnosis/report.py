@@ -138,7 +138,8 @@ def _markdown(doc: dict) -> str:
     h = doc["holdout"]
     if h is not None and h.get("channels"):
         vals = ", ".join(f"{v:g}" for v in h["values"])
-        lines += ["## Held-out condition", "", f"{h['column']} = {vals} ({h['n_rows']} rows, not used in any fit). Before: the model "
+        lines += ["## Held-out condition", "",
+                  f"{h['column']} = {vals} ({h['n_rows']} rows, not used in any fit). Before: the model "
                   "refitted without the law (the control), after: with it, both on the same training rows; "
                   "the model written is the law refitted on every row.", "",
                   "| channel | RMS before | RMS after | RMS % of peak before | after | residual variance removed |",
