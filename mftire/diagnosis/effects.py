@@ -672,8 +672,14 @@ def worse_channels(fit: Mapping[str, tuple[float, int]], control: Mapping[str, t
         if key not in fit or ch in out:
             continue
         sigma = float((noise or {}).get(ch, 0.0))
-        # a fold ("Fy#2") may lose by no more than twice the allowance of the whole
-        if is_worse(fit[key][0], ss_c, n, sigma, 2.0 if "#" in key else 1.0):
+        if "#" in key:
+            # a fold ("Fy#2") may lose by twice the allowance of the whole, and by a share of the channel's
+            # control error over every fold (a fold holding a few rows of the channel does not decide alone)
+            if is_worse(fit[key][0], ss_c, n, sigma, 2.0) and \
+                    fit[key][0] - ss_c > CHANNEL_WORSE_REL * control.get(ch, (ss_c, n))[0]:
+                out.append(ch)
+            continue
+        if is_worse(fit[key][0], ss_c, n, sigma):
             out.append(ch)
     return out
 
@@ -880,7 +886,10 @@ def refine_effect(
         worse = worse_channels(per, per_c, prob.noise)
         messages.append(f"{fit.name} in {fit.variable}: held-out-sweep error {cv:.4g} with every coefficient "
                         f"refitted (control {cv_c:.4g}), {fit.cv:.4g} with the main coefficients"
-                        + (f"; worse than the control on {', '.join(worse)}: not chosen" if worse else ""))
+                        + (f"; worse than the control on {', '.join(worse)} ("
+                           + ", ".join(f"{k} {per[k][0]:.3g} vs {per_c[k][0]:.3g}" for k in per_c
+                                       if k.split('#')[0] in worse and k in per)
+                           + "): not chosen" if worse else ""))  # fmt: skip
         if not worse:
             options.append((cv / cv_c if cv_c > 0 else np.inf, fit, tyre, cv_c, control_tyre, "all"))
     eligible = [o for o in options if o[0] <= MAX_RESIDUAL_VS_CONTROL]
