@@ -206,7 +206,13 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
     v = np.asarray(v, float)
     lv = np.unique(np.round(v[np.isfinite(v)], 6))
     if sweep_level and 3 <= len(lv) <= 6 and blocks is None:
-        return np.unique(np.round(v, 6), return_inverse=True)[1]
+        out = np.unique(np.round(v, 6), return_inverse=True)[1]
+        if kinds is not None:  # a level that holds every sweep of a kind is never held out
+            kk = np.asarray(kinds)
+            for level in np.unique(out):
+                if set(kk[out != level]) != set(kk):
+                    out = np.where(out == level, -1, out)
+        return out if np.unique(out[out >= 0]).size >= 2 else None
     b = np.zeros(len(v), int) if blocks is None else np.asarray(blocks)
     if kinds is not None:
         b = pd.MultiIndex.from_arrays([b, np.asarray(kinds)]).factorize()[0]
