@@ -495,8 +495,11 @@ def _diagnose(
             variable, derived = time_column(df), False
             if variable is None:
                 continue
-            note = (f"the candidate '{e.variable}' needs the measured history; the effect is expressed in the raw "
-                    f"column '{variable}' instead")
+            note = (f"a test-order effect: the candidate '{e.variable}' ("
+                    + ("the accumulated friction work" if e.variable == "energy" else "the position in the sequence")
+                    + f") needs the measured history; the law is expressed in the physical accumulator the data "
+                    f"carry, the elapsed time '{variable}', with the saturating form of a first-order response "
+                    "(fade or warm-up) among the forms tried")  # fmt: skip
             c = by_name.get(variable) or Candidate(variable, df[variable].to_numpy(float), False, False)
         v = c.values[train]
         monotone = bool(np.all(np.diff(v) >= 0)) or variable == time_column(df)
