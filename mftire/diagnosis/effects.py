@@ -1,21 +1,26 @@
-"""Map a candidate variable to model extensions, fit them, and choose one.
+"""Map a candidate variable to model extensions, fit them, and choose one that holds on new data.
 
-An effect is a law of :data:`LAWS`: MF scaling factors times a form of
-:mod:`mftire.mf.extensions` in the candidate's variable (or the standard pressure terms).
-Each is fitted by bounded least squares on the
+An effect is a :class:`Law`: MF scaling factors, force offsets or measured inputs (an effective pressure,
+a slip-angle or camber offset) times a form of :mod:`mftire.mf.extensions` in the candidate's variable
+(or the standard pressure terms).  Each is fitted by bounded least squares on the
 training data (gross outliers removed; each channel on the rows where it is a primary
-response), together with the peak and curvature coefficients of the measured
-channels (:data:`REFIT_KEYS`), because a base fit made on data containing the effect
-has absorbed part of it into them.  The other Magic Formula coefficients stay as
-fitted.  The inflation-pressure effect refits the
+response), together with the peak and curvature coefficients (:data:`REFIT_KEYS`) of the
+channels the law acts on (:func:`refit_channels_of`: its targets' channels, and Mz with a force),
+because a base fit made on data containing the effect has absorbed part of it into them.  The other
+Magic Formula coefficients stay as given.  The inflation-pressure effect refits the
 standard MF 6.1 pressure coefficients instead of an extension section.
 
-Extensions are compared by the Bayesian information criterion of the weighted
-residual, n·ln(SS/n) + k·ln(n), so a term with more parameters must earn them.
+Laws that explain the training data better than the control (the same coefficients refitted without
+a law; 10 % less residual and a lower Bayesian information criterion n·ln(SS/n) + k·ln(n)) are then
+judged on held-out folds only: a law must cut the control's held-out error by 10 %, and no scored
+channel may be worse than under the control beyond its noise, over the folds or in one of them
+(:func:`worse_channels`).  A law that hurts a channel is retried without the targets of that
+channel (:func:`trimmed`).  Training error alone never chooses a law.
 
 Variables are closed (:mod:`mftire.mf.extensions`): a candidate that needs measured
 history (``energy``) or the row order (``sequence``) is expressed in the nearest raw
-column, a time column when the data have one, and the effect says so.
+column, a time column when the data have one, and the effect says so.  Each term stores the
+range its variables were fitted on (evaluation clamps to it in modes 1xx).
 """
 
 from __future__ import annotations
