@@ -219,7 +219,7 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
     frame = pd.DataFrame({"v": v, "s": sweeps, "b": b})
     means = frame.groupby("s").agg(v=("v", "mean"), b=("b", "first"))
     if means["v"].nunique() < k:
-        return None
+        return kind_folds(sweeps, kinds)
     label: dict = {}
     for _, g in means.groupby("b"):
         if len(g) < 2:
@@ -238,6 +238,22 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
                 rank = g["v"].rank(method="first").to_numpy()
                 label.update(zip(g.index, np.minimum((rank - 1) * kk // len(g), kk - 1).astype(int), strict=True))
     out = np.array([label[s] for s in sweeps])
+    return out if np.unique(out[out >= 0]).size >= 2 else kind_folds(sweeps, kinds)
+
+
+def kind_folds(sweeps: np.ndarray, kinds: np.ndarray | None, k: int = 3) -> np.ndarray | None:
+    """Folds of whole sweeps when the candidate gives no ranges (a variable that changes within the sweeps, as
+    the sign of the slip angle): the sweeps of each kind dealt in turn, in their order, to ``k`` folds, so that
+    every fold holds out some sweeps of every kind with two or more and keeps the others in training."""
+    if kinds is None:
+        return None
+    frame = pd.DataFrame({"s": np.asarray(sweeps), "kind": np.asarray(kinds)})
+    first = frame.groupby("s", sort=False)["kind"].first()
+    label = {}
+    for _, g in first.groupby(first):
+        kk = min(k, len(g))
+        label.update({sid: (i % kk if kk >= 2 else -1) for i, sid in enumerate(g.index)})
+    out = frame["s"].map(label).to_numpy(int)
     return out if np.unique(out[out >= 0]).size >= 2 else None
 
 
