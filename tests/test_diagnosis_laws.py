@@ -65,25 +65,6 @@ def test_worse_channels_and_trimmed_law():
     assert EffectFit("x", "v", True, {}, {}, {}, 1.0, 0.5, 0.0, 1).rejected is False
 
 
-def test_lateral_only_effect_leaves_fx_exactly_as_it_was(base_df):
-    """Grip falling with tread temperature on Fy only: the law targets LMUY alone, and the extended model
-    predicts Fx (and every Fx coefficient) exactly as the model given."""
-    sec = _term("LMUY", "linear", "tread_temp", ref=30.0, scale=20.0, c1=-0.12)
-    d = _measure(base_df, sec, {"tread_temp": base_df.tread_temp.values})
-    tyre = _refit(d)
-    res = diagnose(d, tyre, progress=False)
-    assert res.significant, res.messages
-    assert res.ranking[0].variable == "tread_temp"
-    assert "LMUY" in res.effect.targets and "LMUX" not in res.effect.targets
-    a, b = tyre.evaluate_frame(d), res.extended.evaluate_frame(d)
-    np.testing.assert_allclose(a["Fx"].to_numpy(), b["Fx"].to_numpy(), rtol=1e-12, atol=1e-9)
-    assert not any(k[1:3] == "DX" or k[1:3] == "KX" for k in res.effect.standard), res.effect.standard
-    fy = next(e for e in res.errors if e.channel == "Fy")
-    assert fy.rms_after <= 0.5 * fy.rms_before
-    for e in res.errors:  # never worse on the held-out condition
-        assert e.rms_after <= 1.02 * e.rms_before + 1e-9, e
-
-
 def _cornering_campaign(seed: int = 2) -> pd.DataFrame:
     """Cornering at three loads, three sweeps each, with a tread temperature that cycles over the campaign."""
     rng = np.random.default_rng(seed)
@@ -98,6 +79,29 @@ def _cornering_campaign(seed: int = 2) -> pd.DataFrame:
     df["time"] = np.arange(len(df)) * 0.5
     df["tread_temp"] = 40 + 20 * np.sin(np.arange(len(df)) / 50.0) + rng.standard_normal(len(df))
     return df
+
+
+def test_lateral_only_effect_leaves_fx_exactly_as_it_was(base_df):
+    """Grip falling with tread temperature on Fy only: the law targets LMUY alone, and the extended model
+    predicts Fx (and every Fx coefficient) exactly as the model given.  Braking sweeps of the common campaign
+    and the cornering sweeps of the cornering campaign (three per load, so that held-out folds test Fy)."""
+    corner = _cornering_campaign()
+    both = pd.concat([base_df[base_df.alpha == 0.0], corner], ignore_index=True)
+    both["time"] = np.arange(len(both)) * 0.5
+    sec = _term("LMUY", "linear", "tread_temp", ref=30.0, scale=20.0, c1=-0.12)
+    d = _measure(both, sec, {"tread_temp": both.tread_temp.values})
+    tyre = _refit(d)
+    res = diagnose(d, tyre, progress=False)
+    assert res.significant, res.messages
+    assert res.ranking[0].variable == "tread_temp"
+    assert "LMUY" in res.effect.targets and "LMUX" not in res.effect.targets
+    a, b = tyre.evaluate_frame(d), res.extended.evaluate_frame(d)
+    np.testing.assert_allclose(a["Fx"].to_numpy(), b["Fx"].to_numpy(), rtol=1e-12, atol=1e-9)
+    assert not any(k[1:3] == "DX" or k[1:3] == "KX" for k in res.effect.standard), res.effect.standard
+    fy = next(e for e in res.errors if e.channel == "Fy")
+    assert fy.rms_after <= 0.5 * fy.rms_before
+    for e in res.errors:  # never worse on the held-out condition
+        assert e.rms_after <= 1.02 * e.rms_before + 1e-9, e
 
 
 def test_trail_only_effect_is_found_in_the_aligning_moment():

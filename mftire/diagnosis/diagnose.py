@@ -31,6 +31,7 @@ importer's ``fit_row`` column, the accumulated candidates run through the flagge
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -48,6 +49,7 @@ from mftire.diagnosis.effects import (
     choose_effect,
     drop_outliers,
     effects_for,
+    family_targets,
     final_fit,
     is_worse,
     make_problem,
@@ -228,15 +230,6 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
         kk = min(k, len(g))
         rank = g["v"].rank(method="first").to_numpy()
         label.update(zip(g.index, np.minimum((rank - 1) * kk // len(g), kk - 1).astype(int), strict=True))
-    if kinds is not None and blocks is not None:
-        # a kind never held out inside the blocks (one sweep of it per block: cornering at each load) is
-        # held out by ranges across the blocks, so that every channel is tested on held-out sweeps
-        kind_of = pd.Series(np.asarray(kinds)).groupby(np.asarray(sweeps)).first()
-        for _, g in means.assign(kind=kind_of.reindex(means.index).to_numpy()).groupby("kind"):
-            if len(g) >= 2 and all(label[s] < 0 for s in g.index):
-                kk = min(k, len(g))
-                rank = g["v"].rank(method="first").to_numpy()
-                label.update(zip(g.index, np.minimum((rank - 1) * kk // len(g), kk - 1).astype(int), strict=True))
     out = np.array([label[s] for s in sweeps])
     return out if np.unique(out[out >= 0]).size >= 2 else kind_folds(sweeps, kinds)
 
@@ -544,8 +537,17 @@ def _diagnose(
             families = ["trail", "residual_torque"] if law_ch == ["Mz"] else [*families, "trail"]
             law_ch = list(dict.fromkeys([*law_ch, "Mz"]))
         inputs = input_laws(tyre, chans, variable)
+        # the laws act on every force channel measured, and also (linear and saturating forms) on the channels
+        # where the candidate is significant alone; a law that hurts a channel is trimmed of it when judged
+        forces = [ch for ch in chans if ch in ("Fx", "Fy")]
+        broad = list(dict.fromkeys([*forces, *law_ch])) if set(law_ch) & set(forces) else law_ch
         laws = [(var, law, v if var == variable else None)
-                for var, law in effects_for(variable, derived, monotone, n_levels, families, law_ch, second, inputs)]
+                for var, law in effects_for(variable, derived, monotone, n_levels, families, broad, second, inputs)]
+        if broad != law_ch:
+            keep = {t for fam in families for t in family_targets(fam, law_ch)}
+            laws += [(var, dataclasses.replace(law, targets=tuple(t for t in law.targets if t in keep)), val)
+                     for var, law, val in list(laws) if law.form in ("linear", "saturating") and law.targets
+                     and set(law.targets) - keep and set(law.targets) & keep]  # fmt: skip
         chosen, fits = choose_effect(prob, laws, n_pressures, control, eff_ch, folds)
         control = fits[0]
         tried += fits[1:] if len(tried) else fits
@@ -554,8 +556,8 @@ def _diagnose(
         if note:
             chosen.messages.insert(0, note)
         by_var = {var: val for var, _, val in laws}
-        ranked = sorted((f for f in fits[1:] if np.isfinite(f.heldout) and f.heldout < 1.0 and not f.rejected
-                         and f.law is not None), key=lambda f: f.heldout)  # fmt: skip
+        ranked = sorted((f for f in fits[1:] if np.isfinite(f.heldout) and f.heldout < 1.0 and f.law is not None),
+                        key=lambda f: (f.rejected, f.heldout))  # fmt: skip
         ranked = [chosen] + [f for f in ranked if f is not chosen]
         found.append((chosen, e, (prob, [(f, f.law, by_var.get(f.variable)) for f in ranked], eff_ch, folds,
                                   blocks is not None, control.cv, dict(control.cv_channels), control)))  # fmt: skip

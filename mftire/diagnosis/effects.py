@@ -760,7 +760,8 @@ def choose_effect(
     if not good:
         return None, all_fits
     control_cv(None)
-    scored = []
+    scored: list[tuple[float, EffectFit]] = []
+    screened: list[tuple[float, EffectFit]] = []
     queue = [(fit, v, law) for fit, v, law in good]
     while queue:
         fit, v, law = queue.pop(0)
@@ -777,7 +778,9 @@ def choose_effect(
         worse = worse_channels(per, ctrl.cv_channels, prob.noise)
         fit.rejected = bool(worse)
         if worse:
-            fit.messages.append(f"rejected: held-out error worse than the control on {', '.join(worse)}")
+            fit.messages.append(f"rejected as fitted: held-out error worse than the control on {', '.join(worse)}")
+            if fit.heldout < 1.0:  # still a candidate for the full refit (refine_effect), never as fitted here
+                screened.append((fit.heldout, fit))
             narrow = trimmed(law, worse)
             if narrow is not None:  # the same law on the channels it helps only
                 nf = fit_effect(prob, narrow, fit.variable, v, n_pressures, warm=control.standard,
@@ -786,11 +789,11 @@ def choose_effect(
                 if nf.n_params > 0 and _beats(nf, control_for(refit_channels_of(narrow))):
                     queue.append((nf, v, narrow))
             continue
-        if fit.heldout <= MAX_RESIDUAL_VS_CONTROL:
+        if fit.heldout < 1.0:  # better than the control: refined (refine_effect), where it must beat it by 10 %
             scored.append((fit.heldout, fit))
-    if not scored:
+    if not scored and not screened:
         return None, all_fits
-    return _parsimonious(scored)[1], all_fits
+    return _parsimonious(scored or screened)[1], all_fits
 
 
 def _parsimonious(scored: Sequence[tuple]) -> tuple:
