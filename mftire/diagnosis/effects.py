@@ -186,6 +186,13 @@ class EffectFit:
 
 def _tyre_with(tyre: Tyre, standard: Mapping[str, float], section: Mapping[str, object]) -> Tyre:
     params = tyre.parameters.copy()
+    for k in tyre.flat:  # numpy scalars of a model built in code are written as plain numbers
+        try:
+            v = params[k]
+        except (KeyError, TypeError):
+            continue
+        if isinstance(v, np.floating) and k not in standard:
+            params.set(k, float(v))
     for k, v in standard.items():
         params.set(k, float(v))
     for k, v in section.items():
