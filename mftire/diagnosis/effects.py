@@ -971,18 +971,19 @@ CHANNEL_COEFFICIENTS: dict[str, frozenset[str]] = {
 
 
 def refit_channels_of(law: Law) -> tuple[str, ...] | None:
-    """The channels whose main coefficients are refitted with ``law``: those its targets act on; None (every
-    channel) for the control and the pressure law.  The aligning moment reads the forces (Pacejka 2012 eqs
-    4.E71-4.E78), so a force law moves Mz too, but Mz's own coefficients stay as given unless a target acts
-    on Mz: refitting them for a law that does not help Mz only adds their scatter to Mz."""
+    """The channels whose main coefficients are refitted with ``law``: those it acts on, and Mz with a force
+    (the aligning moment reads the forces, Pacejka 2012 eqs 4.E71-4.E78); None (every channel) for the control
+    and the pressure law."""
     chans = set(ch for t in law.targets for ch in TARGET_CHANNELS.get(t, ()) if ch in FIT_CHANNELS)
     if not chans:
         return None
+    if chans & {"Fx", "Fy"}:
+        chans.add("Mz")
     return tuple(ch for ch in FIT_CHANNELS if ch in chans)
 
 
 def law_channels(fit: EffectFit) -> tuple[str, ...]:
-    """The channels whose coefficients a law's model changes: those its targets act on
+    """The channels whose coefficients a law's model changes: those its targets act on, and Mz with a force
     (:func:`refit_channels_of`); empty for the pressure law (the standard pressure terms of every channel)."""
     chans = refit_channels_of(Law(fit.name, fit.targets, "")) if fit.targets else None
     return chans or ()
