@@ -37,7 +37,7 @@ kernel = Extension(
 
 class BuildKernel(build_ext):
     """The kernel is a plain shared library (no PyInit): a file name that is not a module's
-    (build.LIBRARY_SUFFIX instead of the interpreter's extension suffix), so that nothing
+    (build.LIBRARY instead of the interpreter's extension suffix), so that nothing
     tries to import it.  It is built with the vectorised lane loops (build.SIMD_CFLAGS,
     build.SIMD_LIBRARIES) where the compiler and C library support them, else without."""
 

@@ -24,8 +24,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 TIR = ROOT / "tests/data/tir/mfeval/MagicFormula61_Paramerters.tir"
 TARGET_S = 0.3
-EAGER = ("import mftire.cli, mftire.tyre, mftire.fitting.core, mftire.fe.sweeps, mftire.fmu.export, "
-         "mftire.compare.core, mftire.iotools.rig, mftire.iotools.tables; mftire.cli.build_parser()")
+EAGER = ("import mftire.cli, mftire.tyre, mftire.fitting.fitter, mftire.fe.slip_sweeps, mftire.fmu.export, "
+         "mftire.compare.comparison, mftire.iotools.rig, mftire.iotools.loaders; mftire.cli.build_parser()")
 
 
 def _env() -> dict[str, str]:

@@ -22,7 +22,7 @@ import time
 import numpy as np
 
 from mftire.fe.config import load_tyre
-from mftire.fe.sweeps import KMH, campaign, sweep
+from mftire.fe.slip_sweeps import KMH, campaign, sweep
 from mftire.parallel import Executor
 
 TARGET_SWEEP_S = 2.0

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from mftire.fitting import fit_tir
-from mftire.fitting.report import channel_summary, compute_metrics
+from mftire.fitting.fit_report import channel_summary, compute_metrics
 from mftire.fitting.stages import FITTED_KEYS
 from mftire.fitting.synthetic import synthetic_sweeps
 from mftire.iotools.tir import read_tir

@@ -26,7 +26,8 @@ import numpy as np
 import pandas as pd
 
 import mftire
-from mftire.iotools.rig import import_rig, read_ttc, segment, write_ttc
+from mftire.iotools.rig import read_ttc, write_ttc
+from mftire.segmentation.rig_segments import import_rig, segment
 
 ROOT = Path(__file__).resolve().parent.parent
 TARGET_S = 20.0

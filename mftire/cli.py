@@ -28,8 +28,8 @@ EVALUATE_OPTIONAL = ("phit", "Vx", "P", "omega")
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     import pandas as pd
 
+    from mftire.iotools.loaders import read_numeric_csv
     from mftire.iotools.output import OutputPlan
-    from mftire.iotools.tables import read_numeric_csv
     from mftire.tyre import Tyre
 
     OutputPlan([args.tir, args.input], args.force).file(args.output, stdout=True)
@@ -69,6 +69,22 @@ def _cmd_convert(args: argparse.Namespace) -> int:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
+    if args.fmu:
+        from mftire.fmu.build import find_compiler
+        from mftire.fmu.portable import build_info
+
+        try:
+            cc = " ".join(find_compiler())
+        except MftireError as exc:
+            cc = f"none ({exc})"
+        print("FMU export on this machine (mftire export-fmu):")
+        for key, value in build_info(cc).items():
+            print(f"  {key + ':':16} {value}")
+        if args.tir is None:
+            return 0
+        print()
+    elif args.tir is None:
+        raise MftireError("mftire info: give a .tir file (or --fmu)")
     from mftire.iotools.tir import read_tir
     from mftire.iotools.tir_checks import check_parameters
     from mftire.tyre import Tyre
@@ -149,7 +165,9 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from mftire.parallel import Executor
 
     OutputPlan((), args.force).folder(args.output, OUTPUT_NAMES)
-    run_demo(args.output, quick=args.quick, progress=True, executor=Executor.from_args(args))
+    from mftire.cli_options import progress_of
+
+    run_demo(args.output, quick=args.quick, progress=progress_of(args), executor=Executor.from_args(args))
     return 0
 
 
@@ -160,7 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
         __version__ = version("mftire")
     except PackageNotFoundError:  # a source tree that is not installed
         __version__ = "unknown"
-    from mftire.iotools.output import add_force_option
+    from mftire.cli_options import add_force_option
 
     parser = argparse.ArgumentParser(
         prog="mftire", description=__doc__.splitlines()[0],
@@ -193,9 +211,11 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Print the size, loads, ranges and sections of a .tir, the keys that take "
                        "default values and every failed sanity check. Exit code 0, or 1 with --strict when a "
                        "check warns, 2 when the file is broken.")  # fmt: skip
-    p.add_argument("tir", metavar="TIR", help="the .tir property file")
+    p.add_argument("tir", metavar="TIR", nargs="?", help="the .tir property file")
     p.add_argument("--strict", action="store_true", help="reading warnings (blank/non-numeric values) are errors; "
                    "exit 1 on check warnings too (for CI)")
+    p.add_argument("--fmu", action="store_true", help="also say what export-fmu builds here: compiler, glibc "
+                   "floor of the Linux binary, whether a Windows DLL is shipped (MinGW-w64 present)")  # fmt: skip
     p.set_defaults(func=_cmd_info)
 
     p = sub.add_parser("plot", help="draw the standard curves at 0.5, 1 and 1.5 x FNOMIN",
@@ -215,10 +235,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--output", default="demo_out", help="output directory (default demo_out)")
     p.add_argument("--quick", action="store_true", help="reduced grids (a test run)")
-    from mftire.parallel import add_parallel_options
+    from mftire.cli_options import add_parallel_options
 
     add_parallel_options(p, "the FE campaign chunks and the bootstrap refits")
     add_force_option(p)
+    from mftire.cli_options import add_quiet_option
+
+    add_quiet_option(p)
     p.set_defaults(func=_cmd_demo)
 
     from mftire.fe import cli as fe_cli
@@ -236,9 +259,9 @@ def build_parser() -> argparse.ArgumentParser:
     from mftire.compare import cli as compare_cli
 
     compare_cli.add_parser(sub)
-    from mftire.iotools import rig_cli
+    from mftire.segmentation import cli as import_cli
 
-    rig_cli.add_parser(sub)
+    import_cli.add_parser(sub)
     return parser
 
 

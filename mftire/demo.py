@@ -30,24 +30,14 @@ import pandas as pd
 from mftire.iotools.atomic import atomic_path
 from mftire.iotools.tir import write_tir
 from mftire.parallel import Executor
-
-
-class _Steps:
-    def __init__(self, total: int, enabled: bool) -> None:
-        self.total, self.enabled, self.i, self.t0 = total, enabled, 0, time.perf_counter()
-
-    def __call__(self, msg: str) -> None:
-        self.i += 1
-        if self.enabled:
-            print(f"[{self.i}/{self.total} {time.perf_counter() - self.t0:5.1f} s] {msg}", flush=True)
-
+from mftire.progress import Progress
 
 #: Files and folders the demo writes into its output folder.
 OUTPUT_NAMES = ("fe_sweeps.csv", "measured_sweeps.csv", "fitted.tir", "extended.tir", "tyre.fmu", "report.html",
                 "report.json", "headline.png", "rig_sweeps.csv", "rig_fitted.tir", "rig_run.png")
 
 
-def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progress: bool = True,
+def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progress: bool | None = None,
              executor: Executor | None = None) -> dict:
     """Run the demo; returns a summary dict (also in ``output/report.json``).
 
@@ -86,21 +76,21 @@ def _diagnose_task(args: tuple) -> Any:
         return diagnose(data, tyre, progress=False, n_perm=n_perm)
 
 
-def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: Executor) -> dict:
-    from mftire.compare.core import compare
+def _run_demo(output: str | os.PathLike, quick: bool, progress: bool | None, executor: Executor) -> dict:
+    from mftire.compare.comparison import compare
     from mftire.diagnosis.report import write_report
     from mftire.fe.config import load_tyre
     from mftire.fe.programmes import programme
-    from mftire.fe.sweeps import campaign
+    from mftire.fe.slip_sweeps import campaign
     from mftire.fe.template import mf_template
     from mftire.fitting.bands import coverage_table, start_bootstrap_bands
-    from mftire.fitting.core import fit_tir
+    from mftire.fitting.fitter import fit_tir
     from mftire.report_html import HtmlReport
     from mftire.tyre import Tyre
 
     out = os.fspath(output)
     os.makedirs(out, exist_ok=True)
-    step = _Steps(9, progress)
+    step = Progress("mftire demo", progress, total=9).step
 
     step("FE-surrogate campaign of the default tyre" + (" (quick grid)" if quick else ""))
     fe_tyre = load_tyre(None)
@@ -128,7 +118,7 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
     # fit) queue behind it: as many busy processes as workers, the diagnosis (which the rest waits for) first
     diag_pending = executor.start_map(_diagnose_task, [(meas, fitted, 49 if quick else 99)])
     bands_pending = start_bootstrap_bands(None, template, n=4 if quick else 12, fit=fit, stages="1,2,3", seed=0,
-                                          executor=executor)  # fmt: skip
+                                          executor=executor, progress=False)  # fmt: skip
 
     step("diagnosis of the measured residual")
     diag = diag_pending.result()[0]
@@ -225,7 +215,7 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool, executor: 
                               "rig_diagnosis": "rig_diagnosis/diagnosis.md"})  # fmt: skip
     html, js = rep.write(os.path.join(out, "report.html"), os.path.join(out, "report.json"))
     _headline(comp, diag, os.path.join(out, "headline.png"))
-    if progress:
+    if progress is not False:
         print(f"done: {html}\n      {js}", flush=True)
     return summary
 
@@ -255,8 +245,8 @@ class RigStage:
     """What :func:`rig_stage` produced."""
 
     summary: dict
-    import_report: Any  #: :class:`mftire.iotools.rig.RigReport` of the whole file
-    fit: Any  #: :class:`mftire.fitting.core.FitResult` of the rig sweeps
+    import_report: Any  #: :class:`mftire.segmentation.rig_segments.RigReport` of the whole file
+    fit: Any  #: :class:`mftire.fitting.fitter.FitResult` of the rig sweeps
     diagnosis: Any  #: :class:`mftire.diagnosis.diagnose.DiagnosisResult`
     diagnosis_doc: dict
 
@@ -280,17 +270,19 @@ def rig_stage(output: str | os.PathLike, quick: bool = False, pair_step: int | N
     from mftire.data import default_tir, rig_run
     from mftire.diagnosis.diagnose import diagnose
     from mftire.diagnosis.report import write_report
-    from mftire.fitting.core import fit_tir
-    from mftire.iotools.rig import read_ttc, segment, write_sweeps
+    from mftire.fitting.fitter import fit_tir
+    from mftire.iotools.rig import read_ttc, write_sweeps
     from mftire.iotools.tir import read_tir
     from mftire.plotting import subplots
+    from mftire.segmentation.rig_segments import segment
     from mftire.tyre import Tyre
 
     out = os.fspath(output)
     t0 = time.perf_counter()
     path = rig_run()
     raw = read_ttc(path)
-    table, imp = segment(raw, points_per_sweep=RIG_POINTS_PER_SWEEP, name=os.path.basename(path))
+    table, imp = segment(raw, points_per_sweep=RIG_POINTS_PER_SWEEP, name=os.path.basename(path), keep_dropped=False)
+    table = table.drop(columns=["fit_row", "drop_reason"])  # sweep rows only: the demo's tables as before
     step = pair_step or RIG_PAIR_STEP[1 if quick else 0]
     sweeps = table[(table["sweep_id"] // 2) % step == 0].reset_index(drop=True).assign(source="rig")
     write_sweeps(sweeps, os.path.join(out, "rig_sweeps.csv"))

@@ -68,7 +68,7 @@ def _largest(x, absolute: bool) -> float:
 def check_keywords(given: Mapping[str, Any], required: Sequence[str]) -> None:
     """Extra keyword arguments must be variables the tyre's extensions need; else a
     :class:`TypeError` with the likely intended name."""
-    from mftire.iotools.sweeps import _ALIASES  # common names of the schema quantities (one table)
+    from mftire.iotools.sweeps import COLUMN_ALIASES  # common names of the schema quantities (one table)
 
     extra = [k for k in given if k not in required]
     if not extra:
@@ -76,7 +76,7 @@ def check_keywords(given: Mapping[str, Any], required: Sequence[str]) -> None:
     name = extra[0]
     known = [*EVALUATE_ARGUMENTS, *required]
     low = name.lower()
-    guess = next((q for q, names in _ALIASES.items() if low in names and q in known), None)
+    guess = next((q for q, names in COLUMN_ALIASES.items() if low in names and q in known), None)
     guess = guess or next((k for k in known if k.lower() == low), None)
     if guess is None:
         close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)

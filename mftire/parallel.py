@@ -1,8 +1,8 @@
 """One executor for embarrassingly parallel work: local processes, or a Dask cluster.
 
 Used for the bootstrap refits of the prediction bands (:func:`mftire.fitting.bands.bootstrap_bands`),
-the chunks of an FE campaign (:func:`mftire.fe.sweeps.run_sweeps`), the figures of a comparison
-(:meth:`mftire.compare.core.Comparison.plots`) and ``mftire demo``.
+the chunks of an FE campaign (:func:`mftire.fe.slip_sweeps.run_sweeps`), the figures of a comparison
+(:meth:`mftire.compare.comparison.Comparison.plots`) and ``mftire demo``.
 
 * ``Executor(jobs=1)`` runs every task in this process, one after another (the library default).
 * ``Executor(jobs=N)`` runs them in ``N`` local worker processes
@@ -35,7 +35,7 @@ from typing import Any, Generic, TypeVar
 
 from mftire.errors import MftireInputError
 
-__all__ = ["Executor", "Pending", "available_cores", "add_parallel_options"]
+__all__ = ["Executor", "Pending", "available_cores"]
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -152,7 +152,7 @@ class Executor:
 
     @classmethod
     def from_args(cls, args: Any) -> Executor:
-        """From the ``--jobs``/``--scheduler`` options of :func:`add_parallel_options`."""
+        """From the ``--jobs``/``--scheduler`` options of :func:`mftire.cli_options.add_parallel_options`."""
         return cls(jobs=getattr(args, "jobs", None), scheduler=getattr(args, "scheduler", None))
 
 
@@ -216,13 +216,3 @@ def _dask_client(address: str) -> Any:
 def _dask_imap(address: str, fn: Callable[[T], R], items: list[T]) -> Iterator[R]:
     with _dask_client(address) as client:
         yield from _collect(_submit_all(client, fn, items))
-
-
-def add_parallel_options(parser: Any, what: str) -> None:
-    """Add ``--jobs N`` and ``--scheduler ADDRESS`` to an argparse parser (``what`` runs in parallel)."""
-    parser.add_argument("--jobs", type=int, default=0, metavar="N",
-                        help=f"local worker processes for {what} (default 0: all cores; 1: no pool); "
-                        "the result does not depend on it")  # fmt: skip
-    parser.add_argument("--scheduler", metavar="ADDRESS",
-                        help=f"run {what} on a Dask distributed cluster at ADDRESS (e.g. tcp://host:8786; "
-                        "needs pip install 'mftire[dask]' here and on the workers)")  # fmt: skip

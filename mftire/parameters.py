@@ -472,12 +472,6 @@ assert all(p.unit in UNIT_DIMENSIONS or p.unit == _S for p in PARAMETERS)
 assert all(p.section in STANDARD_SECTIONS for p in PARAMETERS)
 
 
-def is_numeric_key(key: str) -> bool:
-    """Return True if ``key`` is a standard key whose value must be a number."""
-    p = BY_KEY.get(key.upper())
-    return p is not None and p.unit != _S
-
-
 def defaults() -> dict[str, float]:
     """Return ``{KEY: default}`` for every numeric standard key (MFeval 4.0's defaults).
 

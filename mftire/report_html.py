@@ -92,11 +92,6 @@ class HtmlReport:
             self._parts.append(f"<p{cls}>{html.escape(para).replace(chr(10), '<br>')}</p>")
         return self
 
-    def add_html(self, fragment: str) -> HtmlReport:
-        """Raw HTML (trusted input only)."""
-        self._parts.append(fragment)
-        return self
-
     def add_numbers(self, key: str, values: Mapping[str, Any], show: bool = True) -> HtmlReport:
         """Named numbers (headline figures): a two-column table in the page and ``numbers[key]`` in JSON."""
         self.numbers[key] = dict(values)

@@ -14,11 +14,11 @@ from hypothesis import strategies as st
 
 from mftire.cli import main
 from mftire.fitting.bands import band_coverage, bootstrap_bands, coverage_table, resample_sweeps
-from mftire.fitting.core import fit_tir
+from mftire.fitting.fitter import fit_tir
 from mftire.fitting.synthetic import synthetic_sweeps
-from mftire.iotools.sweeps import group_sweeps
 from mftire.iotools.tir import read_tir
 from mftire.parameters import with_defaults
+from mftire.segmentation.grouping import group_sweeps
 
 TIR = REFERENCE_TYRES["MF61"]
 NOISE = 0.02  # of each channel's peak

@@ -118,7 +118,7 @@ def test_write_and_cli(tmp_path, self_comparison):
 
     # CLI with measured data and FE-surrogate sweeps
     from mftire.fe.config import load_tyre
-    from mftire.fe.sweeps import sweep
+    from mftire.fe.slip_sweeps import sweep
 
     fe_tyre = load_tyre(None)
     fe = pd.concat([sweep(fe_tyre, k, [4000.0], [16.7], [fe_tyre.size.nominal_pressure], n_kappa=8, n_alpha=9,

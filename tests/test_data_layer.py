@@ -1,14 +1,14 @@
 """The data layer lives in iotools, once: unit table, column aliases, table loaders, resources.
 
 Static checks read the package source with :mod:`ast`; behaviour checks use small
-tables.  What "once" means here:
+loaders.  What "once" means here:
 
 * unit names with SI factors are defined only in :mod:`mftire.iotools.units`; the
   ``.tir`` reader, the sweep conversions, TYDEX and the column checks use that table;
 * the column aliases (other names of schema columns) are defined only in
   :mod:`mftire.iotools.sweeps`; the fitter's column check derives from them, and the
   TYDEX channel keys are among them;
-* the shared loaders are in :mod:`mftire.iotools.tables`; ``cli.py`` defines no reader
+* the shared loaders are in :mod:`mftire.iotools.loaders`; ``cli.py`` defines no reader
   and holds no resource path (the default ``.tir`` is :func:`mftire.data.default_tir`);
 * the columns that are never model variables are one set for comparison and diagnosis.
 """
@@ -28,7 +28,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mftire.errors import MftireInputError
-from mftire.iotools import columns, sweeps, tables, tir, tydex, units
+from mftire.iotools import columns, loaders, sweeps, tir, tydex, units
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "mftire"
@@ -67,7 +67,7 @@ def test_unit_names_are_defined_in_one_module():
 
 
 def test_readers_take_their_units_from_iotools_units():
-    for module in (tir, sweeps, tydex, tables):
+    for module in (tir, sweeps, tydex, loaders):
         tree = ast.parse(Path(module.__file__).read_text(encoding="utf-8"))
         froms = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
         assert "mftire.iotools.units" in froms, module.__name__
@@ -123,21 +123,21 @@ def test_column_aliases_are_defined_once():
                 where.add(path)
     assert where == {"mftire/iotools/sweeps.py"}
     # the fitter's column check is derived from them, and every TYDEX key of a schema column is an alias
-    assert {a for a, _ in tables._OTHER_NAMES.items()} == {a for al in sweeps._ALIASES.values() for a in al}
+    assert {a for a, _ in loaders._OTHER_NAMES.items()} == {a for al in sweeps.COLUMN_ALIASES.values() for a in al}
     for col, keys in tydex.TYDEX_CHANNELS.items():
-        if col in sweeps._ALIASES:
-            assert all(k.lower() in sweeps._ALIASES[col] or k.lower() == col.lower() for k in keys), col
+        if col in sweeps.COLUMN_ALIASES:
+            assert all(k.lower() in sweeps.COLUMN_ALIASES[col] or k.lower() == col.lower() for k in keys), col
 
 
 def test_check_columns_names_aliases_and_unit_suffixes():
     ok = pd.DataFrame(columns=["Fz", "Fz_set", "Fx_1", "residual_Fx", "tread_temp", "time"])
-    tables.check_columns(ok)  # labels and numbered copies are not mistaken for schema columns
+    loaders.check_columns(ok)  # labels and numbered copies are not mistaken for schema columns
     for col, text in (("alfa", "looks like alpha"), ("SA", "looks like alpha in 'deg'"),
                       ("Vx_kmh", "looks like Vx in 'km/h'"), ("Vx_mph", "looks like Vx in 'mph'"),
                       ("Fz [kN]", "looks like Fz in 'kN'"),
                       ("P_psi", "looks like P in 'psi'"), ("Mz_Nm", "looks like Mz in 'Nm'")):
         with pytest.raises(MftireInputError, match=text):
-            tables.check_columns(pd.DataFrame(columns=["Fz", col]))
+            loaders.check_columns(pd.DataFrame(columns=["Fz", col]))
 
 
 def test_cli_holds_no_reader_and_no_resource_path():
@@ -163,11 +163,11 @@ def test_read_numeric_csv_names_file_column_and_row(tmp_path):
     f = tmp_path / "in.csv"
     f.write_text("Fz,kappa,alpha,gamma\n4000,0,0,0\n4000,abc,0,0\n")
     with pytest.raises(MftireInputError, match=r"in.csv: column 'kappa', row 2 \(line 3\): 'abc'"):
-        tables.read_numeric_csv(str(f), ("Fz", "kappa", "alpha", "gamma"))
+        loaders.read_numeric_csv(str(f), ("Fz", "kappa", "alpha", "gamma"))
     f.write_text("Fz,kappa\n4000,0.1\n")
     with pytest.raises(MftireInputError, match="missing column.*alpha"):
-        tables.read_numeric_csv(str(f), ("Fz", "kappa", "alpha"))
-    df = tables.read_numeric_csv(str(f), ("Fz", "kappa"))
+        loaders.read_numeric_csv(str(f), ("Fz", "kappa", "alpha"))
+    df = loaders.read_numeric_csv(str(f), ("Fz", "kappa"))
     assert df["kappa"].dtype == np.float64 and df["Fz"].iloc[0] == 4000.0
 
 
@@ -179,6 +179,8 @@ def test_non_variable_columns_are_one_set():
     g = pd.DataFrame({"Fz": [1.0], "Fz_set": [1.0], "curve_id": [0], "omega": [3.0], "tread_temp": [40.0],
                       "meas_no": [1], "source": ["a"]})
     assert compare_data._extra_variables(g) == ["tread_temp"]
-    assert set(sweeps.group_sweeps(pd.DataFrame(
+    from mftire.segmentation.grouping import group_sweeps
+
+    assert set(group_sweeps(pd.DataFrame(
         {"Fz": [4e3] * 5, "kappa": np.linspace(0, 0.1, 5), "alpha": 0.0, "gamma": 0.0, "Vx": 10.0, "P": 2e5}
     )).columns) - {"Fz", "kappa", "alpha", "gamma", "Vx", "P"} == set(columns.GROUPING_COLUMNS)

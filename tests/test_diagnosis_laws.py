@@ -14,9 +14,8 @@ import pytest
 from test_diagnosis import TYRE, _campaign, _measure, _refit, _term
 
 from mftire.diagnosis.candidates import candidates, is_identifier, numbers_things, with_sweeps
-from mftire.diagnosis.diagnose import diagnose, fit_rows
+from mftire.diagnosis.diagnose import diagnose, split_fit_rows
 from mftire.diagnosis.effects import CONTROL, EffectFit, Law, trimmed, worse_channels
-from mftire.errors import MftireInputError
 
 
 @pytest.fixture(scope="module")
@@ -132,13 +131,13 @@ def test_flagged_rows_feed_the_accumulators_only(base_df):
     warm = _measure(_warm_up(), None)
     raw = pd.concat([warm.assign(fit_row=False), d.assign(fit_row=True)], ignore_index=True)
     raw["time"] = np.arange(len(raw)) * 0.5
-    rows, full = fit_rows(raw)
+    rows, full = split_fit_rows(raw)
     assert full is not None and len(rows) == len(d) and len(full) == len(raw)
     assert "fit_row" not in rows.columns
     res = diagnose(raw, _refit(d), progress=False)
     assert not res.significant and res.extended is None
     assert len(res.data) == len(d)
-    # without the column every row is a fit row; a column that is not True/False is an error
-    assert fit_rows(d)[1] is None
-    with pytest.raises(MftireInputError, match="fit_row"):
-        fit_rows(raw.assign(fit_row=np.where(raw.fit_row, 1.0, np.nan)))
+    # without the column every row is a fit row; the flag read back from CSV as text is understood
+    assert split_fit_rows(d)[1] is None
+    rows2, full2 = split_fit_rows(raw.assign(fit_row=raw.fit_row.map({True: "True", False: "False"})))
+    assert len(rows2) == len(d) and len(full2) == len(raw)

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from mftire.cli import main
-from mftire.fe.sweeps import FREE_ROLLING_COLUMNS, SWEEP_COLUMNS
+from mftire.fe.slip_sweeps import FREE_ROLLING_COLUMNS, SWEEP_COLUMNS
 
 
 @pytest.fixture(scope="module")

@@ -9,8 +9,8 @@ import pytest
 from mftire.errors import MftireInputError
 from mftire.fe.config import load_tyre
 from mftire.fe.friction import h_from_mu_lock, mu_m_of_speed, mu_v_of_kappa
-from mftire.fe.identify import identify_velocity_law
-from mftire.fe.sweeps import KMH, sweep
+from mftire.fe.friction_identify import identify_velocity_law
+from mftire.fe.slip_sweeps import KMH, sweep
 
 SPEEDS = np.array([20.0, 40.0, 60.0, 80.0, 100.0]) * KMH
 

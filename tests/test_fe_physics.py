@@ -11,8 +11,8 @@ import pandas as pd
 import pytest
 
 from mftire.fe.config import load_tyre
-from mftire.fe.solver import solve
-from mftire.fe.sweeps import KMH, free_rolling, sweep
+from mftire.fe.rolling_contact import solve
+from mftire.fe.slip_sweeps import KMH, free_rolling, sweep
 
 TYRE = load_tyre("default")
 LI = TYRE.load_index_load

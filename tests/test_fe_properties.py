@@ -7,8 +7,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mftire.fe.config import TyreConfig
-from mftire.fe.solver import solve
-from mftire.fe.sweeps import free_rolling
+from mftire.fe.rolling_contact import solve
+from mftire.fe.slip_sweeps import free_rolling
 
 BASE = TyreConfig()
 LI = BASE.load_index_load

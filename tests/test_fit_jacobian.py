@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 from conftest import REFERENCE_TYRES
 
-from mftire.fitting import core, fit_tir
+from mftire.fitting import fit_tir, fitter
 from mftire.fitting.model import Inputs, fitting_mode, predict
 from mftire.fitting.stages import FITTED_KEYS, STAGES
 from mftire.fitting.synthetic import synthetic_sweeps
-from mftire.iotools.sweeps import group_sweeps
 from mftire.iotools.tir import read_tir
 from mftire.mf.extensions import ExtensionSet
 from mftire.parameters import with_defaults
+from mftire.segmentation.grouping import group_sweeps
 
 
 @pytest.fixture(scope="module")
@@ -36,17 +36,17 @@ def case():
     return data, template
 
 
-GROUPS = [(s, ch, g) for s in STAGES for ch, g in zip(core._stage_channels(s), s.groups, strict=True)]
+GROUPS = [(s, ch, g) for s in STAGES for ch, g in zip(fitter._stage_channels(s), s.groups, strict=True)]
 
 
 @pytest.mark.parametrize("stage,channel,coeffs", GROUPS, ids=[f"{s.number}-{ch}" for s, ch, _ in GROUPS])
 def test_jacobian_matches_finite_differences(case, stage, channel, coeffs):
     data, template = case
-    table = core._classify_rows(group_sweeps(data))
+    table = fitter._classify_rows(group_sweeps(data))
     rows = table[table["kind"].isin(stage.kinds)] if stage.kinds else table
     p = with_defaults(template)
     keys = [c.key for c in coeffs]
-    ev = core._Evaluator(channel, p, Inputs.from_frame(rows), fitting_mode(), ExtensionSet(()), keys)
+    ev = fitter._Evaluator(channel, p, Inputs.from_frame(rows), fitting_mode(), ExtensionSet(()), keys)
     value, jac = ev.jacobian(p, keys)
     np.testing.assert_allclose(value, ev(p), rtol=1e-14, atol=1e-9)
     for j, (key, c) in enumerate(zip(keys, coeffs, strict=True)):
@@ -61,16 +61,17 @@ def test_jacobian_matches_finite_differences(case, stage, channel, coeffs):
 
 def test_residual_jacobian_with_free_rolling_penalty(case):
     data, template = case
-    table = core._classify_rows(group_sweeps(data))
+    table = fitter._classify_rows(group_sweeps(data))
     rows = table[table["kind"].isin(STAGES[0].kinds)]
     p = with_defaults(template)
     keys = [c.key for c in STAGES[0].coefficients]
     mode, ext = fitting_mode(), ExtensionSet(())
-    free = core._Evaluator("Fx", p, core._condition_inputs(core._free_rolling_targets(rows), ext), mode, ext, keys)
+    free = fitter._Evaluator("Fx", p, fitter._condition_inputs(fitter._free_rolling_targets(rows), ext), mode, ext,
+                             keys)
     fx = free(p)
     margin = -np.median(fx) * np.ones_like(fx)  # about half of the conditions active
-    prob = core._Problem(core._Evaluator("Fx", p, Inputs.from_frame(rows), mode, ext, keys),
-                         rows["Fx"].to_numpy(float), np.full(len(rows), 0.01), core._Penalty(free, 3.0, margin))
+    prob = fitter._Problem(fitter._Evaluator("Fx", p, Inputs.from_frame(rows), mode, ext, keys),
+                         rows["Fx"].to_numpy(float), np.full(len(rows), 0.01), fitter._Penalty(free, 3.0, margin))
     assert prob.exact
     jac = prob.jacobian(p, keys)
     pen = jac[len(rows):]

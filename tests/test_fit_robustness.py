@@ -12,9 +12,9 @@ from conftest import REFERENCE_TYRES
 
 from mftire.errors import MftireInputError
 from mftire.fitting import fit_tir
-from mftire.fitting.data import check_columns, noise_std, parse_weights, row_weights
 from mftire.fitting.model import Inputs, fitting_mode, predict_fx
 from mftire.fitting.synthetic import synthetic_sweeps
+from mftire.fitting.weights import check_columns, noise_std, parse_weights, row_weights
 from mftire.iotools.tir import read_tir
 from mftire.parameters import with_defaults
 

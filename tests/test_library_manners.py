@@ -49,8 +49,8 @@ _SCRIPT = textwrap.dedent(
     from mftire.curves import standard_curves
     from mftire.diagnosis.diagnose import diagnose
     from mftire.diagnosis.report import write_report as write_diagnosis
-    from mftire.fitting.core import fit_tir
-    from mftire.fitting.report import write_report as write_fit_report
+    from mftire.fitting.fitter import fit_tir
+    from mftire.fitting.fit_report import write_report as write_fit_report
     from mftire.fitting.synthetic import synthetic_sweeps
     from mftire.iotools.tir import read_tir
     from mftire.plotting import plot_standard_curves, subplots

@@ -11,9 +11,9 @@ from conftest import REFERENCE_TYRES
 from mftire.errors import MftireInputError
 from mftire.fe.config import load_tyre
 from mftire.fe.measured import Artefacts, measured_campaign
-from mftire.fe.sweeps import KMH, Condition, run_sweeps
+from mftire.fe.slip_sweeps import KMH, Condition, run_sweeps
 from mftire.fitting.bands import bootstrap_bands
-from mftire.fitting.core import fit_tir
+from mftire.fitting.fitter import fit_tir
 from mftire.fitting.synthetic import synthetic_sweeps
 from mftire.iotools.tir import read_tir
 from mftire.parallel import Executor, available_cores

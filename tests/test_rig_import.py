@@ -19,18 +19,17 @@ from hypothesis import strategies as st
 from mftire.cli import main
 from mftire.data import rig_run
 from mftire.errors import MftireInputError
-from mftire.fitting.data import load_sweep_files
+from mftire.fitting.weights import load_sweep_files
 from mftire.iotools.rig import (
     SAE_TO_ISO,
     TTC_CHANNELS,
-    import_rig,
     parse_map_options,
     read_column_map,
     read_ttc,
-    segment,
     to_iso,
     write_ttc,
 )
+from mftire.segmentation.rig_segments import import_rig, segment
 
 ROOT = Path(__file__).resolve().parent.parent
 RAW = Path(rig_run())  # the shipped simulated run (mftire/data, made by validation/make_rig_file.py)
@@ -286,6 +285,7 @@ def test_cli_error_is_one_line(tmp_path, capsys):
 
 def test_segmentation_of_the_shipped_run(imported, raw_rows):
     table, rep = imported
+    table = table[table["fit_row"]]  # the sweep rows (the others: see test_left_out_rows_are_kept_flagged)
     kept = [s for s in rep.segments if s["status"] == "kept"]
     assert len(kept) == 12  # 2 inclinations x 4 loads cornering + 4 loads braking
     assert rep.n_sweeps == 400 and rep.directions == {"increasing": 200, "decreasing": 200}
@@ -315,6 +315,37 @@ def test_segmentation_of_the_shipped_run(imported, raw_rows):
         slope = np.polyfit(g["row_first"], x, 1)[0]
         assert np.sign(slope) == g["sweep_dir"].iloc[0]
         assert g["direction"].iloc[0] == ("increasing" if slope > 0 else "decreasing")
+
+
+def test_left_out_rows_are_kept_flagged(imported, raw_rows, tmp_path):
+    """Issue 21: warm-up, load ramps ... stay in the table as fit_row False rows, in time order; a fit ignores them."""
+    from mftire.fitting.fitter import _as_table
+
+    table, rep = imported
+    sweeps_only, _ = segment(raw_rows, points_per_sweep=10, keep_dropped=False)
+    fit = table[table["fit_row"]].reset_index(drop=True)
+    pd.testing.assert_frame_equal(fit, sweeps_only)
+    left = table[~table["fit_row"]]
+    assert len(left) > 1000 and (left["sweep_id"] == -1).all() and (left["kind"] == "none").all()
+    assert (fit["drop_reason"] == "").all() and set(left["drop_reason"]) == set(rep.dropped)
+    warm = left[left["drop_reason"].str.startswith("warm-up")]
+    assert 0 < warm["ET"].min() < 10 and 60 < warm["ET"].max() < 70
+    assert warm["TSTC"].max() - warm["TSTC"].min() > 5  # the tread warms up: what the diagnosis looks for
+    ramps = left[left["drop_reason"].str.startswith("load ramp")]
+    assert ramps["Fz_set"].isna().all() and ramps["Fz"].between(0.1 * FNOMIN, 1.4 * FNOMIN).all()
+    # one time series: row ranges ascend and no raw row is in two points
+    first, last = table["row_first"].to_numpy(), table["row_last"].to_numpy()
+    assert np.all(first[1:] > last[:-1]) and np.all(last >= first)
+    # binned like the sweep points: about as many raw rows per point
+    assert (left["row_last"] - left["row_first"]).max() < 10
+    # through the CSV the fit reads: only the sweep rows are fitted
+    table.to_csv(tmp_path / "sweeps.csv", index=False)
+    data, _ = load_sweep_files([tmp_path / "sweeps.csv"])
+    assert len(data) == len(table) and data["fit_row"].dtype == bool
+    assert len(_as_table(data)[0]) == rep.n_points == len(fit)
+    every_row, _ = segment(raw_rows)  # no binning: every raw row with a finite input and a load, once
+    assert (every_row["row_first"] == every_row["row_last"]).all()
+    assert every_row["row_first"].is_monotonic_increasing and len(every_row) <= len(raw_rows)
 
 
 def test_extra_channels_kept_under_their_names(imported):
@@ -392,8 +423,8 @@ def test_import_fit_recovers_the_generating_tyre(tmp_path, gen):
     raw, true = gen.simulate(seed=5, g_drop=0.0)
     write_ttc(raw, tmp_path / "run.dat.gz", units="us")
     table, _ = import_rig(tmp_path / "run.dat.gz", points_per_sweep=10, output=tmp_path / "sweeps.csv")
-    held = np.isclose(table["Fz_set"], 0.7 * FNOMIN, rtol=0.05)
-    table[~held].to_csv(tmp_path / "train.csv", index=False)
+    held = np.isclose(table["Fz_set"], 0.7 * FNOMIN, rtol=0.05) & table["fit_row"]
+    table[~held].to_csv(tmp_path / "train.csv", index=False)  # with the left-out rows: the fit ignores them
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         fit = fit_tir(str(tmp_path / "train.csv"), _template(gen), progress=False)
@@ -418,7 +449,7 @@ def chain(tmp_path_factory, imported, gen):
     table, _ = imported
     table.to_csv(d / "sweeps.csv", index=False)
     data, _ = load_sweep_files([d / "sweeps.csv"])  # what mftire fit / diagnose read
-    held = np.isclose(data["Fz_set"], 0.7 * FNOMIN, rtol=0.05)
+    held = np.isclose(data["Fz_set"], 0.7 * FNOMIN, rtol=0.05) & data["fit_row"]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         fit = fit_tir(data[~held], _template(gen), progress=False)

@@ -12,17 +12,14 @@ from hypothesis import strategies as st
 
 from mftire.errors import MftireInputError
 from mftire.iotools.sweeps import (
-    cluster_1d,
     convert_from_si,
     convert_to_si,
-    group_sweeps,
     read_sweep_csv,
-    summarize_sweeps,
-    sweep_kind,
     to_schema,
     unit_factor,
     validate_sweeps,
 )
+from mftire.segmentation.grouping import cluster_1d, group_sweeps, summarize_sweeps, sweep_kind
 
 
 def _lateral(fz: float, n: int = 25, gamma: float = 0.0, **extra: float) -> pd.DataFrame:
@@ -345,3 +342,14 @@ def test_noisy_held_slip_does_not_split_sweeps():
     assert len(s) == 15
     assert (s["n"] == 300).all() and (s["kind"] == "pure_lateral").all()
     assert s["Fz_set"].tolist() == [2000.0, 4000.0, 6000.0] * 5
+
+
+def test_fit_rows_keeps_the_rows_a_fit_uses():
+    from mftire.iotools.sweeps import fit_rows
+
+    df = _lateral(4000.0, n=6)
+    assert fit_rows(df) is df  # no fit_row column: every row
+    flagged = df.assign(fit_row=[True, False, True, True, False, True])
+    assert list(fit_rows(flagged).index) == [0, 2, 3, 5]
+    as_text = df.assign(fit_row=["True", "False", "true", "1", "0", "False"])  # a column read back as text
+    assert list(fit_rows(as_text).index) == [0, 2, 3]

@@ -19,8 +19,9 @@ from conftest import DATA, TIR
 
 from mftire.cli import main
 from mftire.errors import MftireTirWarning
+from mftire.iotools.evaluator_keys import EVALUATOR_KEYS, evaluator_keys
 from mftire.iotools.tir import MalformedLineError, NonNumericValueError, TirError, TirWarning, read_tir
-from mftire.mf.usedkeys import evaluator_keys
+from mftire.mf import usedkeys
 from mftire.tyre import Tyre, load
 
 WILD = DATA / "tir_wild"
@@ -133,6 +134,14 @@ def test_evaluator_keys_come_from_the_code():
     keys = evaluator_keys()
     assert {"PKY1", "FNOMIN", "QSX14", "LMUV", "LGAY", "IP_NOM", "Q_RA1"} <= keys
     assert not {"MASS", "IXX", "TYRESIDE", "BELT_MASS", "FREQ_LONG"} & keys
+
+
+def test_evaluator_keys_data_module_is_current():
+    # the reader's table is data (iotools imports nothing above it); it must equal a fresh scan of the
+    # evaluator's look-ups, and the generated file must be what the generator writes today
+    scanned = usedkeys.scan_evaluator_keys()
+    assert EVALUATOR_KEYS == scanned, f"regenerate: python -m mftire.mf.usedkeys ({sorted(EVALUATOR_KEYS ^ scanned)})"
+    assert usedkeys.TARGET.read_text(encoding="utf-8") == usedkeys.module_text(scanned)
 
 
 # ------------------------------------------------------------------ the wild collection

@@ -13,8 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mftire.errors import MftireInputError
-from mftire.iotools.sweeps import group_sweeps, summarize_sweeps
 from mftire.iotools.tydex import parse_tydex, read_tydex, write_tydex
+from mftire.segmentation.grouping import group_sweeps, summarize_sweeps
 
 DATA = Path(__file__).parent / "data" / "tydex"
 LATERAL = DATA / "lateral_fz4kN_2p2bar.tdx"

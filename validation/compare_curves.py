@@ -25,9 +25,9 @@ import pandas as pd
 from mftire.compare import compare, prepare_comparison_data, write_comparison
 from mftire.data import default_tir
 from mftire.fe.config import load_tyre
-from mftire.fe.sweeps import campaign
+from mftire.fe.slip_sweeps import campaign
 from mftire.fitting.bands import bootstrap_bands, coverage_table
-from mftire.fitting.core import fit_tir
+from mftire.fitting.fitter import fit_tir
 from mftire.fitting.synthetic import synthetic_sweeps
 from mftire.iotools.tir import read_tir, write_tir
 from mftire.parameters import with_defaults

@@ -14,7 +14,7 @@ import warnings
 from pathlib import Path
 
 from mftire.fe.programmes import PROGRAMMES, programme
-from mftire.fitting.core import fit_tir
+from mftire.fitting.fitter import fit_tir
 from mftire.iotools.atomic import atomic_path
 from mftire.iotools.tir import write_tir
 

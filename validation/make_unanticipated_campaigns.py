@@ -61,10 +61,10 @@ from mftire.extensions import SECTION
 from mftire.fe.config import TyreConfig, load_tyre
 from mftire.fe.measured import _smooth_noise
 from mftire.fe.programmes import slip_speed_tyre
-from mftire.fe.solver import solve
-from mftire.fe.sweeps import SWEEP_COLUMNS, free_rolling
+from mftire.fe.rolling_contact import solve
+from mftire.fe.slip_sweeps import SWEEP_COLUMNS, free_rolling
 from mftire.fe.template import mf_template
-from mftire.fitting.core import fit_tir
+from mftire.fitting.fitter import fit_tir
 from mftire.iotools.atomic import atomic_path, write_text_atomic
 from mftire.iotools.tir import TirParameters, write_tir
 

@@ -5,7 +5,7 @@
 ``models``     model evaluation at the data's exact operating points and on grids
 ``tables``     RMS / peak errors per curve, stiffness vs load, trail vs α, free rolling
 ``plots``      one figure per family (+ stiffness, trail, free rolling), bands drawn
-``core``       :func:`compare`, :class:`Comparison`, :func:`write_comparison`
+``comparison`` :func:`compare`, :class:`Comparison`, :func:`write_comparison`
 ``cli``        ``mftire compare``
 =============  ====================================================================
 
@@ -19,8 +19,8 @@ from mftire._lazy import lazy_names
 
 # imported on first use (see mftire._lazy)
 __getattr__, __dir__ = lazy_names(
-    __name__, {"Comparison": "mftire.compare.core", "bands_frame": "mftire.compare.core",
-     "compare": "mftire.compare.core", "write_comparison": "mftire.compare.core",
+    __name__, {"Comparison": "mftire.compare.comparison", "bands_frame": "mftire.compare.comparison",
+     "compare": "mftire.compare.comparison", "write_comparison": "mftire.compare.comparison",
      "curve_grid": "mftire.compare.data", "load_comparison_data": "mftire.compare.data",
      "prepare_comparison_data": "mftire.compare.data", "evaluate_at": "mftire.compare.models",
      "load_models": "mftire.compare.models", "curve_errors": "mftire.compare.tables",

@@ -7,7 +7,7 @@ import os
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
-    from mftire.compare.core import compare, write_comparison
+    from mftire.compare.comparison import compare, write_comparison
     from mftire.compare.data import load_comparison_data
     from mftire.errors import MftireInputError
 
@@ -52,7 +52,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--alpha-window", type=float, default=2.5, metavar="DEG",
                    help="|alpha| window of the stiffness fits in degrees (default 2.5)")
     p.add_argument("--no-plots", action="store_true", help="tables only")
-    from mftire.iotools.output import add_force_option
+    from mftire.cli_options import add_force_option
 
     add_force_option(p)
     p.set_defaults(func=_cmd_compare)

@@ -3,7 +3,7 @@
 Every table here is a sweep table in the schema of :mod:`mftire.iotools.sweeps` (SI:
 Fz [N], kappa [-], alpha [rad], gamma [rad], Vx [m/s], P [Pa]; channels Fx, Fy [N], Mz,
 Mx, My [N·m]) with a ``source`` label per row, grouped by
-:func:`mftire.iotools.sweeps.group_sweeps` over *all* sources at once, so the same
+:func:`mftire.segmentation.grouping.group_sweeps` over *all* sources at once, so the same
 nominal load in an FE file and a rig file gets the same ``Fz_set``.
 
 On top of the sweep kinds of ``group_sweeps`` each swept curve gets a *family*:
@@ -32,8 +32,9 @@ import pandas as pd
 
 from mftire.errors import MftireInputError
 from mftire.iotools.columns import CURVE_COLUMNS, GROUPING_COLUMNS, NOT_VARIABLES
-from mftire.iotools.sweeps import group_sweeps, read_sweep_csv
-from mftire.iotools.tables import load_sweep_files, prepare_table
+from mftire.iotools.loaders import load_sweep_files, prepare_table
+from mftire.iotools.sweeps import fit_rows, read_sweep_csv
+from mftire.segmentation.grouping import group_sweeps
 
 __all__ = [
     "FAMILIES",
@@ -122,12 +123,12 @@ def prepare_comparison_data(table: pd.DataFrame) -> pd.DataFrame:
     Returns
     -------
     DataFrame
-        Copy with the :func:`~mftire.iotools.sweeps.group_sweeps` columns (``Fz_set``
+        Copy with the :func:`~mftire.segmentation.grouping.group_sweeps` columns (``Fz_set``
         [N], ``gamma_set`` [rad], ``P_set`` [Pa], ``Vx_set`` [m/s], ``sweep_id``,
         ``kind``, ``sweep_var``, ``kappa_set``, ``alpha_set``) and ``family``, ``var``
         (swept column), ``held`` (held slip, rounded), ``curve_id``.
     """
-    df = table.copy()
+    df = fit_rows(table).copy()  # rows kept for the diagnosis only (fit_row False) are not sweeps
     if "source" not in df.columns:
         df["source"] = "data"
     df["source"] = df["source"].astype(str)

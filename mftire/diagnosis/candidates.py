@@ -28,18 +28,16 @@ import numpy as np
 import pandas as pd
 
 from mftire.iotools.columns import NOT_VARIABLES
-from mftire.iotools.sweeps import group_sweeps
+from mftire.iotools.sweeps import FIT_ROW  # the importer's flag: rows the fit uses (False: warm-up, ramps)
 from mftire.mf.basic import slip_speed
 from mftire.mf.extensions import identifier_name
+from mftire.segmentation.grouping import group_sweeps
 
 #: Derived candidates, in a fixed order.
 DERIVED = ("Vs", "Vx", "P", "Fz_dev", "sign_alpha", "sign_kappa", "sweep_dir", "sequence", "energy")
 
 #: Columns that are never candidates: MF inputs and outputs and mftire's own labels.
 EXCLUDED = NOT_VARIABLES
-#: Boolean column of imported rig data: True for rows the fit uses, False for warm-up, load-ramp and
-#: dropped segments that are kept for the diagnosis (:mod:`mftire.iotools`).
-FIT_ROW = "fit_row"
 #: Names that look like time (used for the energy integral).
 TIME_NAMES = ("time", "t", "runtime", "time_s", "et", "elapsed_time")
 

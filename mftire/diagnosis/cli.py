@@ -10,15 +10,17 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     from mftire.diagnosis.diagnose import diagnose
     from mftire.diagnosis.holdout import parse_holdout
     from mftire.diagnosis.report import write_report
+    from mftire.iotools.loaders import load_sweep_files
     from mftire.iotools.output import OutputPlan
-    from mftire.iotools.tables import load_sweep_files
     from mftire.tyre import load
 
     OutputPlan([*args.data, args.tir], args.force).folder(args.output, REPORT_FILES)
     tyre = load(args.tir)
     data, _ = load_sweep_files(args.data)
     holdout = parse_holdout(args.holdout) if args.holdout else None
-    result = diagnose(data, tyre, holdout, n_perm=args.permutations, seed=args.seed)
+    from mftire.cli_options import progress_of
+
+    result = diagnose(data, tyre, holdout, n_perm=args.permutations, seed=args.seed, progress=progress_of(args))
     doc = write_report(result, args.output)
     print(doc["summary"])
     for ch, c in ((doc.get("holdout") or {}).get("channels") or {}).items():
@@ -44,8 +46,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--holdout", help="held-out condition, COLUMN=V1[,V2...] in SI (e.g. Vx=16.67); default automatic")
     p.add_argument("--permutations", type=int, default=99, help="permutations of the significance test (default 99)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the permutation test (default 0)")
-    from mftire.iotools.output import add_force_option
+    from mftire.cli_options import add_force_option
 
     add_force_option(p)
+    from mftire.cli_options import add_quiet_option
+
+    add_quiet_option(p)
     p.set_defaults(func=_cmd_diagnose)
     return p

@@ -32,14 +32,13 @@ importer's ``fit_row`` column, the accumulated candidates run through the flagge
 from __future__ import annotations
 
 import dataclasses
-import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
-from mftire.diagnosis.candidates import FIT_ROW, Candidate, candidates, time_column, with_sweeps
+from mftire.diagnosis.candidates import Candidate, candidates, time_column, with_sweeps
 from mftire.diagnosis.effects import (
     FIT_CHANNELS,
     HISTORY_CANDIDATES,
@@ -66,9 +65,10 @@ from mftire.diagnosis.ranking import (
     rank_candidates,
 )
 from mftire.errors import MftireInputError
-from mftire.fitting.data import noise_std
-from mftire.iotools.sweeps import MEASURED_COLUMNS
+from mftire.fitting.weights import noise_std
+from mftire.iotools.sweeps import FIT_ROW, MEASURED_COLUMNS, fit_rows
 from mftire.mf.extensions import BUILTIN_VARIABLES
+from mftire.progress import reporter
 from mftire.tyre import Tyre, TyreLike, as_tyre
 
 
@@ -118,11 +118,6 @@ class DiagnosisResult:
             return head + "; no extension reduced the residual"
         kind = "physical extension" if e.physical else "GENERIC correction (not physics)"
         return head + f"; {kind} '{e.name}' removes {100 * e.removed:.0f} % of the training residual"
-
-
-def _progress(msg: str, enabled: bool) -> None:
-    if enabled:
-        print(f"[diagnose] {msg}", file=sys.stderr, flush=True)
 
 
 def _model(tyre: Tyre, df: pd.DataFrame) -> dict[str, np.ndarray]:
@@ -312,19 +307,17 @@ def _profile_candidates(profiles: Profiles, ranking: list[CandidateScore], by_na
     return out
 
 
-def fit_rows(data: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame | None]:
+def split_fit_rows(data: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame | None]:
     """The grouped rows the fit uses, and all grouped rows when the data carry the importer's ``fit_row`` flag
     with some rows False (warm-up, load-ramp and dropped segments kept for the diagnosis), else None.
 
     The accumulated candidates (``energy``: the friction work, ``sequence``) are computed over all rows, in
     their order, because a thermal or test-order effect builds up most where the tyre is warmed up; the
-    residual ranking and the laws use the rows the fit uses.  Without the column every row is a fit row."""
+    residual ranking and the laws use the rows the fit uses (:func:`mftire.iotools.sweeps.fit_rows`: bool or
+    text).  Without the column every row is a fit row."""
     if FIT_ROW not in data.columns:
         return with_sweeps(data), None
-    flag = data[FIT_ROW]
-    if flag.isna().any() or not set(pd.unique(flag)) <= {True, False}:
-        raise MftireInputError(f"column '{FIT_ROW}' must be True/False (rows the fit uses), not {flag.dtype}")
-    flag = flag.astype(bool)
+    flag = pd.Series(data.index.isin(fit_rows(data).index), index=data.index)  # the importer's reading of it
     if flag.all():
         return with_sweeps(data.drop(columns=[FIT_ROW])), None
     if not flag.any():
@@ -422,9 +415,10 @@ def _diagnose(
     ranking_kwargs: Mapping | None,
 ) -> DiagnosisResult:
     tyre = as_tyre(tyre)
-    if progress is None:
-        progress = sys.stderr.isatty()
-    df, flagged = fit_rows(data.reset_index(drop=True))
+    say = reporter(progress, "mftire diagnose")
+    # the sweep rows; rows an importer kept outside the sweeps (fit_row False: warm-up, load ramps) feed
+    # the accumulated candidates only (issue 21)
+    df, flagged = split_fit_rows(data.reset_index(drop=True))
     chans, not_measured = measured_channels(df, channels or MEASURED_COLUMNS)
     if not chans:
         raise MftireInputError("no measured channel (Fx, Fy, Mz, Mx, My) with data to diagnose"
@@ -437,11 +431,11 @@ def _diagnose(
         keep = flagged[FIT_ROW].to_numpy(bool)
         cands = [Candidate(c.name, c.values[keep], c.derived, c.sweep_level) for c in candidates(flagged)]
         cands = [c for c in cands if np.nanstd(c.values) > 0]
-        _progress(f"{int((~keep).sum())} rows flagged fit_row = False (warm-up, load ramps) used for the "
-                  "accumulated candidates", progress)  # fmt: skip
+        say(f"{int((~keep).sum())} rows flagged fit_row = False (warm-up, load ramps) used for the "
+                  "accumulated candidates")  # fmt: skip
     by_name = {c.name: c for c in cands}
     variables = _variables_for(tyre, df)
-    _progress(f"{len(df)} rows, {df['sweep_id'].nunique()} sweeps, channels {', '.join(chans)}", progress)
+    say(f"{len(df)} rows, {df['sweep_id'].nunique()} sweeps, channels {', '.join(chans)}")
 
     model = _model(tyre, df)
     R0 = tyre["UNLOADED_RADIUS"]
@@ -461,13 +455,13 @@ def _diagnose(
             residuals[ch] = normalised_residual(ch, y, model[ch], Fz, R0)
     X0 = baseline_features(df["kappa"].to_numpy(float), df["alpha"].to_numpy(float), df["gamma"].to_numpy(float),
                            Fz, tyre["FNOMIN"])  # fmt: skip
-    _progress(f"ranking {len(cands)} candidates", progress)
+    say(f"ranking {len(cands)} candidates")
     ranking = rank_candidates(residuals, peaks, X0, cands, df["sweep_id"].to_numpy(), n_perm=n_perm, seed=seed,
                               **(ranking_kwargs or {}))  # fmt: skip
     for name, c in by_name.items():
         if name not in df.columns:
             df[name] = c.values
-    _progress("profiling the scaling factors per sweep", progress)
+    say("profiling the scaling factors per sweep")
     cand_values = {c.name: c.values for c in cands if c.name not in HISTORY_CANDIDATES}
     profiles = profile_factors(tyre, df, cand_values, [c for c in chans if c in ("Fx", "Fy")], noise, seed=seed)
     significant = [e for e in ranking if e.significant]
@@ -486,7 +480,7 @@ def _diagnose(
     column, values = holdout[0], list(holdout[1])
     test = holdout_mask(df, column, values)
     train = ~test
-    _progress(f"holding out {column} = {values} ({int(test.sum())} rows)", progress)
+    say(f"holding out {column} = {values} ({int(test.sum())} rows)")
 
     group = [e for e in significant if e.score >= 0.6 * top.score][:3]
     group += [e for e in significant if e.channel in PROFILE_CHANNELS and e not in group][:2]
@@ -521,7 +515,7 @@ def _diagnose(
         prob.variables = {k: np.asarray(val)[train] for k, val in variables.items()}
         prob = drop_outliers(prob)
         v = prob.df["_cand"].to_numpy(float)
-        _progress(f"fitting effects for {e.variable}", progress)
+        say(f"fitting effects for {e.variable}")
         eff_ch = [ch for ch, sc in e.channel_scores.items() if sc >= max(0.05, 0.25 * e.score)] or [e.channel]
         # held-out folds: the levels of a sweep-level candidate (a level never seen in training, as the
         # held-out condition), else groups of sweeps
@@ -572,7 +566,7 @@ def _diagnose(
                                profiles=profiles, cause=top.variable)  # fmt: skip
     effect, cause, context = best
     # the chosen candidate's best laws and the control, refitted with every MF coefficient
-    _progress(f"refitting every coefficient with the laws of {effect.variable}", progress)
+    say(f"refitting every coefficient with the laws of {effect.variable}")
     prob, law_fits, eff_ch, folds, in_blocks, control_cv, control_channels, local_control = context
     variants, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv, control_channels,
                                     local_control)  # fmt: skip
@@ -629,7 +623,7 @@ def _diagnose(
                           effect.heldout if in_blocks else None)
         + profiles.confounding(effect.variable)))  # fmt: skip
     # validated: the same law refitted the same way on every row (the held-out condition too)
-    _progress(f"refitting {effect.name} in {effect.variable} on every row", progress)
+    say(f"refitting {effect.name} in {effect.variable} on every row")
     pall = make_problem(tyre, df.assign(_cand=cvals), chans)
     pall.noise = dict(prob.noise)
     pall.variables = {k: np.asarray(val) for k, val in variables.items()}

@@ -822,7 +822,7 @@ def _full_refit(data: pd.DataFrame, tyre: Tyre) -> Tyre:
     stages (:data:`REFIT_STAGES`), with the fitter's own start values; Mx and My stay as fitted."""
     import warnings
 
-    from mftire.fitting.core import fit_tir
+    from mftire.fitting.fitter import fit_tir
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -117,10 +117,6 @@ class Profiles:
     def affected(self) -> list[FactorProfile]:
         return [f for f in self.factors if f.affected]
 
-    def best_link(self) -> VariableLink | None:
-        ok = [link for link in self.links if link.p_value <= 0.05 and link.score > 0.2]
-        return max(ok, key=lambda v: v.score) if ok else None
-
     def families_for(self, variable: str) -> list[str]:
         """Families of the affected factors that ``variable`` predicts (best first)."""
         out: list[str] = []

@@ -14,9 +14,9 @@ from mftire._lazy import lazy_names
 # imported on first use (see mftire._lazy)
 __getattr__, __dir__ = lazy_names(
     __name__, {"TyreConfig": "mftire.fe.config", "load_tyre": "mftire.fe.config",
-     "IdentifiedFriction": "mftire.fe.identify", "identify_velocity_law": "mftire.fe.identify",
-     "SteadyStateResult": "mftire.fe.solver", "solve": "mftire.fe.solver", "campaign": "mftire.fe.sweeps",
-     "free_rolling": "mftire.fe.sweeps", "sweep": "mftire.fe.sweeps"}
+     "IdentifiedFriction": "mftire.fe.friction_identify", "identify_velocity_law": "mftire.fe.friction_identify",
+     "SteadyStateResult": "mftire.fe.rolling_contact", "solve": "mftire.fe.rolling_contact",
+     "campaign": "mftire.fe.slip_sweeps", "free_rolling": "mftire.fe.slip_sweeps", "sweep": "mftire.fe.slip_sweeps"}
 )
 
 __all__ = [

@@ -77,7 +77,7 @@ def belt_rolling_radius(tyre: TyreConfig, Fz: ArrayLike, Vx: ArrayLike, P: Array
 
 
 def compliances(tyre: TyreConfig, Fz: ArrayLike, P: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Carcass stiffnesses (Cx [N/m], Cy [N/m], Cpsi [Nm/rad]) at load Fz and pressure P.
+    """Carcass stiffnesses (Cx [N/m], Cy [N/m], Cpsi [N·m/rad]) at load Fz and pressure P.
 
     Lateral and yaw stiffness grow with inflation pressure; the yaw stiffness also
     grows with load (longer contact base), cf. Pacejka 2012 section 9.2.

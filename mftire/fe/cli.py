@@ -26,7 +26,7 @@ def _tyre(args: argparse.Namespace):
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from mftire.fe.sweeps import sweep, write_csv_atomic
+    from mftire.fe.slip_sweeps import sweep, write_csv_atomic
     from mftire.iotools.output import OutputPlan
 
     OutputPlan([args.tyre], args.force).file(args.output)
@@ -46,7 +46,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def _cmd_campaign(args: argparse.Namespace) -> int:
-    from mftire.fe.sweeps import campaign, write_csv_atomic
+    from mftire.fe.slip_sweeps import campaign, write_csv_atomic
     from mftire.iotools.output import OutputPlan
     from mftire.parallel import Executor
 
@@ -54,7 +54,9 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
     tyre = _tyre(args)
     out = Path(args.output)
     t0 = time.perf_counter()
-    table, free = campaign(tyre, quick=args.quick, executor=Executor.from_args(args))
+    from mftire.cli_options import progress_of
+
+    table, free = campaign(tyre, quick=args.quick, executor=Executor.from_args(args), progress=progress_of(args))
     write_csv_atomic(table, out / "sweeps.csv")
     write_csv_atomic(free, out / "free_rolling.csv")
     counts = table["kind"].value_counts().to_dict()
@@ -67,7 +69,7 @@ def _cmd_campaign(args: argparse.Namespace) -> int:
 def _read_tables(paths: list[str]) -> pd.DataFrame:
     import pandas as pd
 
-    from mftire.iotools.tables import read_numeric_csv
+    from mftire.iotools.loaders import read_numeric_csv
 
     df = pd.concat([read_numeric_csv(str(p), ()) for p in paths], ignore_index=True)
     for col in ("Fz", "kappa", "Vx", "Fx"):
@@ -77,7 +79,7 @@ def _read_tables(paths: list[str]) -> pd.DataFrame:
 
 
 def _cmd_identify(args: argparse.Namespace) -> int:
-    from mftire.fe.identify import identify_velocity_law
+    from mftire.fe.friction_identify import identify_velocity_law
     from mftire.iotools.output import OutputPlan
 
     if args.output:
@@ -105,7 +107,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     fe = subparsers.add_parser("fe", help="FE-surrogate rolling-contact model (brush model, van der Steen friction)",
                                description="FE-surrogate steady-state rolling-contact model.")
     sub = fe.add_subparsers(dest="fe_command", required=True)
-    from mftire.iotools.output import add_force_option
+    from mftire.cli_options import add_force_option
 
     tyre_help = "tyre file (TOML) or 'default' (the shipped 205/55 R16 tyre)"
 
@@ -130,10 +132,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     c.add_argument("--tyre", default="default", help=tyre_help)
     c.add_argument("--output", required=True, help="output directory (sweeps.csv, free_rolling.csv)")
     c.add_argument("--quick", action="store_true", help="reduced grid (for tests)")
-    from mftire.parallel import add_parallel_options
+    from mftire.cli_options import add_parallel_options
 
     add_parallel_options(c, "the chunks of slip points")
     add_force_option(c)
+    from mftire.cli_options import add_quiet_option
+
+    add_quiet_option(c)
     c.set_defaults(func=_cmd_campaign)
 
     i = sub.add_parser("identify", help="identify the velocity part of the friction law from braking curves (ch. 5)",

@@ -95,7 +95,7 @@ class CarcassParams:
 
     cx: float = 450e3  #: longitudinal stiffness [N/m]
     cy: float = 150e3  #: lateral stiffness [N/m]
-    cpsi: float = 7000.0  #: yaw (torsional) stiffness at the load-index load [Nm/rad]
+    cpsi: float = 7000.0  #: yaw (torsional) stiffness at the load-index load [N·m/rad]
     cpsi_load: float = 0.5  #: relative growth of cpsi per load fraction [-]
     pressure_sensitivity: float = 0.5  #: relative growth of cy, cpsi per relative overpressure [-]
     camber_reduction: float = 0.6  #: epsilon_gamma, camber spin reduction of a radial tyre [-]

@@ -27,8 +27,8 @@ import numpy as np
 import pandas as pd
 
 from mftire.fe.config import TyreConfig
-from mftire.fe.solver import solve
-from mftire.fe.sweeps import COMBINED_ALPHAS_DEG, Condition, _rows_for, free_rolling, solve_points
+from mftire.fe.rolling_contact import solve
+from mftire.fe.slip_sweeps import COMBINED_ALPHAS_DEG, Condition, free_rolling, rows_for, solve_points
 from mftire.parallel import Executor
 
 CHANNELS = ("Fx", "Fy", "Mz", "Mx", "My")
@@ -111,14 +111,14 @@ def measured_campaign(
     arr = np.array(conds, dtype=float)
     w_free, _ = free_rolling(tyre, arr[:, 0], arr[:, 1], arr[:, 2], arr[:, 3])
     omega_free = {c: w for c, w in zip(conds, w_free, strict=True)}
-    total_points = sum(len(_rows_for(k, n_kappa, n_alpha, combined_alphas_deg)[0]) for k, _ in jobs)
+    total_points = sum(len(rows_for(k, n_kappa, n_alpha, combined_alphas_deg)[0]) for k, _ in jobs)
     total_time = total_points * art.point_time + len(jobs) * art.pause
     drift_dir = {ch: rng.standard_normal() for ch in CHANNELS}
 
     runs = []
     t, energy = 0.0, 0.0
     for kind, c in jobs:
-        kappa, alpha = _rows_for(kind, n_kappa, n_alpha, combined_alphas_deg)
+        kappa, alpha = rows_for(kind, n_kappa, n_alpha, combined_alphas_deg)
         n = len(kappa)
         level = 1.0 if fade is None else float(fade(energy, t))
         Fz = c.Fz * (1.0 + art.fz_wander * _smooth_noise(n, rng)) if art.fz_wander else np.full(n, c.Fz)

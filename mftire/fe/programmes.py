@@ -28,7 +28,7 @@ import pandas as pd
 
 from mftire.fe.config import TyreConfig, load_tyre
 from mftire.fe.measured import Artefacts, measured_campaign, thermal_fade
-from mftire.fe.sweeps import KMH, Condition
+from mftire.fe.slip_sweeps import KMH, Condition
 from mftire.fe.template import mf_template
 from mftire.iotools.tir import TirParameters
 from mftire.parallel import Executor

@@ -7,10 +7,12 @@ Small pure functions in the spirit of pvlib's ``ivtools``:
 ``identify``       which coefficients the data can identify (loads, cambers, ...)
 ``initial``        start values from the data (peak, slope at zero, shape, shifts)
 ``model``          fast channel predictions (only the equations a stage needs)
-``data``           loading, column checks, per-source weights, noise estimate
-``core``           :func:`fit_tir`, :class:`FitResult`, :class:`StageResult`
-``report``         report.md, metrics.json and one PNG per sweep family
+``weights``        per-source weights, noise estimate (loaders: :mod:`mftire.iotools.loaders`)
+``fitter``         :func:`fit_tir`, :class:`FitResult`, :class:`StageResult`
+``fit_report``     report.md, metrics.json and one PNG per sweep family
 ``synthetic``      synthetic sweeps from a ``.tir`` (tests, benchmark)
+``derivatives``    algorithmic derivatives of the channels for the exact Jacobian
+``bands``          bootstrap confidence and prediction bands over sweeps
 ``cli``            ``mftire fit``
 =================  ================================================================
 """
@@ -19,8 +21,8 @@ from mftire._lazy import lazy_names
 
 # imported on first use (see mftire._lazy)
 __getattr__, __dir__ = lazy_names(
-    __name__, {"FitResult": "mftire.fitting.core", "StageResult": "mftire.fitting.core",
-     "fit_tir": "mftire.fitting.core", "STAGES": "mftire.fitting.stages",
+    __name__, {"FitResult": "mftire.fitting.fitter", "StageResult": "mftire.fitting.fitter",
+     "fit_tir": "mftire.fitting.fitter", "STAGES": "mftire.fitting.stages",
      "resolve_stages": "mftire.fitting.stages"}
 )
 

@@ -3,7 +3,7 @@
 :func:`bootstrap_bands` answers "how well do the data pin the fitted curves down, and
 where should a new measurement fall?":
 
-1. **Full fit** (:func:`~mftire.fitting.core.fit_tir`) gives the curve f̂(x).
+1. **Full fit** (:func:`~mftire.fitting.fitter.fit_tir`) gives the curve f̂(x).
 2. **Bootstrap over sweeps.** Whole sweeps (the unit of a measurement, whose points
    share drift, temperature and wear) are resampled with replacement, *stratified by
    source and sweep kind*, so every replicate keeps each source's pure longitudinal,
@@ -55,10 +55,11 @@ import pandas as pd
 from scipy import stats
 
 from mftire.errors import MftireInputError
-from mftire.fitting.core import FitResult, fit_tir
+from mftire.fitting.fitter import FitResult, fit_tir
 from mftire.iotools.jsonutil import jsonable
 from mftire.iotools.tir import TirParameters
 from mftire.parallel import Executor, Pending
+from mftire.progress import reporter
 from mftire.tyre import Tyre
 
 __all__ = ["Bands", "bootstrap_bands", "start_bootstrap_bands", "PendingBands", "band_coverage", "coverage_table",
@@ -305,7 +306,7 @@ def bootstrap_bands(
     Parameters
     ----------
     data : DataFrame, path or sequence
-        Sweep data as for :func:`~mftire.fitting.core.fit_tir` (ignored when ``fit`` is given,
+        Sweep data as for :func:`~mftire.fitting.fitter.fit_tir` (ignored when ``fit`` is given,
         whose ``data`` is resampled).
     template : TirParameters or path
         Template of the full fit (used only when ``fit`` is None).
@@ -333,8 +334,9 @@ def bootstrap_bands(
         Where the replicate fits run (default: in this process; see :mod:`mftire.parallel`).
         The replicates are drawn beforehand from ``seed`` and collected in order, so the
         bands are bit for bit the same whatever the executor.
-    progress : bool or callable
-        Progress messages (per replicate).
+    progress : bool or callable, optional
+        Progress lines per replicate on stderr (default: only when stderr is a terminal;
+        see :mod:`mftire.progress`), or a callable that takes each message.
 
     Returns
     -------
@@ -368,8 +370,7 @@ def start_bootstrap_bands(
         raise MftireInputError(f"band level must be between 0 and 1, got {level}")
     if n < 2:
         raise MftireInputError(f"--bands needs at least 2 replicates, got {n}")
-    say = progress if callable(progress) else (
-        (lambda m: print(f"mftire bands: {m}", flush=True)) if progress else (lambda m: None))
+    say = reporter(progress, "mftire bands")
     t0 = time.perf_counter()
     if fit is None:
         fit = fit_tir(data, template, stages=stages, weights=weights, alpha_star=alpha_star, progress=False)
@@ -426,12 +427,15 @@ class PendingBands:
 
 
 def _heldout_table(heldout) -> pd.DataFrame:
+    """The held-out sweep rows (rows an importer kept outside the sweeps, ``fit_row`` False, are left out)."""
+    from mftire.iotools.sweeps import fit_rows
+
     if isinstance(heldout, pd.DataFrame):
-        return heldout
-    from mftire.fitting.data import load_sweep_files
+        return fit_rows(heldout)
+    from mftire.fitting.weights import load_sweep_files
 
     paths = [heldout] if isinstance(heldout, (str, os.PathLike)) else list(heldout)
-    return load_sweep_files(paths)[0]
+    return fit_rows(load_sweep_files(paths)[0])
 
 
 def coverage_table(bands: Bands, heldout, channels: Sequence[str] = BAND_CHANNELS,

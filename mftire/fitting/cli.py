@@ -8,7 +8,7 @@ import sys
 
 def _cmd_fit(args: argparse.Namespace) -> int:
     from mftire.errors import MftireInputError
-    from mftire.fitting.core import fit_tir
+    from mftire.fitting.fitter import fit_tir
     from mftire.iotools.tir import write_tir
 
     _check_outputs(args)
@@ -16,8 +16,10 @@ def _cmd_fit(args: argparse.Namespace) -> int:
 
     load(args.template)  # a broken template is an error, a suspicious one warns (mftire.iotools.tir_checks)
     fixed = [k.strip() for k in (args.fix or "").split(",") if k.strip()]
+    from mftire.cli_options import progress_of
+
     result = fit_tir(args.data, args.template, stages=args.stages, weights=args.weights,
-                     alpha_star=args.alpha_star, fixed=fixed)
+                     alpha_star=args.alpha_star, fixed=fixed, progress=progress_of(args))
     data = result.data
     if not any(s.status == "fitted" or (s.channel in data.columns and data[s.channel].notna().any())
                for s in result.stages):
@@ -32,7 +34,7 @@ def _cmd_fit(args: argparse.Namespace) -> int:
                          f"RMS {s.rms_start:.4g} -> {s.rms:.4g}")
     lines.extend(f"  note: {m}" for m in result.messages)
     if args.report:
-        from mftire.fitting.report import write_report
+        from mftire.fitting.fit_report import write_report
 
         paths = write_report(result, args.report)
         lines.append(f"  report: {paths['report']}, {paths['metrics']}, {len(paths['plots'])} plot(s)")
@@ -62,14 +64,13 @@ def _bands(args: argparse.Namespace, result) -> list[str]:
     """``--bands N``: bootstrap bands written next to the report (or the fitted .tir)."""
     import os
 
+    from mftire.cli_options import progress_of
     from mftire.fitting.bands import bootstrap_bands, coverage_table, write_bands
     from mftire.parallel import Executor
 
     bands = bootstrap_bands(None, args.template, n=args.bands, level=args.band_level, fit=result,
                             weights=args.weights, alpha_star=args.alpha_star, seed=args.seed,
-                            executor=Executor.from_args(args),
-                            progress=None if not sys.stderr.isatty() else
-                            (lambda m: print(f"\rmftire fit: bands: {m}\x1b[K", end="", file=sys.stderr, flush=True)))
+                            executor=Executor.from_args(args), progress=progress_of(args))
     cov = coverage_table(bands, args.heldout) if args.heldout else None
     directory = args.report or os.path.dirname(os.path.abspath(args.output))
     paths = write_bands(bands, directory, cov)
@@ -110,13 +111,16 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--heldout", nargs="+", metavar="DATA",
                    help="held-out measured sweeps: report the fraction of their points inside the bands")
     p.add_argument("--seed", type=int, default=0, help="random seed of the bootstrap (default 0)")
-    from mftire.parallel import add_parallel_options
+    from mftire.cli_options import add_parallel_options
 
     add_parallel_options(p, "the bootstrap refits of --bands")
     p.add_argument("--fix", metavar="KEYS", help="coefficients held at their template values, "
                    "comma-separated (e.g. PPX1,PPX2,PPX3,PPX4 to fit without pressure terms)")
-    from mftire.iotools.output import add_force_option
+    from mftire.cli_options import add_force_option
 
     add_force_option(p)
+    from mftire.cli_options import add_quiet_option
+
+    add_quiet_option(p)
     p.set_defaults(func=_cmd_fit)
     return p

@@ -19,7 +19,7 @@ and carry no derivative, as the piecewise-constant functions they are; ``abs`` h
 derivative ``sign``; ``maximum``/``minimum``/``where`` pass the derivative of the
 branch taken.  The extension forms are not all differentiable (table lookups), so
 stages that fit an extension coefficient use finite differences
-(see :mod:`mftire.fitting.core`).
+(see :mod:`mftire.fitting.fitter`).
 """
 
 from __future__ import annotations

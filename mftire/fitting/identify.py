@@ -85,7 +85,7 @@ def _distinct(values: np.ndarray, decimals: int) -> np.ndarray:
 def data_levels(df: pd.DataFrame) -> DataLevels:
     """Count the operating conditions of ``df``.
 
-    ``df`` is a table from :func:`mftire.iotools.sweeps.group_sweeps` (it needs the
+    ``df`` is a table from :func:`mftire.segmentation.grouping.group_sweeps` (it needs the
     ``Fz_set, gamma_set, P_set, Vx_set`` columns and ``kappa``, ``alpha``).
     """
     if len(df) == 0:

@@ -12,7 +12,7 @@ x = s + SH (Pacejka 2012 eq 4.E9 / 4.E19):
 
 Per-sweep values are combined over the loads (regression on dfz) into the nominal
 coefficients (PDX1, PDX2, PKX1, PKX2, PCX1, PEX1, PVX1, ...).  Every estimate is a
-proposal: :mod:`mftire.fitting.core` keeps it only when it lowers the stage's cost.
+proposal: :mod:`mftire.fitting.fitter` keeps it only when it lowers the stage's cost.
 """
 
 from __future__ import annotations
@@ -23,6 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 from scipy import stats
+
+from mftire.mf.basic import increments
 
 __all__ = ["SweepShape", "sweep_shape", "longitudinal_guess", "lateral_guess"]
 
@@ -119,9 +121,8 @@ def _common(df: pd.DataFrame, p: dict, xcol: str, ycol: str, pre: str) -> dict[s
     shapes = _shapes(nominal, xcol, ycol)
     if not shapes:
         return {}
-    Fz0p = p["LFZO"] * p["FNOMIN"]  # eq 4.E1
     Fz = np.array([s.Fz for s in shapes])
-    dfz = (Fz - Fz0p) / Fz0p  # eq 4.E2a
+    _, dfz, _ = increments(p, Fz, p["NOMPRES"])  # eqs 4.E1, 4.E2a
     lmu = p[f"LMU{pre}"]
     guess: dict[str, float] = {}
     mu = np.array([s.D for s in shapes]) / Fz / lmu
@@ -147,9 +148,8 @@ def longitudinal_guess(df: pd.DataFrame, p: dict) -> dict[str, float]:
     shapes = _shapes(_nominal_rows(df, p), "kappa", "Fx")
     if not shapes:
         return guess
-    Fz0p = p["LFZO"] * p["FNOMIN"]  # eq 4.E1
     Fz = np.array([s.Fz for s in shapes])
-    dfz = (Fz - Fz0p) / Fz0p  # eq 4.E2a
+    _, dfz, _ = increments(p, Fz, p["NOMPRES"])  # eqs 4.E1, 4.E2a
     K = np.array([s.K for s in shapes])
     # Kxk = Fz (PKX1 + PKX2 dfz) exp(PKX3 dfz) LKX  (eq 4.E15 at dpi = 0)
     kk = K / (Fz * np.exp(p["PKX3"] * dfz) * p["LKX"])
@@ -182,9 +182,8 @@ def lateral_guess(df: pd.DataFrame, p: dict, template_slope) -> dict[str, float]
         ratio = float(np.median(K[ok] / Kt[ok]))
         if ratio != 0 and np.isfinite(ratio):
             guess["PKY1"] = p["PKY1"] * ratio
-    Fz0p = p["LFZO"] * p["FNOMIN"]
     Fz = np.array([s.Fz for s in shapes])
-    dfz = (Fz - Fz0p) / Fz0p
+    _, dfz, _ = increments(p, Fz, p["NOMPRES"])  # eqs 4.E1, 4.E2a
     SHy = (p["PHY1"] + p["PHY2"] * dfz) * p["LHY"]
     sv = (np.array([s.y0 for s in shapes]) - K * SHy) / (Fz * p["LVY"] * p["LMUY"])
     guess["PVY1"] = float(np.median(sv - p["PVY2"] * dfz))

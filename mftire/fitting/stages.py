@@ -79,7 +79,7 @@ class Stage:
     channels : tuple of str
         Measured channels the residuals use.
     kinds : tuple of str
-        Sweep kinds (see :func:`mftire.iotools.sweeps.sweep_kind`) whose rows are fitted;
+        Sweep kinds (see :func:`mftire.segmentation.grouping.sweep_kind`) whose rows are fitted;
         empty: every row.  The first kind is required (the stage is skipped without it);
         the others add rows.
     groups : tuple of tuple of Coefficient

@@ -135,9 +135,17 @@ def _load(tir):
 
 def compile_sources(src_dir: Path, out_path: Path, compiler: str | None = None) -> None:
     """Compile every ``.c`` in ``src_dir`` into the shared library ``out_path``."""
+    from mftire.fmu.portable import glibc_pin_header
+
     cc = find_compiler(compiler)
     c_files = sorted(str(p) for p in src_dir.glob("*.c"))
-    cmd = [*cc, *CFLAGS, "-I", str(src_dir), *c_files, "-o", str(out_path), *LIBS]
+    pins = glibc_pin_header()  # Linux: load on glibc >= 2.17 (mftire/fmu/portable.py); not in the sources
+    extra = []
+    if pins is not None:
+        pin_file = Path(out_path).parent / "mftire_glibc_pins.h"
+        pin_file.write_text(pins, encoding="utf-8")
+        extra = ["-include", str(pin_file)]
+    cmd = [*cc, *CFLAGS, *extra, "-I", str(src_dir), *c_files, "-o", str(out_path), *LIBS]
     try:
         res = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     except OSError as exc:
@@ -145,6 +153,20 @@ def compile_sources(src_dir: Path, out_path: Path, compiler: str | None = None) 
     if res.returncode != 0:
         tail = "\n".join((res.stderr or res.stdout).strip().splitlines()[-15:])
         raise FMUExportError(f"compiling the FMU failed ({' '.join(cc)} exit {res.returncode}):\n{tail}")
+
+
+def _windows_dll(src: Path, dll: Path) -> Path | None:
+    """The Windows DLL when a MinGW-w64 cross compiler is present (else None; a failed build warns)."""
+    from mftire.fmu.portable import compile_windows_dll, mingw_compiler
+
+    if mingw_compiler() is None:
+        return None
+    try:
+        compile_windows_dll(src, dll)
+    except (RuntimeError, OSError, subprocess.SubprocessError) as exc:
+        warnings.warn(f"export-fmu: no Windows DLL: {exc}", stacklevel=3)
+        return None
+    return dll
 
 
 def package_fmu(output, xml: str, files: dict[str, str], ident: str, platform: str, suffix: str,
@@ -160,9 +182,14 @@ def package_fmu(output, xml: str, files: dict[str, str], ident: str, platform: s
             (src / fname).write_text(text, encoding="utf-8")
         binary = Path(tmp) / (ident + suffix)
         compile_sources(src, binary, " ".join(shlex.quote(a) for a in cc))
+        dll = _windows_dll(src, Path(tmp) / (ident + ".dll"))
         with atomic_path(output) as tmp_out, zipfile.ZipFile(tmp_out, "w", zipfile.ZIP_DEFLATED) as zf:
             zf.writestr("modelDescription.xml", xml)
             for fname in sorted(files):
                 zf.writestr(f"sources/{fname}", files[fname])
             zf.write(binary, f"binaries/{platform}/{ident}{suffix}")
+            if dll is not None:
+                from mftire.fmu.portable import windows_platform
+
+                zf.write(dll, f"binaries/{windows_platform(platform)}/{ident}.dll")
     return output

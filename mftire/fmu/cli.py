@@ -41,7 +41,7 @@ def add_parser(subparsers) -> None:
                    help="transient tyre: wheel kinematics in (Fz, Vx, Vy, omega, ...), relaxation-length slip "
                    "states, low-speed model (FMI 2.0; see docs/transient.md)")  # fmt: skip
     p.add_argument("--cc", help="C compiler command (default: $CC, then cc, gcc, clang)")
-    from mftire.iotools.output import add_force_option
+    from mftire.cli_options import add_force_option
 
     add_force_option(p)
     p.set_defaults(func=_cmd_export_fmu)

@@ -3,15 +3,11 @@
 from __future__ import annotations
 
 import datetime as _dt
-import json
-import os
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 import pandas as pd
-
-from mftire.iotools.atomic import write_text_atomic
 
 
 def jsonable(x: Any) -> Any:
@@ -34,8 +30,3 @@ def jsonable(x: Any) -> Any:
     if x is pd.NA or x is None:
         return None
     return x
-
-
-def write_json_atomic(path: str | os.PathLike, obj: Any, indent: int = 1) -> None:
-    """Write ``jsonable(obj)`` as strict JSON (no NaN) to ``path`` atomically."""
-    write_text_atomic(path, json.dumps(jsonable(obj), indent=indent, allow_nan=False) + "\n")

@@ -34,7 +34,6 @@ commands:
 
 from __future__ import annotations
 
-import argparse
 import os
 import stat
 import tempfile
@@ -50,11 +49,6 @@ FIGURE_FORMATS = {
 }  # fmt: skip
 
 FORCE_HELP = "replace existing output files (and write into a non-empty output folder); default: refuse"
-
-
-def add_force_option(parser: argparse.ArgumentParser) -> None:
-    """Add the common ``--force`` option to a sub-command."""
-    parser.add_argument("--force", "-f", action="store_true", help=FORCE_HELP)
 
 
 def figure_format(path: str | os.PathLike) -> str:
@@ -188,4 +182,4 @@ class OutputPlan:
         return path
 
 
-__all__ = ["FIGURE_FORMATS", "FORCE_HELP", "OutputPlan", "add_force_option", "figure_format"]
+__all__ = ["FIGURE_FORMATS", "FORCE_HELP", "OutputPlan", "figure_format"]

@@ -13,23 +13,23 @@ Vx       m/s    forward speed of the wheel centre
 P        Pa     inflation pressure
 phit     1/m    turn slip (optional, 0 when absent)
 Fx, Fy   N      measured forces (any subset)
-Mx,My,Mz N*m    measured moments (any subset)
+Mx,My,Mz N·m    measured moments (any subset)
 ======== ====== ==================================================
 
 Any other column (run id, time, temperature, file, ...) is carried through untouched.
 
 Functions here are small and pure: :func:`validate_sweeps` checks a table and returns a
-clean copy plus a :class:`SweepReport`; :func:`group_sweeps` labels rows with operating
-condition set points and sweep ids; :func:`sweep_kind` tells pure longitudinal, pure
-lateral and combined sweeps apart; :func:`convert_to_si` and :func:`to_schema` do the
-unit conversions shared with :mod:`mftire.iotools.tydex`.
+clean copy plus a :class:`SweepReport`; :func:`convert_to_si` and :func:`to_schema` do the
+unit conversions shared with :mod:`mftire.iotools.tydex`.  Grouping rows into sweeps
+(set points, sweep ids, kinds) is sweep analysis, not reading: it lives in
+:mod:`mftire.segmentation.grouping`.
 """
 
 from __future__ import annotations
 
 import math
 import os
-from collections.abc import Hashable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -53,10 +53,9 @@ __all__ = [
     "to_schema",
     "read_sweep_csv",
     "validate_sweeps",
-    "cluster_1d",
-    "sweep_kind",
-    "group_sweeps",
-    "summarize_sweeps",
+    "FIT_ROW",
+    "fit_rows",
+    "COLUMN_ALIASES",
 ]
 
 #: Operating-condition inputs every sweep table must have (SI).
@@ -65,6 +64,26 @@ REQUIRED_COLUMNS: tuple[str, ...] = ("Fz", "kappa", "alpha", "gamma", "Vx", "P")
 OPTIONAL_INPUT_COLUMNS: tuple[str, ...] = ("phit",)
 #: Measured channels; a table holds any subset.
 MEASURED_COLUMNS: tuple[str, ...] = ("Fx", "Fy", "Mz", "Mx", "My")
+
+#: Boolean column of imported rig tables (:func:`mftire.segmentation.rig_segments.segment`):
+#: True on the rows of the sweeps a fit uses, False on rows kept only for the diagnosis
+#: (warm-up, load ramps and other transitions, dwells), with their ``drop_reason``.
+FIT_ROW = "fit_row"
+
+
+def fit_rows(df: pd.DataFrame) -> pd.DataFrame:
+    """The rows a fit (and a comparison) uses: those with ``fit_row`` True, or all rows without that column.
+
+    A ``fit_row`` column read back from CSV holds ``True``/``False`` (bool) or text; both
+    are understood.  The index is kept.
+    """
+    if FIT_ROW not in df.columns:
+        return df
+    flag = df[FIT_ROW]
+    if flag.dtype != bool:
+        flag = flag.astype(str).str.strip().str.lower().isin(("true", "1", "1.0", "yes"))
+    return df if bool(flag.all()) else df[flag.to_numpy()]
+
 
 # The unit table (names, exact SI factors, SI unit and dimension of each column) lives in
 # mftire.iotools.units; re-exported here for the readers and users of the sweep table.
@@ -124,9 +143,9 @@ def to_schema(df: pd.DataFrame, mapping: Mapping[str, tuple[str, str]]) -> pd.Da
 # Validation
 # ----------------------------------------------------------------------------------------
 
-# lower-case column names that usually mean a schema quantity, with the unit they usually
-# carry (None: the same as the schema, only the name differs).
-_ALIASES: dict[str, dict[str, str | None]] = {
+#: Lower-case column names that usually mean a schema quantity, with the unit they usually
+#: carry (None: the same as the schema, only the name differs).  The one table of column aliases.
+COLUMN_ALIASES: dict[str, dict[str, str | None]] = {
     "alpha": {"sa": "deg", "slipangle": "deg", "slip_angle": "deg", "slipangl": "deg",
               "alpha_deg": "deg", "sa_deg": "deg", "alpha_rad": None, "alfa": None},
     "kappa": {"sl": None, "sr": None, "slipratio": None, "slip_ratio": None, "longslip": None,
@@ -151,13 +170,13 @@ _ALIASES: dict[str, dict[str, str | None]] = {
 
 def find_column(columns, column: str) -> str | None:
     """The name among ``columns`` that holds schema ``column`` in its SI unit: the column
-    itself, a different letter case of it, or an alias of :data:`_ALIASES` that differs in
+    itself, a different letter case of it, or an alias of :data:`COLUMN_ALIASES` that differs in
     name only (``fz`` for ``Fz``, ``slip_ratio`` for ``kappa``; not ``sa``, usually in
     degrees).  None when there is none; a :class:`MftireInputError` when several match."""
     names = [str(c) for c in columns]
     if column in names:
         return column
-    same_unit = {a for a, unit in _ALIASES.get(column, {}).items() if unit is None} | {column.lower()}
+    same_unit = {a for a, unit in COLUMN_ALIASES.get(column, {}).items() if unit is None} | {column.lower()}
     hits = [n for n in names if n.lower() in same_unit]
     if len(hits) > 1:
         raise MftireInputError(f"columns {', '.join(map(repr, hits))} all look like {column}: keep one")
@@ -166,7 +185,7 @@ def find_column(columns, column: str) -> str | None:
 
 def _alias_hint(df: pd.DataFrame, column: str) -> str:
     """A sentence suggesting how an existing column could become schema ``column``."""
-    aliases = _ALIASES.get(column, {})
+    aliases = COLUMN_ALIASES.get(column, {})
     for c in df.columns:
         name = str(c)
         low = name.lower()
@@ -336,7 +355,7 @@ def validate_sweeps(
     df : DataFrame
         Table in the sweep schema (see module docstring): SI columns ``Fz`` [N],
         ``kappa`` [-], ``alpha`` [rad], ``gamma`` [rad], ``Vx`` [m/s], ``P`` [Pa],
-        optional ``phit`` [1/m], and any of ``Fx, Fy`` [N], ``Mz, Mx, My`` [N*m].
+        optional ``phit`` [1/m], and any of ``Fx, Fy`` [N], ``Mz, Mx, My`` [N·m].
     name : str
         Name of the data set (e.g. the file), used in error messages and the report.
     source : str, optional
@@ -481,434 +500,3 @@ def read_sweep_csv(
                                     check_units=check_units)
     clean.attrs["report"] = report.to_dict()
     return clean
-
-
-# ----------------------------------------------------------------------------------------
-# Grouping into sweeps
-# ----------------------------------------------------------------------------------------
-
-
-def cluster_1d(values: Any, rel_tol: float = 0.0, abs_tol: float = 0.0) -> np.ndarray:
-    """Single-linkage 1-D clustering by gaps.
-
-    Sorted values are split wherever the gap between neighbours exceeds
-    ``abs_tol + rel_tol * max(|left|, |right|)``. Dense noisy data around a set point
-    (e.g. Fz = 4 kN +- 5 %) forms one cluster; set points further apart than the
-    tolerance form separate ones.
-
-    Parameters
-    ----------
-    values : array-like of float
-    rel_tol : float
-        Relative gap tolerance [-].
-    abs_tol : float
-        Absolute gap tolerance, in the unit of ``values``.
-
-    Returns
-    -------
-    ndarray of int
-        Cluster label per value, numbered 0.. in increasing value order; -1 for NaN.
-    """
-    x = np.asarray(values, dtype=float)
-    labels = np.full(x.shape, -1, dtype=int)
-    ok = np.isfinite(x)
-    if not ok.any():
-        return labels
-    idx = np.flatnonzero(ok)
-    order = idx[np.argsort(x[idx], kind="stable")]
-    xs = x[order]
-    gaps = np.diff(xs)
-    thresh = abs_tol + rel_tol * np.maximum(np.abs(xs[:-1]), np.abs(xs[1:]))
-    labels[order] = np.concatenate([[0], np.cumsum(gaps > thresh)])
-    return labels
-
-
-def _set_point(values: np.ndarray, kind: str) -> float:
-    """Representative set point of one cluster.
-
-    Exact when all values are equal (simulation data). Otherwise the median, replaced by
-    the roundest number within its uncertainty (3 standard errors, at most 1 % or
-    0.05 deg), so that a load wandering around 4000 N is labelled 4000, not 4006.
-    """
-    v = values[np.isfinite(values)]
-    if v.size == 0:
-        return float("nan")
-    if np.ptp(v) == 0:
-        return float(v[0])
-    med = float(np.median(v))
-    sem = 3.0 * float(np.std(v)) / math.sqrt(v.size)
-    if kind == "angle":
-        med_deg = math.degrees(med)
-        tol = min(0.05, math.degrees(sem))
-        for decimals in range(0, 4):
-            r = round(med_deg, decimals)
-            if abs(r - med_deg) <= tol:
-                return math.radians(r) if r != 0 else 0.0
-        return med
-    if med == 0:
-        return 0.0
-    tol = min(0.01 * abs(med), sem)
-    magnitude = int(math.floor(math.log10(abs(med))))
-    for sig in range(1, 7):
-        r = round(med, sig - 1 - magnitude)
-        if abs(r - med) <= tol:
-            return float(r)
-    return med
-
-
-def _robust_range(x: np.ndarray) -> float:
-    x = x[np.isfinite(x)]
-    if x.size == 0:
-        return 0.0
-    if x.size < 20:
-        return float(np.ptp(x))
-    lo, hi = np.quantile(x, [0.02, 0.98])
-    return float(hi - lo)
-
-
-def sweep_kind(
-    kappa: Any,
-    alpha: Any,
-    *,
-    kappa_tol: float = 0.01,
-    alpha_tol: float = math.radians(0.5),
-) -> str:
-    """Kind of a sweep from which slips vary.
-
-    Parameters
-    ----------
-    kappa : array-like
-        Longitudinal slip [-] of the sweep's rows.
-    alpha : array-like
-        Slip angle [rad] of the sweep's rows.
-    kappa_tol, alpha_tol : float
-        A slip "varies" when its (2-98 %) range exceeds twice the tolerance, and is
-        "zero" when its median magnitude is within the tolerance.
-
-    Returns
-    -------
-    str
-        ``"pure_longitudinal"`` (kappa varies, alpha ~ 0), ``"pure_lateral"``
-        (alpha varies, kappa ~ 0), ``"combined"`` (both varying, or one varying at a
-        non-zero level of the other), or ``"free_rolling"`` (neither varies, both ~ 0).
-        A constant non-zero slip point counts as pure of that slip if the other is 0.
-    """
-    k = np.asarray(kappa, dtype=float)
-    a = np.asarray(alpha, dtype=float)
-    k_var = _robust_range(k) > 2 * kappa_tol
-    a_var = _robust_range(a) > 2 * alpha_tol
-    k_zero = abs(float(np.nanmedian(k))) <= kappa_tol if k.size else True
-    a_zero = abs(float(np.nanmedian(a))) <= alpha_tol if a.size else True
-    if k_var and a_var:
-        return "combined"
-    if k_var:
-        return "pure_longitudinal" if a_zero else "combined"
-    if a_var:
-        return "pure_lateral" if k_zero else "combined"
-    if k_zero and a_zero:
-        return "free_rolling"
-    if a_zero:
-        return "pure_longitudinal"
-    if k_zero:
-        return "pure_lateral"
-    return "combined"
-
-
-def _split_runs(
-    kappa: np.ndarray, alpha: np.ndarray, kappa_tol: float, alpha_tol: float, patience: int = 3
-) -> np.ndarray:
-    """Split an ordered segment into runs in which one slip is held at a level.
-
-    A run starts with both slips "held" at their level (the running mean of the run's
-    values); the first slip to leave its level by more than the tolerance becomes the
-    swept one, the other stays held; when the held slip leaves its level too, a new run
-    starts. A slip only counts as having left its level when ``patience`` consecutive
-    rows are out of it, so single noisy samples do not split a sweep.
-    """
-    n = kappa.size
-    run = np.zeros(n, dtype=int)
-    r = 0
-
-    def out_of_level(x: list[float], i: int, ref: float, tol: float) -> bool:
-        return all(abs(v - ref) > tol for v in x[i : i + patience])
-
-    kappa, alpha = kappa.tolist(), alpha.tolist()  # row by row: Python floats are faster than numpy scalars
-    k_sum, a_sum, count = kappa[0], alpha[0], 1
-    held = "both"
-    for i in range(1, n):
-        k_ref, a_ref = k_sum / count, a_sum / count
-        k_out = out_of_level(kappa, i, k_ref, kappa_tol)
-        a_out = out_of_level(alpha, i, a_ref, alpha_tol)
-        if held == "both":
-            if k_out and a_out:
-                new_run = True
-            else:
-                new_run = False
-                if a_out:
-                    held = "kappa"
-                elif k_out:
-                    held = "alpha"
-        else:
-            new_run = (held == "alpha" and a_out) or (held == "kappa" and k_out)
-        if new_run:
-            r += 1
-            k_sum, a_sum, count, held = kappa[i], alpha[i], 1, "both"
-        else:
-            # running level of the held slip(s); noisy excursions are not averaged in
-            if abs(kappa[i] - k_ref) <= kappa_tol:
-                k_sum += kappa[i]
-            else:
-                k_sum += k_ref
-            if abs(alpha[i] - a_ref) <= alpha_tol:
-                a_sum += alpha[i]
-            else:
-                a_sum += a_ref
-            count += 1
-        run[i] = r
-    return run
-
-
-def _merge_short_runs(run: np.ndarray, min_points: int) -> np.ndarray:
-    """Merge runs shorter than ``min_points`` into the previous run (or the next one)."""
-    ids, counts = np.unique(run, return_counts=True)
-    if ids.size <= 1 or min_points <= 1:
-        return run
-    keep = {int(i) for i, c in zip(ids, counts, strict=True) if c >= min_points}
-    if not keep:
-        return np.zeros_like(run)
-    mapping: dict[int, int] = {}
-    last: int | None = None
-    for i in ids:
-        i = int(i)
-        if i in keep:
-            last = i
-        mapping[i] = last if last is not None else -1
-    first_kept = min(keep)
-    out = np.array([mapping[int(i)] for i in run])
-    out[out == -1] = first_kept
-    return out
-
-
-def _direction_labels(x: np.ndarray, tol: float) -> tuple[np.ndarray, str]:
-    """Per-row direction (+1, -1, 0) of an ordered sweep variable and a summary word."""
-    n = x.size
-    if n < 2:
-        return np.zeros(n, dtype=int), "none"
-    smooth = pd.Series(x).rolling(5, center=True, min_periods=1).median().to_numpy()
-    d = np.gradient(smooth)
-    step = np.sign(d) * (np.abs(d) > 1e-3 * tol)
-    dirs = step.astype(int)
-    nz = dirs[dirs != 0]
-    if nz.size == 0:
-        return dirs, "none"
-    frac_up = float(np.mean(nz > 0))
-    if frac_up >= 0.9:
-        return dirs, "increasing"
-    if frac_up <= 0.1:
-        return dirs, "decreasing"
-    # compress into runs of one sign, ignoring short flickers
-    runs: list[tuple[int, int]] = []
-    for s in nz:
-        if runs and runs[-1][0] == s:
-            runs[-1] = (s, runs[-1][1] + 1)
-        else:
-            runs.append((int(s), 1))
-    long_runs = [s for s, c in runs if c >= max(3, nz.size // 20)]
-    merged = [s for i, s in enumerate(long_runs) if i == 0 or s != long_runs[i - 1]]
-    names = {1: "increasing", -1: "decreasing"}
-    if len(merged) == 2:
-        return dirs, f"{names[merged[0]]}-{names[merged[1]]}"
-    return dirs, "mixed"
-
-
-_CONDITION_SPECS: tuple[tuple[str, str, str], ...] = (
-    ("Fz", "Fz_set", "rel"),
-    ("gamma", "gamma_set", "angle"),
-    ("P", "P_set", "rel"),
-    ("Vx", "Vx_set", "rel"),
-)
-
-
-def group_sweeps(
-    df: pd.DataFrame,
-    fz_tol: float = 0.1,
-    *,
-    gamma_tol: float = math.radians(0.5),
-    p_tol: float = 0.05,
-    vx_tol: float = 0.1,
-    vx_abs_tol: float = 0.5,
-    kappa_tol: float = 0.01,
-    alpha_tol: float = math.radians(0.5),
-    by: Sequence[Hashable] | None = None,
-    split: bool = True,
-    min_points: int = 3,
-) -> pd.DataFrame:
-    """Label rows with operating-condition set points and sweep ids.
-
-    Set points are found by 1-D gap clustering (:func:`cluster_1d`) of each condition
-    over the whole table, so the same nominal load in two files gets the same
-    ``Fz_set`` even when the measured Fz wanders around it.
-
-    Sweeps are then found in row order (the measurement sequence): rows are split
-    wherever the set points or the ``by`` columns change, and (``split=True``) wherever
-    the slip that is held constant leaves its level (see ``kappa_tol``/``alpha_tol``),
-    e.g. a kappa sweep at alpha = 0 followed by one at alpha = 4 deg. Runs shorter than
-    ``min_points`` rows are merged into the previous run.
-
-    Parameters
-    ----------
-    df : DataFrame
-        Validated sweep table (SI).
-    fz_tol : float
-        Relative gap tolerance for Fz clustering [-]. The default 0.1 separates set
-        points more than ~10 % apart, e.g. 2, 4, 6 kN with +-5 % noise.
-    gamma_tol : float
-        Absolute gap tolerance for camber [rad] (default 0.5 deg).
-    p_tol : float
-        Relative gap tolerance for pressure [-].
-    vx_tol, vx_abs_tol : float
-        Relative [-] and absolute [m/s] gap tolerance for speed.
-    kappa_tol : float
-        Level tolerance for kappa [-]: a held kappa may wander this much.
-    alpha_tol : float
-        Level tolerance for alpha [rad].
-    by : sequence of column names, optional
-        Columns that also delimit sweeps (e.g. a run id). Default: whichever of
-        ``source`` and ``file`` exist.
-    split : bool
-        Split (condition, ``by``) runs further by held-slip level. With ``False``
-        every contiguous run of constant set points and ``by`` values is one sweep.
-    min_points : int
-        Minimum rows per sweep before it is merged into its neighbour.
-
-    Returns
-    -------
-    DataFrame
-        Copy of ``df`` (same index and row order) with added columns:
-        ``Fz_set, gamma_set, P_set, Vx_set`` (SI set points), ``sweep_id`` (int, in
-        order of appearance), ``kind`` (see :func:`sweep_kind`), ``sweep_var``
-        (``"kappa"``, ``"alpha"`` or ``"none"``), ``kappa_set``/``alpha_set`` (level of
-        the held slip, NaN for the swept one), ``sweep_dir`` (per row +1/-1/0: is the
-        sweep variable increasing) and ``direction`` (per sweep: ``increasing``,
-        ``decreasing``, ``increasing-decreasing``, ``decreasing-increasing``,
-        ``mixed`` or ``none``).
-    """
-    missing = [c for c in REQUIRED_COLUMNS if c not in df.columns]
-    if missing:
-        raise MftireInputError(f"group_sweeps: missing column(s) {', '.join(missing)}")
-    if len(df) == 0:
-        raise MftireInputError("group_sweeps: empty table")
-    out = df.copy()
-    n = len(out)
-    keys = np.zeros((n, 0), dtype=int)
-    for col, set_col, kind in _CONDITION_SPECS:
-        x = out[col].to_numpy(dtype=float)
-        if col == "Fz":
-            labels = cluster_1d(x, rel_tol=fz_tol)
-        elif col == "gamma":
-            labels = cluster_1d(x, abs_tol=gamma_tol)
-        elif col == "P":
-            labels = cluster_1d(x, rel_tol=p_tol)
-        else:
-            labels = cluster_1d(x, rel_tol=vx_tol, abs_tol=vx_abs_tol)
-        centres = {lab: _set_point(x[labels == lab], kind) for lab in np.unique(labels)}
-        out[set_col] = np.array([centres[lab] for lab in labels], dtype=float)
-        keys = np.column_stack([keys, labels])
-
-    if by is None:
-        by = [c for c in ("source", "file") if c in out.columns]
-    for col in by:
-        if col not in out.columns:
-            raise MftireInputError(f"group_sweeps: 'by' column {col!r} not found")
-        codes = pd.factorize(out[col], use_na_sentinel=False)[0]
-        keys = np.column_stack([keys, codes])
-
-    # contiguous segments of identical keys
-    change = np.ones(n, dtype=bool)
-    if n > 1:
-        change[1:] = np.any(keys[1:] != keys[:-1], axis=1)
-    kappa = out["kappa"].to_numpy(dtype=float)
-    alpha = out["alpha"].to_numpy(dtype=float)
-    sweep = np.zeros(n, dtype=int)
-    next_id = 0
-    starts = np.flatnonzero(change)
-    ends = np.append(starts[1:], n)
-    for s, e in zip(starts, ends, strict=True):
-        if split and e - s > 1:
-            runs = _split_runs(kappa[s:e], alpha[s:e], kappa_tol, alpha_tol)
-            runs = _merge_short_runs(runs, min_points)
-            _, runs = np.unique(runs, return_inverse=True)
-        else:
-            runs = np.zeros(e - s, dtype=int)
-        sweep[s:e] = runs + next_id
-        next_id += int(runs.max()) + 1
-
-    out["sweep_id"] = sweep
-    kinds = np.empty(n, dtype=object)
-    svar = np.empty(n, dtype=object)
-    k_set = np.full(n, np.nan)
-    a_set = np.full(n, np.nan)
-    sdir = np.zeros(n, dtype=int)
-    direction = np.empty(n, dtype=object)
-    order = np.argsort(sweep, kind="stable")
-    bounds = np.flatnonzero(np.diff(sweep[order])) + 1
-    for rows in np.split(order, bounds):
-        k, a = kappa[rows], alpha[rows]
-        kind = sweep_kind(k, a, kappa_tol=kappa_tol, alpha_tol=alpha_tol)
-        if kind == "pure_longitudinal":
-            var = "kappa" if _robust_range(k) > 2 * kappa_tol else "none"
-        elif kind == "pure_lateral":
-            var = "alpha" if _robust_range(a) > 2 * alpha_tol else "none"
-        elif kind == "combined":
-            rk, ra = _robust_range(k) / kappa_tol, _robust_range(a) / alpha_tol
-            var = "kappa" if rk >= ra else "alpha"
-            if max(rk, ra) <= 2:
-                var = "none"
-        else:
-            var = "none"
-        kinds[rows] = kind
-        svar[rows] = var
-        if var != "alpha":
-            a_set[rows] = float(np.median(a))
-        if var != "kappa":
-            k_set[rows] = float(np.median(k))
-        if var == "none":
-            direction[rows] = "none"
-        else:
-            x = k if var == "kappa" else a
-            dirs, word = _direction_labels(x, kappa_tol if var == "kappa" else alpha_tol)
-            sdir[rows] = dirs
-            direction[rows] = word
-    out["kind"] = kinds
-    out["sweep_var"] = svar
-    out["kappa_set"] = k_set
-    out["alpha_set"] = a_set
-    out["sweep_dir"] = sdir
-    out["direction"] = direction
-    return out
-
-
-def summarize_sweeps(grouped: pd.DataFrame) -> pd.DataFrame:
-    """One row per sweep of a :func:`group_sweeps` result.
-
-    Returns
-    -------
-    DataFrame
-        Indexed by ``sweep_id`` with ``kind, sweep_var, direction, n, Fz_set, gamma_set,
-        P_set, Vx_set, kappa_set, alpha_set, kappa_min, kappa_max, alpha_min,
-        alpha_max`` and, when present, ``source``/``file`` of the first row.
-    """
-    need = ["sweep_id", "kind", "sweep_var", "direction", "Fz_set", "gamma_set", "P_set", "Vx_set"]
-    missing = [c for c in need if c not in grouped.columns]
-    if missing:
-        raise MftireInputError(f"summarize_sweeps: run group_sweeps first (missing {missing})")
-    g = grouped.groupby("sweep_id", sort=True)
-    first_cols = ["kind", "sweep_var", "direction", "Fz_set", "gamma_set", "P_set", "Vx_set",
-                  "kappa_set", "alpha_set"] + [c for c in ("source", "file") if c in grouped.columns]
-    summary = g[first_cols].first()
-    summary.insert(3, "n", g.size())
-    summary["kappa_min"] = g["kappa"].min()
-    summary["kappa_max"] = g["kappa"].max()
-    summary["alpha_min"] = g["alpha"].min()
-    summary["alpha_max"] = g["alpha"].max()
-    return summary

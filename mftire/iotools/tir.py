@@ -121,7 +121,7 @@ on a key it uses that has a default (``INFLPRES =``, the ranges), are treated as
 with one :class:`TirWarning` per file naming every line; a blank or non-numeric value on
 a required key (:func:`mftire.iotools.tir_checks.required_keys`), a blank force or moment
 coefficient the evaluator uses (``tir_checks.COEFFICIENT_SECTIONS``), or text on a key the
-evaluator uses (:func:`mftire.mf.usedkeys.evaluator_keys`), is an error.  A key given
+evaluator uses (:data:`mftire.iotools.evaluator_keys.EVALUATOR_KEYS`), is an error.  A key given
 twice in a section is a :class:`TirWarning` and the last value counts (as MFeval and
 Chrono read files).  Adams's ``(COMMENTS)`` / ``{comment_string}`` / quoted-line blocks
 inside a section are kept (``TirParameters.blocks``) and written back.
@@ -688,8 +688,8 @@ def parse_tir(text: str, path: Any = None, strict: bool = False) -> TirParameter
         """A blank or non-numeric value.  Error on a required key (no sensible default), on a key
         the evaluator uses when the value is text, and under ``strict``; else a warning and the key
         is treated as absent (a blank on a key the evaluator uses takes its default)."""
+        from mftire.iotools.evaluator_keys import evaluator_keys
         from mftire.iotools.tir_checks import COEFFICIENT_SECTIONS, required_keys
-        from mftire.mf.usedkeys import evaluator_keys
 
         used = key in evaluator_keys()
         p = BY_KEY.get(key)
@@ -963,7 +963,7 @@ def read_tir(path: str | os.PathLike[str], strict: bool = False) -> TirParameter
 
     Real-world files have quirks.  A blank value (``KEY =``) or a non-numeric value
     on a standard numeric key (``MASS = kg``) is tolerated when the evaluator does
-    not use the key (:func:`mftire.mf.usedkeys.evaluator_keys`): a
+    not use the key (:data:`mftire.iotools.evaluator_keys.EVALUATOR_KEYS`): a
     :class:`TirWarning` naming file, line and key, and the key is treated as absent.
     On a key the evaluator uses it is an error naming file, line and key.
 

@@ -30,9 +30,9 @@ INFLPRES    P            Pa
 FZW, FZ     Fz           N
 FXW, FX     Fx           N
 FYW, FY     Fy           N
-MXW, MX     Mx           N*m
-MYW, MY     My           N*m
-MZW, MZ     Mz           N*m
+MXW, MX     Mx           N·m
+MYW, MY     My           N·m
+MZW, MZ     Mz           N·m
 MEASNUMB    meas_no      -
 RUNTIME     time         s
 TYREDEFL    deflection   m
@@ -64,56 +64,41 @@ from mftire.iotools.atomic import write_text_atomic
 from mftire.iotools.sweeps import convert_from_si, validate_sweeps
 from mftire.iotools.units import DIMENSIONS, SI_UNITS, is_known_unit, unit_factor
 
-__all__ = ["TYDEX_CHANNELS", "read_tydex", "write_tydex", "parse_tydex"]
+__all__ = ["TYDEX_CHANNELS", "TYDEX_VARIABLES", "read_tydex", "write_tydex", "parse_tydex"]
 
 PathLike = str | os.PathLike[str]
 
-#: Schema column for each known TYDEX key, best name first.
-TYDEX_CHANNELS: dict[str, tuple[str, ...]] = {
-    "kappa": ("LONGSLIP",),
-    "alpha": ("SLIPANGL",),
-    "gamma": ("INCLANGL",),
-    "Vx": ("RUNSPEED",),
-    "P": ("INFLPRES",),
-    "Fz": ("FZW", "FZ"),
-    "Fx": ("FXW", "FX"),
-    "Fy": ("FYW", "FY"),
-    "Mx": ("MXW", "MX"),
-    "My": ("MYW", "MY"),
-    "Mz": ("MZW", "MZ"),
-    "meas_no": ("MEASNUMB",),
-    "time": ("RUNTIME",),
-    "deflection": ("TYREDEFL",),
-    "Re": ("ROLLRADI",),
-    "Rl": ("LOADRADI",),
-    "omega": ("TYRESPED",),
+#: The one variable map of TYDEX: schema column -> (TYDEX keys, best name first; the comment of the
+#: first key as :func:`write_tydex` writes it).  The order is the order of the written channels.
+TYDEX_VARIABLES: dict[str, tuple[tuple[str, ...], str]] = {
+    "meas_no": (("MEASNUMB",), "Measurement point number"),
+    "time": (("RUNTIME",), "Time"),
+    "kappa": (("LONGSLIP",), "Longitudinal slip"),
+    "alpha": (("SLIPANGL",), "Slip angle"),
+    "gamma": (("INCLANGL",), "Inclination angle"),
+    "Vx": (("RUNSPEED",), "Running speed"),
+    "P": (("INFLPRES",), "Inflation pressure"),
+    "Fz": (("FZW", "FZ"), "Vertical force W-axis"),
+    "Fx": (("FXW", "FX"), "Longitudinal force W-axis"),
+    "Fy": (("FYW", "FY"), "Lateral force W-axis"),
+    "Mx": (("MXW", "MX"), "Overturning moment W-axis"),
+    "My": (("MYW", "MY"), "Rolling resistance moment W"),
+    "Mz": (("MZW", "MZ"), "Aligning moment W-axis"),
+    "deflection": (("TYREDEFL",), "Tyre deflection"),
+    "Re": (("ROLLRADI",), "Effective rolling radius"),
+    "Rl": (("LOADRADI",), "Loaded radius"),
+    "omega": (("TYRESPED",), "Wheel angular speed"),
 }
-# key written by write_tydex, with its comment
-_WRITE_NAMES: dict[str, tuple[str, str]] = {
-    "meas_no": ("MEASNUMB", "Measurement point number"),
-    "time": ("RUNTIME", "Time"),
-    "kappa": ("LONGSLIP", "Longitudinal slip"),
-    "alpha": ("SLIPANGL", "Slip angle"),
-    "gamma": ("INCLANGL", "Inclination angle"),
-    "Vx": ("RUNSPEED", "Running speed"),
-    "P": ("INFLPRES", "Inflation pressure"),
-    "Fz": ("FZW", "Vertical force W-axis"),
-    "Fx": ("FX", "Longitudinal force W-axis"),
-    "Fy": ("FYW", "Lateral force W-axis"),
-    "Mx": ("MXW", "Overturning moment W-axis"),
-    "My": ("MYW", "Rolling resistance moment W"),
-    "Mz": ("MZW", "Aligning moment W-axis"),
-    "deflection": ("TYREDEFL", "Tyre deflection"),
-    "Re": ("ROLLRADI", "Effective rolling radius"),
-    "Rl": ("LOADRADI", "Loaded radius"),
-    "omega": ("TYRESPED", "Wheel angular speed"),
-}
+#: Schema column for each known TYDEX key, best name first (from :data:`TYDEX_VARIABLES`).
+TYDEX_CHANNELS: dict[str, tuple[str, ...]] = {col: keys for col, (keys, _) in TYDEX_VARIABLES.items()}
 _KEY_TO_COLUMN: dict[str, tuple[str, int]] = {
     key: (col, rank) for col, keys in TYDEX_CHANNELS.items() for rank, key in enumerate(keys)
 }
 _MODEL_BLOCKS = {"MODELDEFINITION", "MODELPARAMETERS", "MODELCOEFFICIENTS", "MODELCHANNELS",
                  "MODELOUTPUTS", "MODELEND"}
 _KNOWN_BLOCKS = {"HEADER", "COMMENTS", "CONSTANTS", "MEASURCHANNELS", "MEASURDATA", "END"}
+#: Unit names as TYDEX files write them, where they differ from mftire's one spelling.
+_TYDEX_SPELLING = {"N.m": "Nm"}
 _NA_TOKENS = ["NOTAVAIL", "NaN", "nan", "NAN", "N/A", "NA", "-"]
 _DEFAULT_CUTS = (10, 40, 50)
 _NUMBER_RE = re.compile(r"NOTAVAIL|[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
@@ -587,10 +572,10 @@ def write_tydex(
     """
     units = dict(units or {})
     chans: list[tuple[str, str, str, np.ndarray]] = []  # key, comment, unit, values
-    for col, (key, comment) in _WRITE_NAMES.items():
+    for col, ((key, *_), comment) in TYDEX_VARIABLES.items():
         if col not in df.columns:
             continue
-        unit = units.get(col, SI_UNITS[col])
+        unit = units.get(col) or _TYDEX_SPELLING.get(SI_UNITS[col], SI_UNITS[col])
         values = pd.to_numeric(df[col], errors="raise").to_numpy(dtype=float)
         if DIMENSIONS[col] != "count":
             values = convert_from_si(values, unit, col)
@@ -598,7 +583,7 @@ def write_tydex(
     for col in columns or ():
         if col not in df.columns:
             raise MftireInputError(f"write_tydex: column {col!r} not found")
-        if col in _WRITE_NAMES:
+        if col in TYDEX_VARIABLES:
             continue
         try:
             values = pd.to_numeric(df[col], errors="raise").to_numpy(dtype=float)

@@ -3,7 +3,7 @@
 One table serves the ``.tir`` reader (``[UNITS]`` section, :mod:`mftire.iotools.tir`),
 the sweep-table conversions (:mod:`mftire.iotools.sweeps`), the TYDEX reader and writer
 (:mod:`mftire.iotools.tydex`) and the column checks of the fitter
-(:mod:`mftire.iotools.tables`).  Factors are exact rationals (:class:`fractions.Fraction`),
+(:mod:`mftire.iotools.loaders`).  Factors are exact rationals (:class:`fractions.Fraction`),
 so a reader can convert with one correct rounding; ``float(factor)`` is the float factor.
 
 Names are looked up after :func:`normalise_unit` (lower case; brackets, blanks, ``*``,
@@ -42,9 +42,9 @@ SI_UNITS: dict[str, str] = {
     "phit": "1/m",
     "Fx": "N",
     "Fy": "N",
-    "Mz": "Nm",
-    "Mx": "Nm",
-    "My": "Nm",
+    "Mz": "N.m",
+    "Mx": "N.m",
+    "My": "N.m",
     "meas_no": "-",
     "time": "s",
     "deflection": "m",
@@ -73,8 +73,9 @@ DIMENSIONS: dict[str, str] = {
     "Rl": "length",
     "omega": "angular_speed",
 }
-#: Axis-label spelling of the SI unit of each column (``N·m`` for moments).
-PLOT_UNITS: dict[str, str] = {c: ("N·m" if u == "Nm" else u) for c, u in SI_UNITS.items()}
+#: Axis-label form of the SI unit of each column: the unit names of :data:`SI_UNITS` (the FMI/SI names the
+#: model spec uses, ``N.m``), with the product dot printed as ``·`` (``N·m``).
+PLOT_UNITS: dict[str, str] = {c: u.replace(".", "·") for c, u in SI_UNITS.items()}
 
 _PI = Fraction(math.pi)  # the float pi, exactly
 _DEG = _PI / 180

@@ -16,10 +16,13 @@ pressure changes", Vehicle System Dynamics 48:S1):
 ``turnslip``       the zeta reduction factors
 ``vertical``       effective rolling radius, loaded radius, deflection, contact patch
 ``relaxation``     carcass stiffnesses and relaxation lengths
-``solver``         assembles the 30 output channels
+``solver``         the one pipeline (prepare, forces, outputs): the 30 output channels
+``extensions``     model extensions: scaling factors as functions of a variable
+``kernel``         the compiled array kernel (the C model over arrays, loaded with ctypes)
+``_kernel_build``  how the kernel is compiled (setup.py and ``python -m mftire.mf.kernel build``)
 ``family``         model codes: MF 5.2 family (FITTYP 6, PAC2002), PAC2002 marker
 ``pac2002``        PAC2002 (Adams MF-Tyre 5.2): its differences from MF 5.2
-``usedkeys``       the ``.tir`` keys the evaluator reads (for tolerant reading)
+``usedkeys``       generates :mod:`mftire.iotools.evaluator_keys` (the ``.tir`` keys read)
 =================  ========================================================
 
 The reference for numerical agreement is MFeval 4.0 (M. Furlan Tassara).  Where it

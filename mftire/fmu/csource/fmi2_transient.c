@@ -33,6 +33,9 @@ typedef struct {
     FMI2Base base; /* first: fmi2_common.c sees the instance as an FMI2Base */
     MFParams params;
     MTInputs inputs;
+    MTInputs held; /* last good inputs (mt_guard_inputs) */
+    unsigned guard_count[MT_N_INPUTS];
+    unsigned nonfinite_count;
     double x[2];
     MTKin kin;
     MTOutputs out;
@@ -63,6 +66,9 @@ static void reset(Instance *ins)
 {
     ins->params = MT_PARAM_START;
     ins->inputs = MT_INPUT_START;
+    ins->held = MT_INPUT_START;
+    memset(ins->guard_count, 0, sizeof ins->guard_count);
+    ins->nonfinite_count = 0;
     ins->x[0] = MT_STATE_START[0];
     ins->x[1] = MT_STATE_START[1];
     ins->use_mode = MT_USEMODE_START;
@@ -85,8 +91,20 @@ static int bad_code(Instance *ins, int rc)
 static int update_kin(Instance *ins)
 {
     int rc;
+    unsigned bad, i;
+    MTInputs in;
     if (ins->kin_ok && !(ins->out_want & MT_OFFSETS & ~ins->kin.offsets)) return 0;
-    rc = mt_kinematics(&ins->params, ins->use_mode, &ins->inputs, ins->out_want, &ins->kin, on_warning, ins);
+    in = ins->inputs;
+    bad = mt_guard_inputs(&ins->params, &in, &ins->held); /* non-finite: last good value; beyond bounds: bound */
+    for (i = 0; i < MT_N_INPUTS; i++)
+        if (bad & (1u << i)) {
+            unsigned n = ++ins->guard_count[i];
+            if (ins->debug_logging || n <= WARN_REPEAT)
+                fmi2_logf(&ins->base, fmi2Warning, "logStatusWarning",
+                          "t=%.17g: input '%s' not finite or out of range: the last good value or the bound is used",
+                          ins->time, mt_input_name(i));
+        }
+    rc = mt_kinematics(&ins->params, ins->use_mode, &in, ins->out_want, &ins->kin, on_warning, ins);
     if (rc != MF_OK) return bad_code(ins, rc);
     ins->kin_ok = 1;
     return 0;
@@ -101,6 +119,9 @@ static int update_out(Instance *ins, unsigned want)
     if (update_kin(ins)) return 1;
     rc = mt_outputs(&ins->params, ins->use_mode, &ins->kin, ins->x, ins->out_want, &ins->out, on_warning, ins);
     if (rc != MF_OK) return bad_code(ins, rc);
+    if (ins->out.nonfinite && (ins->debug_logging || ++ins->nonfinite_count <= WARN_REPEAT))
+        fmi2_logf(&ins->base, fmi2Warning, "logStatusWarning", "t=%.17g: %u output(s) not finite, set to 0", ins->time,
+                  ins->out.nonfinite);
     ins->out_have = ins->out_want;
     ins->out_ok = 1;
     return 0;

@@ -11,7 +11,6 @@
  * Arithmetic is written in the same order as the Python expressions so that
  * both implementations round alike.
  */
-#include <complex.h>
 #include <float.h>
 #include <math.h>
 #include <stddef.h>
@@ -490,6 +489,23 @@ MF_FN double kxk(const MFParams *p, double Fz, double dfz, double dpi)
            p->LKX; /* eq 4.E15 */
 }
 
+/* Longitudinal friction coefficient mu_x (eq 4.E13; 0 at Fz = 0). */
+MF_FN double mu_x(const MFParams *p, const Cond *c, const Basic *b)
+{
+    double dfz = b->dfz, dpi = b->dpi;
+    if (c->Fz == 0.0) return 0.0;
+    return (p->PDX1 + p->PDX2 * dfz) * (1.0 + p->PPX3 * dpi + p->PPX4 * sq(dpi)) * (1.0 - p->PDX3 * sq(c->gamma)) *
+           b->LMUX_star; /* eq 4.E13 */
+}
+
+/* Lateral friction coefficient mu_y at the camber gamma_star (eq 4.E23). */
+MF_FN double mu_y(const MFParams *p, const Basic *b, double gamma_star)
+{
+    double dfz = b->dfz, dpi = b->dpi;
+    return (p->PDY1 + p->PDY2 * dfz) * (1.0 + p->PPY3 * dpi + p->PPY4 * sq(dpi)) * (1.0 - p->PDY3 * sq(gamma_star)) *
+           b->LMUY_star; /* eq 4.E23 */
+}
+
 /* Pure longitudinal force: Fx0 [N], mux [-], Kxk [N]. */
 MF_FN void fx0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double z1, double *Fx0_out,
                 double *mux_out, double *Kxk_out)
@@ -497,9 +513,7 @@ MF_FN void fx0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double 
     double Fz = c->Fz, dfz = b->dfz, dpi = b->dpi;
     double Cx, mux, Dx, Kxk, Bx, SHx, SVx, kappax, Ex, Bk, Fx0;
     Cx = p->PCX1 * p->LCX; /* eq 4.E11 */
-    mux = (p->PDX1 + p->PDX2 * dfz) * (1.0 + p->PPX3 * dpi + p->PPX4 * sq(dpi)) * (1.0 - p->PDX3 * sq(c->gamma)) *
-          b->LMUX_star; /* eq 4.E13 */
-    if (Fz == 0.0) mux = 0.0;
+    mux = mu_x(p, c, b); /* eq 4.E13 */
     Dx = mux * Fz * z1; /* eq 4.E12 */
     Kxk = kxk(p, Fz, dfz, dpi); /* eq 4.E15 */
     Bx = Kxk / (Cx * Dx + MF_EPSILON * sign_nonzero(Dx)); /* eq 4.E16 */
@@ -600,8 +614,7 @@ MF_FN void fy0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, double 
 
     alphay = b->alpha_star + SHy; /* eq 4.E20 */
     Cy = p->PCY1 * p->LCY; /* eq 4.E21 */
-    muy = (p->PDY1 + p->PDY2 * dfz) * (1.0 + p->PPY3 * dpi + p->PPY4 * sq(dpi)) * (1.0 - p->PDY3 * sq(gamma_star)) *
-          b->LMUY_star; /* eq 4.E23 */
+    muy = mu_y(p, b, gamma_star); /* eq 4.E23 */
     Dy = muy * Fz * zeta2; /* eq 4.E22 */
     Ey = (p->PEY1 + p->PEY2 * dfz) *
          (1.0 + p->PEY5 * sq(gamma_star) - (p->PEY3 + p->PEY4 * gamma_star) * sign_nonzero(alphay)) * p->LEY;
@@ -640,9 +653,27 @@ MF_FN double fy_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *
 
 /* ------------------------------------------------------------------ aligning.py */
 
+/* acos(x + 0i) of a real x as the C99 complex acos gives it, as (re, im), with real arithmetic only (MSVC has no
+ * C99 complex): (acos x, -0) for |x| <= 1, (0, -acosh x) above 1, (pi, -acosh(-x)) below -1, NaN for NaN. */
+MF_FN void acos_real(double x, double *re, double *im)
+{
+    if (isnan(x)) {
+        *re = *im = x;
+    } else if (x > 1.0) {
+        *re = 0.0;
+        *im = -acosh(x);
+    } else if (x < -1.0) {
+        *re = MF_PI;
+        *im = -acosh(-x);
+    } else {
+        *re = acos(x);
+        *im = -0.0;
+    }
+}
+
 typedef struct {
     double alphar, alphat, Dr;
-    double complex Cr; /* eq 4.E46 (complex in rare turn-slip cases, as in the reference) */
+    double Cr, Cr_im; /* eq 4.E46, real and imaginary parts (complex in rare turn-slip cases, as in the reference) */
     double Br, Dt, Ct, Bt, Et, Kya_prime;
 } AlignTerms;
 
@@ -660,7 +691,7 @@ MF_FN void aligning_terms(const MFParams *p, Ctx *m, const Cond *c, const Basic 
     double R0 = p->UNLOADED_RADIUS;
     double dfz = b->dfz, dpi = b->dpi, gamma = c->gamma, gamma_star = b->gamma_star, alpha_star = b->alpha_star;
     double Fz, SHt, Kya_prime, SHf, alphar, alphat, z5 = 1.0, z6 = 1.0, Dt, Bt, Ct, Et, zeta0, zeta2, zeta8, Dr, Br;
-    double complex zeta7;
+    double zeta7, zeta7_im = 0.0; /* real and imaginary parts (no C99 complex: portable to MSVC) */
     if (m->limits)
         Fz = (c->Fz <= 0.0) ? 0.0 : c->Fz_low;
     else
@@ -705,7 +736,9 @@ MF_FN void aligning_terms(const MFParams *p, Ctx *m, const Cond *c, const Basic 
         Mzp90 = Mzp_inf * (2.0 / MF_PI) * atan(p->QCRP2 * R0 * fabs(c->phit)) * Gyk; /* eq 4.103 */
         /* acos of a ratio above one is complex in the reference; keep its real outcome. */
         /* MFeval departure (as aligning.py): Drp = 0 gives ratio 1, zeta7 = 0, Mzr = Dr. */
-        zeta7 = (2.0 / MF_PI) * cacos((Drp == 0.0 ? 1.0 : Mzp90 / fabs(Drp)) + 0.0 * I); /* TNO manual */
+        acos_real(Drp == 0.0 ? 1.0 : Mzp90 / fabs(Drp), &zeta7, &zeta7_im); /* TNO manual */
+        zeta7 *= 2.0 / MF_PI;
+        zeta7_im *= 2.0 / MF_PI;
         zeta8 = 1.0 + Drp;
     } else {
         zeta0 = 1.0;
@@ -721,15 +754,16 @@ MF_FN void aligning_terms(const MFParams *p, Ctx *m, const Cond *c, const Basic 
              b->LMUY_star * sgn(c->Vx) * cos(alpha_star) +
          zeta8 - 1.0; /* eq 4.E47 */
     Br = (p->QBZ9 * p->LKY / b->LMUY_star + p->QBZ10 * lat->By * lat->Cy) * z6; /* eq 4.E45 */
-    a->alphar = alphar; a->alphat = alphat; a->Dr = Dr; a->Cr = zeta7; /* eq 4.E46 */
+    a->alphar = alphar; a->alphat = alphat; a->Dr = Dr; a->Cr = zeta7; a->Cr_im = zeta7_im; /* 4.E46 */
     a->Br = Br; a->Dt = Dt; a->Ct = Ct; a->Bt = Bt; a->Et = Et; a->Kya_prime = Kya_prime;
 }
 
-/* Dr*cos(Cr*u) with a possibly complex Cr, real part. */
-MF_FN double residual(double Dr, double complex Cr, double u, double factor)
+/* Dr*cos(Cr*u) with a possibly complex Cr = Cr_re + i*Cr_im, real part: Re cos(x + iy) = cos(x)*cosh(y)
+ * (the real part of the C99 complex cosine, computed as this product). */
+MF_FN double residual(double Dr, double Cr_re, double Cr_im, double u, double factor)
 {
-    if (cimag(Cr) == 0.0) return Dr * cos(creal(Cr) * u) * factor;
-    return creal(Dr * ccos(Cr * u) * factor);
+    if (Cr_im == 0.0) return Dr * cos(Cr_re * u) * factor;
+    return Dr * (cosh(Cr_im * u) * cos(Cr_re * u)) * factor;
 }
 
 /* PAC2002 pure-slip aligning moment (mftire.mf.pac2002.mz0): Mz0 = -t*Fy0 + Mzr with Fy0 at the
@@ -738,7 +772,7 @@ MF_FN void mz0_pac2002(const Cond *c, const Basic *b, const AlignTerms *a, const
                         double *t_out, double *Mzr_out)
 {
     double t0 = trail_mf(a->Dt, a->Ct, a->Bt, a->Et, a->alphat, b->alpha_prime) * c->smooth; /* eq 4.E33 */
-    double Mzr0 = residual(a->Dr, a->Cr, atan(a->Br * a->alphar), 1.0) * c->smooth;          /* eq 4.E36 */
+    double Mzr0 = residual(a->Dr, a->Cr, a->Cr_im, atan(a->Br * a->alphar), 1.0) * c->smooth;          /* eq 4.E36 */
     *Mz = -t0 * lat->Fy0 + Mzr0;
     *t_out = t0;
     *Mzr_out = Mzr0;
@@ -757,7 +791,7 @@ MF_FN void mz0(const MFParams *p, Ctx *m, const Cond *c, const Basic *b, const A
     }
     fy0(p, m, c, b, 0.0, 0, MF_W_EY0, &lat0); /* Fy0 at gamma = phi = 0 */
     t0 = trail_mf(a->Dt, a->Ct, a->Bt, a->Et, a->alphat, b->alpha_prime) * c->smooth; /* eq 4.E33 */
-    Mzr0 = residual(a->Dr, a->Cr, atan(a->Br * a->alphar), cos(b->alpha_prime)) * c->smooth; /* 4.E36 */
+    Mzr0 = residual(a->Dr, a->Cr, a->Cr_im, atan(a->Br * a->alphar), cos(b->alpha_prime)) * c->smooth; /* 4.E36 */
     *Mz = -t0 * lat0.Fy0 + Mzr0; /* eqs 4.E32, 4.E31 */
     *t_out = t0;
     *Mzr_out = Mzr0;
@@ -778,7 +812,7 @@ MF_FN void mz_combined(const MFParams *p, Ctx *m, const Cond *c, const Basic *b,
        PAC2002 follows the book, s with Fz0' = LFZO*FNOMIN (mftire.mf.aligning.mz_combined). */
     s = R0 * (p->SSZ1 + p->SSZ2 * (Fy / (is_pac2002(p) ? p->LFZO * p->FNOMIN : p->FNOMIN)) +
               (p->SSZ3 + p->SSZ4 * b->dfz) * c->gamma) * p->LS; /* A56, 4.E76 */
-    Mzr = residual(a->Dr, a->Cr, atan(a->Br * alphar_eq), 1.0); /* eq 4.E75 */
+    Mzr = residual(a->Dr, a->Cr, a->Cr_im, atan(a->Br * alphar_eq), 1.0); /* eq 4.E75 */
 
     /* Fy at zero camber (and zero spin weighting) for the trail term, eq 4.E74; the pure
        lateral force at the actual inclination is that force when the inclination is zero. */
@@ -1277,6 +1311,16 @@ MF_FN void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c, 
             lat.Kya = kya(p, c->Fz, b.Fz0p, b.dpi, b.gamma_star, z3); /* eq 4.E25 */
         }
         relaxation(p, c, Kxk, lat.Kya, &out->Cx, &out->Cy, &out->sigmax, &out->sigmay);
+        /* the slip stiffnesses and friction coefficients too (cheap; the transient model's sliding limit) */
+        if (!need_fx) {
+            out->Kxk = Kxk;
+            out->mux = mu_x(p, c, &b);
+        }
+        if (!need_fy) {
+            double muy = mu_y(p, &b, b.gamma_star);
+            out->Kya = lat.Kya;
+            out->muy = m->limits ? fabs(muy) : muy;
+        }
     }
 }
 

@@ -85,7 +85,7 @@ int mf_check_fittyp(const MFParams *p, char *msg, unsigned long n);
 #define MF_WANT_MY 16u    /* My (needs FX) */
 #define MF_WANT_RAD 32u   /* rho, Rl, Cz (needs FX, FY) */
 #define MF_WANT_PATCH 64u /* 2a, 2b */
-#define MF_WANT_RELAX 128u /* Cx, Cy, sigmax, sigmay (needs the slip stiffnesses Kxk, Kya only) */
+#define MF_WANT_RELAX 128u /* Cx, Cy, sigmax, sigmay; Kxk, Kya, mux, muy (the slip stiffnesses and mu only) */
 #define MF_WANT_ALL 255u
 /* The groups whose channels need the whole longitudinal / lateral force computed. */
 #define MF_NEEDS_FX (MF_WANT_FX | MF_WANT_MZ | MF_WANT_MY | MF_WANT_RAD)

@@ -3,10 +3,39 @@
  * Each line mirrors the Python; see mf_transient.h and docs/transient.md.
  */
 #include <math.h>
+#include <stddef.h>
 
 #include "mf_transient.h"
 
 static double nan_to(double x, double fill) { return isnan(x) ? fill : x; }
+
+/* Slip at which the carcass deflection saturates: force mu*Fz over the slip stiffness |K| (0 where not positive
+ * and finite: no saturation). */
+static double sat_slip(double mu, double Fz, double K)
+{
+    double q = fabs(mu) * Fz / fabs(K);
+    return (isfinite(q) && q > 0.0) ? q : 0.0;
+}
+
+/* Sliding force over peak force: the Magic Formula's asymptote D*sin(pi/2*C) over D (Pacejka 2012 §4.3.2), for
+ * 0 < C < 2; 1 otherwise. */
+static double sliding(double C)
+{
+    const double PI = 3.14159265358979323846;
+    return (C > 0.0 && C < 2.0) ? fabs(sin(0.5 * PI * C)) : 1.0;
+}
+
+/* 1/max(sech^2(q/qs), smin): how much faster than the linear lag the slip state q relaxes where the
+ * characteristic (slip stiffness K, peak mu*Fz) flattens; 1 where qs = 0.  sech^2 = 4t/(1+t)^2 with
+ * t = exp(-2|x|) (no overflow). */
+static double slope_factor(double q, double qs, double smin)
+{
+    double t, s;
+    if (!(qs > 0.0) || q == 0.0) return 1.0 / (1.0 > smin ? 1.0 : smin); /* sech^2(0) = 1 */
+    t = exp(-2.0 * fabs(q / qs));
+    s = 4.0 * t / ((1.0 + t) * (1.0 + t));
+    return 1.0 / (s > smin ? s : smin);
+}
 
 int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned offsets, MTKin *k,
                   mf_warning_fn warn, void *ctx)
@@ -15,7 +44,7 @@ int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned 
     double Fz = nan_to(in->Fz, 0.0), Vx = nan_to(in->Vx, 0.0), Vy = nan_to(in->Vy, 0.0);
     double omega = nan_to(in->omega, 0.0), yaw = nan_to(in->yawRate, 0.0);
     double vxlow = p->VXLOW, absVx = fabs(Vx), vfloor, Vev, r, q;
-    unsigned want = MF_WANT_RELAX;
+    unsigned want = MF_WANT_RELAX; /* sigma; mu and K for the saturation slips */
     int rc, i;
     r = absVx / vxlow < 1.0 ? absVx / vxlow : 1.0;
     /* low-speed weight (cosine, as MFeval's VXLOW reduction); from VXLOW on exactly 0.5 * (1 + cos(PI)) = 0 */
@@ -45,6 +74,10 @@ int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned 
     k->Vsy = Vy;
     k->sigx = k->zero.sigmax > p->TR_SIGMA_MIN ? k->zero.sigmax : p->TR_SIGMA_MIN; /* Besselink 2010 eq 19 */
     k->sigy = k->zero.sigmay > p->TR_SIGMA_MIN ? k->zero.sigmay : p->TR_SIGMA_MIN; /* Besselink 2010 eq 19 */
+    /* sliding force D*|sin(pi/2*C)| (the asymptote of the Magic Formula, Pacejka 2012 §4.3.2) over the slip
+     * stiffness; C = PCX1*LCX (eq 4.E11), PCY1*LCY (eq 4.E21) */
+    k->slx = p->TR_SAT * sat_slip(k->zero.mux * sliding(p->PCX1 * p->LCX), k->zero.Fz, k->zero.Kxk);
+    k->sly = p->TR_SAT * sat_slip(k->zero.muy * sliding(p->PCY1 * p->LCY), k->zero.Fz, k->zero.Kya);
     q = Vx / vxlow;
     q = q > 1.0 ? 1.0 : (q < -1.0 ? -1.0 : q);
     /* smooth sign of the rolling direction; sin(+-PI/2) is exactly +-1 in double */
@@ -52,31 +85,37 @@ int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned 
     return MF_OK;
 }
 
-/* Leak rates a_x, a_y [1/s] with the deflection limiter. */
-static void leak(const MFParams *p, const MTKin *k, const double x[2], double *ax, double *ay)
+/* Carcass deflection rates dc = (du_c/dt, dv_c/dt) (the linear lag with the deflection limiter), the rates
+ * A = (A_x, A_y) [m/s] and the slope factors r = (r_x, r_y): du/dt = r_x*dc_x (mftire.transient lag()). */
+static void lag(const MFParams *p, const MTKin *k, const double x[2], double dc[2], double A[2], double r[2])
 {
     double gx = fabs(x[0]) / (k->sigx * p->TR_KAPPA_LIM) - 1.0, gy = fabs(x[1]) / (k->sigy * p->TR_TANALPHA_LIM) - 1.0;
     gx = gx > 0.0 ? gx : 0.0; /* deflection limiter */
     gy = gy > 0.0 ? gy : 0.0;
-    *ax = (fabs(k->Vx) + p->TR_LIM_GAIN * fabs(k->Vsx) * gx * gx) / k->sigx;
-    *ay = (fabs(k->Vx) + p->TR_LIM_GAIN * fabs(k->Vsy) * gy * gy) / k->sigy;
+    A[0] = fabs(k->Vx) + p->TR_LIM_GAIN * fabs(k->Vsx) * gx * gx;
+    A[1] = fabs(k->Vx) + p->TR_LIM_GAIN * fabs(k->Vsy) * gy * gy;
+    dc[0] = -k->Vsx - A[0] * (x[0] / k->sigx); /* Pacejka 2012 §7.2.1: du/dt + |Vx|/sigma_kappa*u = -Vsx */
+    dc[1] = k->Vsy - A[1] * (x[1] / k->sigy);  /* Pacejka 2012 §7.2.1: dv/dt + |Vx|/sigma_alpha*v = Vsy (ISO sign) */
+    r[0] = slope_factor(x[0] / k->sigx, k->slx, p->TR_SIGMA_MIN / k->sigx);
+    r[1] = slope_factor(x[1] / k->sigy, k->sly, p->TR_SIGMA_MIN / k->sigy);
 }
 
 void mt_rates(const MFParams *p, const MTKin *k, const double x[2], double dx[2])
 {
-    double ax, ay;
-    leak(p, k, x, &ax, &ay);
-    dx[0] = -k->Vsx - ax * x[0]; /* Pacejka 2012 §7.2.1: du/dt + |Vx|/sigma_kappa*u = -Vsx */
-    dx[1] = k->Vsy - ay * x[1];  /* Pacejka 2012 §7.2.1: dv/dt + |Vx|/sigma_alpha*v = Vsy (ISO sign) */
+    double dc[2], A[2], r[2];
+    lag(p, k, x, dc, A, r);
+    /* slope of the characteristic: local relaxation length sigma*sech^2 (Pacejka 2012 §7.2.2/§7.3) */
+    dx[0] = r[0] * dc[0];
+    dx[1] = r[1] * dc[1];
 }
 
 int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2], unsigned want,
                MTOutputs *out, mf_warning_fn warn, void *ctx)
 {
-    double dx[2];
+    double dx[2], A[2], r[2];
     MFInputs ev = k->ev;
     int rc;
-    mt_rates(p, k, x, dx);
+    lag(p, k, x, dx, A, r); /* damping on the carcass deflection rate */
     out->kappa_t = (x[0] + k->w * p->TR_TAU_X * dx[0]) / k->sigx;    /* low-speed damping (§7.3) */
     out->alpha_t = atan((x[1] + k->w * p->TR_TAU_Y * dx[1]) / k->sigy); /* tan alpha' = v/sigma_alpha */
     ev.kappa = out->kappa_t;
@@ -88,44 +127,157 @@ int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2
     if (want & MF_WANT_FY) out->ss.Fy -= k->w * k->zero.Fy;
     if (want & MF_WANT_MZ) out->ss.Mz -= k->w * k->zero.Mz;
     if (want & MF_WANT_MY) out->ss.My *= k->My_sign; /* rolling resistance opposes the rolling direction */
+    /* last line: no output is ever non-finite (fields of groups not wanted hold earlier, guarded values) */
+    out->nonfinite = 0;
+    {
+        double *o = (double *)&out->ss;
+        size_t i, n = sizeof out->ss / sizeof(double);
+        for (i = 0; i < n; i++)
+            if (!isfinite(o[i])) {
+                o[i] = 0.0;
+                out->nonfinite++;
+            }
+        if (!isfinite(out->kappa_t)) { out->kappa_t = 0.0; out->nonfinite++; }
+        if (!isfinite(out->alpha_t)) { out->alpha_t = 0.0; out->nonfinite++; }
+    }
     return MF_OK;
+}
+
+/*
+ * Equilibrium of ds/dt = r*(f - A(s)*s/sig) with A(s) = |Vx| + G*|Vs|*max(0, |s|/L - 1)^2 (L = sig*lim): the
+ * state the held inputs drive s to, monotonically (one-dimensional, A increasing in |s|).  Returns 0 when
+ * there is none (no leak: |Vx| = 0 and G*|Vs| = 0, or f = 0 and |Vx| = 0).  Beyond the limit, bisection on
+ * [L, L*(1 + 1/sqrt(G*lim))] (60 halvings: to the last bits).
+ */
+static int equilibrium(double f, double sig, double lim, double absVx, double Vs, double G, double *s_eq)
+{
+    double L = sig * lim, c = fabs(f) * sig, lo, hi, mid, gm;
+    int i;
+    if (f == 0.0) {
+        *s_eq = 0.0;
+        return absVx > 0.0 || G * fabs(Vs) > 0.0;
+    }
+    if (absVx * L >= c) { /* within the limit: the linear lag's steady state */
+        *s_eq = f * sig / absVx;
+        return 1;
+    }
+    if (!(G * fabs(Vs) > 0.0) || !(lim > 0.0)) return 0;
+    lo = L;
+    hi = L * (1.0 + 1.0 / sqrt(G * lim)); /* G*|Vs|*(hi/L-1)^2*hi >= |Vs|*sig >= c (|f| <= |Vs|) */
+    if (absVx > 0.0 && c / absVx < hi) hi = c / absVx;
+    for (i = 0; i < 60; i++) {
+        mid = 0.5 * (lo + hi);
+        gm = mid / L - 1.0;
+        if ((absVx + G * fabs(Vs) * gm * gm) * mid < c) lo = mid;
+        else hi = mid;
+    }
+    *s_eq = f > 0.0 ? 0.5 * (lo + hi) : -0.5 * (lo + hi);
+    return 1;
+}
+
+/* Exact solution over h of ds/dt = r*(f - A*s/sig) with r, A, f frozen (exponential Euler), not carried past
+ * the equilibrium s_eq of the unfrozen equation (the true solution never crosses it): stable for any h. */
+static double step1(double s, double sig, double A, double r, double f, double h, int has_eq, double s_eq)
+{
+    double a = r * A / sig, ah = a * h, phi, y;
+    phi = ah < 1e-12 ? h : -expm1(-ah) / a;
+    y = s * exp(-ah) + r * f * phi;
+    if (has_eq && (y - s_eq) * (s - s_eq) < 0.0) y = s_eq;
+    return y;
+}
+
+/* The step of mt_step with the rates A and slope factors r of lag() at x given. */
+static void step_lag(const MFParams *p, const MTKin *k, double x[2], double h, const double A[2], const double r[2])
+{
+    double u, ex, ey;
+    int hx, hy;
+    hx = equilibrium(-k->Vsx, k->sigx, p->TR_KAPPA_LIM, fabs(k->Vx), k->Vsx, p->TR_LIM_GAIN, &ex);
+    hy = equilibrium(k->Vsy, k->sigy, p->TR_TANALPHA_LIM, fabs(k->Vx), k->Vsy, p->TR_LIM_GAIN, &ey);
+    u = step1(x[0], k->sigx, A[0], r[0], -k->Vsx, h, hx, ex);
+    x[1] = step1(x[1], k->sigy, A[1], r[1], k->Vsy, h, hy, ey);
+    x[0] = u;
 }
 
 void mt_step(const MFParams *p, const MTKin *k, double x[2], double h)
 {
-    double ax, ay, ah, phi;
-    leak(p, k, x, &ax, &ay);
-    ah = ax * h;
-    phi = ah < 1e-12 ? h : -expm1(-ah) / ax;
-    x[0] = x[0] * exp(-ah) - k->Vsx * phi; /* exact solution of du/dt = -Vsx - a_x*u over h */
-    ah = ay * h;
-    phi = ah < 1e-12 ? h : -expm1(-ah) / ay;
-    x[1] = x[1] * exp(-ah) + k->Vsy * phi;
+    double dc[2], A[2], r[2];
+    lag(p, k, x, dc, A, r);
+    step_lag(p, k, x, h, A, r);
 }
 
-/* Is the deflection limiter inactive over a step of length H (state s, forcing f, leak |Vx|/sig)?  The
- * linear lag moves s monotonically towards f/a (a > 0) or drifts linearly (a = 0), so it suffices that
- * the start and the end point (or the steady state) lie within the limit. */
-static int limiter_idle(double s, double f, double sig, double lim, double absVx, double H)
+/* Does the slope factor stay within MT_CS_LINEAR_TOL along the monotone path from s0 to s1?  r depends on
+ * |s| only and is smallest, 1, at 0: a path through 0 includes r = 1. */
+static int r_flat(double s0, double r0, double s1, double sig, double qs, double smin)
 {
-    double ulim = sig * lim, a = absVx / sig, end;
-    if (fabs(s) > ulim) return 0;
-    end = a > 0.0 ? f / a : s + f * H;
-    return fabs(end) <= ulim;
+    double r1 = slope_factor(s1 / sig, qs, smin), lo, hi;
+    lo = s0 * s1 > 0.0 ? (r0 < r1 ? r0 : r1) : slope_factor(0.0, qs, smin);
+    hi = r0 > r1 ? r0 : r1;
+    return hi - lo <= MT_CS_LINEAR_TOL * lo;
 }
 
 void mt_advance(const MFParams *p, const MTKin *k, double x[2], double H)
 {
-    double h, absVx = fabs(k->Vx);
+    double h, y[2], smx, smy, dc[2], A[2], r0[2];
     long n, i;
     if (!(H > 0.0)) return;
-    if (limiter_idle(x[0], -k->Vsx, k->sigx, p->TR_KAPPA_LIM, absVx, H) &&
-        limiter_idle(x[1], k->Vsy, k->sigy, p->TR_TANALPHA_LIM, absVx, H)) {
-        mt_step(p, k, x, H); /* exact solution of the linear lag: one step */
-        return;
+    lag(p, k, x, dc, A, r0);
+    y[0] = x[0];
+    y[1] = x[1];
+    step_lag(p, k, y, H, A, r0); /* = mt_step(p, k, y, H) */
+    /* the frozen step moves each state monotonically from x to y: the limiter is idle over the step when
+     * both ends are within the limit */
+    if (fabs(x[0]) <= k->sigx * p->TR_KAPPA_LIM && fabs(y[0]) <= k->sigx * p->TR_KAPPA_LIM &&
+        fabs(x[1]) <= k->sigy * p->TR_TANALPHA_LIM && fabs(y[1]) <= k->sigy * p->TR_TANALPHA_LIM) {
+        smx = p->TR_SIGMA_MIN / k->sigx;
+        smy = p->TR_SIGMA_MIN / k->sigy;
+        if (r_flat(x[0], r0[0], y[0], k->sigx, k->slx, smx) && r_flat(x[1], r0[1], y[1], k->sigy, k->sly, smy)) {
+            if (isfinite(y[0]) && isfinite(y[1])) { /* one exponential step: exact for the linear lag */
+                x[0] = y[0];
+                x[1] = y[1];
+            }
+            return;
+        }
     }
     n = (long)ceil(H / p->TR_CS_STEP - 1e-9);
     if (n < 1) n = 1;
     h = H / (double)n;
-    for (i = 0; i < n; i++) mt_step(p, k, x, h);
+    y[0] = x[0];
+    y[1] = x[1];
+    for (i = 0; i < n; i++) mt_step(p, k, y, h);
+    if (isfinite(y[0]) && isfinite(y[1])) {
+        x[0] = y[0];
+        x[1] = y[1];
+    }
+}
+
+/* Physical bounds of the inputs (mftire.transient.INPUT_BOUNDS); Fz and P: factors of FZMAX and PRESMAX. */
+static const double MT_LO[MT_N_INPUTS] = {-HUGE_VAL, -200.0, -200.0, -2000.0, -1.55, -HUGE_VAL, 1e-3, -100.0};
+static const double MT_HI[MT_N_INPUTS] = {3.0, 200.0, 200.0, 2000.0, 1.55, 3.0, 10.0, 100.0};
+static const char *const MT_INPUT_NAMES[MT_N_INPUTS] = {"Fz", "Vx", "Vy", "omega", "gamma", "P", "muRoad", "yawRate"};
+
+static const size_t MT_INPUT_OFFSETS[MT_N_INPUTS] = {
+    offsetof(MTInputs, Fz), offsetof(MTInputs, Vx), offsetof(MTInputs, Vy), offsetof(MTInputs, omega),
+    offsetof(MTInputs, gamma), offsetof(MTInputs, P), offsetof(MTInputs, muRoad), offsetof(MTInputs, yawRate)};
+
+const char *mt_input_name(unsigned i) { return i < MT_N_INPUTS ? MT_INPUT_NAMES[i] : "?"; }
+
+unsigned mt_guard_inputs(const MFParams *p, MTInputs *in, MTInputs *held)
+{
+    unsigned i, bad = 0;
+    for (i = 0; i < MT_N_INPUTS; i++) {
+        double *x = (double *)((char *)in + MT_INPUT_OFFSETS[i]), *g = (double *)((char *)held + MT_INPUT_OFFSETS[i]);
+        double lo = MT_LO[i], hi = MT_HI[i];
+        if (i == 0) hi *= p->FZMAX > 0.0 ? p->FZMAX : p->FNOMIN;
+        if (i == 5) hi *= p->PRESMAX > 0.0 ? p->PRESMAX : p->INFLPRES;
+        if (fabs(*x) < 1e-30) *x = 0.0 * *x; /* tiny and subnormal: 0 (1/x would overflow; P = 0: INFLPRES) */
+        if (!isfinite(*x)) {
+            *x = *g; /* last good value */
+            bad |= 1u << i;
+        } else if (*x < lo || *x > hi) {
+            *x = *x < lo ? lo : hi;
+            bad |= 1u << i;
+        }
+        *g = *x;
+    }
+    return bad;
 }

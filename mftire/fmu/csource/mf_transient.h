@@ -34,6 +34,7 @@ typedef struct {
 typedef struct {
     double Vx, Vsx, Vsy;  /* forward velocity, slip velocities [m/s] */
     double sigx, sigy;    /* relaxation lengths [m] */
+    double slx, sly;      /* slips where the carcass deflection saturates: TR_SAT*F_slide/|K| (0: linear) [-] */
     double w;             /* low-speed weight: 1 at standstill, 0 from VXLOW */
     double My_sign;       /* smooth sign of the rolling-resistance moment */
     MFInputs ev;          /* evaluator inputs (slips set per evaluation) */
@@ -48,6 +49,7 @@ typedef struct {
 typedef struct {
     MFOutputs ss;  /* Fx, Fy, Mz, My corrected for the low-speed model */
     double kappa_t, alpha_t;
+    unsigned nonfinite; /* outputs of the last mt_outputs that were not finite and are set to 0 (to log) */
 } MTOutputs;
 
 /*
@@ -63,18 +65,32 @@ int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned 
 void mt_rates(const MFParams *p, const MTKin *k, const double x[2], double dx[2]);
 
 /*
+ * Input guard, called before mt_kinematics: each non-finite input (NaN, +-Inf) of *in is replaced by its
+ * last good value in *held (start values at instantiation), each finite input beyond its physical bound
+ * (mftire.transient.INPUT_BOUNDS) is saturated to it; *held takes the values used.  Returns a bit mask
+ * (bit i: input i in MTInputs order, MT_N_INPUTS of them) of the inputs replaced, for the wrapper to log.
+ */
+#define MT_N_INPUTS 8
+unsigned mt_guard_inputs(const MFParams *p, MTInputs *in, MTInputs *held);
+const char *mt_input_name(unsigned i);
+
+/*
  * Outputs at the state x: one steady-state evaluation at the transient slips, of the channel groups want
  * (MF_WANT_*; MF_WANT_ALL: every output).  The fields of groups not wanted are left untouched; kappa_t,
- * alpha_t, Fz and Re are always set.  k must hold the offsets of want & MT_OFFSETS (mt_kinematics).
+ * alpha_t, Fz and Re are always set.  A field that is not finite (known case: Mz, Mzr at Fz = 0 with turn
+ * slip, where the Python evaluator gives NaN too) is set to 0 and counted in out->nonfinite.  k must hold the offsets of want & MT_OFFSETS (mt_kinematics).
  */
 int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2], unsigned want,
                MTOutputs *out, mf_warning_fn warn, void *ctx);
 
-/* One exponential-Euler step of length h (leak rates frozen at the start of the step). */
+/* One exponential-Euler step of length h (rates and slope factors frozen at the start of the step):
+ * stable for any h. */
 void mt_step(const MFParams *p, const MTKin *k, double x[2], double h);
 
-/* Advance the state by H with the inputs held (Co-Simulation step): one exact step mt_step(H) while the
- * deflection limiter stays inactive, else ceil(H / TR_CS_STEP) equal sub-steps of mt_step. */
+/* Advance the state by H with the inputs held (Co-Simulation step): one exact step mt_step(H) while it
+ * stays linear (limiter inactive, slope factors within MT_CS_LINEAR_TOL), else ceil(H / TR_CS_STEP) equal
+ * sub-steps of mt_step.  A non-finite result keeps the state. */
+#define MT_CS_LINEAR_TOL 0.01
 void mt_advance(const MFParams *p, const MTKin *k, double x[2], double H);
 
 #ifdef __cplusplus

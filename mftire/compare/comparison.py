@@ -119,7 +119,7 @@ def bands_frame(bands, grid: pd.DataFrame) -> pd.DataFrame | None:
     if bands is None:
         return None
     if isinstance(bands, (str, os.PathLike)):
-        from mftire.iotools.tables import read_numeric_csv
+        from mftire.iotools.loaders import read_numeric_csv
 
         return read_numeric_csv(os.fspath(bands), ())
     if isinstance(bands, pd.DataFrame):

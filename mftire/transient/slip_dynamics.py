@@ -15,12 +15,19 @@ contact point, scaled so that the transient slips are ``kappa' = u/sigma_kappa``
 ISO axes, because Kya < 0).
 
 State equations (Pacejka 2012 §7.2.1, contact-point lag ``dv/dt + |Vx|·v/sigma = slip
-velocity``), with a deflection limiter (mftire addition, inactive below the limits)::
+velocity``; §7.2.2/§7.3, the relaxation length follows the slope of the force characteristic,
+so the carcass deflection stays within sliding force / carcass stiffness), with a deflection
+limiter (mftire addition, inactive below the limits)::
 
-    du/dt = -Vsx - a_x·u,   Vsx = Vx - omega·Re             (slip velocity, eq 2.5)
-    dv/dt =  Vsy - a_y·v,   Vsy = Vy                        (eq 2.12, ISO sign)
-    a_x = (|Vx| + G·|Vsx|·max(0, |u|/(sigma_kappa·K_lim) - 1)²) / sigma_kappa
-    a_y = (|Vx| + G·|Vsy|·max(0, |v|/(sigma_alpha·A_lim) - 1)²) / sigma_alpha
+    du/dt = r_x·(-Vsx - A_x·u/sigma_kappa),   Vsx = Vx - omega·Re      (slip velocity, eq 2.5)
+    dv/dt = r_y·( Vsy - A_y·v/sigma_alpha),   Vsy = Vy                 (eq 2.12, ISO sign)
+    A_x = |Vx| + G·|Vsx|·max(0, |u|/(sigma_kappa·K_lim) - 1)²
+    r_x = 1/max(sech²(kappa'/kappa_s), TR_SIGMA_MIN/sigma_kappa),  kappa_s = mu_x·Fz·|sin(pi/2·C_x)|/Kxk
+
+The carcass deflection is u_c = sigma_kappa·kappa_s·tanh(kappa'/kappa_s) (|u_c| < F_sl/C_x, F_sl the sliding
+force D_x·sin(pi/2·C_x), the Magic Formula's asymptote, Pacejka 2012 §4.3.2),
+its rate du_c/dt = -Vsx - A_x·kappa' (the lag of the linear model); the slip state relaxes with
+the local relaxation length sigma_kappa·sech²(kappa'/kappa_s).  Lateral likewise.
 
 Outputs: the steady-state Magic Formula at the transient slips, with the low-speed
 model below ``VXLOW`` (see ``docs/transient.md``)::
@@ -69,8 +76,13 @@ CONSTANTS: tuple[tuple[str, float, str, str], ...] = (
     ("TR_TANALPHA_LIM", 1.0, "-", "Transient |tan alpha| = |v/sigma_alpha| beyond which the limiter acts"),
     ("TR_LIM_GAIN", 100.0, "-", "Gain of the deflection limiter (slip overshoot ~ 1/sqrt(gain))"),
     ("TR_SIGMA_MIN", 1e-3, "m", "Lower bound of the relaxation lengths (lift-off, Fz = 0)"),
-    ("TR_CS_STEP", 1e-4, "s", "Largest internal step of the Co-Simulation integrator"),
+    ("TR_SAT", 1.0, "-", "Factor on the saturation slip F_slide/K of the carcass deflection (0: linear relaxation)"),
+    ("TR_CS_STEP", 1e-4, "s", "Largest internal step of the Co-Simulation integrator (non-linear range)"),
 )
+
+#: Relative change of the local relaxation length over a Co-Simulation step below which the step is
+#: taken as one exact exponential step (else sub-steps of at most TR_CS_STEP).
+CS_LINEAR_TOL = 0.01
 
 #: Default constants by name.
 DEFAULT_CONSTANTS: dict[str, float] = {name: value for name, value, _, _ in CONSTANTS}
@@ -136,10 +148,37 @@ class Kinematics:
     Vsy: np.ndarray  #: lateral slip velocity [m/s]
     sigx: np.ndarray  #: relaxation length sigma_kappa [m]
     sigy: np.ndarray  #: relaxation length sigma_alpha [m]
+    slx: np.ndarray  #: slip where the longitudinal deflection saturates, sliding force / Kxk (0: none) [-]
+    sly: np.ndarray  #: tan(alpha) where the lateral deflection saturates, sliding force / |Kya| (0: none) [-]
     w: np.ndarray  #: low-speed weight (1 at standstill, 0 from VXLOW) [-]
     My_sign: np.ndarray  #: smooth sign of the rolling-resistance moment [-]
     zero: dict  #: steady-state outputs at zero slip (offsets, Re, sigma)
     args: dict  #: evaluator arguments except the slips
+
+
+def _sliding(C: float) -> float:
+    """Sliding force over peak force: the Magic Formula's asymptote y_a = D·sin(pi/2·C) over D (Pacejka 2012
+    §4.3.2), for 0 < C < 2; 1 otherwise."""
+    return abs(math.sin(0.5 * math.pi * C)) if 0.0 < C < 2.0 else 1.0
+
+
+def _sat_slip(mu, Fz, K) -> np.ndarray:
+    """Slip at which the carcass deflection saturates: force mu·Fz over the slip stiffness |K|
+    (0 where not positive and finite: no saturation)."""
+    with np.errstate(all="ignore"):
+        q = np.abs(np.asarray(mu, dtype=float)) * np.asarray(Fz, dtype=float) / np.abs(np.asarray(K, dtype=float))
+    return np.where(np.isfinite(q) & (q > 0.0), q, 0.0)
+
+
+def _slope_factor(q, qs, smin):
+    """1/max(sech²(q/qs), smin): how much faster than the linear lag the slip state q relaxes where the
+    characteristic (slip stiffness K, peak mu·Fz) flattens; 1 where qs = 0.  sech² = 4t/(1+t)², t = exp(-2|x|)
+    (no overflow)."""
+    q, qs = np.asarray(q, dtype=float), np.asarray(qs, dtype=float)
+    with np.errstate(all="ignore"):
+        t = np.exp(-2.0 * np.abs(q / np.where(qs > 0.0, qs, 1.0)))
+        s = np.where(qs > 0.0, 4.0 * t / ((1.0 + t) * (1.0 + t)), 1.0)
+    return 1.0 / np.maximum(s, smin)
 
 
 def _clean(x, fill: float) -> np.ndarray:
@@ -250,18 +289,32 @@ class TransientTyre:
         r = np.minimum(absVx / vxlow, 1.0)
         w = 0.5 * (1.0 + np.cos(np.pi * r))  # low-speed weight (cosine, as MFeval's VXLOW reduction)
         My_sign = np.sin(0.5 * np.pi * np.clip(Vx / vxlow, -1.0, 1.0))
-        return Kinematics(Vx=Vx, Vsx=Vsx, Vsy=Vy, sigx=sigx, sigy=sigy, w=w, My_sign=My_sign, zero=zero, args=args)
+        # sliding force D·|sin(pi/2·C)| (the asymptote of the Magic Formula, Pacejka 2012 §4.3.2) over the slip
+        # stiffness; C = PCX1·LCX (eq 4.E11), PCY1·LCY (eq 4.E21)
+        slx = c["TR_SAT"] * _sat_slip(zero["mux"] * _sliding(p["PCX1"] * p["LCX"]), zero["Fz"], zero["Kxk"])
+        sly = c["TR_SAT"] * _sat_slip(zero["muy"] * _sliding(p["PCY1"] * p["LCY"]), zero["Fz"], zero["Kya"])
+        return Kinematics(Vx=Vx, Vsx=Vsx, Vsy=Vy, sigx=sigx, sigy=sigy, slx=slx, sly=sly, w=w, My_sign=My_sign,
+                          zero=zero, args=args)  # fmt: skip
 
-    def rates(self, kin: Kinematics, u: ArrayLike, v: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-        """State derivatives (du/dt, dv/dt) for the kinematics ``kin`` and deflections ``u``, ``v``."""
+    def lag(self, kin: Kinematics, u: ArrayLike, v: ArrayLike):
+        """Carcass deflection rates (du_c/dt, dv_c/dt) and the factors (r_x, r_y) with which the slip
+        states relax faster than the linear lag (du/dt = r_x·du_c/dt)."""
         c = self.constants
         gx = np.maximum(np.abs(u) / (kin.sigx * c["TR_KAPPA_LIM"]) - 1.0, 0.0)  # deflection limiter
         gy = np.maximum(np.abs(v) / (kin.sigy * c["TR_TANALPHA_LIM"]) - 1.0, 0.0)
-        ax = (np.abs(kin.Vx) + c["TR_LIM_GAIN"] * np.abs(kin.Vsx) * gx * gx) / kin.sigx
-        ay = (np.abs(kin.Vx) + c["TR_LIM_GAIN"] * np.abs(kin.Vsy) * gy * gy) / kin.sigy
-        du = -kin.Vsx - ax * u  # Pacejka 2012 §7.2.1: du/dt + |Vx|/sigma_kappa*u = -Vsx
-        dv = kin.Vsy - ay * v  # Pacejka 2012 §7.2.1: dv/dt + |Vx|/sigma_alpha*v = Vsy (ISO sign)
-        return du, dv
+        Ax = np.abs(kin.Vx) + c["TR_LIM_GAIN"] * np.abs(kin.Vsx) * gx * gx
+        Ay = np.abs(kin.Vx) + c["TR_LIM_GAIN"] * np.abs(kin.Vsy) * gy * gy
+        dcu = -kin.Vsx - Ax * (u / kin.sigx)  # Pacejka 2012 §7.2.1: du/dt + |Vx|/sigma_kappa*u = -Vsx
+        dcv = kin.Vsy - Ay * (v / kin.sigy)  # Pacejka 2012 §7.2.1: dv/dt + |Vx|/sigma_alpha*v = Vsy (ISO sign)
+        rx = _slope_factor(u / kin.sigx, kin.slx, c["TR_SIGMA_MIN"] / kin.sigx)
+        ry = _slope_factor(v / kin.sigy, kin.sly, c["TR_SIGMA_MIN"] / kin.sigy)
+        return dcu, dcv, rx, ry
+
+    def rates(self, kin: Kinematics, u: ArrayLike, v: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """State derivatives (du/dt, dv/dt) for the kinematics ``kin`` and deflections ``u``, ``v``."""
+        dcu, dcv, rx, ry = self.lag(kin, u, v)
+        # slope of the characteristic: local relaxation length sigma·sech² (Pacejka 2012 §7.2.2/§7.3)
+        return rx * dcu, ry * dcv
 
     def derivatives(self, x: ArrayLike, **inputs: ArrayLike) -> np.ndarray:
         """``[du/dt, dv/dt]`` at state ``x = (u, v)`` and the inputs (see :data:`INPUTS`)."""
@@ -271,7 +324,7 @@ class TransientTyre:
     def outputs_from(self, kin: Kinematics, u: ArrayLike, v: ArrayLike) -> dict[str, np.ndarray]:
         """All outputs (FMU names) at the kinematics ``kin`` and deflections ``u``, ``v``."""
         c = self.constants
-        du, dv = self.rates(kin, u, v)
+        du, dv, _, _ = self.lag(kin, u, v)  # damping on the carcass deflection rate
         kappa_t = (u + kin.w * c["TR_TAU_X"] * du) / kin.sigx  # transient slip with low-speed damping (§7.3)
         alpha_t = np.arctan((v + kin.w * c["TR_TAU_Y"] * dv) / kin.sigy)  # tan alpha' = v/sigma_alpha (§7.2.1)
         ss = self._eval(kin.args, kappa_t, alpha_t)
@@ -367,52 +420,176 @@ def simulate(
     return frame
 
 
+def _equilibrium(f: float, sig: float, lim: float, absVx: float, Vs: float, G: float) -> float | None:
+    """Equilibrium of ds/dt = r·(f - A(s)·s/sig), A(s) = |Vx| + G·|Vs|·max(0, |s|/L - 1)², L = sig·lim: the
+    state the held inputs drive s to, monotonically; None when there is none.  Beyond the limit, bisection on
+    [L, L·(1 + 1/sqrt(G·lim))] (60 halvings; as mt_transient.c)."""
+    L, c = sig * lim, abs(f) * sig
+    if f == 0.0:
+        return 0.0 if (absVx > 0.0 or G * abs(Vs) > 0.0) else None
+    if absVx * L >= c:
+        return f * sig / absVx  # within the limit: the linear lag's steady state
+    if not (G * abs(Vs) > 0.0) or not (lim > 0.0):
+        return None
+    lo, hi = L, L * (1.0 + 1.0 / math.sqrt(G * lim))
+    if absVx > 0.0 and c / absVx < hi:
+        hi = c / absVx
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        gm = mid / L - 1.0
+        if (absVx + G * abs(Vs) * gm * gm) * mid < c:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi) if f > 0.0 else -0.5 * (lo + hi)
+
+
+def _step1(s: float, sig: float, A: float, r: float, f: float, h: float, s_eq: float | None) -> float:
+    """Exact solution over ``h`` of ds/dt = r·(f - A·s/sig) with r, A, f frozen (exponential Euler), not carried
+    past the equilibrium ``s_eq`` of the unfrozen equation (the true solution never crosses it)."""
+    a = r * A / sig
+    ah = a * h
+    phi = h if ah < 1e-12 else -math.expm1(-ah) / a
+    y = s * math.exp(-ah) + r * f * phi
+    if s_eq is not None and (y - s_eq) * (s - s_eq) < 0.0:
+        y = s_eq
+    return y
+
+
 def step_exact(model: TransientTyre, kin: Kinematics, u: float, v: float, h: float) -> tuple[float, float]:
     """One exponential-Euler step of length ``h`` (the FMU's Co-Simulation sub-step).
 
-    The leak rates a_x, a_y are frozen at the start of the step; for constant inputs
-    and an inactive limiter this is the exact solution of the linear lag.
+    The rates A_x, A_y and slope factors r_x, r_y are frozen at the start of the step; each state moves
+    monotonically towards the steady state of the frozen equation and is not carried past the equilibrium
+    of the full equation (:func:`_equilibrium`), so the step is stable for any ``h`` and never chatters.
+    For constant inputs in the linear range (limiter idle, r = 1) it is the exact solution of the lag.
     """
     c = model.constants
-    out = []
-    for s, sig, lim, vs, sign in ((u, kin.sigx, c["TR_KAPPA_LIM"], kin.Vsx, -1.0),
-                                  (v, kin.sigy, c["TR_TANALPHA_LIM"], kin.Vsy, 1.0)):  # fmt: skip
-        g = max(abs(s) / (float(sig) * lim) - 1.0, 0.0)
-        a = (abs(float(kin.Vx)) + c["TR_LIM_GAIN"] * abs(float(vs)) * g * g) / float(sig)
-        ah = a * h
-        phi = h if ah < 1e-12 else -math.expm1(-ah) / a
-        out.append(s * math.exp(-ah) + sign * float(vs) * phi)
-    return out[0], out[1]
+    sigx, sigy = float(kin.sigx), float(kin.sigy)
+    Vsx, Vsy, absVx = float(kin.Vsx), float(kin.Vsy), abs(float(kin.Vx))
+    gx = max(abs(u) / (sigx * c["TR_KAPPA_LIM"]) - 1.0, 0.0)
+    gy = max(abs(v) / (sigy * c["TR_TANALPHA_LIM"]) - 1.0, 0.0)
+    rx = float(_slope_factor(u / sigx, kin.slx, c["TR_SIGMA_MIN"] / sigx))
+    ry = float(_slope_factor(v / sigy, kin.sly, c["TR_SIGMA_MIN"] / sigy))
+    G = c["TR_LIM_GAIN"]
+    ex = _equilibrium(-Vsx, sigx, c["TR_KAPPA_LIM"], absVx, Vsx, G)
+    ey = _equilibrium(Vsy, sigy, c["TR_TANALPHA_LIM"], absVx, Vsy, G)
+    un = _step1(u, sigx, absVx + G * abs(Vsx) * gx * gx, rx, -Vsx, h, ex)
+    vn = _step1(v, sigy, absVx + G * abs(Vsy) * gy * gy, ry, Vsy, h, ey)
+    return un, vn
+
+
+def _r_flat(s0: float, s1: float, sig, qs, smin: float) -> bool:
+    """Whether the slope factor r stays within CS_LINEAR_TOL along the monotone path from s0 to s1 (r depends
+    on |s| only and is smallest, 1, at 0: a path through 0 includes r = 1)."""
+    r0 = float(_slope_factor(s0 / float(sig), qs, smin))
+    r1 = float(_slope_factor(s1 / float(sig), qs, smin))
+    lo = min(r0, r1) if s0 * s1 > 0.0 else float(_slope_factor(0.0, qs, smin))
+    return max(r0, r1) - lo <= CS_LINEAR_TOL * lo
 
 
 def advance(model: TransientTyre, kin: Kinematics, u: float, v: float, H: float) -> tuple[float, float]:
     """Advance ``(u, v)`` by ``H`` with the inputs held: the FMU's Co-Simulation step.
 
-    One exact step (:func:`step_exact`) while the deflection limiter stays inactive (the
-    linear lag moves monotonically towards its steady state), else ``ceil(H/TR_CS_STEP)``
-    equal sub-steps.
+    One exponential step (:func:`step_exact`) when it stays in the linear range: the limiter idle
+    over the step and the slope factors along the step within :data:`CS_LINEAR_TOL` of each other.
+    Else ``ceil(H/TR_CS_STEP)`` equal sub-steps.  Every (sub-)step is stable for any length.
+    A result that is not finite (cannot happen with guarded inputs) keeps the state.
     """
     c = model.constants
     if not H > 0.0:
         return u, v
-    absVx = abs(float(kin.Vx))
-
-    def idle(s, f, sig, lim):
-        ulim, a = float(sig) * lim, absVx / float(sig)
-        end = f / a if a > 0.0 else s + f * H
-        return abs(s) <= ulim and abs(end) <= ulim
-
-    if idle(u, -float(kin.Vsx), kin.sigx, c["TR_KAPPA_LIM"]) and idle(v, float(kin.Vsy), kin.sigy,
-                                                                      c["TR_TANALPHA_LIM"]):  # fmt: skip
-        return step_exact(model, kin, u, v, H)
+    un, vn = step_exact(model, kin, u, v, H)
+    # the frozen step moves each state monotonically from start to end: the limiter is idle over the step
+    # when both ends are within the limit
+    ulim, vlim = float(kin.sigx) * c["TR_KAPPA_LIM"], float(kin.sigy) * c["TR_TANALPHA_LIM"]
+    if max(abs(u), abs(un)) <= ulim and max(abs(v), abs(vn)) <= vlim:
+        smx, smy = c["TR_SIGMA_MIN"] / float(kin.sigx), c["TR_SIGMA_MIN"] / float(kin.sigy)
+        if _r_flat(u, un, kin.sigx, kin.slx, smx) and _r_flat(v, vn, kin.sigy, kin.sly, smy):
+            return (un, vn) if math.isfinite(un) and math.isfinite(vn) else (u, v)
     n = max(int(math.ceil(H / c["TR_CS_STEP"] - 1e-9)), 1)
+    x0 = (u, v)
     for _ in range(n):
         u, v = step_exact(model, kin, u, v, H / n)
-    return u, v
+    return (u, v) if math.isfinite(u) and math.isfinite(v) else x0
+
+
+#: Physical bounds of the inputs (finite values beyond are saturated; the FMU's mt_guard_inputs):
+#: name -> (low, high); Fz and P bounds are factors of the file's FZMAX and PRESMAX.
+INPUT_BOUNDS: dict[str, tuple[float, float]] = {
+    "Fz": (-math.inf, 3.0), "Vx": (-200.0, 200.0), "Vy": (-200.0, 200.0), "omega": (-2000.0, 2000.0),
+    "gamma": (-1.55, 1.55), "P": (-math.inf, 3.0), "muRoad": (1e-3, 10.0), "yawRate": (-100.0, 100.0),
+}  # fmt: skip
+
+
+def guard_inputs(flat: Mapping[str, float], inputs: Mapping[str, float],
+                 held: dict[str, float]) -> tuple[dict[str, float], list[str]]:  # fmt: skip
+    """The transient model's input guard (the FMU's ``mt_guard_inputs``, same rules).
+
+    A non-finite input (NaN, ±Inf) is replaced by its last good value ``held[name]``; a finite value
+    beyond :data:`INPUT_BOUNDS` is saturated to the bound; |x| < 1e-30 is 0 (silently).  ``held`` is
+    updated with the values used.
+    Returns the values to use and the names of the inputs replaced or saturated.
+    """
+    out, bad = {}, []
+    for name, _, _, _ in INPUTS:
+        x = float(inputs.get(name, held[name]))
+        lo, hi = INPUT_BOUNDS[name]
+        if name == "Fz":
+            hi *= flat["FZMAX"] if flat.get("FZMAX", 0.0) > 0.0 else flat["FNOMIN"]
+        elif name == "P":
+            hi *= flat["PRESMAX"] if flat.get("PRESMAX", 0.0) > 0.0 else flat["INFLPRES"]
+        if abs(x) < 1e-30:
+            x = 0.0 * x  # tiny and subnormal: 0 (1/x would overflow; P = 0: INFLPRES)
+        if not math.isfinite(x):
+            x = held[name]
+            bad.append(name)
+        elif x < lo or x > hi:
+            x = min(max(x, lo), hi)
+            bad.append(name)
+        held[name] = out[name] = x
+    return out, bad
+
+
+class TransientStepper:
+    """The transient tyre stepped as the Co-Simulation FMU steps it (Python mirror of ``fmi2DoStep``).
+
+    ``step(H, **inputs)`` guards the inputs (:func:`guard_inputs`, a warning for each one replaced),
+    advances the states with the inputs held (:func:`advance`) and returns the outputs at the new state.
+    """
+
+    def __init__(self, model: TransientTyre, x0=(0.0, 0.0)) -> None:
+        self.model = model
+        self.x = (float(x0[0]), float(x0[1]))
+        self.held = model.defaults()
+        self.time = 0.0
+
+    def set_inputs(self, **inputs: float) -> Kinematics:
+        """Guarded kinematics of ``inputs`` (omitted inputs keep their last value)."""
+        vals, bad = guard_inputs(self.model._p, inputs, self.held)
+        if bad:
+            msg = "not finite or out of range: the last good value is held (non-finite) or the bound used"
+            warnings.warn(f"t={self.time:.17g}: transient tyre input(s) {', '.join(bad)} {msg}", stacklevel=3)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return self.model.kinematics(**vals)
+
+    def step(self, H: float, **inputs: float) -> dict[str, float]:
+        kin = self.set_inputs(**inputs)
+        self.x = advance(self.model, kin, self.x[0], self.x[1], H)
+        self.time += H
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            out = self.model.outputs_from(kin, self.x[0], self.x[1])
+        return {k: float(v) for k, v in out.items()}
 
 
 __all__ = [
     "CONSTANTS",
+    "CS_LINEAR_TOL",
+    "INPUT_BOUNDS",
+    "TransientStepper",
+    "guard_inputs",
     "DEFAULT_CONSTANTS",
     "INPUTS",
     "Kinematics",

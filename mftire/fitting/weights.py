@@ -2,7 +2,7 @@
 
 The sweep table itself (schema, validation, grouping) lives in
 :mod:`mftire.iotools.sweeps`, the shared loaders (:func:`load_sweep_files`,
-:func:`prepare_table`, :func:`check_columns`) in :mod:`mftire.iotools.tables`
+:func:`prepare_table`, :func:`check_columns`) in :mod:`mftire.iotools.loaders`
 (re-exported here); this module adds what fitting needs on top of them:
 
 * :func:`parse_weights` / :func:`row_weights` turn ``"fe=1,measured=5"`` into per-row
@@ -14,14 +14,14 @@ The sweep table itself (schema, validation, grouping) lives in
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
 from scipy import stats
 
 from mftire.errors import MftireInputError
-from mftire.iotools.tables import check_columns, load_sweep_files, prepare_table
+from mftire.iotools.loaders import check_columns, load_sweep_files, prepare_table
 
 __all__ = [
     "check_columns",
@@ -119,10 +119,3 @@ def noise_std(y: np.ndarray, x: np.ndarray, groups: np.ndarray | None = None) ->
     if d.size == 0:
         return 0.0
     return float(stats.median_abs_deviation(d, scale="normal") / np.sqrt(6.0))
-
-
-def iter_groups(labels: np.ndarray) -> Iterable[np.ndarray]:
-    """Row indices of each distinct label."""
-    order = np.argsort(labels, kind="stable")
-    bounds = np.flatnonzero(np.diff(labels[order])) + 1
-    return np.split(order, bounds)

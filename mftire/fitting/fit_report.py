@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from mftire.fitting.core import CONDITION_KEYS, FitResult
+from mftire.fitting.fitter import CONDITION_KEYS, FitResult
 from mftire.fitting.model import CHANNELS, Inputs, predict
 from mftire.iotools.atomic import atomic_path, write_text_atomic
 from mftire.iotools.jsonutil import jsonable

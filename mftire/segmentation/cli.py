@@ -1,4 +1,4 @@
-"""``mftire import RAW --output SWEEPS.csv``: the command line of :mod:`mftire.iotools.rig`.
+"""``mftire import RAW --output SWEEPS.csv``: the command line of :mod:`mftire.segmentation.rig_segments`.
 
 Kept apart from the importer so that registering the command (``mftire --help``) does
 not load pandas.
@@ -27,7 +27,8 @@ def _parse_signs(items: Sequence[str] | None) -> dict[str, float]:
 
 def _cmd_import(args: argparse.Namespace) -> int:
     from mftire.iotools.atomic import write_text_atomic
-    from mftire.iotools.rig import import_rig, parse_map_options
+    from mftire.iotools.rig import parse_map_options
+    from mftire.segmentation.rig_segments import import_rig
 
     columns = parse_map_options(args.map or [])
     warm: str | float = args.warmup
@@ -41,8 +42,9 @@ def _cmd_import(args: argparse.Namespace) -> int:
     if args.report:
         write_text_atomic(args.report, json.dumps(rep.to_dict(), indent=1, default=float) + "\n")
     print(str(rep))
-    print(f"mftire import: wrote {args.output} ({len(table)} points, {rep.n_sweeps} sweeps, {rep.seconds:.1f} s)",
-          file=sys.stdout)
+    left = len(table) - rep.n_points
+    print(f"mftire import: wrote {args.output} ({rep.n_points} points in {rep.n_sweeps} sweeps, {left} rows outside "
+          f"the sweeps kept with fit_row = False, {rep.seconds:.1f} s)", file=sys.stdout)
     return 0
 
 

@@ -24,7 +24,7 @@ import pandas as pd
 
 from mftire.errors import MftireInputError
 from mftire.iotools.sweeps import (
-    _ALIASES,
+    COLUMN_ALIASES,
     MEASURED_COLUMNS,
     OPTIONAL_INPUT_COLUMNS,
     REQUIRED_COLUMNS,
@@ -39,7 +39,7 @@ __all__ = ["check_columns", "load_sweep_files", "prepare_table", "read_numeric_c
 _SCHEMA = set(REQUIRED_COLUMNS) | set(OPTIONAL_INPUT_COLUMNS) | set(MEASURED_COLUMNS)
 _LOWER = {c.lower(): c for c in _SCHEMA}
 # other names of schema quantities (lower case) -> (schema column, unit they usually carry)
-_OTHER_NAMES = {alias: (col, unit) for col, aliases in _ALIASES.items() for alias, unit in aliases.items()}
+_OTHER_NAMES = {alias: (col, unit) for col, aliases in COLUMN_ALIASES.items() for alias, unit in aliases.items()}
 # NAME [unit], NAME (unit) or NAME_unit, the suffix a unit of mftire.iotools.units
 _UNIT_RE = re.compile(r"^\s*([A-Za-z_]+?)\s*(?:[\[(]\s*([^\])]*)\s*[\])]|_([A-Za-z]+))\s*$")
 

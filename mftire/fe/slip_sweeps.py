@@ -15,8 +15,6 @@ the travel-speed setpoint V (the TYDEX RUNSPEED), alpha and gamma are in rad.
 from __future__ import annotations
 
 import os
-import sys
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,9 +26,10 @@ from scipy.optimize import newton
 from mftire.errors import MftireInputError
 from mftire.fe import carcass as cc
 from mftire.fe.config import TyreConfig, check_operating_range
-from mftire.fe.solver import solve
+from mftire.fe.rolling_contact import solve
 from mftire.iotools.atomic import write_text_atomic
 from mftire.parallel import Executor
+from mftire.progress import reporter
 
 SWEEP_COLUMNS = ["Fz", "kappa", "alpha", "gamma", "Vx", "P", "Fx", "Fy", "Mz", "Mx", "My"]
 FREE_ROLLING_COLUMNS = ["Vx", "Fz", "load_fraction", "P", "omega", "re"]
@@ -126,7 +125,7 @@ class Condition:
     gamma: float = 0.0
 
 
-def _rows_for(kind: str, n_kappa: int, n_alpha: int, alphas_comb: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
+def rows_for(kind: str, n_kappa: int, n_alpha: int, alphas_comb: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
     """(kappa, alpha) points of one sweep of the given kind."""
     if kind == "braking":
         k = kappa_grid(n_kappa)
@@ -140,16 +139,6 @@ def _rows_for(kind: str, n_kappa: int, n_alpha: int, alphas_comb: Sequence[float
         kk, aa = np.meshgrid(k, a)
         return kk.ravel(), aa.ravel()
     raise MftireInputError(f"unknown sweep kind {kind!r} (use braking, cornering or combined)")
-
-
-def _progress(enabled: bool) -> Callable[[str], None]:
-    t0 = time.perf_counter()
-
-    def report(msg: str) -> None:
-        if enabled:
-            print(f"\r[{time.perf_counter() - t0:6.1f} s] {msg}\x1b[K", end="", file=sys.stderr, flush=True)
-
-    return report
 
 
 def run_sweeps(
@@ -170,15 +159,13 @@ def run_sweeps(
     ``chunk`` points, run by ``executor`` (default: in this process); the chunks and each
     point's solution do not depend on the executor, so neither does the table (bit for bit).
     """
-    if progress is None:
-        progress = sys.stderr.isatty()
-    report = _progress(progress)
+    say = reporter(progress, "mftire fe")
     conds = sorted({(c.Fz, c.V, c.P, c.gamma) for _, c in jobs})
     if not conds:
         raise MftireInputError("no sweeps requested")
     arr = np.array(conds, dtype=float)
     check_operating_range(tyre, arr[:, 0], arr[:, 1], arr[:, 2])
-    report(f"free rolling for {len(conds)} conditions")
+    say.update(f"free rolling for {len(conds)} conditions")
     omega_free, re = free_rolling(tyre, arr[:, 0], arr[:, 1], arr[:, 2], arr[:, 3])
     lookup = {c: (w, r) for c, w, r in zip(conds, omega_free, re, strict=True)}
     free_tab = pd.DataFrame({
@@ -187,7 +174,7 @@ def run_sweeps(
     })[FREE_ROLLING_COLUMNS]
     pieces = []
     for kind, c in jobs:
-        kap, alp = _rows_for(kind, n_kappa, n_alpha, combined_alphas_deg)
+        kap, alp = rows_for(kind, n_kappa, n_alpha, combined_alphas_deg)
         w_free, _ = lookup[(c.Fz, c.V, c.P, c.gamma)]
         pieces.append(pd.DataFrame({
             "Fz": c.Fz, "kappa": kap, "alpha": alp, "gamma": c.gamma, "Vx": c.V, "P": c.P,
@@ -197,9 +184,8 @@ def run_sweeps(
     table = pd.concat(pieces, ignore_index=True)
     pts = np.array(table[["Fz", "Vx", "P", "omega", "alpha", "gamma"]].to_numpy(dtype=float).T, order="C")  # a copy
     pts[1] *= np.cos(pts[4])  # Vx = V cos(alpha), eq 3.2
-    res = solve_points(tyre, pts, chunk=chunk, executor=executor, report=report)
-    if progress:
-        print(file=sys.stderr)
+    res = solve_points(tyre, pts, chunk=chunk, executor=executor, report=say.update)
+    say.done()
     table[["Fx", "Fy", "Mz", "Mx", "My"]] = res
     table["load_fraction"] = table["Fz"] / tyre.load_index_load
     table = table.drop(columns="omega")

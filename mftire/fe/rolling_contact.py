@@ -46,14 +46,14 @@ class SteadyStateResult:
 
     Fx: np.ndarray  #: longitudinal force [N]
     Fy: np.ndarray  #: lateral force [N]
-    Mz: np.ndarray  #: aligning moment [Nm]
-    Mx: np.ndarray  #: overturning moment at the contact centre [Nm]
-    My: np.ndarray  #: rolling-resistance moment at the contact centre [Nm]
+    Mz: np.ndarray  #: aligning moment [N·m]
+    Mx: np.ndarray  #: overturning moment at the contact centre [N·m]
+    My: np.ndarray  #: rolling-resistance moment at the contact centre [N·m]
     loaded_radius: np.ndarray  #: rl [m]
     rolling_radius: np.ndarray  #: belt (kinematic) rolling radius r_b [m]
     contact_length: np.ndarray  #: 2a [m]
     contact_width: np.ndarray  #: 2b [m]
-    wheel_torque: np.ndarray  #: drive torque on the wheel needed for this state [Nm]
+    wheel_torque: np.ndarray  #: drive torque on the wheel needed for this state [N·m]
     slip_velocity_x: np.ndarray  #: Vsx = Vx - omega r_b [m/s]
     iterations: np.ndarray  #: carcass iterations used
     converged: np.ndarray  #: carcass iteration converged

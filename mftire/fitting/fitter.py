@@ -5,7 +5,7 @@ problem solved with :func:`scipy.optimize.least_squares` (trust-region reflectiv
 
 * residual of row i: ``sqrt(w_i) * (model_i - measured_i) / sigma`` where ``w_i`` is the
   row's source weight and ``sigma`` [channel unit] the channel's noise standard
-  deviation estimated from the data (:func:`mftire.fitting.data.noise_std`, floored
+  deviation estimated from the data (:func:`mftire.fitting.weights.noise_std`, floored
   at 0.1 % of the channel's peak for noise-free simulation data);
 * robust ``soft_l1`` loss with ``f_scale = 3`` (three noise standard deviations):
   residuals beyond 3σ (gross outliers) count linearly, not quadratically;
@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -42,15 +41,17 @@ from threadpoolctl import threadpool_limits
 
 from mftire.errors import MftireInputError
 from mftire.fitting import derivatives, initial
-from mftire.fitting.data import load_sweep_files, noise_std, parse_weights, prepare_table, row_weights
 from mftire.fitting.identify import DataLevels, data_levels, split_identified
 from mftire.fitting.model import Inputs, Model, fitting_mode, predict
 from mftire.fitting.stages import FITTED_KEYS, STAGES, Coefficient, Stage, resolve_stages
-from mftire.iotools.sweeps import group_sweeps
+from mftire.fitting.weights import load_sweep_files, noise_std, parse_weights, prepare_table, row_weights
+from mftire.iotools.sweeps import fit_rows
 from mftire.iotools.tir import TirParameters, read_tir
 from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
 from mftire.mf.modes import Mode
 from mftire.parameters import with_defaults
+from mftire.progress import Progress, reporter
+from mftire.segmentation.grouping import group_sweeps
 from mftire.tyre import Tyre
 
 __all__ = ["StageResult", "FitResult", "fit_tir", "LOSS", "F_SCALE", "CONDITION_KEYS"]
@@ -189,13 +190,8 @@ class FitResult:
 # ------------------------------------------------------------------------------------
 
 
-def _progress_printer(progress: bool | Callable[[str], None] | None) -> Callable[[str], None]:
-    if callable(progress):
-        return progress
-    show = sys.stderr.isatty() if progress is None else bool(progress)
-    if not show:
-        return lambda msg: None
-    return lambda msg: print(f"mftire fit: {msg}", file=sys.stderr, flush=True)
+def _progress_printer(progress: bool | Callable[[str], None] | Progress | None) -> Progress:
+    return reporter(progress, "mftire fit")
 
 
 # ------------------------------------------------------------------------------------
@@ -592,6 +588,7 @@ def _as_table(data) -> tuple[pd.DataFrame, int, list[str]]:
             messages.append(f"{r['name']}: {r['n_dropped_nonpositive_fz']} rows with Fz <= 0 dropped")
     if "source" not in table.columns:
         table["source"] = "data"
+    table = fit_rows(table)  # rows an importer kept for the diagnosis only (fit_row False) are not fitted
     return table.reset_index(drop=True), n_nan, messages
 
 

@@ -24,7 +24,7 @@ from scipy.optimize import least_squares
 from mftire.errors import MftireInputError
 from mftire.fe.config import TyreConfig
 from mftire.fe.friction import h_from_mu_lock, mu_v_of_kappa
-from mftire.fe.solver import solve
+from mftire.fe.rolling_contact import solve
 
 _EPS = 1e-4
 

@@ -1,0 +1,1 @@
+"""Segmentation and sweep analysis: from rows in measurement order to labelled sweeps."""
