@@ -54,7 +54,14 @@ def test_unanticipated_campaign(case):
     if family in FAMILY_TARGETS:
         expected |= {t for ts in FAMILY_TARGETS[family].values() for t in ts}
     assert set(res.effect.targets) & expected, (res.effect.name, res.effect.targets, expected)
-    assert _cut(res) >= 0.6, [(c.channel, c.rms_pct_before, c.rms_pct_after) for c in res.errors]
+    # a held-out level beyond the range the law was fitted on: in modes 1xx the law is clamped to that range
+    # (issue 21, as MF clamps its inputs), so it predicts the edge of the range there, not an extrapolation
+    h = exp["holdout"]
+    train = pd.read_csv(DATA / case / "sweeps.csv")
+    train = train[~np.isin(train[h["column"]], h["values"])] if h["column"] == exp["variable"] else None
+    beyond = train is not None and (min(h["values"]) > train[h["column"]].max()
+                                    or max(h["values"]) < train[h["column"]].min())  # fmt: skip
+    assert _cut(res) >= (0.5 if beyond else 0.6), [(c.channel, c.rms_pct_before, c.rms_pct_after) for c in res.errors]
     for name in exp.get("confounded_with", ()):  # said, with what the within-block variation supports
         assert any(name in note for note in res.confounding), res.confounding
 

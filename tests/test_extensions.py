@@ -201,6 +201,8 @@ EXTENDED = {
     **_term(1, "LMUX LMUY", "decay", "Vs", scale=16.7, c1=0.4),
     **_term(2, "LKX LKY LTR", "linear", "temperature", ref=50.0, scale=25.0, c1=-0.1),
     **_term(3, "FX_OFFSET", "linear", "sign_kappa", c1=0.005),
+    **_term(4, "P_FACTOR ALPHA_OFFSET", "hinge", "temperature", ref=50.0, scale=25.0, min=0.0, max=90.0, c1=0.02,
+            c2=-0.5),
 }
 
 
@@ -315,3 +317,62 @@ def test_fitting_model_clips_curvature_as_the_fitted_file_evaluates():
             np.testing.assert_array_equal(got, ref[ch], err_msg=ch)
             assert np.max(np.abs(got - unclipped[ch])) > 10.0, ch  # and it matters
         assert not any(issubclass(w.category, MFLimitWarning) for w in seen)  # silent while fitting
+
+
+# ------------------------------------------------------------ issue 21: identifiers, new forms, input laws
+
+
+@pytest.mark.parametrize("name", ["run", "sweep_id", "RunNumber", "seg_no", "file3", "row", "test_index", "Sequence"])
+def test_identifier_is_refused_as_law_variable_through_the_api(name):
+    with pytest.raises(MftireInputError, match="identifier"):
+        make_extension(1, "LMUX", "linear", name, c1=0.1)
+    with pytest.raises(MftireInputError, match="EXT1_VARIABLE2.*identifier"):
+        make_extension(1, "LMUX", "interaction", "wet", variable2=name, c1=0.1)
+
+
+@pytest.mark.parametrize("name", ["tread_temp", "time", "wet", "sweep_dir", "mileage", "runtime"])
+def test_physical_variables_are_not_identifiers(name):
+    assert make_extension(1, "LMUX", "linear", name, c1=0.1).variable == name
+
+
+def test_identifier_is_refused_when_reading_a_tir(tmp_path):
+    params = read_tir(REFERENCE_TYRES["MF61"])
+    for k, v in _term(1, "LMUX LMUY", "interaction", "wet", c1=-0.1, c2=0.01).items():
+        params.set(k, v, section=SECTION)
+    params.set("EXT1_VARIABLE2", "run", section=SECTION)
+    path = tmp_path / "run_law.tir"
+    write_tir(params, path)
+    with pytest.raises(MftireInputError, match=r"EXT1_VARIABLE2 = 'run'.*identifier"):
+        load(path)
+
+
+@pytest.mark.parametrize(
+    ("form", "numbers", "u", "expected"),
+    [
+        ("hinge", {"ref": 50.0, "scale": 10.0, "c1": -0.1, "c2": 1.0}, 55.0, 1.0),  # below the threshold
+        ("hinge", {"ref": 50.0, "scale": 10.0, "c1": -0.1, "c2": 1.0}, 80.0, 0.8),  # 2 scales above it
+        ("direction", {"c1": 0.05}, 1.0, 1.05),
+        ("direction", {"c1": 0.05}, -1.0, 0.95),
+        ("direction", {"c1": 0.05}, 0.0, 1.0),
+    ],
+)
+def test_hinge_and_direction_form_values(form, numbers, u, expected):
+    t = make_extension(1, "LMUY", form, "x", **numbers)
+    assert float(t.factor(np.array(u), None)) == pytest.approx(expected, rel=1e-12)
+
+
+def test_input_laws_equal_the_corrected_inputs():
+    """P_FACTOR evaluates the tyre at P·f, ALPHA_OFFSET / GAMMA_OFFSET at alpha / gamma + (f − 1)."""
+    base = load(REFERENCE_TYRES["MF61"])
+    P0 = base["NOMPRES"]
+    ext = _extended({**_term(1, "P_FACTOR", "linear", "tread_temp", ref=20.0, scale=100.0, c1=0.1),
+                     **_term(2, "ALPHA_OFFSET", "linear", "tread_temp", ref=20.0, scale=100.0, c1=0.01),
+                     **_term(3, "GAMMA_OFFSET", "linear", "tread_temp", ref=20.0, scale=100.0, c1=-0.02)})  # fmt: skip
+    T = np.array([20.0, 70.0, 120.0])
+    f = 1.0 + (T - 20.0) / 100.0
+    got = ext.evaluate(5000.0, -0.05, 0.04, 0.01, P=P0, tread_temp=T, mode=121)
+    ref = base.evaluate(5000.0, -0.05, 0.04 + 0.01 * (f - 1), 0.01 - 0.02 * (f - 1),
+                        P=P0 * (1.0 + 0.1 * (f - 1)), mode=121)  # fmt: skip
+    for k in ("Fx", "Fy", "Mz", "Mx", "My"):
+        np.testing.assert_allclose(got[k], ref[k], rtol=1e-10, atol=1e-9, err_msg=k)
+    assert not np.allclose(got["Fy"], base.evaluate(5000.0, -0.05, 0.04, 0.01, P=P0, mode=121)["Fy"])

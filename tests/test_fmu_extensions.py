@@ -61,6 +61,15 @@ CASES: dict[str, tuple[str, dict]] = {
                               **_term(2, "LMX LVMX LMY", "linear", "sign_alpha", c1=0.1),
                               **_term(3, "LCX LCY LHX LHY LVX LVY", "linear", "gamma", scale=0.05, c1=0.2),
                               **_term(4, "LXAL LYKA LVYKA LKYC LEY LFZO", "quadratic", "kappa", c1=0.2, c2=0.3)}),
+    "hinge_temperature": ("JuliaMF61", _term(1, "LMUY LKY", "hinge", "temperature", ref=50.0, scale=20.0, min=0.0,
+                                             max=120.0, c1=-0.08, c2=0.5)),
+    "direction_offset": ("JuliaMF62", {**_term(1, "FY_OFFSET", "direction", "sweep_dir", c1=0.02),
+                                       **_term(2, "LMUX", "direction", "sweep_dir", c1=-0.03)}),
+    "input_laws": ("JuliaMF61", {**_term(1, "P_FACTOR", "linear", "temperature", ref=20.0, scale=50.0, min=0.0,
+                                         max=120.0, c1=0.08),
+                                 **_term(2, "ALPHA_OFFSET", "linear", "time", ref=0.0, scale=1000.0, c1=0.01),
+                                 **_term(3, "GAMMA_OFFSET", "quadratic", "temperature", ref=20.0, scale=50.0,
+                                         c1=0.005, c2=0.002)}),
     "all": ("JuliaMF62", {
         **_term(1, "LMUX LMUY", "decay", "Vs", scale=16.7, c1=0.3),
         **_term(2, "LMUX LMUY", "saturating", "time", scale=300.0, c1=-0.15, c2=1.0),
@@ -73,7 +82,7 @@ CASES: dict[str, tuple[str, dict]] = {
 
 #: external variable -> (low, high) of its random values
 DATA_RANGES = {"time": (-50.0, 3000.0), "temperature": (-20.0, 140.0), ODD_NAME: (-10.0, 200.0),
-               "surface": (-0.5, 2.7), "wet": (0.0, 1.0)}  # fmt: skip
+               "surface": (-0.5, 2.7), "wet": (0.0, 1.0), "sweep_dir": (-1.0, 1.0)}  # fmt: skip
 MODES = (111, 121, 211, 112, 110, 222)
 N_POINTS = 300  # per case and interface
 
@@ -314,6 +323,37 @@ def test_nan_data_input_is_zeroed_with_a_warning(build):
     assert len(py_warnings) == 2
     for w in py_warnings:
         assert w in logged, (w, logged)
+
+
+@pytest.mark.parametrize("mode", [111, 211])
+def test_extension_variable_beyond_its_fitted_range_is_clamped_with_a_warning_in_modes_1xx(build, mode):
+    """The "all" case's LKX·LKY term was fitted on temperature -10..120: at 200 the FMU and Python clamp it to
+    120 and warn in mode 111; in mode 211 (no limits) both extrapolate, silently.  (Its LTR term has no
+    stored range: Mz moves on.)"""
+    from mftire.fmu.host import FMUTyre
+    from mftire.mf.extensions import EXT_RANGE_WARNING
+
+    _, unzipdir = build("all")
+    tyre = _tyre("all")
+    pt = dict(Fz=4000.0, kappa=0.05, alpha=0.03, gamma=0.01, phit=0.0, Vx=15.0, P=2.4e5, omega=0.0, muRoad=1.0)
+    with FMUTyre(unzipdir, "ME", start_values={"useMode": mode}) as fmu:
+        got = fmu.evaluate(**pt, time=100.0, temperature=200.0)
+        logged = " | ".join(m for s, c, m in fmu.messages if s == 1)
+    py_warnings: list[str] = []
+    ref = _python(tyre, pt, {"time": 100.0, "temperature": 200.0}, mode, record=py_warnings)
+    edge = _python(tyre, pt, {"time": 100.0, "temperature": 120.0}, mode)
+    assert max(_rel_errors(tyre.flat, got, ref).values()) <= 1e-9
+    if mode // 100 == 1:
+        assert (ref["Fx"], ref["Fy"]) == (edge["Fx"], edge["Fy"])
+        assert EXT_RANGE_WARNING in py_warnings and EXT_RANGE_WARNING in logged
+    else:
+        assert ref["Fx"] != edge["Fx"]
+        assert EXT_RANGE_WARNING not in py_warnings and EXT_RANGE_WARNING not in logged
+    # Tyre.evaluate (compiled kernel or numpy) says the same
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        tyre.evaluate(4000.0, 0.05, 0.03, 0.01, mode=mode, time=100.0, temperature=[20.0, 200.0])
+    assert (EXT_RANGE_WARNING in [str(w.message) for w in caught]) == (mode // 100 == 1)
 
 
 # --------------------------------------------------------------------------- sources and errors

@@ -28,7 +28,9 @@ import numpy as np
 import pandas as pd
 
 from mftire.iotools.columns import NOT_VARIABLES
+from mftire.iotools.sweeps import FIT_ROW  # the importer's flag: rows the fit uses (False: warm-up, ramps)
 from mftire.mf.basic import slip_speed
+from mftire.mf.extensions import identifier_name
 from mftire.segmentation.grouping import group_sweeps
 
 #: Derived candidates, in a fixed order.
@@ -115,10 +117,50 @@ def _both_directions(df: pd.DataFrame) -> bool:
     return False
 
 
+#: A numbering column has at least this many distinct values ...
+MIN_ID_LEVELS = 6
+
+
+def numbers_things(v: np.ndarray, sweeps: np.ndarray) -> bool:
+    """True when a column only numbers things (a run, sweep, segment or row number under another name):
+    integer values, at least :data:`MIN_ID_LEVELS` of them, spaced by one (a count, not a measurement),
+    that either never decrease along the rows or change at (nearly) every sweep.  Such a column is a
+    label: on new data its values are different, and a law in it extrapolates without meaning."""
+    v = np.asarray(v, float)
+    ok = np.isfinite(v)
+    if ok.sum() < 2 or not np.all(v[ok] == np.round(v[ok])):
+        return False
+    lv = np.unique(v[ok])
+    if lv.size < MIN_ID_LEVELS or np.median(np.diff(lv)) != 1.0:
+        return False
+    if np.all(np.diff(v[ok]) >= 0):
+        return True
+    per_level = pd.Series(np.asarray(sweeps)[ok]).groupby(v[ok]).nunique()
+    return bool(per_level.max() <= 2 and lv.size >= 0.5 * pd.unique(np.asarray(sweeps)).size)
+
+
+def is_identifier(name: str, v: np.ndarray, sweeps: np.ndarray) -> bool:
+    """An identifier column: named as one (:func:`mftire.mf.extensions.identifier_name`) or only numbering
+    things (:func:`numbers_things`).  Never a candidate, never a law variable."""
+    if str(name).lower() in TIME_NAMES:  # a clock at 1 Hz counts seconds, it does not number things
+        return False
+    return identifier_name(name) or numbers_things(v, sweeps)
+
+
+def identifier_columns(df: pd.DataFrame) -> list[str]:
+    """The data columns left out of the candidates as identifiers (:func:`is_identifier`)."""
+    sweeps = df["sweep_id"].to_numpy() if "sweep_id" in df.columns else np.zeros(len(df))
+    return [str(c) for c in df.columns if str(c) not in EXCLUDED and str(c) not in DERIVED
+            and pd.api.types.is_numeric_dtype(df[c]) and not pd.api.types.is_bool_dtype(df[c])
+            and is_identifier(str(c), df[c].to_numpy(float), sweeps)]  # fmt: skip
+
+
 def candidates(df: pd.DataFrame) -> list[Candidate]:
     """All candidates for grouped sweep data: derived ones, then numeric data columns.
 
-    Constant columns (one value) are left out: they cannot explain anything.
+    Constant columns (one value) are left out: they cannot explain anything.  So are identifiers
+    (:func:`is_identifier`: run, sweep, row, file numbers, any column that only numbers things), and the
+    ``fit_row`` flag of imported rig data.
     """
     sweep = df["sweep_id"].to_numpy()
     out = []
@@ -138,7 +180,9 @@ def candidates(df: pd.DataFrame) -> list[Candidate]:
             out.append(Candidate(name, v, True, level(v)))
     for col in df.columns:
         name = str(col)
-        if name in EXCLUDED or name in DERIVED or not pd.api.types.is_numeric_dtype(df[col]):
+        if name in EXCLUDED or name in DERIVED or name == FIT_ROW or not pd.api.types.is_numeric_dtype(df[col]):
+            continue
+        if not pd.api.types.is_bool_dtype(df[col]) and is_identifier(name, df[col].to_numpy(float), sweep):
             continue
         if pd.api.types.is_bool_dtype(df[col]):
             v = df[col].to_numpy(float)

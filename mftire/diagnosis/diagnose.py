@@ -11,16 +11,27 @@ Procedure (:func:`diagnose`)
 3. No significant candidate: "no significant effect", nothing changes.
 4. Otherwise a condition is held out (``holdout`` or an interior level of the top
    candidate, else of load, speed or pressure).  For the significant candidates
-   close to the top, laws on the affected families of scaling factors are fitted on the
-   remaining data (:mod:`mftire.diagnosis.effects`) and compared by their error on
-   held-out sweeps with a control refit; the candidate whose law predicts best is the
-   cause, and is listed first, with what it is confounded with (:meth:`Profiles.confounding`).
-5. Before/after errors on the held-out condition per channel: RMS, RMS in % of the
-   channel's peak, and the share of residual variance removed.
+   close to the top, laws on the affected families of the affected channels are fitted on the
+   remaining data (:mod:`mftire.diagnosis.effects`), each refitting the main coefficients of the
+   channels it acts on, and compared on held-out folds (contiguous ranges or levels of the
+   candidate, every sweep kind kept) with the control refitted the same way without a law; a law
+   that makes any scored channel (Fx, Fy, Mz) worse than the control beyond its noise, over the folds
+   or in one of them, is never chosen (:func:`~mftire.diagnosis.effects.worse_channels`).
+5. The held-out condition: each surviving law's model and its control, both fitted without it, per
+   channel; the first law (in order of preference) that makes no scored channel worse and improves
+   them together is refitted on every row and written.  Its model changes only the coefficients of
+   the channels the law acts on.  When none holds: "cause named, no law found", the model unchanged.
+6. Before/after errors on the held-out condition per channel (before: the control): RMS, RMS in % of
+   the channel's peak, and the share of residual variance removed.
+
+Identifiers are never candidates (:func:`mftire.diagnosis.candidates.is_identifier`).  With the
+importer's ``fit_row`` column, the accumulated candidates run through the flagged rows too
+(:func:`fit_rows`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -32,13 +43,18 @@ from mftire.diagnosis.effects import (
     FIT_CHANNELS,
     HISTORY_CANDIDATES,
     MAX_RESIDUAL_VS_CONTROL,
+    PRESSURE_COEFFICIENTS,
     EffectFit,
     choose_effect,
     drop_outliers,
     effects_for,
+    family_targets,
+    final_fit,
+    is_worse,
     make_problem,
     primary_rows,
     refine_effect,
+    restricted,
 )
 from mftire.diagnosis.holdout import default_holdout, holdout_mask, levels
 from mftire.diagnosis.profile import CONFOUND_R, Profiles, profile_factors
@@ -50,7 +66,8 @@ from mftire.diagnosis.ranking import (
 )
 from mftire.errors import MftireInputError
 from mftire.fitting.weights import noise_std
-from mftire.iotools.sweeps import MEASURED_COLUMNS, fit_rows
+from mftire.iotools.sweeps import FIT_ROW, MEASURED_COLUMNS, fit_rows
+from mftire.mf.extensions import BUILTIN_VARIABLES
 from mftire.progress import reporter
 from mftire.tyre import Tyre, TyreLike, as_tyre
 
@@ -85,8 +102,14 @@ class DiagnosisResult:
     not_measured: dict[str, str] = field(default_factory=dict)  #: channel -> why it was left out
     profiles: Profiles | None = None  #: per-sweep scaling-factor profiles
     confounding: list[str] = field(default_factory=list)  #: what the cause is confounded with, in words
+    #: the candidate named as the cause when no law was accepted ("cause named, no law found"), else None
+    cause: str | None = None
 
     def summary(self) -> str:
+        if not self.significant and self.cause is not None:
+            return (f"cause named, no law found: {self.cause} explains the residual, but no law in it predicts "
+                    "held-out data better than refitting the model without it on every scored channel; the model "
+                    "is left unchanged (see the per-sweep profiles)")  # fmt: skip
         if not self.significant:
             return "no significant effect: the residual is not explained by any candidate beyond the MF inputs"
         e = self.effect
@@ -180,14 +203,20 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
     v = np.asarray(v, float)
     lv = np.unique(np.round(v[np.isfinite(v)], 6))
     if sweep_level and 3 <= len(lv) <= 6 and blocks is None:
-        return np.unique(np.round(v, 6), return_inverse=True)[1]
+        out = np.unique(np.round(v, 6), return_inverse=True)[1]
+        if kinds is not None:  # a level that holds every sweep of a kind is never held out
+            kk = np.asarray(kinds)
+            for level in np.unique(out):
+                if set(kk[out != level]) != set(kk):
+                    out = np.where(out == level, -1, out)
+        return out if np.unique(out[out >= 0]).size >= 2 else None
     b = np.zeros(len(v), int) if blocks is None else np.asarray(blocks)
     if kinds is not None:
         b = pd.MultiIndex.from_arrays([b, np.asarray(kinds)]).factorize()[0]
     frame = pd.DataFrame({"v": v, "s": sweeps, "b": b})
     means = frame.groupby("s").agg(v=("v", "mean"), b=("b", "first"))
     if means["v"].nunique() < k:
-        return None
+        return kind_folds(sweeps, kinds)
     label: dict = {}
     for _, g in means.groupby("b"):
         if len(g) < 2:
@@ -197,6 +226,22 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
         rank = g["v"].rank(method="first").to_numpy()
         label.update(zip(g.index, np.minimum((rank - 1) * kk // len(g), kk - 1).astype(int), strict=True))
     out = np.array([label[s] for s in sweeps])
+    return out if np.unique(out[out >= 0]).size >= 2 else kind_folds(sweeps, kinds)
+
+
+def kind_folds(sweeps: np.ndarray, kinds: np.ndarray | None, k: int = 3) -> np.ndarray | None:
+    """Folds of whole sweeps when the candidate gives no ranges (a variable that changes within the sweeps, as
+    the sign of the slip angle): the sweeps of each kind dealt in turn, in their order, to ``k`` folds, so that
+    every fold holds out some sweeps of every kind with two or more and keeps the others in training."""
+    if kinds is None:
+        return None
+    frame = pd.DataFrame({"s": np.asarray(sweeps), "kind": np.asarray(kinds)})
+    first = frame.groupby("s", sort=False)["kind"].first()
+    label = {}
+    for _, g in first.groupby(first):
+        kk = min(k, len(g))
+        label.update({sid: (i % kk if kk >= 2 else -1) for i, sid in enumerate(g.index)})
+    out = frame["s"].map(label).to_numpy(int)
     return out if np.unique(out[out >= 0]).size >= 2 else None
 
 
@@ -259,6 +304,37 @@ def _profile_candidates(profiles: Profiles, ranking: list[CandidateScore], by_na
         ranking.insert(len(significant) + len(out), entry)
         out.append(entry)
         have.add(link.variable)
+    return out
+
+
+def split_fit_rows(data: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame | None]:
+    """The grouped rows the fit uses, and all grouped rows when the data carry the importer's ``fit_row`` flag
+    with some rows False (warm-up, load-ramp and dropped segments kept for the diagnosis), else None.
+
+    The accumulated candidates (``energy``: the friction work, ``sequence``) are computed over all rows, in
+    their order, because a thermal or test-order effect builds up most where the tyre is warmed up; the
+    residual ranking and the laws use the rows the fit uses (:func:`mftire.iotools.sweeps.fit_rows`: bool or
+    text).  Without the column every row is a fit row."""
+    if FIT_ROW not in data.columns:
+        return with_sweeps(data), None
+    flag = pd.Series(data.index.isin(fit_rows(data).index), index=data.index)  # the importer's reading of it
+    if flag.all():
+        return with_sweeps(data.drop(columns=[FIT_ROW])), None
+    if not flag.any():
+        raise MftireInputError(f"column '{FIT_ROW}' is False on every row: no row to diagnose")
+    full = with_sweeps(data.drop(columns=[FIT_ROW])).assign(**{FIT_ROW: flag.to_numpy()})
+    return full[full[FIT_ROW]].drop(columns=[FIT_ROW]).reset_index(drop=True), full
+
+
+def input_laws(tyre: Tyre, channels: Sequence[str], variable: str) -> list[str]:
+    """The input laws (:data:`mftire.mf.extensions.INPUT_TARGETS`) worth trying for ``variable``: an effective
+    pressure when the file has pressure terms (:data:`~mftire.diagnosis.effects.PRESSURE_COEFFICIENTS`) and the
+    candidate is not the pressure itself; a slip-angle and a camber offset when Fy is measured."""
+    out = []
+    if variable not in ("P", "dpi") and any(float(tyre.flat.get(k, 0.0)) != 0.0 for k in PRESSURE_COEFFICIENTS):
+        out.append("P_FACTOR")
+    if "Fy" in channels:
+        out += ["ALPHA_OFFSET", "GAMMA_OFFSET"]
     return out
 
 
@@ -340,16 +416,23 @@ def _diagnose(
 ) -> DiagnosisResult:
     tyre = as_tyre(tyre)
     say = reporter(progress, "mftire diagnose")
-    # the sweep rows; rows an importer kept outside the sweeps (fit_row False: warm-up, load ramps) are
-    # left out until the candidates use them (issue 21)
-    df = with_sweeps(fit_rows(data).reset_index(drop=True))
+    # the sweep rows; rows an importer kept outside the sweeps (fit_row False: warm-up, load ramps) feed
+    # the accumulated candidates only (issue 21)
+    df, flagged = split_fit_rows(data.reset_index(drop=True))
     chans, not_measured = measured_channels(df, channels or MEASURED_COLUMNS)
     if not chans:
         raise MftireInputError("no measured channel (Fx, Fy, Mz, Mx, My) with data to diagnose"
                                + "".join(f"; {c}: {why}" for c, why in not_measured.items()))
     if holdout is not None:  # a held-out level given by the user must exist, whatever the ranking finds
         holdout_mask(df, holdout[0], list(holdout[1]))
-    cands = candidates(df)
+    if flagged is None:
+        cands = candidates(df)
+    else:  # the accumulators (friction work, position in the sequence) run through the flagged rows too
+        keep = flagged[FIT_ROW].to_numpy(bool)
+        cands = [Candidate(c.name, c.values[keep], c.derived, c.sweep_level) for c in candidates(flagged)]
+        cands = [c for c in cands if np.nanstd(c.values) > 0]
+        say(f"{int((~keep).sum())} rows flagged fit_row = False (warm-up, load ramps) used for the "
+                  "accumulated candidates")  # fmt: skip
     by_name = {c.name: c for c in cands}
     variables = _variables_for(tyre, df)
     say(f"{len(df)} rows, {df['sweep_id'].nunique()} sweeps, channels {', '.join(chans)}")
@@ -391,8 +474,8 @@ def _diagnose(
     top = significant[0]
     if holdout is None:
         pref = [top.variable] if by_name[top.variable].sweep_level and top.variable in df.columns else []
-        ch = top.channel if top.channel in residuals else next(iter(residuals))
-        misfit = np.where(primary_rows(df, ch), residuals[ch] ** 2, np.nan)
+        ch = top.channel if top.channel in residuals else next(iter(residuals), None)
+        misfit = None if ch is None else np.where(primary_rows(df, ch), residuals[ch] ** 2, np.nan)
         holdout = default_holdout(df, pref, misfit)
     column, values = holdout[0], list(holdout[1])
     test = holdout_mask(df, column, values)
@@ -415,15 +498,20 @@ def _diagnose(
             variable, derived = time_column(df), False
             if variable is None:
                 continue
-            note = (f"the candidate '{e.variable}' needs the measured history; the effect is expressed in the raw "
-                    f"column '{variable}' instead")
+            note = (f"a test-order effect: the candidate '{e.variable}' ("
+                    + ("the accumulated friction work" if e.variable == "energy" else "the position in the sequence")
+                    + f") needs the measured history; the law is expressed in the physical accumulator the data "
+                    f"carry, the elapsed time '{variable}', with the saturating form of a first-order response "
+                    "(fade or warm-up) among the forms tried")  # fmt: skip
             c = by_name.get(variable) or Candidate(variable, df[variable].to_numpy(float), False, False)
         v = c.values[train]
         monotone = bool(np.all(np.diff(v) >= 0)) or variable == time_column(df)
         families = profiles.families_for(variable) or ["friction"]
-        second = profiles.second_variable(variable, cand_values) if len(np.unique(v)) <= 3 else None
+        # a second variable of an interaction: another column or an MF input (dfz, gamma, Vx, P)
+        second = profiles.second_variable(variable, {k: x for k, x in cand_values.items() if k != variable})
         dtr = dtrain.assign(_cand=v)
         prob = make_problem(tyre, dtr, chans)
+        prob.noise = {ch: noise[ch] / prob.scale[ch] for ch in prob.channels if np.isfinite(noise.get(ch, np.nan))}
         prob.variables = {k: np.asarray(val)[train] for k, val in variables.items()}
         prob = drop_outliers(prob)
         v = prob.df["_cand"].to_numpy(float)
@@ -435,8 +523,25 @@ def _diagnose(
         kinds = prob.df["sweep_var"].to_numpy() if "sweep_var" in prob.df.columns else None
         folds = level_folds(v, prob.df["sweep_id"].to_numpy(), c.sweep_level, blocks=blocks, kinds=kinds)
         n_levels = int(np.unique(np.round(v[np.isfinite(v)], 9)).size)
+        # the laws act on the channels where the candidate is significant (a law that helps Fy is not put on Fx)
+        law_ch = [ch for ch in eff_ch if ch in ("Fx", "Fy")] or [ch for ch in eff_ch if ch in chans] or chans
+        scores = e.channel_scores
+        if "Mz" in eff_ch and scores.get("Mz", 0.0) >= max(scores.get("Fx", 0.0), scores.get("Fy", 0.0)):
+            # an aligning-moment effect: the trail and residual torque (Pacejka 2012 eqs 4.E33-4.E47)
+            families = ["trail", "residual_torque"] if law_ch == ["Mz"] else [*families, "trail"]
+            law_ch = list(dict.fromkeys([*law_ch, "Mz"]))
+        inputs = input_laws(tyre, chans, variable)
+        # the laws act on every force channel measured, and also (linear and saturating forms) on the channels
+        # where the candidate is significant alone; a law that hurts a channel is trimmed of it when judged
+        forces = [ch for ch in chans if ch in ("Fx", "Fy")]
+        broad = list(dict.fromkeys([*forces, *law_ch])) if set(law_ch) & set(forces) else law_ch
         laws = [(var, law, v if var == variable else None)
-                for var, law in effects_for(variable, derived, monotone, n_levels, families, chans, second)]
+                for var, law in effects_for(variable, derived, monotone, n_levels, families, broad, second, inputs)]
+        if broad != law_ch:
+            keep = {t for fam in families for t in family_targets(fam, law_ch)}
+            laws += [(var, dataclasses.replace(law, targets=tuple(t for t in law.targets if t in keep)), val)
+                     for var, law, val in list(laws) if law.form in ("linear", "saturating") and law.targets
+                     and set(law.targets) - keep and set(law.targets) & keep]  # fmt: skip
         chosen, fits = choose_effect(prob, laws, n_pressures, control, eff_ch, folds)
         control = fits[0]
         tried += fits[1:] if len(tried) else fits
@@ -444,12 +549,12 @@ def _diagnose(
             continue
         if note:
             chosen.messages.insert(0, note)
-        by_law = {law.name: (law, val) for _, law, val in laws}
-        ranked = sorted((f for f in fits[1:] if np.isfinite(f.heldout) and f.heldout < 1.0 and f.name in by_law),
-                        key=lambda f: f.heldout)  # fmt: skip
+        by_var = {var: val for var, _, val in laws}
+        ranked = sorted((f for f in fits[1:] if np.isfinite(f.heldout) and f.heldout < 1.0 and f.law is not None),
+                        key=lambda f: (f.rejected, f.heldout))  # fmt: skip
         ranked = [chosen] + [f for f in ranked if f is not chosen]
-        found.append((chosen, e, (prob, [(f, *by_law[f.name]) for f in ranked], eff_ch, folds, blocks is not None,
-                                  control.cv)))  # fmt: skip
+        found.append((chosen, e, (prob, [(f, f.law, by_var.get(f.variable)) for f in ranked], eff_ch, folds,
+                                  blocks is not None, control.cv, dict(control.cv_channels), control)))  # fmt: skip
     # the lowest held-out error wins; a better-ranked candidate within 10 % of it is preferred
     lowest = min((f.heldout for f, _, _ in found), default=np.inf)
     best = next((t for t in found if t[0].heldout <= 1.1 * lowest), None)
@@ -458,24 +563,58 @@ def _diagnose(
                "than refitting the model without it")
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
-                               profiles=profiles)  # fmt: skip
+                               profiles=profiles, cause=top.variable)  # fmt: skip
     effect, cause, context = best
     # the chosen candidate's best laws and the control, refitted with every MF coefficient
     say(f"refitting every coefficient with the laws of {effect.variable}")
-    prob, law_fits, eff_ch, folds, in_blocks, control_cv = context
-    refined, extended, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv)
-    if refined is None:
+    prob, law_fits, eff_ch, folds, in_blocks, control_cv, control_channels, local_control = context
+    variants, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv, control_channels,
+                                    local_control)  # fmt: skip
+    if not variants:
         msg = ("no significant effect: the best laws did not beat the control once every coefficient was "
                "refitted (" + "; ".join(notes) + ")")
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
-                               profiles=profiles)  # fmt: skip
-    effect = refined
+                               profiles=profiles, cause=cause.variable)  # fmt: skip
+    # the held-out condition: each variant's model and its control, both refitted without it, per channel; the
+    # first variant (in order of preference) that no channel finds worse beyond its noise and that improves the
+    # scored channels together is accepted.  A law acts on its channels only: every other coefficient stays as
+    # the model has it, the control is restricted the same way.
+    dtest = df[test].reset_index(drop=True)
+    rejected: list[str] = []
+    accepted = None
+    for refined, extended in variants:
+        ext_r, eff_r = restricted(tyre, extended, refined)
+        ctrl_r, _ = restricted(tyre, refined.control_tyre, refined)
+        errs = channel_errors(dtest, _model(ctrl_r, dtest), _model(ext_r, dtest), chans)
+        # the scored channels, those the laws are fitted on (Mx and My follow the forces through models of
+        # their own and are reported, not scored)
+        worse = [e.channel for e in errs if e.channel in FIT_CHANNELS
+                 and is_worse(e.n * e.rms_after**2, e.n * e.rms_before**2, e.n, noise.get(e.channel, 0.0))]
+        gain = sum(e.rms_pct_before**2 - e.rms_pct_after**2 for e in errs if e.channel in FIT_CHANNELS)
+        if not worse and gain > 0.0:
+            accepted = (eff_r, ext_r, errs)
+            break
+        what = ", ".join(f"{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g}" for e in errs
+                         if e.channel in worse)  # fmt: skip
+        rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) "
+                        + (f"made {what}" if worse else "did not improve"))
+    effect = variants[0][0]
     named = [e for e in ranking if e.variable == effect.variable and e.significant]
     if named and effect.variable != cause.variable:  # e.g. a slip-speed law chosen for Vx: the cause is Vs
         cause = named[0]
     ranking.remove(cause)
     ranking.insert(0, cause)
+    if accepted is None:
+        msg = (f"cause named, no law found: the laws that beat the control on the held-out folds lost to the model "
+               f"refitted without them on the held-out condition {column} = {values}: " + "; ".join(rejected)
+               + "; the model is left unchanged")  # fmt: skip
+        return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
+                               [], None, tried + [v[0] for v in variants], messages=[msg], data=df, train=train,
+                               not_measured=not_measured, profiles=profiles, cause=cause.variable)  # fmt: skip
+    effect, extended, errors = accepted
+    if rejected:
+        effect.messages.append("not chosen on the held-out condition: " + "; ".join(rejected))
 
     # extended: the refined tyre; its variables are columns of the data (closed variables)
     cvals = df[effect.variable].to_numpy(float) if effect.variable in df.columns else by_name[cause.variable].values
@@ -483,8 +622,19 @@ def _diagnose(
         confounding_notes(df[train].reset_index(drop=True), effect.variable, cvals[train],
                           effect.heldout if in_blocks else None)
         + profiles.confounding(effect.variable)))  # fmt: skip
-    dtest = df[test].reset_index(drop=True)
-    errors = channel_errors(dtest, _model(tyre, dtest), _model(extended, dtest), chans)
+    # validated: the same law refitted the same way on every row (the held-out condition too)
+    say(f"refitting {effect.name} in {effect.variable} on every row")
+    pall = make_problem(tyre, df.assign(_cand=cvals), chans)
+    pall.noise = dict(prob.noise)
+    pall.variables = {k: np.asarray(val) for k, val in variables.items()}
+    pall = drop_outliers(pall)
+    values_all = pall.df["_cand"].to_numpy(float) if effect.variable not in BUILTIN_VARIABLES else None
+    extended, _ = restricted(tyre, final_fit(pall, effect, values_all, n_pressures, eff_ch), effect)
+    effect.standard = {k: float(v) for k, v in extended.flat.items() if k in tyre.flat and v != tyre.flat[k]}
+    effect.section = {k: v for k, v in (extended.extensions or {}).items() if k not in (tyre.extensions or {})}
+    effect.parameters = {k: float(v) for k, v in effect.section.items() if isinstance(v, float) and "_C" in k}
+    effect.messages.append(f"held out: {column} = {values} (the law's model and the control refitted without "
+                           "it); the model written is the law refitted on every row")  # fmt: skip
     full_after = _model(extended, df)
     for ch in chans:
         df[f"residual_after_{ch}"] = df[ch].to_numpy(float) - full_after[ch]

@@ -1,21 +1,26 @@
-"""Map a candidate variable to model extensions, fit them, and choose one.
+"""Map a candidate variable to model extensions, fit them, and choose one that holds on new data.
 
-An effect is a law of :data:`EFFECTS_FOR`: MF scaling factors times a form of
-:mod:`mftire.mf.extensions` in the candidate's variable (or the standard pressure terms).
-Each is fitted by bounded least squares on the
+An effect is a :class:`Law`: MF scaling factors, force offsets or measured inputs (an effective pressure,
+a slip-angle or camber offset) times a form of :mod:`mftire.mf.extensions` in the candidate's variable
+(or the standard pressure terms).  Each is fitted by bounded least squares on the
 training data (gross outliers removed; each channel on the rows where it is a primary
-response), together with the peak and curvature coefficients of the measured
-channels (:data:`REFIT_KEYS`), because a base fit made on data containing the effect
-has absorbed part of it into them.  The other Magic Formula coefficients stay as
-fitted.  The inflation-pressure effect refits the
+response), together with the peak and curvature coefficients (:data:`REFIT_KEYS`) of the
+channels the law acts on (:func:`refit_channels_of`: its targets' channels, and Mz with a force),
+because a base fit made on data containing the effect has absorbed part of it into them.  The other
+Magic Formula coefficients stay as given.  The inflation-pressure effect refits the
 standard MF 6.1 pressure coefficients instead of an extension section.
 
-Extensions are compared by the Bayesian information criterion of the weighted
-residual, n·ln(SS/n) + k·ln(n), so a term with more parameters must earn them.
+Laws that explain the training data better than the control (the same coefficients refitted without
+a law; 10 % less residual and a lower Bayesian information criterion n·ln(SS/n) + k·ln(n)) are then
+judged on held-out folds only: a law must cut the control's held-out error by 10 %, and no scored
+channel may be worse than under the control beyond its noise, over the folds or in one of them
+(:func:`worse_channels`).  A law that hurts a channel is retried without the targets of that
+channel (:func:`trimmed`).  Training error alone never chooses a law.
 
 Variables are closed (:mod:`mftire.mf.extensions`): a candidate that needs measured
 history (``energy``) or the row order (``sequence``) is expressed in the nearest raw
-column, a time column when the data have one, and the effect says so.
+column, a time column when the data have one, and the effect says so.  Each term stores the
+range its variables were fitted on (evaluation clamps to it in modes 1xx).
 """
 
 from __future__ import annotations
@@ -34,6 +39,7 @@ from mftire.mf.extensions import (
     BUILTIN_VARIABLES,
     MAX_LEVELS,
     SECTION,
+    TARGET_CHANNELS,
     Extension,
     ExtensionSet,
     make_extension,
@@ -64,12 +70,21 @@ FAMILY_TARGETS = {
     "curvature": {"Fx": ("LEX",), "Fy": ("LEY",)},
     "shape": {"Fx": ("LCX",), "Fy": ("LCY",)},
     "shift": {"Fx": ("FX_OFFSET",), "Fy": ("FY_OFFSET",)},
+    # the aligning moment (Pacejka 2012 eqs 4.E33-4.E47): pneumatic trail and residual torque
+    "trail": {"Mz": ("LTR",)},
+    "residual_torque": {"Mz": ("LRES",)},
 }
+#: Input laws (:data:`mftire.mf.extensions.INPUT_TARGETS`) tried with a family: an effective inflation
+#: pressure with friction or stiffness (it acts through the MF's pressure terms, eqs 4.E2b, 4.E13, 4.E15,
+#: 4.E23, 4.E25), a slip-angle or camber offset with a shift (it moves the curves sideways).
+INPUT_LAWS = {"friction": ("P_FACTOR",), "stiffness": ("P_FACTOR",), "shift": ("ALPHA_OFFSET", "GAMMA_OFFSET")}
+#: Standard coefficients through which an effective pressure acts (none non-zero: no pressure input law).
+PRESSURE_COEFFICIENTS = ("PPX1", "PPX2", "PPX3", "PPX4", "PPY1", "PPY2", "PPY3", "PPY4", "PPZ1")
 
 
 def family_targets(family: str, channels: Sequence[str]) -> tuple[str, ...]:
-    """The scaling factors of ``family`` for the force channels present (friction: LMUX, LMUY)."""
-    out = [t for ch in ("Fx", "Fy") if ch in channels for t in FAMILY_TARGETS[family][ch]]
+    """The scaling factors of ``family`` for the channels present (friction: LMUX, LMUY)."""
+    out = [t for ch in ("Fx", "Fy", "Mz") if ch in channels for t in FAMILY_TARGETS[family].get(ch, ())]
     return tuple(out) or tuple(t for ts in FAMILY_TARGETS[family].values() for t in ts)
 
 #: Laws tried for each derived candidate (data columns: see :func:`effects_for`);
@@ -151,6 +166,13 @@ class EffectFit:
     heldout: float = float("nan")  #: held-out-sweep error relative to the control refit [-]
     cv: float = float("nan")  #: held-out-sweep error (sum of squared weighted residuals) [-]
     targets: tuple[str, ...] = ()  #: scaling factors (or offsets) the law acts on
+    #: held-out-fold error per channel: channel -> (sum of squared weighted residuals, held-out rows)
+    cv_channels: dict[str, tuple[float, int]] = field(default_factory=dict)
+    law: Law | None = None  #: the law fitted
+    rejected: bool = False  #: a scored channel was worse on held-out folds than under the control
+    refit: str = "main"  #: how the chosen model was refitted: its "main" coefficients or "all" (staged fitter)
+    control_tyre: Tyre | None = field(default=None, repr=False)  #: the control refitted the same way
+    control: EffectFit | None = field(default=None, repr=False)  #: the control of the same channels (local fit)
 
     @property
     def removed(self) -> float:
@@ -164,6 +186,13 @@ class EffectFit:
 
 def _tyre_with(tyre: Tyre, standard: Mapping[str, float], section: Mapping[str, object]) -> Tyre:
     params = tyre.parameters.copy()
+    for k in tyre.flat:  # numpy scalars of a model built in code are written as plain numbers
+        try:
+            v = params[k]
+        except (KeyError, TypeError):
+            continue
+        if isinstance(v, np.floating) and k not in standard:
+            params.set(k, float(v))
     for k, v in standard.items():
         params.set(k, float(v))
     for k, v in section.items():
@@ -173,18 +202,28 @@ def _tyre_with(tyre: Tyre, standard: Mapping[str, float], section: Mapping[str, 
 
 def effects_for(
     variable: str, derived: bool, monotone: bool, n_levels: int = 99, families: Sequence[str] = ("friction",),
-    channels: Sequence[str] = ("Fx", "Fy"), second: str | None = None,
+    channels: Sequence[str] = ("Fx", "Fy"), second: str | None = None, inputs: Sequence[str] = (),
 ) -> tuple[tuple[str, Law], ...]:
     """Laws to try for a candidate, as ``(variable read, law)``.
 
-    Derived candidates: their documented laws (:data:`EFFECTS_FOR`).  Data columns, for
+    Derived candidates: their documented laws (:data:`EFFECTS_FOR`); the sweep direction: hysteresis,
+    a ``direction`` law on the force offsets and the friction of ``channels``.  Data columns, for
     each family of scaling factors the per-sweep profiles link to the variable (friction
     when none): a saturating law when the variable never decreases along the sequence
-    (fade or warm-up with time), linear and quadratic laws, a per-level table when it has
-    at most :data:`mftire.mf.extensions.MAX_LEVELS` levels, and, for a flag with a second
-    variable ``second``, the interaction of the two.
+    (fade or warm-up with time), linear and quadratic laws, a hinge (a change above a threshold) for a
+    continuous variable, a per-level table when it has at most 5 levels, the interaction with a second
+    variable ``second`` (a data column or an MF input: dfz, gamma, Vx, P), and the input laws ``inputs``
+    of the family (:data:`INPUT_LAWS`; linear).
     """
     laws: list[tuple[str, Law]] = list(EFFECTS_FOR.get(variable, ())) if derived else []
+    if variable == "sweep_dir":  # hysteresis between up and down sweeps, in the families of the channels
+        fams = list(families) + (["shift"] if {"Fx", "Fy"} & set(channels) else [])
+        for fam in dict.fromkeys(fams):
+            tg = tuple(t for t in family_targets(fam, channels)
+                       if set(TARGET_CHANNELS.get(t, ())) & set(channels))  # fmt: skip
+            if tg:
+                laws.append(("sweep_dir", Law(f"hysteresis_{fam}", tg, "direction")))
+        return tuple(laws)
     for fam in families:
         tg = family_targets(fam, channels)
         if derived and fam == "friction" and laws:
@@ -197,10 +236,17 @@ def effects_for(
         laws.append((variable, Law(f"{fam}_variable", tg, "linear")))
         if n_levels >= 4:
             laws.append((variable, Law(f"{fam}_variable_quadratic", tg, "quadratic")))
+        if n_levels >= 8 and not derived:
+            laws.append((variable, Law(f"{fam}_threshold", tg, "hinge")))
         if 2 <= n_levels <= min(MAX_LEVELS, 5) and not derived:
             laws.append((variable, Law(f"{fam}_levels", tg, "table")))
-        if second is not None and n_levels <= 3:
+        if second is not None:
             laws.append((variable, Law(f"{fam}_interaction", tg, "interaction", variable2=second)))
+        for target in INPUT_LAWS.get(fam, ()):
+            name = {"P_FACTOR": "effective_pressure", "ALPHA_OFFSET": "slip_angle_offset",
+                    "GAMMA_OFFSET": "camber_offset"}[target]  # fmt: skip
+            if target in inputs and all(law.name != name for _, law in laws):
+                laws.append((variable, Law(name, (target,), "linear")))
     return tuple(laws)
 
 
@@ -231,6 +277,8 @@ class _Problem:
     scale: dict[str, float]
     variables: dict[str, np.ndarray]
     weights: np.ndarray
+    #: noise standard deviation of each channel in units of its scale (0: unknown)
+    noise: dict[str, float] = field(default_factory=dict)
     #: the arrays of :meth:`targets`, made once (``df`` and ``weights`` are not changed in place)
     _targets: tuple | None = field(default=None, init=False, repr=False, compare=False)
 
@@ -276,14 +324,16 @@ def drop_outliers(prob: _Problem, limit: float = 10.0) -> _Problem:
         return prob
     keep = ~bad
     return _Problem(prob.tyre, d[keep].reset_index(drop=True), prob.channels, prob.scale,
-                    {k: np.asarray(v)[keep] for k, v in prob.variables.items()}, prob.weights[keep])  # fmt: skip
+                    {k: np.asarray(v)[keep] for k, v in prob.variables.items()}, prob.weights[keep],
+                    prob.noise)  # fmt: skip
 
 
 def take(prob: _Problem, rows: np.ndarray) -> _Problem:
     """The problem restricted to ``rows`` (a boolean mask or indices)."""
     idx = np.flatnonzero(rows) if np.asarray(rows).dtype == bool else np.asarray(rows)
     return _Problem(prob.tyre, prob.df.iloc[idx].reset_index(drop=True), prob.channels, prob.scale,
-                    {k: np.asarray(v)[idx] for k, v in prob.variables.items()}, prob.weights[idx])  # fmt: skip
+                    {k: np.asarray(v)[idx] for k, v in prob.variables.items()}, prob.weights[idx],
+                    prob.noise)  # fmt: skip
 
 
 def subsample(prob: _Problem, max_rows: int = MAX_ROWS) -> tuple[_Problem, np.ndarray]:
@@ -293,7 +343,8 @@ def subsample(prob: _Problem, max_rows: int = MAX_ROWS) -> tuple[_Problem, np.nd
         return prob, np.arange(n)
     idx = np.unique(np.linspace(0, n - 1, max_rows).round().astype(int))
     sub = _Problem(prob.tyre, prob.df.iloc[idx].reset_index(drop=True), prob.channels, prob.scale,
-                   {k: np.asarray(v)[idx] for k, v in prob.variables.items()}, prob.weights[idx])  # fmt: skip
+                   {k: np.asarray(v)[idx] for k, v in prob.variables.items()}, prob.weights[idx],
+                   prob.noise)  # fmt: skip
     return sub, idx
 
 
@@ -347,22 +398,21 @@ def law_term(law: Law, variable: str, v: np.ndarray | None, tyre: Tyre, index: i
              v2: np.ndarray | None = None) -> Extension:
     """The extension term of ``law`` in ``variable`` (values ``v`` for data columns), numbered ``index``.
 
-    Data variables are normalised by their median and standard deviation and clipped to
-    the fitted range; the slip-speed decay is eq 4.E7 with z = Vs/LONGVL.
+    Data variables are normalised by their median and standard deviation; every variable's training range
+    is stored (``MIN``/``MAX``: evaluation clamps to it in modes 1xx); the slip-speed decay is eq 4.E7
+    with z = Vs/LONGVL; the direction form reads the sign of the sweep direction.
     """
     numbers: dict[str, float] = {}
+    vv = np.asarray(v, float)[np.isfinite(v)] if v is not None else np.zeros(0)
+    if vv.size:
+        # the range seen in training: evaluation clamps to it in modes 1xx, with a warning (no extrapolation)
+        numbers.update(MIN=float(vv.min()), MAX=float(vv.max()))
     if law.form == "decay":
         numbers.update(REF=0.0, SCALE=float(tyre["LONGVL"]))
-    elif variable in BUILTIN_VARIABLES and variable in ("sign_alpha", "sign_kappa"):
+    elif law.form == "direction" or variable in ("sign_alpha", "sign_kappa"):
         numbers.update(REF=0.0, SCALE=1.0)
-    elif v is not None and np.isfinite(v).any():
-        vv = np.asarray(v, float)[np.isfinite(v)]
-        sc = float(np.std(vv)) or 1.0
-        span = float(vv.max() - vv.min())
-        # clipped half a span beyond the fitted range: a level just beyond the data is predicted,
-        # a wild extrapolation is not
-        numbers.update(REF=float(np.median(vv)), SCALE=sc, MIN=float(vv.min()) - 0.5 * span,
-                       MAX=float(vv.max()) + 0.5 * span)
+    elif vv.size:
+        numbers.update(REF=float(np.median(vv)), SCALE=float(np.std(vv)) or 1.0)
         if law.form == "saturating":
             numbers.update(REF=float(vv.min()))
         if law.form == "table":
@@ -370,7 +420,8 @@ def law_term(law: Law, variable: str, v: np.ndarray | None, tyre: Tyre, index: i
                 numbers[f"L{i}"] = float(lev)
     if law.variable2 is not None and v2 is not None:
         vv2 = np.asarray(v2, float)[np.isfinite(v2)]
-        numbers.update(REF2=float(np.min(vv2)), SCALE2=float(np.std(vv2)) or 1.0)
+        numbers.update(REF2=float(np.min(vv2)), SCALE2=float(np.std(vv2)) or 1.0, MIN2=float(np.min(vv2)),
+                       MAX2=float(np.max(vv2)))  # fmt: skip
         return make_extension(index, law.targets, law.form, variable, variable2=law.variable2, **numbers)
     return make_extension(index, law.targets, law.form, variable, **numbers)
 
@@ -398,13 +449,15 @@ def fit_effect(
     warm: Mapping[str, float] | None = None,
     pressure_channels: Sequence[str] | None = None,
     extra_keys: Sequence[str] = (),
+    refit_channels: Sequence[str] | None = None,
 ) -> EffectFit:
     """Fit one law on the training problem, with the main pure-slip coefficients
     of the measured channels (:data:`REFIT_KEYS`) refitted alongside when
     ``refit_base``; :data:`CONTROL` is the control refit.  ``warm`` gives start values of
     refitted coefficients (the control refit's), so that an effect starts from the
     control's optimum with its own terms neutral.  ``extra_keys``: coefficients of the
-    tyre's own extension terms refitted too (a law already in the model)."""
+    tyre's own extension terms refitted too (a law already in the model).  ``refit_channels``: the main
+    coefficients of these channels only (the channels a law acts on: :func:`law_channels`)."""
     tyre = prob.tyre
     base = tyre.extension_set
     base_section = dict(tyre.extensions or {})
@@ -421,6 +474,9 @@ def fit_effect(
             v2 = prob.variables.get(law.variable2)
             if v2 is None and law.variable2 in prob.df.columns:
                 v2 = prob.df[law.variable2].to_numpy(float)
+            elif v2 is None and law.variable2 == "dfz":
+                fz0 = float(tyre["LFZO"]) * float(tyre["FNOMIN"])
+                v2 = (prob.df["Fz"].to_numpy(float) - fz0) / fz0  # eq 4.E2a
         term = law_term(law, variable, values, tyre, index, v2)
         keys = list(term.coefficient_keys)
         x0 = [term.start(k) for k in keys]
@@ -434,7 +490,8 @@ def fit_effect(
     ss0 = float(base_r @ base_r)
     ext = parse_section({**base_section, **term.section()}) if term is not None else base
     model = _model(prob, ext, variables)
-    refit = [k for ch in covered_channels(prob) for k in REFIT_KEYS.get(ch, ()) if k not in keys]
+    refit = [k for ch in covered_channels(prob) if refit_channels is None or ch in refit_channels
+             for k in REFIT_KEYS.get(ch, ()) if k not in keys]  # fmt: skip
     refit = list(dict.fromkeys(refit)) if refit_base else []
     own = {k: t for t in base.terms for k in t.coefficient_keys}
     refit += [k for k in extra_keys if k in own and k not in refit]
@@ -483,7 +540,7 @@ def fit_effect(
     section = {k: v for k, v in section.items() if k not in base_section}
     params = {kk: float(vv) for kk, vv in zip(keys, res.x[: len(keys)], strict=True)}
     fit = EffectFit(law.name, variable, True, params, section, standard, ss0, ss1, float(bic), k, messages,
-                    targets=law.targets)
+                    targets=law.targets, law=law)
     if term is not None:
         fit.messages.append(f"term: {term.describe()}")
     return fit
@@ -567,9 +624,12 @@ def heldout_error(
     prob: _Problem, law: Law, variable: str, values: np.ndarray | None, n_pressures: int,
     warm: Mapping[str, float] | None, pressure_channels: Sequence[str] | None, folds: np.ndarray | None = None,
     extra_keys: Sequence[str] = (),
+    per_channel: dict[str, tuple[float, int]] | None = None,
+    refit_channels: Sequence[str] | None = None,
 ) -> float:
     """Sum of squared weighted residuals on held-out rows: each label of ``folds`` held out in
-    turn (default ``CV_FOLDS`` groups of whole sweeps; rows labelled -1 are never held out)."""
+    turn (default ``CV_FOLDS`` groups of whole sweeps; rows labelled -1 are never held out).
+    ``per_channel`` (a dict, filled): channel -> (its share of the sum, its held-out rows)."""
     from mftire.diagnosis.ranking import fold_of_groups
 
     if folds is None:
@@ -581,10 +641,70 @@ def heldout_error(
         v_tr = None if values is None else np.asarray(values)[~test]
         v_te = None if values is None else np.asarray(values)[test]
         fit = fit_effect(tr, law, variable, v_tr, n_pressures, warm=warm, pressure_channels=pressure_channels,
-                         extra_keys=extra_keys)
+                         extra_keys=extra_keys, refit_channels=refit_channels)
         r = fit_residuals(te, fit, v_te)
         total += float(r @ r)
+        if per_channel is not None:  # per channel over the folds, and per channel and fold ("Fy#2")
+            y, masks, _ = te.targets()
+            for ch, part in zip(te.channels, r.reshape(len(te.channels), -1), strict=True):
+                n_f = int((masks[ch] & np.isfinite(y[ch])).sum())
+                ss, n = per_channel.get(ch, (0.0, 0))
+                per_channel[ch] = (ss + float(part @ part), n + n_f)
+                if n_f:
+                    per_channel[f"{ch}#{f}"] = (float(part @ part), n_f)
     return total
+
+
+#: A scored channel may be worse on held-out data than under the control refit by at most this share of
+#: the control's sum of squares ...
+CHANNEL_WORSE_REL = 0.02
+#: ... plus this share of the noise's (its estimate per row times the rows, never more than the control's
+#: own sum of squares: a noise estimate from a few sweeps must not license a real loss).
+CHANNEL_WORSE_NOISE = 0.02
+
+
+def is_worse(ss: float, ss_control: float, n: int, sigma: float, scale: float = 1.0) -> bool:
+    """True when a channel's sum of squared held-out residuals ``ss`` exceeds the control's ``ss_control``
+    beyond ``scale`` × (:data:`CHANNEL_WORSE_REL`·SS_control + :data:`CHANNEL_WORSE_NOISE`·min(n·σ²,
+    SS_control)) (``n`` held-out rows, ``sigma`` the channel's noise)."""
+    allowance = CHANNEL_WORSE_REL * ss_control + CHANNEL_WORSE_NOISE * min(n * sigma**2, ss_control)
+    return ss > ss_control + scale * allowance
+
+
+def worse_channels(fit: Mapping[str, tuple[float, int]], control: Mapping[str, tuple[float, int]],
+                   noise: Mapping[str, float] | None = None) -> list[str]:
+    """The channels whose held-out-fold error under a law (``fit``: channel -> (SS, rows)) exceeds the
+    control's beyond its noise (:func:`is_worse`), over the folds together and (with twice the allowance) in each fold
+    (keys ``"Fy#2"``): a law that helps on some held-out ranges and hurts on others is not consistent.  A law
+    that makes any scored channel worse on data it was not fitted on is never accepted (issue 21: a diagnosis
+    that makes the model worse must never happen)."""
+    out: list[str] = []
+    for key, (ss_c, n) in control.items():
+        ch = key.split("#")[0]
+        if key not in fit or ch in out:
+            continue
+        sigma = float((noise or {}).get(ch, 0.0))
+        if "#" in key:
+            # a fold ("Fy#2") may lose by twice the allowance of the whole, and by a share of the channel's
+            # control error over every fold (a fold holding a few rows of the channel does not decide alone)
+            if is_worse(fit[key][0], ss_c, n, sigma, 2.0) and \
+                    fit[key][0] - ss_c > CHANNEL_WORSE_REL * control.get(ch, (ss_c, n))[0]:
+                out.append(ch)
+            continue
+        if is_worse(fit[key][0], ss_c, n, sigma):
+            out.append(ch)
+    return out
+
+
+def trimmed(law: Law, worse: Sequence[str]) -> Law | None:
+    """``law`` without the targets that act on the channels ``worse`` (None when nothing is left): a law
+    acts only on the channels it helps (a friction law in temperature that helps Fy is not applied to Fx)."""
+    from mftire.mf.extensions import TARGET_CHANNELS
+
+    keep = tuple(t for t in law.targets if not set(TARGET_CHANNELS.get(t, ())) & set(worse))
+    if not keep or keep == law.targets or law.name in ("pressure", "none"):
+        return None
+    return dataclasses.replace(law, targets=keep)  # the same law (name, form) on fewer targets
 
 
 def choose_effect(
@@ -614,27 +734,73 @@ def choose_effect(
     folds = None if folds is None else np.asarray(folds)[idx]
     if control is None:
         control = fit_effect(prob, CONTROL, laws[0][0] if laws else "", None, n_pressures)
+    controls: dict[tuple[str, ...] | None, EffectFit] = {None: control}
+
+    def control_for(chs: tuple[str, ...] | None) -> EffectFit:
+        """The control refitted on the same channels as a law (every other coefficient as given)."""
+        if chs not in controls:
+            controls[chs] = fit_effect(prob, CONTROL, "", None, n_pressures, warm=control.standard,
+                                       refit_channels=chs)  # fmt: skip
+        return controls[chs]
+
+    scored_controls: set = set()
+
+    def control_cv(chs: tuple[str, ...] | None) -> EffectFit:
+        c = control_for(chs)
+        if chs not in scored_controls:  # a control's held-out error on this candidate's folds
+            per: dict[str, tuple[float, int]] = {}
+            c.cv = heldout_error(prob, CONTROL, "", None, n_pressures, None, effect_channels, folds, per_channel=per,
+                                 refit_channels=chs)  # fmt: skip
+            c.cv_channels = per
+            c.messages.append(f"held-out-sweep error {c.cv:.4g}")
+            scored_controls.add(chs)
+        return c
+
     fits: list[tuple[EffectFit, np.ndarray | None, Law]] = []
     for var, law, v in laws:
         fits.append((fit_effect(prob, law, var, v, n_pressures, warm=control.standard,
-                                pressure_channels=effect_channels), v, law))  # fmt: skip
-    good = sorted((t for t in fits if t[0].n_params > 0 and _beats(t[0], control)), key=lambda t: t[0].bic)[:4]
+                                pressure_channels=effect_channels, refit_channels=refit_channels_of(law)),
+                     v, law))  # fmt: skip
+    good = sorted((t for t in fits if t[0].n_params > 0 and _beats(t[0], control_for(refit_channels_of(t[2])))),
+                  key=lambda t: t[0].bic)[:4]  # fmt: skip
     all_fits = [control] + [f for f, _, _ in fits]
     if not good:
         return None, all_fits
-    cv_control = heldout_error(prob, CONTROL, "", None, n_pressures, None, effect_channels, folds)
-    control.messages.append(f"held-out-sweep error {cv_control:.4g}")
-    control.cv = cv_control
-    scored = []
-    for fit, v, law in good:
-        cv = heldout_error(prob, law, fit.variable, v, n_pressures, control.standard, effect_channels, folds)
-        fit.messages.append(f"held-out-sweep error {cv:.4g} (control {cv_control:.4g})")
-        fit.heldout = cv / cv_control if cv_control > 0 else np.inf
+    control_cv(None)
+    scored: list[tuple[float, EffectFit]] = []
+    screened: list[tuple[float, EffectFit]] = []
+    queue = [(fit, v, law) for fit, v, law in good]
+    while queue:
+        fit, v, law = queue.pop(0)
+        chs = refit_channels_of(law)
+        ctrl = control_cv(chs)
+        per: dict[str, tuple[float, int]] = {}
+        cv = heldout_error(prob, law, fit.variable, v, n_pressures, ctrl.standard, effect_channels, folds,
+                           per_channel=per, refit_channels=chs)  # fmt: skip
+        fit.messages.append(f"held-out-sweep error {cv:.4g} (control {ctrl.cv:.4g})")
+        fit.heldout = cv / ctrl.cv if ctrl.cv > 0 else np.inf
         fit.cv = cv
-        scored.append((cv, fit))
-    if min(cv for cv, _ in scored) > MAX_RESIDUAL_VS_CONTROL * cv_control:
+        fit.cv_channels = per
+        fit.control = ctrl
+        worse = worse_channels(per, ctrl.cv_channels, prob.noise)
+        fit.rejected = bool(worse)
+        if worse:
+            fit.messages.append(f"rejected as fitted: held-out error worse than the control on {', '.join(worse)}")
+            if fit.heldout < 1.0:  # still a candidate for the full refit (refine_effect), never as fitted here
+                screened.append((fit.heldout, fit))
+            narrow = trimmed(law, worse)
+            if narrow is not None:  # the same law on the channels it helps only
+                nf = fit_effect(prob, narrow, fit.variable, v, n_pressures, warm=control.standard,
+                                pressure_channels=effect_channels, refit_channels=refit_channels_of(narrow))
+                all_fits.append(nf)
+                if nf.n_params > 0 and _beats(nf, control_for(refit_channels_of(narrow))):
+                    queue.append((nf, v, narrow))
+            continue
+        if fit.heldout < 1.0:  # better than the control: refined (refine_effect), where it must beat it by 10 %
+            scored.append((fit.heldout, fit))
+    if not scored and not screened:
         return None, all_fits
-    return _parsimonious(scored)[1], all_fits
+    return _parsimonious(scored or screened)[1], all_fits
 
 
 def _parsimonious(scored: Sequence[tuple]) -> tuple:
@@ -667,7 +833,9 @@ def _full_refit(data: pd.DataFrame, tyre: Tyre) -> Tyre:
 def refine_effect(
     prob: _Problem, fits: Sequence[tuple[EffectFit, Law, np.ndarray | None]], n_pressures: int,
     effect_channels: Sequence[str] | None, folds: np.ndarray | None, local_control_cv: float = float("nan"),
-) -> tuple[EffectFit | None, Tyre | None, list[str]]:
+    local_control_channels: Mapping[str, tuple[float, int]] | None = None,
+    local_control: EffectFit | None = None,
+) -> tuple[list[tuple[EffectFit, Tyre]], list[str]]:
     """Refit the best laws and the control with every MF coefficient (the staged fitter), then choose
     among them by held-out-sweep error, each model's law and main coefficients refitted on each fold.
 
@@ -679,8 +847,12 @@ def refine_effect(
     without an effect; a full refit without an effect) by :data:`MAX_RESIDUAL_VS_CONTROL`: an effect must
     explain what refitting the model cannot.  Among those within :data:`PARSIMONY` of the lowest held-out
     error, the law with the fewest coefficients wins (then the lowest error).
-    Returns ``(chosen, extended tyre, messages)``; chosen is None when no law beats the control by
-    :data:`MAX_RESIDUAL_VS_CONTROL` on held-out sweeps.
+    A variant whose held-out error on any scored channel is worse than its control's beyond the noise
+    (:func:`worse_channels`) is never chosen.
+    Returns ``([(effect, extended tyre), ...], messages)``: the variants that beat their control by
+    :data:`MAX_RESIDUAL_VS_CONTROL` on held-out sweeps, the preferred first (empty: none).  An effect's
+    ``refit`` says how its model was refitted (``"main"`` coefficients or ``"all"``) and ``control_tyre`` is
+    the control refitted the same way on the same rows (:func:`final_fit` refits the chosen way on every row).
     """
     base = prob.tyre
     prob, idx = subsample(prob)
@@ -689,37 +861,147 @@ def refine_effect(
     cols = [c for c in prob.df.columns if not str(c).startswith(("residual_", "_"))]
     train = prob.df[cols]  # the training rows without gross outliers, subsampled
     control_tyre = _full_refit(train, base)
-    cv_full = heldout_error(replace_tyre(prob, control_tyre), CONTROL, "", None, n_pressures, None,
-                            effect_channels, folds)  # fmt: skip
-    cv_local = local_control_cv if np.isfinite(local_control_cv) else cv_full
-    messages = [f"control, the main coefficients refitted without an effect: held-out-sweep error {cv_local:.4g}",
+    full: dict[tuple[str, ...] | None, tuple[float, dict]] = {}
+
+    def full_control(chs: tuple[str, ...] | None) -> tuple[float, dict]:
+        """The full control's held-out error, its main coefficients of the channels ``chs`` refitted per fold."""
+        if chs not in full:
+            per: dict[str, tuple[float, int]] = {}
+            cv = heldout_error(replace_tyre(prob, control_tyre), CONTROL, "", None, n_pressures, None,
+                               effect_channels, folds, per_channel=per, refit_channels=chs)  # fmt: skip
+            full[chs] = (cv, per)
+        return full[chs]
+
+    cv_full = full_control(None)[0]
+    messages = [f"control, the main coefficients refitted without an effect: held-out-sweep error "
+                f"{local_control_cv:.4g}",
                 f"control, every coefficient refitted without an effect: held-out-sweep error {cv_full:.4g}"]
     # each law as fitted locally (its held-out error from choose_effect) and refitted in full; each variant
-    # must beat the control refitted the same way
-    options: list[tuple[float, EffectFit, Tyre, float]] = [(f.cv, f, f.apply(base), cv_local) for f, _, _ in fits
-                                                           if np.isfinite(f.cv)]  # fmt: skip
+    # must beat the control refitted the same way (the same channels, the same coefficients)
+    options: list[tuple] = []
+    for f, _, _ in fits:
+        ctrl = f.control if f.control is not None else local_control
+        if ctrl is None or not np.isfinite(f.cv) or f.rejected or not np.isfinite(ctrl.cv):
+            continue
+        if not worse_channels(f.cv_channels, ctrl.cv_channels, prob.noise):
+            options.append((f.cv / ctrl.cv if ctrl.cv > 0 else np.inf, f, f.apply(base), ctrl.cv, ctrl.apply(base),
+                            "main"))  # fmt: skip
     base_terms = {t.index for t in base.extension_set.terms}
-    for fit, _law, values in list(fits)[:REFINE_LAWS]:
+    for fit, law, values in list(fits)[:REFINE_LAWS]:
+        chs = refit_channels_of(law) if law is not None else None
         tyre = _full_refit(train, fit.apply(base))
         keys = [k for t in tyre.extension_set.terms if t.index not in base_terms for k in t.coefficient_keys]
         p = replace_tyre(prob, tyre)
         if values is not None and fit.variable not in BUILTIN_VARIABLES:
             p.variables = {**p.variables, fit.variable: np.asarray(values)}
-        cv = heldout_error(p, CONTROL, "", None, n_pressures, None, effect_channels, folds, extra_keys=keys)
+        per: dict[str, tuple[float, int]] = {}
+        cv = heldout_error(p, CONTROL, "", None, n_pressures, None, effect_channels, folds, extra_keys=keys,
+                           per_channel=per, refit_channels=chs)  # fmt: skip
+        cv_c, per_c = full_control(chs)
+        worse = worse_channels(per, per_c, prob.noise)
         messages.append(f"{fit.name} in {fit.variable}: held-out-sweep error {cv:.4g} with every coefficient "
-                        f"refitted, {fit.cv:.4g} with the main coefficients")  # fmt: skip
-        options.append((cv, fit, tyre, cv_full))
-    eligible = [o for o in options if o[0] <= MAX_RESIDUAL_VS_CONTROL * o[3]]
-    if not eligible:
-        return None, None, messages
-    cv, fit, tyre, cv_control = _parsimonious(eligible)
-    section = {k: v for k, v in (tyre.extensions or {}).items() if k not in (base.extensions or {})}
-    standard = {k: float(v) for k, v in tyre.flat.items() if k in base.flat and v != base.flat[k]}
-    refined = EffectFit(fit.name, fit.variable, fit.physical,
-                        {k: float(v) for k, v in section.items() if isinstance(v, float) and "_C" in k}, section,
-                        standard, fit.ss_before, fit.ss_after, fit.bic, fit.n_params, [*fit.messages, *messages],
-                        heldout=cv / cv_control if cv_control > 0 else np.inf, targets=fit.targets, cv=cv)  # fmt: skip
-    return refined, tyre, messages
+                        f"refitted (control {cv_c:.4g}), {fit.cv:.4g} with the main coefficients"
+                        + (f"; worse than the control on {', '.join(worse)} ("
+                           + ", ".join(f"{k} {per[k][0]:.3g} vs {per_c[k][0]:.3g}" for k in per_c
+                                       if k.split('#')[0] in worse and k in per)
+                           + "): not chosen" if worse else ""))  # fmt: skip
+        if not worse:
+            options.append((cv / cv_c if cv_c > 0 else np.inf, fit, tyre, cv_c, control_tyre, "all"))
+    eligible = [o for o in options if o[0] <= MAX_RESIDUAL_VS_CONTROL]
+    out = []
+    for ratio, fit, tyre, cv_control, ctrl, how in _ranked(eligible):
+        section = {k: v for k, v in (tyre.extensions or {}).items() if k not in (base.extensions or {})}
+        standard = {k: float(v) for k, v in tyre.flat.items() if k in base.flat and v != base.flat[k]}
+        refined = EffectFit(fit.name, fit.variable, fit.physical,
+                            {k: float(v) for k, v in section.items() if isinstance(v, float) and "_C" in k}, section,
+                            standard, fit.ss_before, fit.ss_after, fit.bic, fit.n_params, [*fit.messages, *messages],
+                            heldout=ratio, targets=fit.targets, cv=ratio * cv_control, law=fit.law, refit=how,
+                            control_tyre=ctrl)  # fmt: skip
+        out.append((refined, tyre))
+    return out, messages
+
+
+def _ranked(options: Sequence[tuple]) -> list[tuple]:
+    """``options`` in the order of preference of :func:`_parsimonious` (the preferred first, then the
+    preferred of the rest ...)."""
+    rest, out = list(options), []
+    while rest:
+        best = _parsimonious(rest)
+        out.append(best)
+        rest = [o for o in rest if o is not best]
+    return out
+
+
+def final_fit(prob: _Problem, effect: EffectFit, values: np.ndarray | None, n_pressures: int,
+              effect_channels: Sequence[str] | None) -> Tyre:
+    """The chosen law refitted on every row ``prob`` holds (the training rows and the held-out condition),
+    the way it was chosen (``effect.refit``): its coefficients with the main coefficients
+    (:func:`fit_effect`), or with every coefficient (the staged fitter), started from the law's values."""
+    base = prob.tyre
+    if effect.refit == "all" or effect.law is None:
+        sub, idx = subsample(prob)
+        cols = [c for c in sub.df.columns if not str(c).startswith(("residual_", "_"))]
+        return _full_refit(sub.df[cols], _tyre_with(base, {}, effect.section))
+    sub, idx = subsample(prob)
+    v = None if values is None else np.asarray(values)[idx]
+    fit = fit_effect(sub, effect.law, effect.variable, v, n_pressures, pressure_channels=effect_channels,
+                     refit_channels=refit_channels_of(effect.law))  # fmt: skip
+    return fit.apply(base)
+
+
+def _channel_of(stage: str, key: str) -> str | None:
+    if stage == "longitudinal":
+        return "Fx"
+    if stage == "lateral":
+        return "Fy"
+    if stage in ("aligning", "combined_mz"):
+        return "Mz"
+    if stage == "combined":
+        return "Fx" if key[2:3] == "X" else "Fy"
+    return None
+
+
+#: The fitter's coefficients of each force and moment channel (:mod:`mftire.fitting.stages`): pure and combined
+#: slip of Fx (Pacejka 2012 eqs 4.E9-4.E18, 4.E50-4.E57), of Fy (4.E19-4.E30, 4.E58-4.E67), and Mz (4.E31-4.E49,
+#: 4.E71-4.E78).
+CHANNEL_COEFFICIENTS: dict[str, frozenset[str]] = {
+    ch: frozenset(c.key for st in STAGES for c in st.coefficients if _channel_of(st.name, c.key) == ch)
+    for ch in ("Fx", "Fy", "Mz")
+}
+
+
+def refit_channels_of(law: Law) -> tuple[str, ...] | None:
+    """The channels whose main coefficients are refitted with ``law``: those it acts on, and Mz with a force
+    (the aligning moment reads the forces, Pacejka 2012 eqs 4.E71-4.E78); None (every channel) for the control
+    and the pressure law."""
+    chans = set(ch for t in law.targets for ch in TARGET_CHANNELS.get(t, ()) if ch in FIT_CHANNELS)
+    if not chans:
+        return None
+    if chans & {"Fx", "Fy"}:
+        chans.add("Mz")
+    return tuple(ch for ch in FIT_CHANNELS if ch in chans)
+
+
+def law_channels(fit: EffectFit) -> tuple[str, ...]:
+    """The channels whose coefficients a law's model changes: those its targets act on, and Mz with a force
+    (:func:`refit_channels_of`); empty for the pressure law (the standard pressure terms of every channel)."""
+    chans = refit_channels_of(Law(fit.name, fit.targets, "")) if fit.targets else None
+    return chans or ()
+
+
+def restricted(base: Tyre, extended: Tyre, fit: EffectFit) -> tuple[Tyre, EffectFit]:
+    """The extended model acting on the law's channels only: the base model, the law's terms, and the
+    refitted coefficients of the channels the law acts on (:func:`law_channels`); every other coefficient
+    as the base model has it, so that a law on Fy leaves Fx exactly as it was.  Returns the tyre and the
+    effect with its changed standard coefficients restricted the same way."""
+    chans = law_channels(fit)
+    if not chans:
+        return extended, fit
+    allowed = frozenset().union(*(CHANNEL_COEFFICIENTS[ch] for ch in chans))
+    standard = {k: float(v) for k, v in extended.flat.items()
+                if k in allowed and k in base.flat and isinstance(v, float) and v != base.flat[k]}  # fmt: skip
+    section = {k: v for k, v in (extended.extensions or {}).items() if k not in (base.extensions or {})}
+    return _tyre_with(base, standard, section), dataclasses.replace(fit, standard=standard, section=section)
 
 
 def replace_tyre(prob: _Problem, tyre: Tyre) -> _Problem:

@@ -60,6 +60,9 @@ PRIOR = {"LMU": 0.3, "LK": 0.5, "LE": 1.0, "LC": 0.2, "OFF": 0.05}
 MIN_SPREAD = {"LMU": 0.01, "LK": 0.02, "LE": 0.05, "LC": 0.01, "OFF": 0.005}
 #: Significance of the spread test.
 SPREAD_ALPHA = 1e-3
+#: MF inputs offered as the second variable of an interaction, by their set-point column: the variable the
+#: law reads (:data:`mftire.mf.extensions.BUILTIN_VARIABLES`).
+SECOND_INPUTS = {"Fz_set": "dfz", "gamma_set": "gamma", "Vx_set": "Vx", "P_set": "P"}
 #: Confounding threshold on |r| across sweeps.
 CONFOUND_R = 0.5
 #: Bootstrap replicates of each sweep's factors (their spread expected from noise).
@@ -125,29 +128,47 @@ class Profiles:
         return out[:2]
 
     def second_variable(self, variable: str, candidates: Mapping[str, np.ndarray]) -> str | None:
-        """For a flag ``variable``: the candidate that best explains, within the flag's levels,
-        what the flag leaves of the most affected factor it predicts (an interaction)."""
+        """The second variable of an interaction with ``variable``: of the other candidates and the MF
+        inputs (:data:`SECOND_INPUTS`: load, camber, speed and pressure by their set points), the one that
+        best explains, within the levels of a flag ``variable`` (or along a continuous one, as the product
+        of the two centred variables), what ``variable`` alone leaves of the most affected factor it
+        predicts (p < 0.01)."""
         links = [lk for lk in self.links if lk.variable == variable and lk.p_value <= 0.05]
-        if not links or self.sweep_table.empty:
+        if not links or self.sweep_table.empty or variable not in self.sweep_table.columns:
             return None
         f = links[0]
-        t = self.sweep_table[self.sweep_table["channel"] == next(p.channel for p in self.factors
-                                                                  if p.factor == f.factor)]  # fmt: skip
-        lam, flag = t[f.factor].to_numpy(float), t[variable].to_numpy(float)
+        channel = next((p.channel for p in self.factors if p.factor == f.factor), None)
+        if channel is None:
+            return None
+        t = self.sweep_table[self.sweep_table["channel"] == channel]
+        lam, x = t[f.factor].to_numpy(float), t[variable].to_numpy(float)
+        if not np.all(np.isfinite(x)) or np.std(x) == 0:
+            return None
+        flag = len(np.unique(x)) <= 3
         rest = lam.copy()
-        for level in np.unique(flag):
-            rest[flag == level] -= rest[flag == level].mean()
+        if flag:
+            for level in np.unique(x):
+                rest[x == level] -= rest[x == level].mean()
+        else:  # what a straight line in the variable leaves
+            rest = lam - np.polyval(np.polyfit(x, lam, 1), x)
+        others = {name: name for name in candidates if name != variable and name in t.columns}
+        others.update({sp: name for sp, name in SECOND_INPUTS.items() if sp in t.columns and name != variable})
         best, best_p = None, 0.01
-        for name in candidates:
-            if name == variable or name not in t.columns:
-                continue
-            v = t[name].to_numpy(float)
+        for col, name in others.items():
+            v = t[col].to_numpy(float)
             if not np.all(np.isfinite(v)) or np.std(v) == 0:
                 continue
-            for level in np.unique(flag):
-                m = flag == level
-                if m.sum() >= 3 and np.std(v[m]) > 0 and np.std(rest[m]) > 0:
-                    pv = float(stats.pearsonr(v[m], rest[m]).pvalue)
+            if flag:
+                for level in np.unique(x):
+                    m = x == level
+                    if m.sum() >= 3 and np.std(v[m]) > 0 and np.std(rest[m]) > 0:
+                        pv = float(stats.pearsonr(v[m], rest[m]).pvalue)
+                        if pv < best_p:
+                            best, best_p = name, pv
+            else:
+                prod = (x - x.mean()) * (v - v.mean())
+                if len(x) >= 6 and np.std(prod) > 0 and np.std(rest) > 0:
+                    pv = float(stats.pearsonr(prod, rest).pvalue)
                     if pv < best_p:
                         best, best_p = name, pv
         return best

@@ -37,12 +37,15 @@ def to_json(result: DiagnosisResult, extended_tir: str | None) -> dict:
             "physical": e.physical,
             "label": "physical model extension" if e.physical else "generic smooth correction (not physics)",
             "section": {k: v for k, v in e.section.items()},
+            "targets": list(e.targets),
             "refitted_coefficients": e.standard,
             "training_residual_removed": e.removed,
             "messages": e.messages,
         }
     return {
         "significant": bool(result.significant),
+        "cause": result.cause if result.cause is not None else (
+            result.ranking[0].variable if result.significant and result.ranking else None),
         "summary": result.summary(),
         "ranking": [
             {
@@ -138,7 +141,10 @@ def _markdown(doc: dict) -> str:
     h = doc["holdout"]
     if h is not None and h.get("channels"):
         vals = ", ".join(f"{v:g}" for v in h["values"])
-        lines += ["## Held-out condition", "", f"{h['column']} = {vals} ({h['n_rows']} rows, not used in any fit).", "",
+        lines += ["## Held-out condition", "",
+                  f"{h['column']} = {vals} ({h['n_rows']} rows, not used in any fit). Before: the model "
+                  "refitted without the law (the control), after: with it, both on the same training rows; "
+                  "the model written is the law refitted on every row.", "",
                   "| channel | RMS before | RMS after | RMS % of peak before | after | residual variance removed |",
                   "|---|---:|---:|---:|---:|---:|"]  # fmt: skip
         for ch, c in h["channels"].items():

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mftire.mf.basic import basic
-from mftire.mf.extensions import ExtensionSet
+from mftire.mf.extensions import INPUT_TARGETS, ExtensionSet
 from mftire.mf.modes import Mode
 from mftire.mf.solver import Channels, channels, prepare, scaled
 
@@ -73,8 +73,8 @@ class Model:
 
     def channels(self, q: Mapping[str, float], want: tuple[str, ...], given: Channels | None = None) -> Channels:
         """Pieces 2 and 3 for parameters ``q``: the channels ``want`` (see :func:`mftire.mf.solver.channels`)."""
-        qq, offsets = scaled(q, self.extensions, self.pre)
-        if given is None:
+        qq, offsets = scaled(q, self.extensions, self.pre, warn=False)
+        if given is None and not any(k in offsets for k in INPUT_TARGETS):  # input laws change the conditions
             given = self._given_basic(qq)
         return channels(qq, self.pre, offsets, want, given)
 

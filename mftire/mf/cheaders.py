@@ -17,7 +17,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from mftire.mf.extensions import BUILTIN_VARIABLES, FORMS, MAX_EXTERNAL, OFFSET_TARGETS, TARGETS, ExtensionSet
+from mftire.mf.extensions import BUILTIN_VARIABLES, FORMS, MAX_EXTERNAL, TARGET_CODES, TARGETS, ExtensionSet
 from mftire.parameters import PARAMETERS
 
 #: The C model's directory (``mf_eval.c``, ``mf_kernel.c``, ``mf_transient.c``) and the array
@@ -81,8 +81,7 @@ def extension_header(extensions: ExtensionSet | None = None, runtime: bool = Fal
         return f"MF_PIDX({field})"
 
     lines += [
-        "#define MF_TARGET_FX_OFFSET (-1)",
-        "#define MF_TARGET_FY_OFFSET (-2)",
+        *(f"#define MF_TARGET_{name} ({code})" for name, code in TARGET_CODES.items()),
         "#define MF_PIDX(f) ((int)(offsetof(MFParams, f) / sizeof(double)))",
         "",
         "typedef struct {",
@@ -97,7 +96,7 @@ def extension_header(extensions: ExtensionSet | None = None, runtime: bool = Fal
     if not runtime:
         lines.append("static const MFTerm MF_TERMS[MF_N_TERMS] = {")
     for t in terms:
-        tg = ", ".join("MF_TARGET_" + x if x in OFFSET_TARGETS else idx(x) for x in t.targets)
+        tg = ", ".join("MF_TARGET_" + x if x in TARGET_CODES else idx(x) for x in t.targets)
         two = t.variable2 is not None
         f2 = [idx(t.key(n)) for n in ("REF2", "SCALE2", "MIN2", "MAX2")] if two else [idx(t.key("REF"))] * 4
         first = (t.level_keys or t.coefficient_keys)[0]

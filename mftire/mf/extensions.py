@@ -44,6 +44,10 @@ form             f                                               use
 ``table``        1 + C_k, k the level L_k nearest to u           a categorical variable (road surface)
 ``interaction``  1 + C1·z + C2·z·z2                              a condition flag times a variable
                                                                  (grip loss on wet growing with speed)
+``hinge``        1 + C1·max(z − C2, 0)                           a change above a threshold C2 (grip
+                                                                 loss above a temperature)
+``direction``    1 + C1·sgn(z)                                   hysteresis: changes sign with the
+                                                                 sweep direction (v = sweep_dir)
 ===============  ==============================================  ====================================
 
 Friction factors act where the book puts friction modifications (eq 4.E7: the file's
@@ -79,7 +83,20 @@ SCALING_TARGETS: tuple[str, ...] = (
 )  # fmt: skip
 #: Force offsets an extension may add: ``Fz·(f − 1)`` [N].
 OFFSET_TARGETS: tuple[str, ...] = ("FX_OFFSET", "FY_OFFSET")
-TARGETS: tuple[str, ...] = SCALING_TARGETS + OFFSET_TARGETS
+#: Input laws: a measured MF input corrected by a law of a column, applied to the conditioned inputs
+#: before the force and moment equations (a mis-measured input is one of the most common rig effects):
+#: ``ALPHA_OFFSET`` alpha + (f − 1) [rad] (a slip-angle offset, e.g. a toe misalignment drifting with
+#: time), ``GAMMA_OFFSET`` gamma + (f − 1) [rad] (a camber offset), ``P_FACTOR`` P·f (an effective
+#: inflation pressure, e.g. P·(1 + C1·(T − T0)) when the logged pressure stays at the cold value; Gay-Lussac:
+#: at constant volume P/T is constant).  The effective pressure enters every force and moment equation
+#: through dpi (Pacejka 2012 eq 4.E2b); the loaded radius and contact patch keep the logged pressure.
+INPUT_TARGETS: tuple[str, ...] = ("ALPHA_OFFSET", "GAMMA_OFFSET", "P_FACTOR")
+TARGETS: tuple[str, ...] = SCALING_TARGETS + OFFSET_TARGETS + INPUT_TARGETS
+
+#: Codes of the targets that are not scaling factors in the C term table (``MF_TARGET_*`` of the generated
+#: ``mf_ext_gen.h``; scaling factors are indices into ``MFParams``, >= 0).
+TARGET_CODES: dict[str, int] = {"FX_OFFSET": -1, "FY_OFFSET": -2, "ALPHA_OFFSET": -3, "GAMMA_OFFSET": -4,
+                                "P_FACTOR": -5}  # fmt: skip
 
 #: Channels each target acts on (the fitter fits a term in the first stage of these).
 TARGET_CHANNELS: dict[str, tuple[str, ...]] = {
@@ -87,6 +104,7 @@ TARGET_CHANNELS: dict[str, tuple[str, ...]] = {
     **{k: ("Fy",) for k in ("LCY", "LMUY", "LEY", "LKY", "LKYC", "LHY", "LVY", "LYKA", "LVYKA", "FY_OFFSET")},
     **{k: ("Mz",) for k in ("LTR", "LRES", "LKZC", "LS")},
     "LMX": ("Mx",), "LVMX": ("Mx",), "LMY": ("My",), "LFZO": ("Fx", "Fy"),
+    "ALPHA_OFFSET": ("Fy", "Mz"), "GAMMA_OFFSET": ("Fy", "Mz"), "P_FACTOR": ("Fx", "Fy", "Mz"),
 }  # fmt: skip
 
 #: Variables the evaluator derives from its own (conditioned) inputs: name -> (meaning,
@@ -96,6 +114,33 @@ BUILTIN_VARIABLES: dict[str, tuple[str, str]] = {v.name: (v.description, v.c_exp
 
 #: Input names of the evaluator that an external variable may not take.
 RESERVED_VARIABLES = ("phit", "omega", "mode", "muRoad")
+
+#: Words that make a column name an identifier (a run, sweep, segment, row, file or record
+#: number): a label that only numbers things is never a law variable.  On new data the numbers
+#: are different, and a law in them extrapolates without meaning (issue 21).
+IDENTIFIER_WORDS = frozenset({
+    "run", "runs", "sweep", "sweeps", "segment", "seg", "row", "rows", "file", "files", "id", "ids", "idx", "index",
+    "number", "num", "nr", "no", "count", "counter", "record", "rec", "sequence", "seq", "trial", "uid", "key",
+})  # fmt: skip
+
+
+#: Physical variables whose names hold an identifier word: the sweep direction (+1 while the swept slip
+#: increases, −1 while it decreases), the variable of the ``direction`` (hysteresis) form.
+NOT_IDENTIFIERS = frozenset({"sweep_dir", "sweep_direction"})
+
+
+def identifier_name(name: str) -> bool:
+    """True when ``name`` names an identifier: one of its words (split at ``_``, ``-``, ``.``, spaces,
+    digits and camel-case humps) is in :data:`IDENTIFIER_WORDS` (``run``, ``sweep_id``, ``RunNumber``,
+    ``seg_no``, ``file3``); not the sweep direction (:data:`NOT_IDENTIFIERS`)."""
+    if str(name).strip().lower() in NOT_IDENTIFIERS:
+        return False
+    words = re.findall(r"[A-Z]?[a-z]+|[A-Z]+(?![a-z])", re.sub(r"[^A-Za-z]+", " ", str(name)))
+    return any(w.lower() in IDENTIFIER_WORDS for w in words)
+
+
+#: The warning of a variable outside the range its term was fitted on (modes 1xx; the FMU's C says the same).
+EXT_RANGE_WARNING = next(w.text for w in spec.WARNINGS if w.name == "EXT_RANGE")
 
 #: Most levels of a ``table`` form.
 MAX_LEVELS = 8
@@ -134,6 +179,16 @@ def _interaction(u, z, z2, ref, c):
     return 1.0 + c[0] * z + c[1] * z * z2
 
 
+def _hinge(u, z, z2, ref, c):
+    # a change that starts at a threshold z = C2 (a grip loss above a temperature): piecewise linear
+    return 1.0 + c[0] * np.maximum(z - c[1], 0.0)
+
+
+def _direction(u, z, z2, ref, c):
+    # hysteresis: a factor (or offset) that changes sign with the sweep direction sgn(z)
+    return 1.0 + c[0] * np.sign(z)
+
+
 @dataclass(frozen=True)
 class Form:
     """One functional form f(u; C) of an extension (neutral: every coefficient 0 -> f = 1).
@@ -170,6 +225,10 @@ FORMS: dict[str, Form] = {
              "1.0 + mf_ext_table(u, c, n)", _table),
         Form("interaction", "1 + C1·z + C2·z·z2", 2, ((-2.0, 2.0), (-2.0, 2.0)), (0.0, 0.0),
              "1.0 + c[0] * z + c[1] * z * z2", _interaction, two_variables=True),
+        Form("hinge", "1 + C1·max(z − C2, 0)", 2, ((-2.0, 2.0), (-3.0, 3.0)), (0.0, 0.0),
+             "1.0 + c[0] * fmax(z - c[1], 0.0)", _hinge),
+        Form("direction", "1 + C1·sgn(z)", 1, ((-0.5, 0.5),), (0.0,),
+             "1.0 + c[0] * (double)((z > 0.0) - (z < 0.0))", _direction),
     )
 }  # fmt: skip
 
@@ -253,19 +312,29 @@ class Extension:
     def variables(self) -> tuple[str, ...]:
         return (self.variable,) if self.variable2 is None else (self.variable, self.variable2)
 
-    def factor(self, v: np.ndarray, v2: np.ndarray | None, q: Mapping[str, float] | None = None) -> np.ndarray:
-        """f(v) of this term (q: flat parameters overriding the stored coefficient values)."""
-        u = np.minimum(np.maximum(v, self.value("MIN", q)), self.value("MAX", q))
+    def factor(self, v: np.ndarray, v2: np.ndarray | None, q: Mapping[str, float] | None = None,
+               clip: bool = True) -> np.ndarray:
+        """f(v) of this term (q: flat parameters overriding the stored coefficient values); ``clip``: the
+        variables clamped to the range the term was fitted on (``MIN``..``MAX``, :meth:`outside`)."""
+        u = np.minimum(np.maximum(v, self.value("MIN", q)), self.value("MAX", q)) if clip else v
         ref = self.value("REF", q)
         z = (u - ref) / self.value("SCALE", q)
         z2 = 0.0
         if self.variable2 is not None and v2 is not None:
-            u2 = np.minimum(np.maximum(v2, self.value("MIN2", q)), self.value("MAX2", q))
+            u2 = np.minimum(np.maximum(v2, self.value("MIN2", q)), self.value("MAX2", q)) if clip else v2
             z2 = (u2 - self.value("REF2", q)) / self.value("SCALE2", q)
         c = [q[k] if q is not None and k in q else self.numbers.get(k, 0.0) for k in self.coefficient_keys]
         if self.form.name == "table":
             c = [self.numbers[k] for k in self.level_keys] + c
         return self.form.fn(u, z, z2, ref, c)
+
+    def outside(self, v: np.ndarray, v2: np.ndarray | None, q: Mapping[str, float] | None = None) -> bool:
+        """True when a value of a variable lies outside the range the term was fitted on."""
+        with np.errstate(invalid="ignore"):
+            out = bool(np.any((v < self.value("MIN", q)) | (v > self.value("MAX", q))))
+            if self.variable2 is not None and v2 is not None:
+                out |= bool(np.any((v2 < self.value("MIN2", q)) | (v2 > self.value("MAX2", q))))
+        return out
 
     def describe(self) -> str:
         """One line: ``LMUX·LMUY × decay(Vs)``."""
@@ -313,7 +382,13 @@ def _check_variable(name: object, key: str) -> str:
         raise MftireInputError(
             f"[{SECTION}] {key} = {name!r}: that name is an input of the evaluator; name the variable differently"
         )
-    if name.lower() in ("energy", "sequence"):
+    if identifier_name(name):
+        raise MftireInputError(
+            f"[{SECTION}] {key} = {name!r}: an identifier (a run, sweep, segment, row or file number) cannot be a "
+            "law variable: on new data the numbers differ and the law extrapolates without meaning; use the "
+            "physical quantity it stands for (elapsed time, accumulated friction work, temperature, wear)"
+        )
+    if name.lower() in ("energy",):
         raise MftireInputError(
             f"[{SECTION}] {key} = {name!r}: a quantity that needs measured history cannot be a model variable; "
             "use a measured column (time, run index, temperature)"
@@ -348,11 +423,18 @@ class ExtensionSet:
             out.update(t.section())
         return out
 
-    def scale(self, p: Mapping[str, float], variables: Mapping[str, np.ndarray]) -> tuple[dict, dict]:
+    def scale(self, p: Mapping[str, float], variables: Mapping[str, np.ndarray], limits: bool = True,
+              warn: bool = False) -> tuple[dict, dict]:
         """Effective parameters: ``(q, offsets)``.
 
+        ``limits`` (modes 1xx): each variable is clamped to the range its term was fitted on
+        (``EXTn_MIN``..``EXTn_MAX``), as the Magic Formula clamps its own inputs to the file's ranges;
+        ``warn``: an :class:`~mftire.mf.inputs.MFLimitWarning` says so when a value was outside.  Without
+        ``limits`` (modes 2xx) the law extrapolates.
+
         ``q`` is ``p`` with each targeted scaling factor replaced by λ·Π f (arrays);
-        ``offsets`` maps ``FX_OFFSET``/``FY_OFFSET`` to the factor sum Σ(f − 1).
+        ``offsets`` maps ``FX_OFFSET``/``FY_OFFSET``, ``ALPHA_OFFSET``/``GAMMA_OFFSET`` to the sum
+        Σ(f − 1) and ``P_FACTOR`` to the product Π f (:func:`apply_input_laws`).
         ``variables`` holds every variable the terms read (builtin and external).
         """
         q = dict(p)
@@ -360,9 +442,17 @@ class ExtensionSet:
         for t in self.terms:
             v = _lookup(variables, t.variable, t)
             v2 = _lookup(variables, t.variable2, t) if t.variable2 is not None else None
-            f = t.factor(v, v2, p)
+            if limits and warn and t.outside(v, v2, p):
+                import warnings
+
+                from mftire.mf.inputs import MFLimitWarning
+
+                warnings.warn(EXT_RANGE_WARNING, MFLimitWarning, stacklevel=4)
+            f = t.factor(v, v2, p, clip=limits)
             for target in t.targets:
-                if target in OFFSET_TARGETS:
+                if target == "P_FACTOR":
+                    offsets[target] = offsets.get(target, 1.0) * f
+                elif target in OFFSET_TARGETS or target in INPUT_TARGETS:
                     offsets[target] = offsets.get(target, 0.0) + (f - 1.0)
                 else:
                     q[target] = q[target] * f
@@ -458,12 +548,26 @@ def builtin_variables(p: Mapping[str, float], c) -> dict[str, np.ndarray]:
     return {name: eval(code, {"__builtins__": {}}, names) for name, code in _BUILTIN_CODE.items()}
 
 
+def apply_input_laws(c, offsets: Mapping[str, np.ndarray]):
+    """The conditioned inputs ``c`` (:class:`mftire.mf.inputs.Conditions`) with the input laws of
+    ``offsets`` (:data:`INPUT_TARGETS`) applied: alpha + offset, gamma + offset, P·factor (``c``
+    itself when there is none)."""
+    if not any(k in offsets for k in INPUT_TARGETS):
+        return c
+    import dataclasses
+
+    return dataclasses.replace(
+        c, alpha=c.alpha + offsets.get("ALPHA_OFFSET", 0.0), gamma=c.gamma + offsets.get("GAMMA_OFFSET", 0.0),
+        P=c.P * offsets.get("P_FACTOR", 1.0))  # fmt: skip
+
+
 def required_variables(section: Mapping[str, object] | None) -> list[str]:
     """External variables (input columns) the section's terms need besides the MF inputs."""
     return parse_section(section).external_variables
 
 
 __all__ = [
-    "BUILTIN_VARIABLES", "Extension", "ExtensionSet", "FORMS", "Form", "OFFSET_TARGETS", "SCALING_TARGETS",
-    "SECTION", "TARGETS", "make_extension", "parse_section", "required_variables",
+    "BUILTIN_VARIABLES", "EXT_RANGE_WARNING", "Extension", "ExtensionSet", "FORMS", "Form", "IDENTIFIER_WORDS",
+    "INPUT_TARGETS", "OFFSET_TARGETS", "SCALING_TARGETS", "SECTION", "TARGETS", "TARGET_CODES", "apply_input_laws",
+    "identifier_name", "make_extension", "parse_section", "required_variables",
 ]  # fmt: skip

@@ -209,7 +209,7 @@ def _pack(p: Mapping[str, float], ext) -> tuple:
     if not ext:
         params = np.array(base)
         return params, params.ctypes.data, None, 0, ctypes.c_void_p(params.ctypes.data), None
-    from mftire.mf.extensions import BUILTIN_VARIABLES, OFFSET_TARGETS
+    from mftire.mf.extensions import BUILTIN_VARIABLES, TARGET_CODES
 
     builtin = list(BUILTIN_VARIABLES)
     external = ext.external_variables
@@ -232,7 +232,7 @@ def _pack(p: Mapping[str, float], ext) -> tuple:
             put(t.numbers[k])
         for k in t.coefficient_keys:
             put(p[k] if k in p else t.numbers.get(k, 0.0))
-        tg = [(-1 if x == "FX_OFFSET" else -2) if x in OFFSET_TARGETS else _PARAM_INDEX[x] for x in t.targets]
+        tg = [TARGET_CODES[x] if x in TARGET_CODES else _PARAM_INDEX[x] for x in t.targets]
         from mftire.mf.extensions import FORMS
 
         row = [list(FORMS).index(t.form.name), len(tg), *tg, *([0] * (_N_TARGETS - len(tg)))]

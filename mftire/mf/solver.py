@@ -27,7 +27,7 @@ from mftire.errors import MftireError, MftireInputError
 from mftire.mf import kernel, pac2002, spec, turnslip
 from mftire.mf.aligning import aligning_terms, mz0, mz_combined, zero_camber_lateral
 from mftire.mf.basic import basic, increments
-from mftire.mf.extensions import ExtensionSet, builtin_variables, parse_section
+from mftire.mf.extensions import ExtensionSet, apply_input_laws, builtin_variables, parse_section
 from mftire.mf.family import PAC2002_CODE, is_pac2002
 from mftire.mf.inputs import Conditions, MFLimitWarning, condition_inputs
 from mftire.mf.lateral import fy0, fy_combined
@@ -156,18 +156,19 @@ def prepare(
 
 
 def scaled(
-    p: Mapping[str, float], extensions: ExtensionSet | None, pre: Prepared
+    p: Mapping[str, float], extensions: ExtensionSet | None, pre: Prepared, warn: bool = True
 ) -> tuple[dict, dict[str, np.ndarray]]:
     """Piece 2: effective parameters ``(q, offsets)`` (see :meth:`ExtensionSet.scale`).
 
     Without extensions ``q`` is ``p`` itself and ``offsets`` is empty.  Extension
     coefficients (``EXTn_C1`` ...) are taken from ``p`` when it holds them, so a fitter
-    can vary them like any coefficient.
+    can vary them like any coefficient.  In modes 1xx the extension variables are clamped to the
+    ranges their terms were fitted on, with an :class:`~mftire.mf.inputs.MFLimitWarning` when ``warn``.
     """
     if not extensions:
         return p, {}
     with np.errstate(all="ignore"):
-        return extensions.scale(p, pre.all_variables(p))
+        return extensions.scale(p, pre.all_variables(p), limits=pre.mode.limits, warn=warn)
 
 
 @dataclass
@@ -217,7 +218,7 @@ def channels(
     offsets = offsets or {}
     with np.errstate(all="ignore"):
         if out.b is None:
-            c = pre.c
+            c = apply_input_laws(pre.c, offsets)  # input laws of the model extensions (alpha, gamma, P)
             if m.turn_slip:
                 phi, eps_gamma = turnslip.turn_slip_spin(q, c)
                 c = dataclasses.replace(c, phi=phi, eps_gamma=eps_gamma)
@@ -252,7 +253,7 @@ def channels(
                 else:
                     out.Mz, out.t, out.Mzr = mz0(q, m, c, b, terms)
         if "Mx" in todo:
-            out.Mx = mx(q, c, pre.dpi, out.Fy)
+            out.Mx = mx(q, c, b.dpi if "P_FACTOR" in offsets else pre.dpi, out.Fy)
         if "My" in todo:
             out.My = my(q, c, out.Fx)
     return out

@@ -146,6 +146,9 @@ WARNINGS: tuple[WarningKind, ...] = (
     _W("KAPPA_LOW", "Slip ratio below" + _SAT, "KPUMIN"),
     _W("KAPPA_HIGH", "Slip ratio above" + _SAT, "KPUMAX"),
     _W("LOW_SPEED", "Speed input Vx below the limit {limit}={value}. Low speed mode activated.", "VXLOW"),
+    # a model-extension variable outside the range its term was fitted on, clamped (modes 1xx)
+    _W("EXT_RANGE", "Model extension variable outside the range it was fitted on (EXTn_MIN..EXTn_MAX). Values "
+       "have been saturated."),
     _W("EX", "Ex" + _CURV.replace("{eq}", "4.E14"), group="FX"),
     _W("EXA", "Exa" + _CURV.replace("{eq}", "4.E56"), group="FX"),
     _W("EY", "Ey" + _CURV.replace("{eq}", "4.E24"), group="FY"),

@@ -1108,29 +1108,43 @@ MF_FN double mf_ext_table(double u, const double *c, int n)
     return c[n + best];
 }
 
-/* q = p with the targeted scaling factors multiplied by f; off[0], off[1] the FX/FY offset sums.
+/* q = p with the targeted scaling factors multiplied by f; off[0], off[1] the FX/FY offset sums; off[2],
+ * off[3] the slip-angle and camber offsets and off[4] the pressure factor of the input laws.
  * The term fields are read as doubles from p's storage at the indices of the table (in the
  * array kernel the storage runs on past MFParams with the numbers of the terms). */
-MF_FN void apply_extensions(const ExtTable *ext, const MFParams *p, const Cond *c, const double *data, MFParams *q,
-                             double *off)
+MF_FN void apply_extensions(const ExtTable *ext, const MFParams *p, Ctx *m, const Cond *c, const double *data,
+                             MFParams *q, double *off)
 {
     const double *P = (const double *)p;
     double *Q = (double *)q;
     int i, k;
     *q = *p;
-    off[0] = off[1] = 0.0;
+    off[0] = off[1] = off[2] = off[3] = 0.0;
+    off[4] = 1.0;
     for (i = 0; i < ext->n; i++) {
         const MFTerm *t = &ext->terms[i];
-        double u = clip(mf_ext_var(t->var, p, c, data), P[t->min], P[t->max]);
-        double z = (u - P[t->ref]) / P[t->scale], z2 = 0.0, f;
+        /* modes 1xx: the variables clamped to the range the term was fitted on, with a warning */
+        double u = mf_ext_var(t->var, p, c, data), z, z2 = 0.0, f;
+        if (m->limits) {
+            if (u < P[t->min] || u > P[t->max]) flag(m, MF_W_EXT_RANGE);
+            u = clip(u, P[t->min], P[t->max]);
+        }
+        z = (u - P[t->ref]) / P[t->scale];
         if (t->var2 >= 0) {
-            double u2 = clip(mf_ext_var(t->var2, p, c, data), P[t->min2], P[t->max2]);
+            double u2 = mf_ext_var(t->var2, p, c, data);
+            if (m->limits) {
+                if (u2 < P[t->min2] || u2 > P[t->max2]) flag(m, MF_W_EXT_RANGE);
+                u2 = clip(u2, P[t->min2], P[t->max2]);
+            }
             z2 = (u2 - P[t->ref2]) / P[t->scale2];
         }
         f = mf_ext_form(t->form, u, z, z2, P[t->ref], P + t->c0, t->n);
         for (k = 0; k < t->n_targets; k++) {
             if (t->targets[k] == MF_TARGET_FX_OFFSET) off[0] += f - 1.0;
             else if (t->targets[k] == MF_TARGET_FY_OFFSET) off[1] += f - 1.0;
+            else if (t->targets[k] == MF_TARGET_ALPHA_OFFSET) off[2] += f - 1.0;
+            else if (t->targets[k] == MF_TARGET_GAMMA_OFFSET) off[3] += f - 1.0;
+            else if (t->targets[k] == MF_TARGET_P_FACTOR) off[4] *= f;
             else Q[t->targets[k]] *= f;
         }
     }
@@ -1203,14 +1217,25 @@ MF_FN void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c, 
     PureLat lat;
     AlignTerms at;
     double z1, Fx0, mux = 0.0, Kxk = 0.0, Fy_comb, Gyk = 0.0, Fx = 0.0, Fy = 0.0;
-    double off[2] = {0.0, 0.0}; /* force offsets of the model extensions, as factors of Fz */
+    /* force offsets of the model extensions (factors of Fz), input laws (alpha, gamma offsets, P factor) */
+    double off[5] = {0.0, 0.0, 0.0, 0.0, 1.0};
+    double dpi_mx = dpi; /* dpi of Mx: the effective pressure of an input law (the radius keeps dpi) */
     int need_fx = (want & MF_NEEDS_FX) != 0;
     int need_fy = (want & MF_NEEDS_FY) != 0;
 #if MF_N_TERMS > 0 || defined(MF_EXT_RUNTIME)
     MFParams q; /* p with the extension terms applied to its scaling factors */
+    Cond ce; /* c with the input laws applied (extensions.py apply_input_laws) */
     if (ext->n > 0) {
-        apply_extensions(ext, p, c, data, &q, off);
+        apply_extensions(ext, p, m, c, data, &q, off);
         p = &q;
+        if (off[2] != 0.0 || off[3] != 0.0 || off[4] != 1.0) {
+            ce = *c;
+            ce.alpha += off[2];
+            ce.gamma += off[3];
+            ce.P *= off[4];
+            dpi_mx = (ce.P - p->NOMPRES) / p->NOMPRES; /* eq 4.E2b */
+            c = &ce;
+        }
     }
 #endif
     (void)ext;
@@ -1238,7 +1263,7 @@ MF_FN void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c, 
         else
             mz0(p, m, c, &b, &at, &out->Mz, &out->t, &out->Mzr);
     }
-    if (want & MF_WANT_MX) out->Mx = mx(p, c, dpi, Fy);
+    if (want & MF_WANT_MX) out->Mx = mx(p, c, dpi_mx, Fy);
     if (want & MF_WANT_MY) out->My = my(p, c, Fx);
     if (want & MF_WANT_RAD) loaded_radius(p, m, c, dpi, Romega, Fx, Fy, out);
     if (want & MF_WANT_PATCH) {

@@ -40,6 +40,7 @@ enum {
     MF_W_KAPPA_LOW,
     MF_W_KAPPA_HIGH,
     MF_W_LOW_SPEED,
+    MF_W_EXT_RANGE,
     MF_W_EX,
     MF_W_EXA,
     MF_W_EY,
@@ -81,6 +82,7 @@ typedef struct { const char *format; int limit; const char *input; } MFWarningSp
     {"Slip ratio below the limit KPUMIN=%.17g. Values have been saturated.", MF_SPEC_PIDX(KPUMIN), NULL}, \
     {"Slip ratio above the limit KPUMAX=%.17g. Values have been saturated.", MF_SPEC_PIDX(KPUMAX), NULL}, \
     {"Speed input Vx below the limit VXLOW=%.17g. Low speed mode activated.", MF_SPEC_PIDX(VXLOW), NULL}, \
+    {"Model extension variable outside the range it was fitted on (EXTn_MIN..EXTn_MAX). Values have been saturated.", -1, NULL}, \
     {"Ex over limit (>1), eq 4.E14; clipped to 1.", -1, NULL}, \
     {"Exa over limit (>1), eq 4.E56; clipped to 1.", -1, NULL}, \
     {"Ey over limit (>1), eq 4.E24; clipped to 1.", -1, NULL}, \
@@ -194,6 +196,6 @@ enum {
     if ((want) & MF_WANT_RELAX) { (OUT)[O_CX][i] = (o)->Cx; (OUT)[O_CY][i] = (o)->Cy; (OUT)[O_SIGMAX][i] = (o)->sigmax; (OUT)[O_SIGMAY][i] = (o)->sigmay; } \
 } while (0)
 
-#define MF_SPEC_SIGNATURE "Fx,Fy,Fz,Mx,My,Mz,kappa,alpha,gamma,phit,Vx,P,Re,rho,2a,t,mux,muy,omega,Rl,2b,Mzr,Cx,Cy,Cz,Kya,sigmax,sigmay,instKya,Kxk|NAN_DATA0,NAN_DATA1,NAN_DATA2,NAN_DATA3,NAN_FZ,NAN_KAPPA,NAN_ALPHA,NAN_GAMMA,NAN_PHIT,NAN_VX,NAN_OMEGA,ALPHA_LOW,ALPHA_HIGH,GAMMA_LOW,GAMMA_HIGH,FZ_HIGH,FZ_LOW,P_LOW,P_HIGH,KAPPA_LOW,KAPPA_HIGH,LOW_SPEED,EX,EXA,EY,EYK,ET,EY0|Fz,kappa,alpha,gamma,phit,Vx,P,omega,data0,data1,data2,data3"
+#define MF_SPEC_SIGNATURE "Fx,Fy,Fz,Mx,My,Mz,kappa,alpha,gamma,phit,Vx,P,Re,rho,2a,t,mux,muy,omega,Rl,2b,Mzr,Cx,Cy,Cz,Kya,sigmax,sigmay,instKya,Kxk|NAN_DATA0,NAN_DATA1,NAN_DATA2,NAN_DATA3,NAN_FZ,NAN_KAPPA,NAN_ALPHA,NAN_GAMMA,NAN_PHIT,NAN_VX,NAN_OMEGA,ALPHA_LOW,ALPHA_HIGH,GAMMA_LOW,GAMMA_HIGH,FZ_HIGH,FZ_LOW,P_LOW,P_HIGH,KAPPA_LOW,KAPPA_HIGH,LOW_SPEED,EXT_RANGE,EX,EXA,EY,EYK,ET,EY0|Fz,kappa,alpha,gamma,phit,Vx,P,omega,data0,data1,data2,data3"
 
 #endif /* MF_SPEC_GEN_H */

@@ -6,11 +6,14 @@
 #define MF_EXT_RUNTIME 1 /* the term table is given at run time (mf_kernel.c) */
 #define MF_TARGET_FX_OFFSET (-1)
 #define MF_TARGET_FY_OFFSET (-2)
+#define MF_TARGET_ALPHA_OFFSET (-3)
+#define MF_TARGET_GAMMA_OFFSET (-4)
+#define MF_TARGET_P_FACTOR (-5)
 #define MF_PIDX(f) ((int)(offsetof(MFParams, f) / sizeof(double)))
 
 typedef struct {
     int form;      /* index in mftire.mf.extensions.FORMS */
-    int n_targets; int targets[26]; /* MFParams indices, or MF_TARGET_* */
+    int n_targets; int targets[29]; /* MFParams indices, or MF_TARGET_* */
     int var, var2; /* mf_ext_var indices; var2 < 0: one variable */
     int ref, scale, min, max, ref2, scale2, min2, max2; /* MFParams indices */
     int c0, n;     /* first level (table) or coefficient, and the number of levels (table) */
@@ -49,6 +52,8 @@ static double mf_ext_form(int form, double u, double z, double z2, double ref, c
     case 4: return 1.0 / (1.0 + c[0] * fmax(z, 0.0)); /* decay: 1/(1 + C1_max(z, 0)) */
     case 5: return 1.0 + mf_ext_table(u, c, n); /* table: 1 + C_k, k: level L_k nearest to u */
     case 6: return 1.0 + c[0] * z + c[1] * z * z2; /* interaction: 1 + C1_z + C2_z_z2 */
+    case 7: return 1.0 + c[0] * fmax(z - c[1], 0.0); /* hinge: 1 + C1_max(z _ C2, 0) */
+    case 8: return 1.0 + c[0] * (double)((z > 0.0) - (z < 0.0)); /* direction: 1 + C1_sgn(z) */
     }
     return 1.0;
 }

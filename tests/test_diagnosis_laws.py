@@ -1,0 +1,143 @@
+"""Issue 21: the diagnosis' laws hold on new data.
+
+Identifiers are never candidates or law variables; a law acts on the channels it helps only; a law that
+makes a channel worse on held-out data is never accepted ("cause named, no law found"); the aligning
+moment's own targets (trail) are tried; the importer's flagged rows (``fit_row``) are used for the
+accumulated candidates only.  Campaigns as in tests/test_diagnosis.py (a known MF tyre, one injected effect).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from test_diagnosis import TYRE, _campaign, _measure, _refit, _term
+
+from mftire.diagnosis.candidates import candidates, is_identifier, numbers_things, with_sweeps
+from mftire.diagnosis.diagnose import diagnose, split_fit_rows
+from mftire.diagnosis.effects import CONTROL, EffectFit, Law, trimmed, worse_channels
+
+
+@pytest.fixture(scope="module")
+def base_df():
+    return _campaign()
+
+
+def _with_identifiers(d: pd.DataFrame) -> pd.DataFrame:
+    g = with_sweeps(d)
+    out = d.copy()
+    sweep = g["sweep_id"].factorize()[0]
+    out["run"] = sweep  # named as one
+    out["specimen"] = 100 + sweep  # only numbers things: integers spaced by one, one per sweep
+    out["pt"] = np.arange(len(out))  # a row counter under an innocent name
+    return out
+
+
+def test_identifiers_are_never_candidates(base_df):
+    d = with_sweeps(_with_identifiers(_measure(base_df, None)))
+    names = {c.name for c in candidates(d)}
+    assert not names & {"run", "specimen", "pt"}
+    assert {"tread_temp", "time"} <= names
+    sweeps = d["sweep_id"].to_numpy()
+    assert numbers_things(d["specimen"].to_numpy(float), sweeps)
+    assert numbers_things(d["pt"].to_numpy(float), sweeps)
+    assert not numbers_things(d["tread_temp"].to_numpy(float), sweeps)
+    assert not numbers_things(np.repeat([0.0, 1.0], len(d) // 2 + 1)[: len(d)], sweeps)  # a flag
+    assert not is_identifier("time", np.arange(len(d), dtype=float), sweeps)  # a 1 Hz clock counts seconds
+
+
+def test_worse_channels_and_trimmed_law():
+    control = {"Fx": (1.0, 100), "Fy": (1.0, 100)}
+    assert worse_channels({"Fx": (0.5, 100), "Fy": (1.01, 100)}, control) == []
+    assert worse_channels({"Fx": (0.5, 100), "Fy": (1.03, 100)}, control) == ["Fy"]
+    # within the noise: 2 % of the noise's sum of squares, never more than 2 % of the control's
+    assert worse_channels({"Fx": (0.5, 100), "Fy": (1.03, 100)}, control, {"Fy": 0.25}) == []
+    assert worse_channels({"Fx": (0.5, 100), "Fy": (1.05, 100)}, control, {"Fy": 10.0}) == ["Fy"]
+    # a fold may lose by twice the allowance of the whole, no more
+    folds = {"Fy": (1.0, 100), "Fy#0": (0.5, 50), "Fy#1": (0.5, 50)}
+    assert worse_channels({"Fy": (1.0, 100), "Fy#0": (0.4, 50), "Fy#1": (0.6, 50)}, folds) == ["Fy"]
+    law = Law("friction_variable", ("LMUX", "LMUY"), "linear")
+    narrow = trimmed(law, ["Fx"])
+    assert narrow is not None and narrow.targets == ("LMUY",)
+    assert trimmed(Law("f", ("LMUX",), "linear"), ["Fx"]) is None
+    assert trimmed(CONTROL, ["Fx"]) is None
+    assert EffectFit("x", "v", True, {}, {}, {}, 1.0, 0.5, 0.0, 1).rejected is False
+
+
+def _cornering_campaign(seed: int = 2) -> pd.DataFrame:
+    """Cornering at three loads, three sweeps each, with a tread temperature that cycles over the campaign."""
+    rng = np.random.default_rng(seed)
+    F0 = TYRE["FNOMIN"]
+    rows = []
+    for _ in range(3):
+        for lf in (0.5, 1.0, 1.5):
+            a = np.radians(np.linspace(-12, 12, 41))
+            rows.append(pd.DataFrame(dict(Fz=lf * F0 * (1 + 0.02 * rng.standard_normal(41)), kappa=0.0, alpha=a,
+                                          gamma=0.0, Vx=60 / 3.6, P=TYRE["NOMPRES"])))  # fmt: skip
+    df = pd.concat(rows, ignore_index=True)
+    df["time"] = np.arange(len(df)) * 0.5
+    df["tread_temp"] = 40 + 20 * np.sin(np.arange(len(df)) / 50.0) + rng.standard_normal(len(df))
+    return df
+
+
+def test_lateral_only_effect_leaves_fx_exactly_as_it_was(base_df):
+    """Grip falling with tread temperature on Fy only: the law targets LMUY alone, and the extended model
+    predicts Fx (and every Fx coefficient) exactly as the model given.  Braking sweeps of the common campaign
+    and the cornering sweeps of the cornering campaign (three per load, so that held-out folds test Fy)."""
+    corner = _cornering_campaign()
+    both = pd.concat([base_df[base_df.alpha == 0.0], corner], ignore_index=True)
+    both["time"] = np.arange(len(both)) * 0.5
+    sec = _term("LMUY", "linear", "tread_temp", ref=30.0, scale=20.0, c1=-0.12)
+    d = _measure(both, sec, {"tread_temp": both.tread_temp.values})
+    tyre = _refit(d)
+    res = diagnose(d, tyre, progress=False)
+    assert res.significant, res.messages
+    assert res.ranking[0].variable == "tread_temp"
+    assert "LMUY" in res.effect.targets and "LMUX" not in res.effect.targets
+    a, b = tyre.evaluate_frame(d), res.extended.evaluate_frame(d)
+    np.testing.assert_allclose(a["Fx"].to_numpy(), b["Fx"].to_numpy(), rtol=1e-12, atol=1e-9)
+    assert not any(k[1:3] == "DX" or k[1:3] == "KX" for k in res.effect.standard), res.effect.standard
+    fy = next(e for e in res.errors if e.channel == "Fy")
+    assert fy.rms_after <= 0.5 * fy.rms_before
+    for e in res.errors:  # never worse on the held-out condition
+        assert e.rms_after <= 1.02 * e.rms_before + 1e-9, e
+
+
+def test_trail_only_effect_is_found_in_the_aligning_moment():
+    """Pneumatic trail falling with tread temperature (Mz only): an LTR law, forces untouched."""
+    base_df = _cornering_campaign()
+    sec = _term("LTR", "linear", "tread_temp", ref=30.0, scale=20.0, c1=-0.2)
+    d = _measure(base_df, sec, {"tread_temp": base_df.tread_temp.values})
+    tyre = _refit(d)
+    res = diagnose(d, tyre, progress=False)
+    assert res.significant, res.messages
+    assert res.ranking[0].variable == "tread_temp"
+    assert res.effect.targets == ("LTR",), res.effect.targets
+    a, b = tyre.evaluate_frame(d), res.extended.evaluate_frame(d)
+    for ch in ("Fx", "Fy"):
+        np.testing.assert_allclose(a[ch].to_numpy(), b[ch].to_numpy(), rtol=1e-12, atol=1e-9)
+    mz = next(e for e in res.errors if e.channel == "Mz")
+    assert mz.rms_after <= 0.5 * mz.rms_before
+
+
+def _warm_up(n: int = 120) -> pd.DataFrame:
+    """A free-rolling warm-up at the nominal load (no slip: nothing for the fit)."""
+    return pd.DataFrame(dict(Fz=TYRE["FNOMIN"], kappa=0.0, alpha=0.0, gamma=0.0, Vx=60 / 3.6, P=TYRE["NOMPRES"],
+                             tread_temp=np.linspace(20, 30, n)))  # fmt: skip
+
+
+def test_flagged_rows_feed_the_accumulators_only(base_df):
+    d = _measure(base_df, None)
+    warm = _measure(_warm_up(), None)
+    raw = pd.concat([warm.assign(fit_row=False), d.assign(fit_row=True)], ignore_index=True)
+    raw["time"] = np.arange(len(raw)) * 0.5
+    rows, full = split_fit_rows(raw)
+    assert full is not None and len(rows) == len(d) and len(full) == len(raw)
+    assert "fit_row" not in rows.columns
+    res = diagnose(raw, _refit(d), progress=False)
+    assert not res.significant and res.extended is None
+    assert len(res.data) == len(d)
+    # without the column every row is a fit row; the flag read back from CSV as text is understood
+    assert split_fit_rows(d)[1] is None
+    rows2, full2 = split_fit_rows(raw.assign(fit_row=raw.fit_row.map({True: "True", False: "False"})))
+    assert len(rows2) == len(d) and len(full2) == len(raw)
