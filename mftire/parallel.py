@@ -669,10 +669,13 @@ class FilesTask:
     fn: Callable[[Any, str], Any]
 
     def __call__(self, item: Any) -> tuple[Any, dict[str, bytes]]:
+        import contextvars
         import tempfile
 
         with tempfile.TemporaryDirectory(prefix="mftire-task-") as folder:
-            result = self.fn(item, folder)
+            # in a fresh context, as on a worker: the task writes its own scratch folder, outside the running
+            # command's output scope (the client writes the files under that policy)
+            result = contextvars.Context().run(self.fn, item, folder)
             files: dict[str, bytes] = {}
             for root, _dirs, names in os.walk(folder):
                 for name in sorted(names):

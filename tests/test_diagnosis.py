@@ -75,8 +75,9 @@ def _measure(df: pd.DataFrame, section: dict | None, variables: dict | None = No
     return d
 
 
-def _refit(d: pd.DataFrame) -> Tyre:
-    keys = ["PDX1", "PDX2", "PDY1", "PDY2", "PKX1", "PKY1", "QDZ1", "PEX1", "PEY1"]
+def _refit(d: pd.DataFrame, keys: tuple[str, ...] = ("PDX1", "PDX2", "PDY1", "PDY2", "PKX1", "PKY1", "QDZ1", "PEX1",
+                                                       "PEY1")) -> Tyre:
+    keys = list(keys)
 
     def tyre_of(x):
         flat = dict(TYRE.flat)

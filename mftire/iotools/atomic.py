@@ -146,6 +146,7 @@ def staged_folder(folder: str | os.PathLike) -> Iterator[str]:
         _removedirs(created)
         raise
     try:
+        _output.allow_staging(stage)  # the running command may write into its own staging folder
         yield stage
         os.makedirs(folder, exist_ok=True)
         for root, _dirs, names in os.walk(stage):

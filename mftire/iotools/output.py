@@ -185,6 +185,15 @@ def final_rename(tmp: str, path: str) -> None:
     scope.written.add(real)
 
 
+def allow_staging(folder: str | os.PathLike) -> None:
+    """Let the running command write into ``folder``, a private staging folder of its own
+    (:func:`mftire.iotools.atomic.staged_folder`) whose files are moved onto the checked outputs at the end;
+    outside a command, nothing to do."""
+    scope = _SCOPE.get()
+    if scope is not None:
+        scope.folders.add(_real(os.fspath(folder)))
+
+
 _SLUG_BAD = re.compile(r"[^A-Za-z0-9._-]+")
 
 
@@ -366,5 +375,5 @@ class OutputPlan:
         return path
 
 
-__all__ = ["FIGURE_FORMATS", "FORCE_HELP", "OutputPlan", "command_scope", "figure_format", "final_rename",
-           "rename_noreplace", "safe_name", "writes_through"]
+__all__ = ["FIGURE_FORMATS", "FORCE_HELP", "OutputPlan", "allow_staging", "command_scope", "figure_format",
+           "final_rename", "rename_noreplace", "safe_name", "writes_through"]

@@ -27,6 +27,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from mftire.parameters import parameter_bounds
+
 
 @dataclass(frozen=True)
 class Group:
@@ -183,9 +185,8 @@ FAMILIES: tuple[Family, ...] = (
 
 #: Parameters with a physical bound, refused outside it (the FMU's tunable parameters at every set; the
 #: ``.tir`` checks of :mod:`mftire.iotools.tir_checks` refuse the same in a file): (key, "> 0" or ">= 0").
-PARAMETER_BOUNDS: tuple[tuple[str, str], ...] = (
-    ("FNOMIN", "> 0"), ("UNLOADED_RADIUS", "> 0"), ("WIDTH", ">= 0"), ("RIM_RADIUS", ">= 0"),
-)
+#: One table with every other consumer: :data:`mftire.parameters.PARAMETER_LIMITS` (evaluate, info, fit, export).
+PARAMETER_BOUNDS: tuple[tuple[str, str], ...] = parameter_bounds()
 
 
 @dataclass(frozen=True)

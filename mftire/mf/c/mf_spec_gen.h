@@ -95,9 +95,16 @@ typedef struct { const char *format; int limit; const char *input; } MFWarningSp
 typedef struct { int index; double bound; int strict; const char *name; } MFParamBound;
 #define MF_SPEC_PARAMETER_BOUNDS { \
     {MF_SPEC_PIDX(FNOMIN), 0.0, 1, "FNOMIN"}, \
+    {MF_SPEC_PIDX(FNOMIN), 1.0, 0, "FNOMIN"}, \
     {MF_SPEC_PIDX(UNLOADED_RADIUS), 0.0, 1, "UNLOADED_RADIUS"}, \
     {MF_SPEC_PIDX(WIDTH), 0.0, 0, "WIDTH"}, \
     {MF_SPEC_PIDX(RIM_RADIUS), 0.0, 0, "RIM_RADIUS"}, \
+    {MF_SPEC_PIDX(NOMPRES), 0.0, 1, "NOMPRES"}, \
+    {MF_SPEC_PIDX(LFZO), 0.001, 0, "LFZO"}, \
+    {MF_SPEC_PIDX(LONGVL), 0.0, 1, "LONGVL"}, \
+    {MF_SPEC_PIDX(VXLOW), 0.0, 1, "VXLOW"}, \
+    {MF_SPEC_PIDX(LMUX), 0.0, 0, "LMUX"}, \
+    {MF_SPEC_PIDX(LMUY), 0.0, 0, "LMUY"}, \
 }
 
 /* The model codes (FITTYP) the evaluator handles: MF 5.2 (6), MF 6.1 (61), MF 6.2 (62), PAC2002 (2002), MF-Tyre 5.0 (2002). */
