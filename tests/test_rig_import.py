@@ -459,6 +459,7 @@ def chain(tmp_path_factory, imported, gen):
     return data, held, fitted, diag
 
 
+@pytest.mark.filterwarnings("ignore::mftire.mf.inputs.MFLimitWarning")  # curvature clips of the refits
 def test_diagnosis_names_tread_temperature(chain, gen):
     data, held, fitted, diag = chain
     assert diag.significant

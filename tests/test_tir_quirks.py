@@ -240,6 +240,7 @@ def test_unsupported_fittyp_is_an_error_with_a_hint(tmp_path, value, hint):
     assert excinfo.value.line == lineno and hint in str(excinfo.value)
 
 
+@pytest.mark.filterwarnings("ignore:.*PROPERTY_FILE_FORMAT_X")  # the unknown-key hint for the decoy key
 def test_fittyp_decides_over_a_contradicting_format(tmp_path):
     text = _text().replace("[MODEL]", "[MODEL]\nPROPERTY_FILE_FORMAT_X = 1", 1)
     text = re.sub(r"(?m)^\s*PROPERTY_FILE_FORMAT\s*=.*$", "PROPERTY_FILE_FORMAT = 'PAC2002'", text)

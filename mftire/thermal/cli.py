@@ -11,10 +11,8 @@ from mftire.errors import MftireInputError
 
 
 def _add_data_options(p: argparse.ArgumentParser) -> None:
-    from mftire.thermal.series import FORMATS
-
     p.add_argument("data", metavar="DATA", help="raw rig file (.gz accepted) or an imported series CSV")
-    p.add_argument("--format", choices=FORMATS, default=None,
+    p.add_argument("--format", default=None,  # checked by mftire.thermal.series.read_series (no pandas at start-up)
                    help="ttc or columns: a raw file as mftire import reads it; series: the continuous CSV mftire "
                    "import writes (default: series for .csv, else ttc)")  # fmt: skip
     p.add_argument("--map", action="append", metavar="TARGET=SOURCE[:UNIT[:SIGN]]",
