@@ -131,6 +131,7 @@ __all__ = [
     "read_ttc",
     "read_columns",
     "read_column_map",
+    "read_raw",
     "parse_map_options",
     "to_iso",
     "column_spec",
@@ -664,6 +665,32 @@ TTC_UNITS: dict[str, dict[str, str]] = {
            "RST": "deg F", "TSTI": "deg F", "TSTC": "deg F", "TSTO": "deg F", "AMBTMP": "deg F", "SR": "-"},
 }  # fmt: skip
 _TTC_DECIMALS = {"ET": 3, "SA": 4, "IA": 4, "SR": 5, "NFX": 4, "NFY": 4}
+
+
+def read_raw(path: PathLike, fmt: str, *, columns: Mapping[str, Any] | None = None,
+             column_map: PathLike | None = None, convention: str | None = None,
+             signs: Mapping[str, float] | None = None) -> pd.DataFrame:
+    """A raw rig file as a continuous series in ISO-W axes: ``fmt`` ``"ttc"`` (:func:`read_ttc`) or
+    ``"columns"`` (:func:`read_columns`, the column map from ``column_map`` (TOML, :func:`read_column_map`)
+    and/or ``columns``, which win).  ``convention`` defaults to SAE for TTC files and to the map's (else ISO)
+    for columns; ``signs`` flips channels after the conversion."""
+    p = os.fspath(path)
+    if fmt == "ttc":
+        if columns or column_map:
+            raise MftireInputError("a column map (--map/--columns-map) is only used with --format columns")
+        return read_ttc(p, convention=convention or "sae", signs=signs)
+    if fmt == "columns":
+        opts: dict[str, Any] = read_column_map(column_map) if column_map else {"columns": {}}
+        specs = dict(opts.pop("columns"))
+        specs.update({t: (s if isinstance(s, ColumnSpec) else column_spec(t, s, "--map"))
+                      for t, s in (columns or {}).items()})  # fmt: skip
+        conv = convention or opts.pop("convention", "iso")
+        opts.pop("convention", None)
+        df = read_columns(p, specs, convention=conv, **opts)
+        if signs:
+            to_iso(df, "iso", signs)
+        return df
+    raise MftireInputError(f"--format must be 'ttc' or 'columns', got {fmt!r}")
 
 
 def write_ttc(raw: pd.DataFrame, path: PathLike, *, units: str = "metric", title: str = "") -> None:

@@ -19,16 +19,7 @@ import numpy as np
 import pandas as pd
 
 from mftire.errors import MftireInputError
-from mftire.iotools.rig import (
-    ColumnSpec,
-    PathLike,
-    column_spec,
-    read_column_map,
-    read_columns,
-    read_ttc,
-    to_iso,
-    write_sweeps,
-)
+from mftire.iotools.rig import ColumnSpec, PathLike, read_raw, write_sweeps
 from mftire.iotools.sweeps import REQUIRED_COLUMNS
 from mftire.segmentation.grouping import cluster_1d, set_point, sweep_kind
 
@@ -459,22 +450,7 @@ def import_rig(
     """
     t0 = _time.perf_counter()
     p = os.fspath(path)
-    if fmt == "ttc":
-        if columns or column_map:
-            raise MftireInputError("a column map (--map/--columns-map) is only used with --format columns")
-        df = read_ttc(p, convention=convention or "sae", signs=signs)
-    elif fmt == "columns":
-        opts: dict[str, Any] = read_column_map(column_map) if column_map else {"columns": {}}
-        specs = dict(opts.pop("columns"))
-        specs.update({t: (s if isinstance(s, ColumnSpec) else column_spec(t, s, "--map"))
-                      for t, s in (columns or {}).items()})  # fmt: skip
-        conv = convention or opts.pop("convention", "iso")
-        opts.pop("convention", None)
-        df = read_columns(p, specs, convention=conv, **opts)
-        if signs:
-            to_iso(df, "iso", signs)
-    else:
-        raise MftireInputError(f"--format must be 'ttc' or 'columns', got {fmt!r}")
+    df = read_raw(p, fmt, columns=columns, column_map=column_map, convention=convention, signs=signs)
     table, rep = segment(df, points_per_sweep=points_per_sweep, name=p, **segment_kw)
     rep.seconds = _time.perf_counter() - t0
     if output is not None:

@@ -28,24 +28,16 @@ def default_format(path: str | os.PathLike) -> str:
 def read_series(path: str | os.PathLike, fmt: str | None = None, *, columns: Mapping[str, Any] | None = None,
                 column_map: str | os.PathLike | None = None, convention: str | None = None) -> pd.DataFrame:
     """The series at ``path`` (module docstring); ``fmt`` None: :func:`default_format`."""
-    from mftire.iotools.rig import ColumnSpec, column_spec, read_column_map, read_columns, read_ttc
+    from mftire.iotools.rig import read_raw
 
     p = os.fspath(path)
     fmt = fmt or default_format(p)
     if not os.path.exists(p):
         raise MftireInputError(f"{p}: file not found")
-    if fmt != "columns" and (columns or column_map):
+    if fmt in ("ttc", "columns"):
+        return read_raw(p, fmt, columns=columns, column_map=column_map, convention=convention)
+    if columns or column_map:
         raise MftireInputError("a column map (--map/--columns-map) is only used with --format columns")
-    if fmt == "ttc":
-        return read_ttc(p, convention=convention or "sae")
-    if fmt == "columns":
-        opts: dict[str, Any] = read_column_map(column_map) if column_map else {"columns": {}}
-        specs = dict(opts.pop("columns"))
-        specs.update({t: (s if isinstance(s, ColumnSpec) else column_spec(t, s, "--map"))
-                      for t, s in (columns or {}).items()})  # fmt: skip
-        conv = convention or opts.pop("convention", "iso")
-        opts.pop("convention", None)
-        return read_columns(p, specs, convention=conv, **opts)
     if fmt == "series":
         if convention not in (None, "iso"):
             raise MftireInputError("--convention: an imported series is already in ISO axes")
