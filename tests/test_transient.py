@@ -384,6 +384,18 @@ def test_host_modes_give_the_same_outputs(fmu2_path):
 
 
 @needs_c_compiler
+@pytest.mark.parametrize("key,value", [("VXLOW", 0.0), ("VXLOW", -1.0), ("TR_CS_STEP", 0.0)])
+def test_non_physical_start_values_fail_the_initialisation(fmu2_path, key, value):
+    """VXLOW > 0 (the bounds of mftire.mf.spec, shared with the steady FMU) and TR_CS_STEP > 0."""
+    from fmpy.fmi1 import FMICallException
+
+    from mftire.fmu.transient_host import TransientFMUs
+
+    with pytest.raises(FMICallException):
+        TransientFMUs(fmu2_path, ("a",), outputs=("Fx",), mode="direct", start_values={key: value})
+
+
+@needs_c_compiler
 def test_container_mode_checks_the_step(fmu2_path, tmp_path):
     """Container mode: the container FMU validates; fixed step, steps one after the other (the container
     checks its own time)."""

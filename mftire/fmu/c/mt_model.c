@@ -181,11 +181,12 @@ static void store(FMModel *m, double *dst, double value)
     m->kin_ok = m->out_ok = 0;
 }
 
-/* Whether the model refuses the parameter value (fm_check_parameter), or a non-positive TR_CS_STEP or VXLOW. */
+/* Whether the model refuses the parameter value (fm_check_parameter: the bounds of mftire.mf.spec, VXLOW > 0
+ * among them), or a non-positive TR_CS_STEP. */
 static int check_parameter(const FMModel *m, const double *slot, double value, char *msg, unsigned long n)
 {
-    if ((slot == &m->params.TR_CS_STEP || slot == &m->params.VXLOW) && !(value > 0.0)) {
-        snprintf(msg, n, "%g: TR_CS_STEP and VXLOW must be positive", value);
+    if (slot == &m->params.TR_CS_STEP && !(value > 0.0)) {
+        snprintf(msg, n, "%g: TR_CS_STEP must be positive", value);
         return 1;
     }
     return fm_check_parameter(&m->params, slot, value, msg, n);
