@@ -190,13 +190,8 @@ class Executor:
                 if progress is not None:
                     progress(i + 1, len(items))
             return
-        pool = _process_pool(n)
-        try:
+        with _pool_cm(_process_pool(n)) as pool:  # Ctrl-C, SIGTERM, an error, the consumer gone: workers stopped
             yield from _collect(self, pool, _submit_all(pool, fn, items, progress), items, labels)
-        except BaseException:  # Ctrl-C, SIGTERM, an error, the consumer gone: stop the workers now
-            _stop(pool, interrupted=True)
-            raise
-        _stop(pool, interrupted=False)
 
     def start_map(self, fn: Callable[[T], R], items: Iterable[T], *, labels: Sequence[str] | Callable | None = None,
                   progress: Callable[[int, int], None] | None = None) -> Pending[R]:
