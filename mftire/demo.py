@@ -249,13 +249,12 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool | None, exe
                               "rig_diagnosis": "rig_diagnosis/diagnosis.md"})  # fmt: skip
     rep.write(os.path.join(out, "report.html"), os.path.join(out, "report.json"))
     _headline(comp, diag, os.path.join(out, "headline.png"))
-    summary["run_time_s"] = reporter.elapsed()
-    return summary, headline_text(summary, diag)
+    return summary, headline_text(summary, diag, reporter.elapsed())
 
 
-def headline_text(summary: dict, diag) -> str:
+def headline_text(summary: dict, diag, run_time_s: float) -> str:
     """The demo's closing lines: held-out errors before and after, the cause, the band coverage, the run time."""
-    L = [f"done in {summary['run_time_s']:.1f} s"]
+    L = [f"done in {run_time_s:.1f} s"]
     if diag.holdout is not None and diag.errors:
         col, vals = diag.holdout["column"], diag.holdout["values"]
         where = ", ".join(f"{v * 3.6:.0f} km/h" if col == "Vx" else f"{v:g}" for v in vals)
