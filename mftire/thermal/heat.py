@@ -154,6 +154,24 @@ def implicit_step(T: tuple[float, float, float], dt: float, q_s: float, q_b: flo
     )  # fmt: skip
 
 
+def node_rates(T: tuple[float, float, float], q_s, q_b, g_air, T_amb, T_road, caps: tuple[float, float, float],
+               g_sb: float, g_bg: float, g_ba: float, g_road: float) -> tuple:
+    """Time derivatives of the node temperatures [K/s]: the node equations of the module docstring.
+
+    ``C_s dT_s/dt = q_s − G_sb (T_s − T_b) − G_air (T_s − T_amb) − G_road (T_s − T_road)``,
+    ``C_b dT_b/dt = q_b + G_sb (T_s − T_b) − G_bg (T_b − T_g) − G_ba (T_b − T_amb)``,
+    ``C_g dT_g/dt = G_bg (T_b − T_g)`` (lumped capacitance, Incropera & DeWitt §5.1; conduction
+    ``Q = G·ΔT``, eqs 3.6 and 3.19).  The rates of the transient block's Model Exchange states
+    (:mod:`mftire.transient`); :func:`implicit_step` is their backward-Euler step.  ``T`` (T_s, T_b, T_g)
+    [°C], powers [W], conductances [W/K], ``caps`` [J/K].
+    """
+    Ts, Tb, Tg = T
+    q_sb, q_bg = g_sb * (Ts - Tb), g_bg * (Tb - Tg)
+    dTs = (q_s - q_sb - g_air * (Ts - T_amb) - g_road * (Ts - T_road)) / caps[0]
+    dTb = (q_b + q_sb - q_bg - g_ba * (Tb - T_amb)) / caps[1]
+    return dTs, dTb, q_bg / caps[2]
+
+
 def steady_state(q_s: float, q_b: float, g_air: float, T_amb: float, T_road: float, g_sb: float, g_bg: float,
                  g_ba: float, g_road: float) -> tuple[float, float, float]:
     """Node temperatures [°C] for constant inputs (the node equations with ``dT/dt = 0``).
@@ -173,4 +191,5 @@ def steady_state(q_s: float, q_b: float, g_air: float, T_amb: float, T_road: flo
 
 
 __all__ = ["ATMOSPHERE", "KELVIN", "air_conductance", "friction_power", "gas_heat_capacity", "gas_temperature",
-           "hot_pressure", "hysteresis_loss", "implicit_step", "rolling_loss", "slip_velocities", "steady_state"]
+           "hot_pressure", "hysteresis_loss", "implicit_step", "node_rates", "rolling_loss", "slip_velocities",
+           "steady_state"]

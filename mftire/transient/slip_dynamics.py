@@ -131,6 +131,29 @@ STATES: tuple[tuple[str, str], ...] = (
     ("v", "Lateral slip deflection of the contact point (tan alpha' = v/sigma_alpha)"),
 )
 
+#: Inputs of the thermal block (``thermal=True``): (name, unit, description, default) -- default a key of
+#: ``[MFTIRE_THERMAL]`` (:class:`~mftire.mf.thermal_section.ThermalParameters` field) or a number.
+THERMAL_INPUTS: tuple[tuple[str, str, str, str | float], ...] = (
+    ("T_ambient", "degC", "Ambient air temperature (convection of the tread and the sidewall)", "cold_temperature"),
+    ("T_road", "degC", "Road surface temperature (contact conduction)", "cold_temperature"),
+)
+
+#: Outputs of the thermal block: (name, unit, description).
+THERMAL_OUTPUTS: tuple[tuple[str, str, str], ...] = (
+    ("T_surface", "degC", "Tread surface node temperature"),
+    ("T_bulk", "degC", "Tread bulk/carcass node temperature"),
+    ("T_gas", "degC", "Inflation gas node temperature"),
+    ("P_hot", "Pa", "Inflation pressure the Magic Formula uses: the gas law's hot pressure (TH_PRESSURE = 1), "
+     "else the P input"),
+)
+
+#: States of the thermal block (after ``u``, ``v``): the node temperatures [°C].
+THERMAL_STATES: tuple[tuple[str, str], ...] = (
+    ("T_s", "Tread surface node temperature (state)"),
+    ("T_b", "Tread bulk/carcass node temperature (state)"),
+    ("T_g", "Inflation gas node temperature (state)"),
+)
+
 #: Steady-state channels published by the FMU under another name than the evaluator's.
 _FMU_NAME = {"Fz": "Fz_out", "2a": "a2", "2b": "b2"}
 
@@ -154,6 +177,8 @@ class Kinematics:
     My_sign: np.ndarray  #: smooth sign of the rolling-resistance moment [-]
     zero: dict  #: steady-state outputs at zero slip (offsets, Re, sigma)
     args: dict  #: evaluator arguments except the slips
+    T: tuple | None = None  #: node temperatures (T_s, T_b, T_g) [°C] (thermal block)
+    P_hot: np.ndarray | None = None  #: the pressure the Magic Formula uses [Pa] (thermal block)
 
 
 def _sliding(C: float) -> float:
@@ -196,15 +221,29 @@ class TransientTyre:
         ``useMode`` of the steady-state evaluation (default 111).
     constants : mapping, optional
         Overrides of :data:`DEFAULT_CONSTANTS`.
+    thermal : bool
+        The thermal block (:mod:`mftire.thermal`): three temperature states (tread surface, bulk/carcass,
+        inflation gas), heated by the sliding friction power and the rolling loss of the Magic Formula
+        outputs; the gas law's hot pressure is the MF's pressure (``TH_PRESSURE`` = 1; the ``P`` input is
+        then the cold set pressure) and each temperature law of ``[MFTIRE_EXTENSIONS]`` with an
+        ``EXTn_NODE`` reads its node.  Needs a ``[MFTIRE_THERMAL]`` section.
     """
 
-    def __init__(self, tyre: Tyre, mode: int = 111, constants: Mapping[str, float] | None = None) -> None:
+    def __init__(self, tyre: Tyre, mode: int = 111, constants: Mapping[str, float] | None = None,
+                 thermal: bool = False) -> None:  # fmt: skip
         Mode.from_code(mode)
         unknown = sorted(set(constants or {}) - set(DEFAULT_CONSTANTS))
         if unknown:
             raise MftireInputError(f"unknown transient constant(s) {', '.join(unknown)}")
-        if tyre.extensions:
-            raise MftireInputError(f"{tyre.name}: the transient model does not support [MFTIRE_EXTENSIONS] yet")
+        self.thermal = None
+        self._ext = None
+        self._data_nodes: dict[str, int] = {}
+        if thermal:
+            self.thermal, self._ext, self._data_nodes = thermal_block(tyre)
+        elif tyre.extensions:
+            raise MftireInputError(f"{tyre.name}: the transient model supports [MFTIRE_EXTENSIONS] only as the "
+                                   "temperature laws of its thermal block (thermal=True, a [MFTIRE_THERMAL] "
+                                   "section)")  # fmt: skip
         self.tyre = tyre
         self.mode = int(mode)
         self.constants = {**DEFAULT_CONSTANTS, **{k: float(v) for k, v in (constants or {}).items()}}
@@ -212,8 +251,11 @@ class TransientTyre:
         self._mu_cache: dict[float, dict] = {}
 
     def defaults(self) -> dict[str, float]:
-        """Default value of every input (see :func:`input_defaults`)."""
-        return input_defaults(self._p)
+        """Default value of every input (see :func:`input_defaults`; the thermal block's too)."""
+        out = input_defaults(self._p)
+        if self.thermal is not None:
+            out.update(thermal_input_defaults(self._p, self.thermal))
+        return out
 
     def _params(self, mu: float) -> dict:
         # muRoad multiplies LMUX and LMUY (as the FMU's mf_eval.c basic()).
@@ -232,18 +274,24 @@ class TransientTyre:
         a = kin_args
         keys = ("Fz", "gamma", "phit", "Vx", "P", "omega")
         mu = np.asarray(a["mu"], dtype=float)
+        variables = a.get("variables")
         if mu.ndim == 0 or np.all(mu == mu.flat[0]):
             p = self._params(float(mu.flat[0]) if mu.size else 1.0)
-            return evaluate_arrays(p, a["Fz"], kappa, alpha, *(a[k] for k in keys[1:]), self.mode)
+            return evaluate_arrays(p, a["Fz"], kappa, alpha, *(a[k] for k in keys[1:]), self.mode, self._ext,
+                                   variables)  # fmt: skip
         # friction varying over the points: one evaluation per distinct value
         keys = tuple(k for k in keys if a[k] is not None)  # omega None: free rolling (estimated)
-        arrs = np.broadcast_arrays(mu, kappa, alpha, *(a[k] for k in keys))
+        names = tuple(variables or ())
+        arrs = np.broadcast_arrays(mu, kappa, alpha, *(a[k] for k in keys), *(variables[n] for n in names))
+        nk = 3 + len(keys)
         res: dict[str, np.ndarray] = {}
         for m in np.unique(arrs[0]):
             sel = arrs[0] == m
-            rest = dict(zip(keys[1:], (x[sel] for x in arrs[4:]), strict=True))
+            rest = dict(zip(keys[1:], (x[sel] for x in arrs[4:nk]), strict=True))
+            var = {n: x[sel] for n, x in zip(names, arrs[nk:], strict=True)} or None
             o = evaluate_arrays(self._params(float(m)), arrs[3][sel], arrs[1][sel], arrs[2][sel], rest["gamma"],
-                                rest["phit"], rest["Vx"], rest["P"], rest.get("omega"), self.mode)  # fmt: skip
+                                rest["phit"], rest["Vx"], rest["P"], rest.get("omega"), self.mode, self._ext,
+                                var)  # fmt: skip
             for k, val in o.items():
                 res.setdefault(k, np.zeros(arrs[0].shape))[sel] = val
         return res
@@ -258,15 +306,25 @@ class TransientTyre:
         P: ArrayLike | None = None,
         muRoad: ArrayLike = 1.0,
         yawRate: ArrayLike = 0.0,
+        T: tuple | None = None,
     ) -> Kinematics:
         """Slip velocities, relaxation lengths, low-speed weights and zero-slip offsets.
 
         ``Fz`` and ``P`` default to the file's ``FNOMIN`` and ``INFLPRES``, the others to a
         wheel at rest (0; ``muRoad`` 1).  ``omega=None`` means free rolling (Python only).
-        Inputs broadcast against each other.
+        Inputs broadcast against each other.  Thermal block: ``T`` the node temperatures (T_s, T_b, T_g)
+        [°C] (required), ``P`` the cold set pressure (default ``TH_COLD_PRESSURE``, else ``INFLPRES``).
         """
         p, c = self._p, self.constants
         Fz = _clean(p["FNOMIN"] if Fz is None else Fz, 0.0)
+        P_hot = variables = None
+        if self.thermal is not None:
+            if T is None:
+                raise MftireInputError("the thermal block needs the node temperatures T = (T_s, T_b, T_g)")
+            T = tuple(np.asarray(x, dtype=float) for x in T)
+            P, P_hot = thermal_pressure(p, self.thermal, thermal_input_defaults(p, self.thermal)["P"] if P is None
+                                        else P, T[2])  # fmt: skip
+            variables = {name: T[i] for name, i in self._data_nodes.items()}
         P = np.asarray(p["INFLPRES"] if P is None else P, dtype=float)
         free_rolling = omega is None
         Vx, Vy, omega, gamma = (_clean(v, 0.0) for v in (Vx, Vy, 0.0 if free_rolling else omega, gamma))
@@ -278,7 +336,7 @@ class TransientTyre:
         Vev = np.maximum(absVx, np.nextafter(vxlow, np.inf))
         phit = -yawRate / np.sqrt(Vev**2 + Vy**2)  # turn slip phi_t = -psi_dot/V (Pacejka 2012 eq 4.75)
         omega_ev = None if free_rolling else np.where(omega == 0.0, 1e-300, omega)  # a true 0: not "estimate"
-        args = dict(Fz=Fz, gamma=gamma, phit=phit, Vx=Vev, P=P, omega=omega_ev, mu=mu)
+        args = dict(Fz=Fz, gamma=gamma, phit=phit, Vx=Vev, P=P, omega=omega_ev, mu=mu, variables=variables)
         zero = self._eval(args, 0.0, 0.0)
         if free_rolling:  # Python only: omega = Vx/Re, no longitudinal slip velocity
             Vsx = np.zeros(np.broadcast(Vx, zero["Re"]).shape)
@@ -294,7 +352,7 @@ class TransientTyre:
         slx = c["TR_SAT"] * _sat_slip(zero["mux"] * _sliding(p["PCX1"] * p["LCX"]), zero["Fz"], zero["Kxk"])
         sly = c["TR_SAT"] * _sat_slip(zero["muy"] * _sliding(p["PCY1"] * p["LCY"]), zero["Fz"], zero["Kya"])
         return Kinematics(Vx=Vx, Vsx=Vsx, Vsy=Vy, sigx=sigx, sigy=sigy, slx=slx, sly=sly, w=w, My_sign=My_sign,
-                          zero=zero, args=args)  # fmt: skip
+                          zero=zero, args=args, T=T, P_hot=P_hot)  # fmt: skip
 
     def lag(self, kin: Kinematics, u: ArrayLike, v: ArrayLike):
         """Carcass deflection rates (du_c/dt, dv_c/dt) and the factors (r_x, r_y) with which the slip
@@ -336,12 +394,106 @@ class TransientTyre:
         out["My"] = ss["My"] * kin.My_sign  # rolling resistance opposes the rolling direction
         out["kappa_t"] = np.asarray(kappa_t, dtype=float)
         out["alpha_t"] = np.asarray(alpha_t, dtype=float)
+        if kin.T is not None:
+            for (name, _, _), T in zip(THERMAL_OUTPUTS, kin.T, strict=False):
+                out[name] = T
+            out["P_hot"] = kin.P_hot
         names = (*FIRST_OUTPUTS, *(k for k in out if k not in FIRST_OUTPUTS))
         return {k: np.broadcast_to(out[k], np.shape(out["Fx"])) for k in names}
 
     def outputs(self, x: ArrayLike, **inputs: ArrayLike) -> dict[str, np.ndarray]:
-        """All outputs at state ``x = (u, v)`` and the inputs."""
-        return self.outputs_from(self.kinematics(**inputs), x[0], x[1])
+        """All outputs at state ``x = (u, v)`` (thermal block: ``(u, v, T_s, T_b, T_g)``) and the inputs
+        (the thermal inputs ``T_ambient``, ``T_road`` are not needed for the outputs)."""
+        return self.outputs_from(self._kin(x, inputs), x[0], x[1])
+
+    def _kin(self, x, inputs: Mapping[str, ArrayLike]) -> Kinematics:
+        ins = {k: v for k, v in inputs.items() if k not in ("T_ambient", "T_road")}
+        if self.thermal is not None:
+            ins["T"] = (x[2], x[3], x[4])
+        return self.kinematics(**ins)
+
+    def heat(self, kin: Kinematics, out: Mapping[str, np.ndarray]) -> tuple:
+        """Heat inputs of the thermal block at the outputs ``out``: ``(q_s, q_b, g_air)``.
+
+        ``q_s`` the share ``TH_SLIP_SHARE`` of the sliding friction power at the transient slips
+        (:func:`mftire.thermal.heat.friction_power`) [W], ``q_b`` the rolling and hysteresis loss
+        (:func:`mftire.thermal.simulation.bulk_power`) [W], ``g_air`` the convective conductance at the
+        wheel-centre speed (:func:`mftire.thermal.heat.air_conductance`) [W/K].
+        """
+        from mftire.thermal.heat import air_conductance, friction_power
+        from mftire.thermal.simulation import bulk_power
+
+        th = self.thermal
+        q_s = th.slip_share * friction_power(out["Fx"], out["Fy"], out["kappa_t"], out["alpha_t"], kin.Vx)
+        q_b = bulk_power(th, kin.args["Fz"], kin.Vx, out["Fx"], out["Fy"], float(self._p["FNOMIN"]))
+        return q_s, q_b, air_conductance(kin.Vx, th.h_air0, th.h_air1)
+
+    def thermal_rates(self, kin: Kinematics, out: Mapping[str, np.ndarray], T_ambient, T_road) -> tuple:
+        """``(dT_s/dt, dT_b/dt, dT_g/dt)`` [K/s] (:func:`mftire.thermal.heat.node_rates`) at the kinematics
+        (which hold the node temperatures) and the outputs there."""
+        from mftire.thermal.heat import node_rates
+
+        th = self.thermal
+        q_s, q_b, g_air = self.heat(kin, out)
+        return node_rates(kin.T, q_s, q_b, g_air, T_ambient, T_road, th.caps, th.g_surface_bulk, th.g_bulk_gas,
+                          th.g_bulk_ambient, th.g_road)  # fmt: skip
+
+    def all_derivatives(self, x: ArrayLike, **inputs: ArrayLike) -> np.ndarray:
+        """Every state derivative at state ``x`` and the inputs: ``[du/dt, dv/dt]``, with the thermal block
+        ``[du/dt, dv/dt, dT_s/dt, dT_b/dt, dT_g/dt]`` (the Model Exchange FMU's ``der(...)``)."""
+        kin = self._kin(x, inputs)
+        du, dv = self.rates(kin, x[0], x[1])
+        if self.thermal is None:
+            return np.array([du, dv], dtype=float)
+        out = self.outputs_from(kin, x[0], x[1])
+        d = self.defaults()
+        Ta, Tr = (inputs.get(k, d[k]) for k in ("T_ambient", "T_road"))
+        return np.array([du, dv, *self.thermal_rates(kin, out, Ta, Tr)], dtype=float)
+
+
+def thermal_block(tyre: Tyre):
+    """The thermal block's parameters, extension terms and data variables of a tyre: ``(params, ext, nodes)``,
+    ``ext`` the terms with each law of an ``EXTn_NODE`` reading its node (:func:`mftire.thermal.simulation.
+    node_tyre`), ``nodes`` the node index (0 surface, 1 bulk, 2 gas) of each variable they read.  A clear error
+    for a tyre without ``[MFTIRE_THERMAL]`` or with a law reading anything else than a node or a builtin."""
+    from mftire.mf.thermal_section import NODE_VARIABLES, NODES, SECTION
+    from mftire.thermal.simulation import node_tyre, thermal_of
+
+    params = thermal_of(tyre)
+    if params is None:
+        raise MftireInputError(f"{tyre.name}: the thermal block needs a [{SECTION}] section (made by mftire "
+                               "fit-thermal); this .tir has none")  # fmt: skip
+    ext = node_tyre(tyre, params).extension_set
+    index = {NODE_VARIABLES[n]: i for i, n in enumerate(NODES)}
+    other = [v for v in ext.external_variables if v not in index]
+    if other:
+        raise MftireInputError(f"{tyre.name}: the thermal block's laws must read a node temperature (EXTn_NODE in "
+                               f"[{SECTION}]) or a builtin variable; variable(s) {', '.join(other)} cannot be "
+                               "supplied to the transient block")  # fmt: skip
+    return params, (ext if ext else None), {v: index[v] for v in ext.external_variables}
+
+
+def thermal_input_defaults(flat: Mapping[str, float], params) -> dict[str, float]:
+    """Defaults of the thermal block's inputs: ``T_ambient``, ``T_road`` at ``TH_COLD_TEMPERATURE`` [°C], and
+    the pressure input ``P`` (the cold set pressure) at ``TH_COLD_PRESSURE``, else ``INFLPRES`` [Pa]."""
+    out = {name: float(getattr(params, d)) if isinstance(d, str) else float(d) for name, _, _, d in THERMAL_INPUTS}
+    out["P"] = float(flat["INFLPRES"] if params.cold_pressure is None else params.cold_pressure)
+    return out
+
+
+def thermal_pressure(flat: Mapping[str, float], params, P, T_gas) -> tuple[np.ndarray, np.ndarray]:
+    """``(P_mf, P_hot)``: the pressure the Magic Formula is given and the one it uses [Pa] from the cold set
+    pressure ``P`` (NaN or <= 0: ``INFLPRES``, the evaluator's rule) and the gas temperature [°C]: the gas
+    law's hot pressure (:func:`mftire.thermal.heat.hot_pressure`) when ``TH_PRESSURE`` = 1, else ``P``."""
+    from mftire.thermal.heat import hot_pressure
+
+    P = np.asarray(P, dtype=float)
+    with np.errstate(invalid="ignore"):
+        cold = np.where(P > 0.0, P, float(flat["INFLPRES"]))  # NaN > 0 is False
+    if not params.pressure:
+        return P, cold
+    hot = hot_pressure(T_gas, cold, params.cold_temperature, params.atmosphere)
+    return hot, hot
 
 
 def _signal(value, t: np.ndarray, name: str) -> Callable[[float], float]:
@@ -376,6 +528,10 @@ def simulate(
     rtol: float = 1e-8,
     atol: float = 1e-12,
     max_step: float | None = None,
+    thermal: bool = False,
+    T_ambient=None,
+    T_road=None,
+    T0=None,
 ) -> pd.DataFrame:
     """Simulate the transient tyre over the time points ``t`` with :func:`scipy.integrate.solve_ivp`.
 
@@ -387,37 +543,64 @@ def simulate(
 
     Returns a DataFrame indexed by ``t`` with the FMU's output names (``Fx, Fy, Mz,
     Mx, My, kappa_t, alpha_t, ...``) and the states ``u``, ``v``.
+
+    ``thermal=True``: the thermal block (see :class:`TransientTyre`; the ``.tir`` needs a
+    ``[MFTIRE_THERMAL]`` section).  The node temperatures are three more states, integrated with
+    ``u``, ``v``; ``T_ambient`` and ``T_road`` [°C] are inputs like the others (default
+    ``TH_COLD_TEMPERATURE``; the road at the ambient temperature when only that is given), ``P`` is the
+    cold set pressure (default ``TH_COLD_PRESSURE``, else ``INFLPRES``), ``T0`` the initial node
+    temperatures (T_s, T_b, T_g) [°C] (default the section's ``TH_T_INIT_*``, else the ambient temperature at
+    ``t[0]``).  The frame gains ``T_surface``, ``T_bulk``, ``T_gas`` [°C] and ``P_hot`` [Pa].
     """
     from scipy.integrate import solve_ivp
 
     t = np.asarray(t, dtype=float)
     if t.ndim != 1 or t.size < 2 or np.any(np.diff(t) <= 0):
         raise MftireInputError("simulate: t must be an increasing 1-D array of at least two times")
-    model = TransientTyre(tyre, mode, constants)
+    if not thermal and not (T_ambient is None and T_road is None and T0 is None):
+        raise MftireInputError("simulate: T_ambient, T_road and T0 are inputs of the thermal block (thermal=True)")
+    model = TransientTyre(tyre, mode, constants, thermal=thermal)
     d = model.defaults()
     given = dict(Fz=Fz, Vx=Vx, Vy=Vy, omega=omega, gamma=gamma, P=P, muRoad=muRoad, yawRate=yawRate)
+    if thermal:
+        given.update(T_ambient=T_ambient, T_road=T_ambient if T_road is None and not callable(T_ambient) else T_road)
+        for k in ("T_ambient", "T_road"):
+            if given[k] is not None and not callable(given[k]) and not np.all(np.isfinite(np.asarray(given[k],
+                                                                                                  dtype=float))):
+                raise MftireInputError(f"simulate: {k} must be finite temperatures [°C] (NaN or Inf given)")
     sig = {k: _signal(d[k] if v is None else v, t, k) for k, v in given.items() if not (k == "omega" and v is None)}
 
     free = {} if "omega" in sig else {"omega": None}
+    x0 = [float(x) for x in x0]
+    if thermal:
+        x0 += _initial_temperatures(model, T0, sig["T_ambient"](t[0]))
 
     def inputs_at(tt):
         return {**{k: f(tt) for k, f in sig.items()}, **free}
 
     def rhs(tt, x):
-        kin = model.kinematics(**inputs_at(tt))
-        return [float(r) for r in model.rates(kin, x[0], x[1])]
+        return model.all_derivatives(x, **inputs_at(tt)).tolist()
 
     step = max_step if max_step is not None else float(np.min(np.diff(t)))
-    sol = solve_ivp(rhs, (t[0], t[-1]), list(map(float, x0)), method=method, t_eval=t, rtol=rtol, atol=atol,
+    sol = solve_ivp(rhs, (t[0], t[-1]), x0, method=method, t_eval=t, rtol=rtol, atol=atol,
                     max_step=step)  # fmt: skip
     if not sol.success:
         raise MftireInputError(f"simulate: the ODE solver failed: {sol.message}")
-    u, v = sol.y
     ins = {**{k: np.array([f(tt) for tt in t]) for k, f in sig.items()}, **free}
-    out = model.outputs_from(model.kinematics(**ins), u, v)
+    out = model.outputs(sol.y, **ins)
     frame = pd.DataFrame({k: np.asarray(val, dtype=float) for k, val in out.items()}, index=pd.Index(t, name="t"))
-    frame["u"], frame["v"] = u, v
+    frame["u"], frame["v"] = sol.y[0], sol.y[1]
     return frame
+
+
+def _initial_temperatures(model: TransientTyre, T0, T_amb0: float) -> list[float]:
+    """The initial node temperatures of the thermal block: ``T0``, else the section's, else the ambient."""
+    from mftire.thermal.simulation import initial_temperatures
+
+    T = initial_temperatures(model.thermal, float(T_amb0)) if T0 is None else tuple(np.asarray(T0, dtype=float))
+    if len(T) != 3 or not all(math.isfinite(float(x)) and float(x) > -273.15 for x in T):
+        raise MftireInputError(f"simulate: T0 must be three finite node temperatures above -273.15 °C, not {T0!r}")
+    return [float(x) for x in T]
 
 
 def _equilibrium(f: float, sig: float, lim: float, absVx: float, Vs: float, G: float) -> float | None:
@@ -519,6 +702,7 @@ def advance(model: TransientTyre, kin: Kinematics, u: float, v: float, H: float)
 INPUT_BOUNDS: dict[str, tuple[float, float]] = {
     "Fz": (-math.inf, 3.0), "Vx": (-200.0, 200.0), "Vy": (-200.0, 200.0), "omega": (-2000.0, 2000.0),
     "gamma": (-1.55, 1.55), "P": (-math.inf, 3.0), "muRoad": (1e-3, 10.0), "yawRate": (-100.0, 100.0),
+    "T_ambient": (-100.0, 300.0), "T_road": (-100.0, 300.0),
 }  # fmt: skip
 
 
@@ -532,7 +716,7 @@ def guard_inputs(flat: Mapping[str, float], inputs: Mapping[str, float],
     Returns the values to use and the names of the inputs replaced or saturated.
     """
     out, bad = {}, []
-    for name, _, _, _ in INPUTS:
+    for name in held:  # the kinematic inputs, then the thermal block's (TransientTyre.defaults)
         x = float(inputs.get(name, held[name]))
         lo, hi = INPUT_BOUNDS[name]
         if name == "Fz":
@@ -551,17 +735,42 @@ def guard_inputs(flat: Mapping[str, float], inputs: Mapping[str, float],
     return out, bad
 
 
+def advance_thermal(model: TransientTyre, kin: Kinematics, out: Mapping[str, np.ndarray], H: float, T_ambient: float,
+                    T_road: float) -> tuple[float, float, float]:  # fmt: skip
+    """Advance the node temperatures ``kin.T`` by ``H`` (the FMU's Co-Simulation step of the thermal block):
+    one backward-Euler step (:func:`mftire.thermal.heat.implicit_step`, stable for any ``H``) with the heat
+    inputs of the outputs ``out`` at the start of the step held."""
+    from mftire.thermal.heat import implicit_step
+
+    th = model.thermal
+    q_s, q_b, g_air = (float(x) for x in model.heat(kin, out))
+    T = tuple(float(x) for x in kin.T)
+    if not H > 0.0:
+        return T  # type: ignore[return-value]
+    Tn = implicit_step(T, H, q_s, q_b, g_air, T_ambient, T_road, th.caps, th.g_surface_bulk, th.g_bulk_gas,
+                       th.g_bulk_ambient, th.g_road)  # fmt: skip
+    return Tn if all(map(math.isfinite, Tn)) else T
+
+
 class TransientStepper:
     """The transient tyre stepped as the Co-Simulation FMU steps it (Python mirror of ``fmi2DoStep``).
 
     ``step(H, **inputs)`` guards the inputs (:func:`guard_inputs`, a warning for each one replaced),
-    advances the states with the inputs held (:func:`advance`) and returns the outputs at the new state.
+    advances the states with the inputs held (:func:`advance`; the thermal block's temperatures with
+    :func:`advance_thermal`, the heat of the outputs at the start of the step) and returns the outputs at
+    the new state.  ``x0``: ``(u, v)``, thermal ``(u, v, T_s, T_b, T_g)`` (default: the initial temperatures
+    of the section, else the ``T_ambient`` default).
     """
 
-    def __init__(self, model: TransientTyre, x0=(0.0, 0.0)) -> None:
+    def __init__(self, model: TransientTyre, x0=None) -> None:
         self.model = model
-        self.x = (float(x0[0]), float(x0[1]))
         self.held = model.defaults()
+        x0 = (0.0, 0.0) if x0 is None else x0
+        self.x = (float(x0[0]), float(x0[1]))
+        self.T = None
+        if model.thermal is not None:
+            self.T = tuple(float(x) for x in x0[2:5]) if len(x0) >= 5 else \
+                tuple(_initial_temperatures(model, None, self.held["T_ambient"]))
         self.time = 0.0
 
     def set_inputs(self, **inputs: float) -> Kinematics:
@@ -570,16 +779,27 @@ class TransientStepper:
         if bad:
             msg = "not finite or out of range: the last good value is held (non-finite) or the bound used"
             warnings.warn(f"t={self.time:.17g}: transient tyre input(s) {', '.join(bad)} {msg}", stacklevel=3)
+        self._thermal_inputs = (vals.pop("T_ambient", None), vals.pop("T_road", None))
+        if self.T is not None:
+            vals["T"] = self.T
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             return self.model.kinematics(**vals)
 
     def step(self, H: float, **inputs: float) -> dict[str, float]:
         kin = self.set_inputs(**inputs)
+        if self.T is not None:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                out0 = self.model.outputs_from(kin, self.x[0], self.x[1])
+            T = advance_thermal(self.model, kin, out0, H, *self._thermal_inputs)
         self.x = advance(self.model, kin, self.x[0], self.x[1], H)
         self.time += H
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
+            if self.T is not None:
+                self.T = T
+                kin = self.set_inputs()  # the laws and the pressure at the new temperatures
             out = self.model.outputs_from(kin, self.x[0], self.x[1])
         return {k: float(v) for k, v in out.items()}
 
@@ -588,8 +808,15 @@ __all__ = [
     "CONSTANTS",
     "CS_LINEAR_TOL",
     "INPUT_BOUNDS",
+    "THERMAL_INPUTS",
+    "THERMAL_OUTPUTS",
+    "THERMAL_STATES",
     "TransientStepper",
+    "advance_thermal",
     "guard_inputs",
+    "thermal_block",
+    "thermal_input_defaults",
+    "thermal_pressure",
     "DEFAULT_CONSTANTS",
     "INPUTS",
     "Kinematics",
