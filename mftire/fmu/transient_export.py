@@ -10,6 +10,14 @@ from :mod:`mftire.transient` and the steady-state table of
 ``mftire/transient.py``) on top of the steady-state evaluator ``mf_eval.c``; ``mftire/fmu/c/mt_model.c``
 puts it behind the one model interface (``fmu_model.h``), and the same thin FMI 2 and FMI 3 wrappers as the
 steady-state FMU's (``fmi2_wrapper.c``, ``fmi3_wrapper.c``) make it an FMU.
+
+Thermal block (a ``.tir`` with ``[MFTIRE_THERMAL]``; :class:`mftire.transient.TransientTyre` ``thermal=True``):
+three more states ``T_s``, ``T_b``, ``T_g`` (node temperatures, °C), inputs ``T_ambient``, ``T_road``,
+outputs ``T_surface``, ``T_bulk``, ``T_gas``, ``P_hot``, the section's keys as parameters (the initial
+temperatures ``TH_T_INIT_*`` among them), and the temperature laws of ``[MFTIRE_EXTENSIONS]`` compiled in
+(their C generated from :mod:`mftire.mf.extensions` as the steady FMU's), each reading its node.  The
+generated ``mt_config_gen.h`` switches it on (``MT_THERMAL``); a ``.tir`` without the section gives the
+transient FMU without it.
 """
 
 from __future__ import annotations
@@ -17,9 +25,11 @@ from __future__ import annotations
 import os
 import re
 import subprocess
+from dataclasses import dataclass
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
+from mftire.errors import MftireError
 from mftire.fmu import variables as vt
 from mftire.fmu.build import (
     CFLAGS,
@@ -37,17 +47,42 @@ from mftire.fmu.build import (
 )
 from mftire.fmu.documentation import documentation_files
 from mftire.mf import spec
-from mftire.transient import CONSTANTS, INPUTS, STATES, TRANSIENT_OUTPUTS, input_defaults
+from mftire.mf.extensions import ExtensionSet
+from mftire.mf.thermal_section import ThermalParameters
+from mftire.transient import (
+    CONSTANTS,
+    INPUTS,
+    STATES,
+    THERMAL_INPUTS,
+    THERMAL_OUTPUTS,
+    THERMAL_STATES,
+    TRANSIENT_OUTPUTS,
+    input_defaults,
+)
+from mftire.transient.slip_dynamics import thermal_input_defaults
 
 
-def output_names() -> list[str]:
+@dataclass(frozen=True)
+class ThermalExport:
+    """The thermal block of a transient FMU: the section's parameters, the extension terms (each law of an
+    ``EXTn_NODE`` reading its node variable) and the node index of each external variable, in data-slot order
+    (:func:`mftire.transient.slip_dynamics.thermal_block`)."""
+
+    params: ThermalParameters
+    extensions: ExtensionSet | None
+    nodes: tuple[int, ...]
+
+
+def output_names(thermal: bool = False) -> list[str]:
     """Output names of the transient FMU, in order: the forces and moments, the transient slips,
-    then the steady-state channels of the steady-state FMU (:data:`mftire.fmu.variables.OUTPUTS`)."""
+    then the steady-state channels of the steady-state FMU (:data:`mftire.fmu.variables.OUTPUTS`); the thermal
+    block's outputs (:data:`mftire.transient.THERMAL_OUTPUTS`) last."""
     return (
         [n for n, *_ in vt.OUTPUTS[:2]]
         + ["Mz", "Mx", "My"]
         + [n for n, *_ in TRANSIENT_OUTPUTS]
         + [n for n, *_ in vt.OUTPUTS if n not in ("Fx", "Fy", "Mz", "Mx", "My")]
+        + ([n for n, *_ in THERMAL_OUTPUTS] if thermal else [])
     )
 
 
@@ -64,8 +99,10 @@ _STEADY_FIELD = {name: field for name, field, _, _ in vt.OUTPUTS}
 #: needs: the FMU evaluates only the groups of the outputs read (lazy outputs, ``mt_model.c``).
 OUTPUT_GROUPS: dict[str, str] = {o.fmu: o.group for o in spec.OUTPUTS if o.fmu and o.group}
 
-#: Outputs every evaluation sets (no channel group): the transient slips, the load used and Re.
-UNGROUPED_OUTPUTS = ("kappa_t", "alpha_t", *(o.fmu for o in spec.OUTPUTS if o.fmu and not o.group))
+#: Outputs every evaluation sets (no channel group): the transient slips, the load used and Re; the thermal
+#: block's node temperatures and pressure.
+UNGROUPED_OUTPUTS = ("kappa_t", "alpha_t", *(o.fmu for o in spec.OUTPUTS if o.fmu and not o.group),
+                     *(n for n, *_ in THERMAL_OUTPUTS))  # fmt: skip
 
 
 def output_group(name: str) -> str:
@@ -77,11 +114,11 @@ def output_group(name: str) -> str:
     raise FMUExportError(f"transient FMU output {name!r} has no channel group (add it to OUTPUT_GROUPS)")
 
 
-def _output_rows() -> list[tuple[str, str, str | None, str]]:
+def _output_rows(thermal: bool = False) -> list[tuple[str, str, str | None, str]]:
     steady = {name: (field, unit, desc) for name, field, unit, desc in vt.OUTPUTS}
-    trans = {name: (name, unit, desc) for name, unit, desc in TRANSIENT_OUTPUTS}
+    trans = {name: (name, unit, desc) for name, unit, desc in (*TRANSIENT_OUTPUTS, *THERMAL_OUTPUTS)}
     rows = []
-    for name in output_names():
+    for name in output_names(thermal):
         if name in trans:
             field, unit, desc = trans[name]
         else:
@@ -95,36 +132,92 @@ def _output_rows() -> list[tuple[str, str, str | None, str]]:
     return rows
 
 
-def transient_variable_table(flat: dict[str, float], use_mode: int = vt.DEFAULT_USE_MODE) -> list[vt.Variable]:
+#: Description of each thermal parameter in the FMU (fields of ThermalParameters).
+_THERMAL_DESC = {
+    "cap_surface": "heat capacity of the tread surface node", "cap_bulk": "heat capacity of the bulk/carcass node",
+    "cap_gas": "heat capacity of the inflation gas node", "g_surface_bulk": "conductance surface <-> bulk",
+    "g_bulk_gas": "conductance bulk <-> gas", "g_bulk_ambient": "conductance bulk (sidewall) -> ambient air",
+    "h_air0": "convective conductance surface -> air at standstill",
+    "h_air1": "its speed term [W/K/(m/s)^0.8]: G_air = TH_H_AIR0 + TH_H_AIR1*|Vx|^0.8",
+    "g_road": "conductance surface -> road", "slip_share": "share of the sliding friction power heating the surface",
+    "roll_loss": "rolling-loss coefficient: bulk power c*Fz*|Vx|",
+    "hysteresis": "hysteresis coefficient: bulk power c*|Vx|*(Fx^2 + Fy^2)/max(Fz, 0.1*FNOMIN)",
+    "cold_pressure": "cold set pressure of the file (the FMU's P input is the cold pressure; this is its start)",
+    "cold_temperature": "temperature at which the cold pressure is set", "atmosphere": "atmospheric pressure",
+    "pressure": "1: the gas law's hot pressure is the MF's pressure; 0: the P input is",
+    "t_init_surface": "initial surface temperature", "t_init_bulk": "initial bulk temperature",
+    "t_init_gas": "initial gas temperature",
+    "temperature": "steady-state temperature of the file (not used by the block)",
+}  # fmt: skip
+
+
+def _thermal_flat(flat: dict[str, float], th: ThermalParameters) -> dict[str, float]:
+    """``flat`` with every parameter of the thermal block (``TH_*``; the initial temperatures default to the
+    ``T_ambient`` start value, ``TH_COLD_TEMPERATURE``)."""
+    out = dict(flat)
+    for name in _THERMAL_DESC:
+        value = getattr(th, name)
+        if value is None and name.startswith("t_init_"):
+            value = th.cold_temperature
+        if value is not None:
+            out["TH_" + name.upper()] = float(value)
+    return out
+
+
+def transient_variable_table(flat: dict[str, float], use_mode: int = vt.DEFAULT_USE_MODE,
+                             thermal: ThermalExport | None = None) -> list[vt.Variable]:  # fmt: skip
     """Every variable of the transient FMU (value references 0..n-1).
 
     ``time``; the inputs; the outputs; ``useMode``; the ``.tir`` parameters (as the
     steady-state FMU); the transient constants ``TR_*``; the states ``u``, ``v`` and
     their derivatives ``der(u)``, ``der(v)`` (kinds ``"state"`` and ``"der"``; the
-    ``field`` of both is the state index).
+    ``field`` of both is the state index).  ``thermal``: the thermal block's inputs, outputs, parameters
+    (``TH_*``, the laws' ``EXTn_*``) and states ``T_s``, ``T_b``, ``T_g`` (no start value: they start at
+    the parameters ``TH_T_INIT_*``).
     """
     V = vt.Variable
     out: list[vt.Variable] = [
         V("time", 0, "time", "Real", "independent", "continuous", None, "s", "Simulation time", "")
     ]
     defaults = input_defaults(flat)
-    for name, unit, desc, _ in INPUTS:
+    rows = list(INPUTS)
+    if thermal is not None:
+        defaults.update(thermal_input_defaults(flat, thermal.params))
+        rows = [r if r[0] != "P" else ("P", "Pa", "Cold set inflation pressure at TH_COLD_TEMPERATURE (NaN or <= 0: "
+                                      "INFLPRES); with TH_PRESSURE = 1 the MF uses the gas law's P_hot", r[3])
+                for r in rows] + list(THERMAL_INPUTS)  # fmt: skip
+        flat = _thermal_flat(flat, thermal.params)
+    for name, unit, desc, _ in rows:
         value = defaults[name]
         out.append(V(name, len(out), "input", "Real", "input", "continuous", value, unit, desc, name))
-    for name, field, unit, desc in _output_rows():
+    for name, field, unit, desc in _output_rows(thermal is not None):
         out.append(V(name, len(out), "output", "Real", "output", "continuous", None, unit, desc, field))
-    steady = vt.variable_table(flat, use_mode, None)
+    try:
+        steady = vt.variable_table(flat, use_mode, thermal.extensions if thermal is not None else None)
+    except MftireError as exc:
+        raise FMUExportError(f"the model extensions cannot be exported: {exc}") from None
+    from mftire.mf.thermal_section import UNITS as TH_UNITS
+
     for v in steady:
         if v.kind in ("mode", "param"):
-            out.append(V(v.name, len(out), v.kind, v.type, v.causality, v.variability, v.start, v.unit,
-                         v.description, v.field))  # fmt: skip
+            unit, desc, variability = v.unit, v.description, v.variability
+            name = v.name[3:].lower() if v.name.startswith("TH_") else None
+            if thermal is not None and name in _THERMAL_DESC:
+                unit, desc = TH_UNITS[name], f"[MFTIRE_THERMAL] {_THERMAL_DESC[name]}"
+                variability = "fixed" if name.startswith("t_init_") else "tunable"
+            out.append(V(v.name, len(out), v.kind, v.type, v.causality, variability, v.start, unit, desc,
+                         v.field))  # fmt: skip
     for name, value, unit, desc in CONSTANTS:
         out.append(V(name, len(out), "param", "Real", "parameter", "tunable", float(value), _CONST_UNIT[unit],
                      f"[transient] {desc}", name))  # fmt: skip
-    for i, (name, desc) in enumerate(STATES):
-        out.append(V(name, len(out), "state", "Real", "local", "continuous", 0.0, "m", desc, str(i)))
-    for i, (name, _desc) in enumerate(STATES):
-        out.append(V(f"der({name})", len(out), "der", "Real", "local", "continuous", None, "m/s",
+    states = [(name, desc, 0.0, "m", "m/s") for name, desc in STATES]
+    if thermal is not None:
+        states += [(name, desc + ": starts at TH_T_INIT_" + ("SURFACE", "BULK", "GAS")[i], None, "degC", "K/s")
+                   for i, (name, desc) in enumerate(THERMAL_STATES)]  # fmt: skip
+    for i, (name, desc, start, unit, _) in enumerate(states):
+        out.append(V(name, len(out), "state", "Real", "local", "continuous", start, unit, desc, str(i)))
+    for i, (name, _desc, _, _, dunit) in enumerate(states):
+        out.append(V(f"der({name})", len(out), "der", "Real", "local", "continuous", None, dunit,
                      f"Time derivative of {name}", str(i)))  # fmt: skip
     names = [v.name for v in out]
     assert len(set(names)) == len(names), "transient FMU variable names must be unique"
@@ -179,11 +272,60 @@ def transient_model_header(variables: list[vt.Variable], model_identifier: str, 
     lines += [f"    {vt.c_string(v.name)}," for v in by_vr]
     lines += ["};", "", "static const MTInputs MT_INPUT_START = {"]
     lines += [f"    .{v.field} = {vt._c_double(v.start)}," for v in by_vr if v.kind == "input"]
-    state_start = ", ".join(vt._c_double(v.start) for v in states)
-    lines += ["};", "", f"static const double MT_STATE_START[2] = {{{state_start}}};"]
+    params = {v.name: v for v in by_vr if v.kind == "param"}
+    init = ("TH_T_INIT_SURFACE", "TH_T_INIT_BULK", "TH_T_INIT_GAS")
+    # a state without a start value starts at its parameter TH_T_INIT_* (thermal block)
+    state_start = ", ".join(vt._c_double(v.start if v.start is not None else params[init[int(v.field) - 2]].start)
+                            for v in states)  # fmt: skip
+    lines += ["};", "", f"static const double MT_STATE_START[{len(states)}] = {{{state_start}}};"]
     lines += ["", "static const MFParams MT_PARAM_START = {"]
     lines += [f"    .{v.field} = {vt._c_double(v.start)}," for v in by_vr if v.kind == "param"]
-    lines += ["};", "", "#endif /* MT_MODEL_GEN_H */", ""]
+    lines += ["};", ""]
+    if len(states) > 2:
+        lines += _thermal_bounds()
+    lines += ["#endif /* MT_MODEL_GEN_H */", ""]
+    return "\n".join(lines)
+
+
+def _thermal_bounds() -> list[str]:
+    """``MT_THERMAL_BOUNDS``: the bounds of the ``[MFTIRE_THERMAL]`` parameters
+    (:func:`mftire.mf.thermal_section.bounds`, the one table) for ``check_parameter`` of ``mt_model.c``."""
+    from mftire.mf.thermal_section import bounds
+
+    kinds = {">": 0, ">=": 1, "in": 2}
+    lines = ["/* The bounds of the [MFTIRE_THERMAL] parameters (mftire.mf.thermal_section.bounds). */",
+             "typedef struct {", "    size_t offset;", "    double bound;",
+             "    int kind; /* 0: >, 1: >=, 2: 0 or 1 */", "    const char *text;", "} MTThermalBound;",
+             "#define MT_THERMAL_BOUNDS { \\"]  # fmt: skip
+    for name, op, bound in bounds():
+        key = "TH_" + name.upper()
+        if name in ("cold_pressure", "temperature"):
+            continue  # not used by the block (and not always a parameter)
+        text = "0 or 1" if op == "in" else f"{op} {bound:g}"
+        entry = f"{{offsetof(MFParams, {key}), {vt._c_double(bound)}, {kinds[op]}, {vt.c_string(text)}}}"
+        lines.append(f"    {entry}, \\")
+    lines += ["}", ""]
+    return lines
+
+
+def transient_config_header(thermal: ThermalExport | None) -> str:
+    """``mt_config_gen.h``: whether the thermal block is compiled in (``MT_THERMAL``), the number of states,
+    and the node (0 surface, 1 bulk, 2 gas) each data slot of the laws reads."""
+    from mftire.thermal.heat import KELVIN
+
+    nodes = thermal.nodes if thermal is not None else ()
+    lines = [
+        "/* mt_config_gen.h -- GENERATED by mftire/fmu/transient_export.py. Do not edit. */",
+        "#ifndef MT_CONFIG_GEN_H",
+        "#define MT_CONFIG_GEN_H",
+        f"#define MT_THERMAL {1 if thermal is not None else 0}",
+        f"#define MT_N_STATES {5 if thermal is not None else 2}",
+        f"#define MT_KELVIN {KELVIN!r} /* 0 degC in kelvin (mftire.thermal.heat.KELVIN) */",
+        f"#define MT_N_DATA_NODES {len(nodes)}",
+    ]
+    if nodes:
+        lines.append(f"#define MT_DATA_NODES {{{', '.join(map(str, nodes))}}}")
+    lines += ["#endif /* MT_CONFIG_GEN_H */", ""]
     return "\n".join(lines)
 
 
@@ -226,7 +368,8 @@ def transient_model_description_xml(
         index[v.vr] = i
         if v.kind == "state":
             state_index[v.field] = i
-        initial = {"state": "exact", "der": "calculated"}.get(v.kind, v.initial if v.kind != "input" else None)
+        initial = {"state": "exact" if v.start is not None else "calculated", "der": "calculated"}.get(
+            v.kind, v.initial if v.kind != "input" else None)
         attrs = a(name=v.name, valueReference=v.vr, description=v.description, causality=v.causality,
                   variability=v.variability, initial=initial)  # fmt: skip
         inner = a(unit=v.unit if v.type == "Real" else None,
@@ -245,7 +388,8 @@ def transient_model_description_xml(
     lines += [f'      <Unknown index="{index[v.vr]}" dependencies="{deps}"/>' for v in variables if v.kind == "der"]
     lines.append("    </Derivatives>")
     lines.append("    <InitialUnknowns>")
-    lines += [f'      <Unknown index="{index[v.vr]}"/>' for v in variables if v.kind in ("output", "der")]
+    lines += [f'      <Unknown index="{index[v.vr]}"/>' for v in variables
+              if v.kind in ("output", "der") or (v.kind == "state" and v.start is None)]  # fmt: skip
     lines.append("    </InitialUnknowns>")
     lines.append("  </ModelStructure>")
     lines.append("</fmiModelDescription>")
@@ -274,7 +418,8 @@ def _xml3(variables: list[vt.Variable], model_identifier: str, model_name: str, 
     state_vr = {v.field: v.vr for v in variables if v.kind == "state"}
     for v in variables:
         tag = "Float64" if v.type == "Real" else "Int32"
-        initial = {"state": "exact", "der": "calculated"}.get(v.kind, v.initial if v.kind != "input" else None)
+        initial = {"state": "exact" if v.start is not None else "calculated", "der": "calculated"}.get(
+            v.kind, v.initial if v.kind != "input" else None)
         attrs = a(name=v.name, valueReference=v.vr, description=v.description, causality=v.causality,
                   variability=v.variability, initial=initial, unit=v.unit if v.type == "Real" else None,
                   derivative=state_vr[v.field] if v.kind == "der" else None,
@@ -286,31 +431,57 @@ def _xml3(variables: list[vt.Variable], model_identifier: str, model_name: str, 
     lines += [f'    <Output valueReference="{v.vr}" dependencies="{deps}"/>' for v in variables if v.kind == "output"]
     lines += [f'    <ContinuousStateDerivative valueReference="{v.vr}" dependencies="{deps}"/>'
               for v in variables if v.kind == "der"]  # fmt: skip
-    lines += [f'    <InitialUnknown valueReference="{v.vr}"/>' for v in variables if v.kind in ("output", "der")]
+    lines += [f'    <InitialUnknown valueReference="{v.vr}"/>' for v in variables
+              if v.kind in ("output", "der") or (v.kind == "state" and v.start is None)]  # fmt: skip
     lines.append("  </ModelStructure>")
     lines.append("</fmiModelDescription>")
     return "\n".join(lines) + "\n"
 
 
 def generate_transient_sources(
-    flat: dict[str, float], model_identifier: str, use_mode: int = vt.DEFAULT_USE_MODE, fmi_version: int = 2
+    flat: dict[str, float], model_identifier: str, use_mode: int = vt.DEFAULT_USE_MODE, fmi_version: int = 2,
+    thermal: ThermalExport | None = None,
 ) -> tuple[list[vt.Variable], dict[str, str]]:
-    """The variable table and every file of ``sources/`` of the transient FMU."""
-    variables = transient_variable_table(flat, use_mode)
+    """The variable table and every file of ``sources/`` of the transient FMU (``thermal``: with the thermal
+    block; its laws' C generated from :mod:`mftire.mf.extensions` as the steady FMU's)."""
+    variables = transient_variable_table(flat, use_mode, thermal)
+    ext = thermal.extensions if thermal is not None else None  # no other extension terms (refused at export)
     files = source_files("transient", fmi_version)
-    files["mf_params.h"] = vt.params_header(variables, None)
-    files["mf_ext_gen.h"] = vt.extension_header(variables, None)  # no extension terms (refused above)
+    files["mf_params.h"] = vt.params_header(variables, ext)
+    files["mf_ext_gen.h"] = vt.extension_header(variables, ext)
+    files["mt_config_gen.h"] = transient_config_header(thermal)
     files["mt_model_gen.h"] = transient_model_header(variables, model_identifier, fmi_version)
     if fmi_version == 3:
         files["buildDescription.xml"] = vt.build_description_xml(model_identifier, [UNITY])
     return variables, files
 
 
-def _check_transient(tir):
+def _check_transient(tir, thermal: bool | None = None) -> tuple[dict[str, float], str, ThermalExport | None]:
+    """Flat parameters, name and thermal block of a ``.tir`` for the transient FMU.  ``thermal``: None the
+    thermal block when the file has ``[MFTIRE_THERMAL]``; True required (a clear error without the section);
+    False without it."""
+    from mftire.mf.thermal_section import SECTION
+    from mftire.transient.slip_dynamics import thermal_block
+    from mftire.tyre import Tyre, load
+
     flat, name, spec = _load(tir)
+    tyre = tir if isinstance(tir, Tyre) else load(tir) if isinstance(tir, (str, os.PathLike)) else Tyre(tir)
+    has = bool(tyre.parameters.sections.get(SECTION))
+    if thermal is None:
+        thermal = has
+    if thermal:
+        if not has:
+            raise FMUExportError(f"{name}: the thermal block needs a [{SECTION}] section (made by mftire "
+                                 "fit-thermal); this .tir has none")  # fmt: skip
+        try:
+            params, ext, nodes = thermal_block(tyre)
+        except MftireError as exc:
+            raise FMUExportError(f"{name}: cannot be exported: {exc}") from None
+        return flat, name, ThermalExport(params, ext, tuple(nodes.values()))
     if spec is not None:
-        raise FMUExportError(f"{name}: --transient does not support [MFTIRE_EXTENSIONS] model extensions yet")
-    return flat, name
+        raise FMUExportError(f"{name}: --transient supports [MFTIRE_EXTENSIONS] model extensions only as the "
+                             f"temperature laws of the thermal block (a [{SECTION}] section)")  # fmt: skip
+    return flat, name, None
 
 
 def export_transient_fmu(
@@ -321,8 +492,12 @@ def export_transient_fmu(
     model_identifier: str | None = None,
     use_mode: int = vt.DEFAULT_USE_MODE,
     compiler: str | None = None,
+    thermal: bool | None = None,
 ) -> Path:
     """Export a tyre as the transient FMU (FMI 2.0 or 3.0, Model Exchange + Co-Simulation).
+
+    ``thermal``: the thermal block (module docstring); None (default) when the file has a
+    ``[MFTIRE_THERMAL]`` section, True requires one (an error without), False leaves it out.
 
     Inputs ``Fz, Vx, Vy, omega, gamma, P, muRoad, yawRate``; outputs ``Fx, Fy, Mz, Mx,
     My, kappa_t, alpha_t`` and the steady-state channels at the transient slips; states
@@ -336,20 +511,23 @@ def export_transient_fmu(
         raise FMUExportError(f"fmi_version must be 2 or 3, not {fmi_version!r}")
     Mode.from_code(use_mode)
     cc = find_compiler(compiler)
-    flat, name = _check_transient(tir)
+    flat, name, th = _check_transient(tir, thermal)
     if model_identifier is None:
-        table = transient_variable_table(flat, use_mode)
+        table = transient_variable_table(flat, use_mode, th)
         ident = model_identifier_for(name + "_transient", vt.guid(table, fmi_version))
     else:
         ident = model_identifier
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", ident):
         raise FMUExportError(f"model identifier {ident!r} is not a C identifier")
-    variables, files = generate_transient_sources(flat, ident, use_mode, fmi_version)
+    variables, files = generate_transient_sources(flat, ident, use_mode, fmi_version, th)
     platform, suffix = _platform(fmi_version)
     description = (
         f"Transient Magic Formula tyre {name} (FITTYP {int(flat['FITTYP'])}) exported by mftire: wheel kinematics "
         "in, relaxation-length slip states u, v, low-speed model; ISO-W axes, SI units"
     )
+    if th is not None:
+        description += ("; thermal block: node temperatures T_s, T_b, T_g [degC] (inputs T_ambient, T_road; the gas "
+                        "law's hot pressure P_hot)")  # fmt: skip
     xml = transient_model_description_xml(variables, ident, name, description, [UNITY], fmi_version)
     docs = documentation_files(model_name=name, model_identifier=ident, description=description, variables=variables,
                                flat=flat, fmi_version=fmi_version, transient=True)  # fmt: skip
@@ -360,14 +538,15 @@ def export_transient_fmu(
 PROBE = "mt_probe.c"
 
 
-def build_probe_library(tir, directory: str | os.PathLike, compiler: str | None = None) -> Path:
+def build_probe_library(tir, directory: str | os.PathLike, compiler: str | None = None,
+                        thermal: bool | None = None) -> Path:  # fmt: skip
     """Compile the transient C model with a small harness (``mt_probe_*``) into a shared library.
 
     For tests (C vs Python derivatives) and the benchmark; the FMU itself exports only
     the FMI functions.  Returns the library path.
     """
-    flat, name = _check_transient(tir)
-    _, files = generate_transient_sources(flat, "mt_probe")
+    flat, name, th = _check_transient(tir, thermal)
+    _, files = generate_transient_sources(flat, "mt_probe", thermal=th)
     files[PROBE] = read_source(PROBE)
     directory = Path(directory)
     src = directory / "probe_src"
@@ -386,10 +565,12 @@ def build_probe_library(tir, directory: str | os.PathLike, compiler: str | None 
 
 
 __all__ = [
+    "ThermalExport",
     "build_probe_library",
     "export_transient_fmu",
     "generate_transient_sources",
     "transient_model_description_xml",
+    "transient_config_header",
     "transient_model_header",
     "transient_variable_table",
 ]

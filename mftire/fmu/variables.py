@@ -77,6 +77,10 @@ UNITS: dict[str, dict[str, int]] = {
     "kg.m2": {"kg": 1, "m": 2},
     "s": {"s": 1},
     "1/s": {"s": -1},
+    "degC": {"K": 1, "offset": 273.15},  # the thermal block's temperatures
+    "K/s": {"K": 1, "s": -1},
+    "J/K": {"kg": 1, "m": 2, "s": -2, "K": -1},
+    "W/K": {"kg": 1, "m": 2, "s": -3, "K": -1},
 }
 
 #: mftire parameter-table units -> FMI unit names ("-" is dimensionless: no unit).

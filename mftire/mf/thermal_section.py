@@ -107,12 +107,31 @@ class ThermalParameters:
         return out
 
 
+#: The FMI unit of each numeric field (:data:`mftire.fmu.variables.UNITS`; None: dimensionless or not
+#: expressible, the unit is in the module docstring).
+UNITS: dict[str, str | None] = {
+    "cap_surface": "J/K", "cap_bulk": "J/K", "cap_gas": "J/K", "g_surface_bulk": "W/K", "g_bulk_gas": "W/K",
+    "g_bulk_ambient": "W/K", "h_air0": "W/K", "h_air1": None, "g_road": "W/K", "slip_share": None,
+    "roll_loss": None, "hysteresis": None, "cold_pressure": "Pa", "cold_temperature": "degC", "atmosphere": "Pa",
+    "pressure": None, "t_init_surface": "degC", "t_init_bulk": "degC", "t_init_gas": "degC", "temperature": "degC",
+}  # fmt: skip
+
 #: Keys that must be > 0 (capacities, the absolute temperature scale of the gas law).
 _POSITIVE = ("cap_surface", "cap_bulk", "cap_gas", "atmosphere")
 #: Keys that must be >= 0.
 _NONNEGATIVE = ("g_surface_bulk", "g_bulk_gas", "g_bulk_ambient", "h_air0", "h_air1", "g_road", "slip_share",
                 "roll_loss", "hysteresis")
+#: Temperatures that must be above absolute zero [°C].
+_TEMPERATURES = ("cold_temperature", "t_init_surface", "t_init_bulk", "t_init_gas", "temperature")
 _NUMBER_NAMES = tuple(f.name for f in fields(ThermalParameters) if f.name != "nodes")
+
+
+def bounds() -> list[tuple[str, str, float]]:
+    """The bound of each numeric field: ``(field, op, bound)`` with op ``">"``, ``">="`` or ``"in"`` (0 or 1):
+    what :func:`parse_thermal` checks, as a table (the transient FMU's C checks its parameters with it)."""
+    out = [(n, ">", 0.0) for n in _POSITIVE] + [(n, ">=", 0.0) for n in _NONNEGATIVE]
+    out += [(n, ">", -273.15) for n in _TEMPERATURES] + [("pressure", "in", 0.0)]
+    return out
 
 
 def parse_thermal(section: Mapping[str, object] | None) -> ThermalParameters | None:
@@ -143,7 +162,7 @@ def parse_thermal(section: Mapping[str, object] | None) -> ThermalParameters | N
             raise MftireInputError(f"[{SECTION}] {k} = {value!r} must be >= 0")
         if name == "pressure" and v not in (0.0, 1.0):
             raise MftireInputError(f"[{SECTION}] {k} = {value!r} must be 0 or 1")
-        if name in ("cold_temperature", "t_init_surface", "t_init_bulk", "t_init_gas", "temperature") and v <= -273.15:
+        if name in _TEMPERATURES and v <= -273.15:
             raise MftireInputError(f"[{SECTION}] {k} = {value!r} °C is below absolute zero")
         if name == "cold_pressure" and v <= -101325.0:
             raise MftireInputError(f"[{SECTION}] {k} = {value!r} Pa: a gauge pressure below vacuum")
@@ -162,4 +181,5 @@ def check_nodes(params: ThermalParameters, extension_indices) -> None:
             raise MftireInputError(f"[{SECTION}] EXT{n}_NODE: [MFTIRE_EXTENSIONS] has no term EXT{n}")
 
 
-__all__ = ["NODES", "NODE_VARIABLES", "SECTION", "ThermalParameters", "check_nodes", "parse_thermal"]
+__all__ = ["NODES", "NODE_VARIABLES", "SECTION", "UNITS", "ThermalParameters", "bounds", "check_nodes",
+           "parse_thermal"]

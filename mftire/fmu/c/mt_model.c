@@ -6,6 +6,12 @@
  * Co-Simulation: fm_do_step holds the inputs over the communication step H and advances the
  * states with mt_advance (mf_transient.c: the integration is the model's, not the wrapper's).
  *
+ * Thermal block (MT_THERMAL, a .tir with [MFTIRE_THERMAL]): three more states, the node temperatures
+ * x[2..4] = (T_s, T_b, T_g) [degC], which drive the MF's pressure and the laws that read a node
+ * (mt_thermal_inputs, so the kinematics depend on them); their derivatives are heat.node_rates at the heat
+ * of the outputs (ME), their Co-Simulation step one backward-Euler step with the heat of the outputs at the
+ * start of the step (mt_thermal_step).  Initial temperatures: the parameters TH_T_INIT_*.
+ *
  * Outputs are computed lazily: the first read of an output after new inputs, states or a step
  * evaluates the Magic Formula at the transient slips for the channel groups (MF_WANT_* of mf_eval.h)
  * of every output read so far (MTVarInfo.want), and the zero-slip evaluation of the kinematics computes
@@ -39,10 +45,14 @@ struct FMModel {
     MTInputs inputs;
 #if MT_HAS_GUARD
     MTInputs held;                  /* last good inputs (mt_guard_inputs) */
-    FMWarnSlot guard[MT_N_INPUTS];  /* the guard's warnings, per input */
+    FMWarnSlot guard[MT_N_GUARDED]; /* the guard's warnings, per input */
     FMWarnSlot nonfinite;           /* outputs set to 0 by mt_outputs */
 #endif
-    double x[2];
+    double x[MT_N_STATES];
+#if MT_THERMAL
+    double P_hot;          /* the pressure the MF uses (mt_thermal_inputs) */
+    double T_amb, T_road;  /* the guarded thermal inputs of the kinematics */
+#endif
     MTKin kin;
     MTOutputs out;
     int kin_ok, out_ok;
@@ -59,7 +69,7 @@ struct FMModel {
 
 static const char *fm_guid(void) { return MT_GUID; }
 static size_t fm_size(void) { return sizeof(FMModel); }
-static unsigned fm_n_states(void) { return 2; }
+static unsigned fm_n_states(void) { return MT_N_STATES; }
 static int fm_is_unknown(unsigned vr)
 {
     return vr < MT_N_VARS && (MT_VARS[vr].kind == MT_K_OUTPUT || MT_VARS[vr].kind == MT_K_DER);
@@ -98,8 +108,10 @@ static void fm_reset(FMModel *m)
     memset(m->guard, 0, sizeof m->guard);
     memset(&m->nonfinite, 0, sizeof m->nonfinite);
 #endif
-    m->x[0] = MT_STATE_START[0];
-    m->x[1] = MT_STATE_START[1];
+    {
+        unsigned i;
+        for (i = 0; i < MT_N_STATES; i++) m->x[i] = MT_STATE_START[i];
+    }
     m->use_mode = MT_USEMODE_START;
     m->time = 0.0;
     m->kin_ok = m->out_ok = 0;
@@ -137,13 +149,18 @@ static int update_kin(FMModel *m)
     {
         unsigned i, bad = mt_guard_inputs(&m->params, &in, &m->held); /* the model's guard, before the states */
         char text[160];
-        for (i = 0; i < MT_N_INPUTS; i++)
+        for (i = 0; i < MT_N_GUARDED; i++)
             if (bad & (1u << i)) {
                 snprintf(text, sizeof text, "input '%s' not finite or out of range: the last good value or the "
                          "bound is used", mt_input_name(i));
                 fm_warn(m->log, m->host, &m->guard[i], m->evals, m->time, text);
             }
     }
+#endif
+#if MT_THERMAL
+    m->T_amb = in.T_ambient;
+    m->T_road = in.T_road;
+    mt_thermal_inputs(&m->params, &m->x[2], &in, &m->P_hot); /* the hot pressure and the laws' node temperatures */
 #endif
     rc = mt_kinematics(&m->params, m->use_mode, &in, m->out_want, &m->kin, on_warning, m);
     if (rc != MF_OK) return bad_code(m, rc);
@@ -168,8 +185,30 @@ static int update_out(FMModel *m, unsigned want)
         fm_warn(m->log, m->host, &m->nonfinite, m->evals, m->time, text);
     }
 #endif
+#if MT_THERMAL
+    m->out.T_surface = m->x[2];
+    m->out.T_bulk = m->x[3];
+    m->out.T_gas = m->x[4];
+    m->out.P_hot = m->P_hot;
+#endif
     m->out_have = m->out_want;
     m->out_ok = 1;
+    return 0;
+}
+
+/* Every state derivative at the present inputs and states (dx: MT_N_STATES values). */
+static int derivatives(FMModel *m, double *dx)
+{
+    if (update_kin(m)) return 1;
+    mt_rates(&m->params, &m->kin, m->x, dx);
+#if MT_THERMAL
+    {
+        double q[3];
+        if (update_out(m, MF_WANT_FX | MF_WANT_FY)) return 1; /* the heat of the forces at the transient slips */
+        mt_thermal_heat(&m->params, &m->kin, &m->out, q);
+        mt_thermal_rates(&m->params, q, m->T_amb, m->T_road, &m->x[2], &dx[2]);
+    }
+#endif
     return 0;
 }
 
@@ -189,6 +228,21 @@ static int check_parameter(const FMModel *m, const double *slot, double value, c
         snprintf(msg, n, "%g: TR_CS_STEP must be positive", value);
         return 1;
     }
+#if MT_THERMAL
+    { /* the bounds of [MFTIRE_THERMAL] (mftire.mf.thermal_section, generated into mt_model_gen.h) */
+        static const MTThermalBound bounds[] = MT_THERMAL_BOUNDS;
+        unsigned k;
+        size_t off = (size_t)((const char *)slot - (const char *)&m->params);
+        for (k = 0; k < sizeof bounds / sizeof bounds[0]; k++)
+            if (bounds[k].offset == off && isfinite(value) &&
+                (bounds[k].kind == 0 ? !(value > bounds[k].bound)
+                                     : bounds[k].kind == 1 ? !(value >= bounds[k].bound)
+                                                           : !(value == 0.0 || value == 1.0))) {
+                snprintf(msg, n, "%g must be %s", value, bounds[k].text);
+                return 1;
+            }
+    }
+#endif
     return fm_check_parameter(&m->params, slot, value, msg, n);
 }
 
@@ -216,7 +270,7 @@ static int fm_exit_initialization(FMModel *m)
 static int fm_get_real(FMModel *m, unsigned vr, double *value)
 {
     const MTVarInfo *v;
-    double dx[2];
+    double dx[MT_N_STATES];
     if (vr >= MT_N_VARS) goto bad;
     v = &MT_VARS[vr];
     switch (v->kind) {
@@ -225,8 +279,7 @@ static int fm_get_real(FMModel *m, unsigned vr, double *value)
     case MT_K_PARAM: *value = *(const double *)((const char *)&m->params + v->offset); return FM_OK;
     case MT_K_STATE: *value = m->x[v->offset]; return FM_OK;
     case MT_K_DER:
-        if (update_kin(m)) return FM_ERROR;
-        mt_rates(&m->params, &m->kin, m->x, dx);
+        if (derivatives(m, dx)) return FM_ERROR;
         *value = dx[v->offset];
         return FM_OK;
     case MT_K_OUTPUT:
@@ -260,6 +313,15 @@ static int fm_set_real(FMModel *m, unsigned vr, double value)
             return FM_ERROR;
         }
         store(m, (double *)((char *)&m->params + v->offset), value);
+#if MT_THERMAL
+        { /* an initial temperature sets its state (the parameters are fixed: before initialisation only) */
+            static const size_t init[3] = {offsetof(MFParams, TH_T_INIT_SURFACE), offsetof(MFParams, TH_T_INIT_BULK),
+                                           offsetof(MFParams, TH_T_INIT_GAS)};
+            unsigned i;
+            for (i = 0; i < 3; i++)
+                if (v->offset == init[i]) m->x[2 + i] = value;
+        }
+#endif
         return FM_OK;
     case MT_K_STATE:
         if (m->initialized) {
@@ -269,6 +331,7 @@ static int fm_set_real(FMModel *m, unsigned vr, double value)
         }
         m->x[v->offset] = value;
         m->out_ok = 0;
+        if (v->offset >= 2) m->kin_ok = 0; /* node temperatures drive the kinematics */
         return FM_OK;
     default:
         logf_(m, FM_ERROR, "logStatusError", "%s cannot be set", MT_VAR_NAMES[vr]);
@@ -309,35 +372,50 @@ static int fm_set_int(FMModel *m, unsigned vr, int value)
 
 static int fm_set_states(FMModel *m, const double *x)
 {
-    m->x[0] = x[0];
-    m->x[1] = x[1];
+    unsigned i;
+    for (i = 0; i < MT_N_STATES; i++) m->x[i] = x[i];
     m->out_ok = 0;
+    if (MT_THERMAL) m->kin_ok = 0; /* node temperatures drive the kinematics */
     return FM_OK;
 }
 
 static int fm_get_states(FMModel *m, double *x)
 {
-    x[0] = m->x[0];
-    x[1] = m->x[1];
+    unsigned i;
+    for (i = 0; i < MT_N_STATES; i++) x[i] = m->x[i];
     return FM_OK;
 }
 
 static int fm_get_derivatives(FMModel *m, double *dx)
 {
     m->evals++;
-    if (update_kin(m)) return FM_ERROR;
-    mt_rates(&m->params, &m->kin, m->x, dx);
-    return FM_OK;
+    return derivatives(m, dx) ? FM_ERROR : FM_OK;
 }
 
-static void fm_get_nominals(double *xn) { xn[0] = xn[1] = 1e-3; /* deflections of the order of a millimetre */ }
+static void fm_get_nominals(double *xn)
+{
+    unsigned i;
+    xn[0] = xn[1] = 1e-3; /* deflections of the order of a millimetre */
+    for (i = 2; i < MT_N_STATES; i++) xn[i] = 100.0; /* temperatures of the order of 100 degC */
+}
 
 /* ------------------------------------------------------------------ Co-Simulation */
 
 static int fm_do_step(FMModel *m, double t, double h)
 {
+#if MT_THERMAL
+    double q[3];
+    if (update_out(m, MF_WANT_FX | MF_WANT_FY)) return FM_ERROR; /* the heat of the outputs at the start */
+    mt_thermal_heat(&m->params, &m->kin, &m->out, q);
+#endif
     if (update_kin(m)) return FM_ERROR; /* inputs are held over the step */
     mt_advance(&m->params, &m->kin, m->x, h);
+#if MT_THERMAL
+    if (h > 0.0) {
+        mt_thermal_step(&m->params, q, m->T_amb, m->T_road, &m->x[2], h);
+        m->kin_ok = 0; /* the laws and the pressure at the new temperatures */
+    }
+#endif
     m->time = t + h;
     m->out_ok = 0; /* the outputs at the new state are computed when read */
     return FM_OK;

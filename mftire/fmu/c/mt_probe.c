@@ -87,3 +87,34 @@ __attribute__((visibility("default"))) double mt_probe_bench(int use_mode, const
     if (acc != acc) return -1.0;
     return ((double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec)) / (double)n;
 }
+
+#if MT_THERMAL
+/* Thermal block at the inputs (the 8 kinematic ones, T_ambient, T_road) and the state x (u, v, T_s, T_b, T_g):
+ * every derivative dx (5), the heat q = (q_s, q_b, g_air), P_hot, the outputs y (Fx, Fy, Mz, Mx, My, kappa_t,
+ * alpha_t) and the node temperatures Tn after one backward-Euler step of h with that heat. */
+__attribute__((visibility("default"))) int mt_probe_thermal(int use_mode, const double *inputs, const double *x,
+                                                            double h, double *dx, double *q, double *P_hot,
+                                                            double *y, double *Tn)
+{
+    MTInputs in;
+    MTKin k;
+    MTOutputs o;
+    int rc;
+    load_inputs(&in, inputs);
+    in.T_ambient = inputs[8];
+    in.T_road = inputs[9];
+    mt_thermal_inputs(&MT_PARAM_START, &x[2], &in, P_hot);
+    rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, MF_WANT_ALL, &k, NULL, NULL);
+    if (rc) return rc;
+    rc = mt_outputs(&MT_PARAM_START, use_mode, &k, x, MF_WANT_ALL, &o, NULL, NULL);
+    if (rc) return rc;
+    mt_rates(&MT_PARAM_START, &k, x, dx);
+    mt_thermal_heat(&MT_PARAM_START, &k, &o, q);
+    mt_thermal_rates(&MT_PARAM_START, q, in.T_ambient, in.T_road, &x[2], &dx[2]);
+    y[0] = o.ss.Fx; y[1] = o.ss.Fy; y[2] = o.ss.Mz; y[3] = o.ss.Mx; y[4] = o.ss.My;
+    y[5] = o.kappa_t; y[6] = o.alpha_t;
+    Tn[0] = x[2]; Tn[1] = x[3]; Tn[2] = x[4];
+    mt_thermal_step(&MT_PARAM_START, q, in.T_ambient, in.T_road, Tn, h);
+    return 0;
+}
+#endif

@@ -251,20 +251,23 @@ void mt_advance(const MFParams *p, const MTKin *k, double x[2], double H)
 }
 
 /* Physical bounds of the inputs (mftire.transient.INPUT_BOUNDS); Fz and P: factors of FZMAX and PRESMAX. */
-static const double MT_LO[MT_N_INPUTS] = {-HUGE_VAL, -200.0, -200.0, -2000.0, -1.55, -HUGE_VAL, 1e-3, -100.0};
-static const double MT_HI[MT_N_INPUTS] = {3.0, 200.0, 200.0, 2000.0, 1.55, 3.0, 10.0, 100.0};
-static const char *const MT_INPUT_NAMES[MT_N_INPUTS] = {"Fz", "Vx", "Vy", "omega", "gamma", "P", "muRoad", "yawRate"};
+static const double MT_LO[MT_N_INPUTS + 2] = {-HUGE_VAL, -200.0, -200.0, -2000.0, -1.55, -HUGE_VAL, 1e-3, -100.0,
+                                              -100.0, -100.0};
+static const double MT_HI[MT_N_INPUTS + 2] = {3.0, 200.0, 200.0, 2000.0, 1.55, 3.0, 10.0, 100.0, 300.0, 300.0};
+static const char *const MT_INPUT_NAMES[MT_N_INPUTS + 2] = {"Fz", "Vx", "Vy", "omega", "gamma", "P", "muRoad", "yawRate",
+                                                            "T_ambient", "T_road"};
 
-static const size_t MT_INPUT_OFFSETS[MT_N_INPUTS] = {
+static const size_t MT_INPUT_OFFSETS[MT_N_INPUTS + 2] = {
     offsetof(MTInputs, Fz), offsetof(MTInputs, Vx), offsetof(MTInputs, Vy), offsetof(MTInputs, omega),
-    offsetof(MTInputs, gamma), offsetof(MTInputs, P), offsetof(MTInputs, muRoad), offsetof(MTInputs, yawRate)};
+    offsetof(MTInputs, gamma), offsetof(MTInputs, P), offsetof(MTInputs, muRoad), offsetof(MTInputs, yawRate),
+    offsetof(MTInputs, T_ambient), offsetof(MTInputs, T_road)};
 
-const char *mt_input_name(unsigned i) { return i < MT_N_INPUTS ? MT_INPUT_NAMES[i] : "?"; }
+const char *mt_input_name(unsigned i) { return i < MT_N_GUARDED ? MT_INPUT_NAMES[i] : "?"; }
 
 unsigned mt_guard_inputs(const MFParams *p, MTInputs *in, MTInputs *held)
 {
     unsigned i, bad = 0;
-    for (i = 0; i < MT_N_INPUTS; i++) {
+    for (i = 0; i < MT_N_GUARDED; i++) {
         double *x = (double *)((char *)in + MT_INPUT_OFFSETS[i]), *g = (double *)((char *)held + MT_INPUT_OFFSETS[i]);
         double lo = MT_LO[i], hi = MT_HI[i];
         if (i == 0) hi *= p->FZMAX > 0.0 ? p->FZMAX : p->FNOMIN;
@@ -281,3 +284,75 @@ unsigned mt_guard_inputs(const MFParams *p, MTInputs *in, MTInputs *held)
     }
     return bad;
 }
+
+#if MT_THERMAL
+/* ------------------------------------------------------------------ the thermal block (mftire.thermal.heat) */
+
+void mt_thermal_inputs(const MFParams *p, const double T[3], MTInputs *in, double *P_hot)
+{
+    double cold = in->P > 0.0 ? in->P : p->INFLPRES; /* NaN > 0 is false: INFLPRES, the evaluator's rule */
+    if (p->TH_PRESSURE != 0.0) {
+        /* gas law on absolute pressures (Gay-Lussac; Harsh & Shyrokau 2019 eq 9): heat.hot_pressure */
+        *P_hot = (cold + p->TH_ATMOSPHERE) * (T[2] + MT_KELVIN) / (p->TH_COLD_TEMPERATURE + MT_KELVIN) -
+                 p->TH_ATMOSPHERE;
+        in->P = *P_hot;
+    } else {
+        *P_hot = cold;
+    }
+#if MT_N_DATA_NODES > 0
+    {
+        static const int nodes[MT_N_DATA_NODES] = MT_DATA_NODES; /* the node each law variable reads */
+        int i;
+        for (i = 0; i < MT_N_DATA_NODES; i++) in->data[i] = T[nodes[i]];
+    }
+#endif
+}
+
+void mt_thermal_heat(const MFParams *p, const MTKin *k, const MTOutputs *o, double q[3])
+{
+    double Vx = k->Vx, Fz = k->ev.Fz, Fx = o->ss.Fx, Fy = o->ss.Fy, floor = 0.1 * p->FNOMIN;
+    double vsx = -o->kappa_t * Vx, vsy = Vx * tan(o->alpha_t); /* slip velocities (Pacejka 2012 eqs 2.10-2.12) */
+    /* sliding friction power |Fx*Vsx| + |Fy*Vsy| (Harsh & Shyrokau 2019 eq 3), its share into the surface */
+    q[0] = p->TH_SLIP_SHARE * (fabs(Fx * vsx) + fabs(Fy * vsy));
+    /* rolling loss c*Fz*|Vx| (Pacejka 2012 eq 4.E70, QSY1 term) + hysteresis c*|Vx|*(Fx^2+Fy^2)/max(Fz, 0.1*Fz0) */
+    q[1] = p->TH_ROLL_LOSS * (Fz > 0.0 ? Fz : 0.0) * fabs(Vx) +
+           p->TH_HYSTERESIS * fabs(Vx) * (Fx * Fx + Fy * Fy) / (Fz > floor ? Fz : floor);
+    /* convection h0 + h1*|Vx|^0.8 (Incropera & DeWitt eq 7.38) */
+    q[2] = p->TH_H_AIR0 + p->TH_H_AIR1 * pow(fabs(Vx), 0.8);
+}
+
+void mt_thermal_rates(const MFParams *p, const double q[3], double T_amb, double T_road, const double T[3],
+                      double dT[3])
+{
+    /* lumped capacitance, conduction Q = G*dT (Incropera & DeWitt §5.1, eqs 3.6, 3.19): heat.node_rates */
+    double q_sb = p->TH_G_SURFACE_BULK * (T[0] - T[1]), q_bg = p->TH_G_BULK_GAS * (T[1] - T[2]);
+    dT[0] = (q[0] - q_sb - q[2] * (T[0] - T_amb) - p->TH_G_ROAD * (T[0] - T_road)) / p->TH_CAP_SURFACE;
+    dT[1] = (q[1] + q_sb - q_bg - p->TH_G_BULK_AMBIENT * (T[1] - T_amb)) / p->TH_CAP_BULK;
+    dT[2] = q_bg / p->TH_CAP_GAS;
+}
+
+void mt_thermal_step(const MFParams *p, const double q[3], double T_amb, double T_road, double T[3], double h)
+{
+    /* (C/h + K) T+ = C/h T + q + sinks, tridiagonal (Thomas algorithm): heat.implicit_step */
+    double cs = p->TH_CAP_SURFACE / h, cb = p->TH_CAP_BULK / h, cg = p->TH_CAP_GAS / h;
+    double g_sb = p->TH_G_SURFACE_BULK, g_bg = p->TH_G_BULK_GAS, g_ba = p->TH_G_BULK_AMBIENT, g_road = p->TH_G_ROAD;
+    double b1 = cs + g_sb + q[2] + g_road, c1 = -g_sb, a2 = -g_sb, b2 = cb + g_sb + g_bg + g_ba, c2 = -g_bg;
+    double a3 = -g_bg, b3 = cg + g_bg;
+    double r1 = cs * T[0] + q[0] + q[2] * T_amb + g_road * T_road, r2 = cb * T[1] + q[1] + g_ba * T_amb, r3 = cg * T[2];
+    double w2, b2p, r2p, w3, b3p, x1, x2, x3;
+    if (!(h > 0.0)) return;
+    w2 = a2 / b1;
+    b2p = b2 - w2 * c1;
+    r2p = r2 - w2 * r1;
+    w3 = a3 / b2p;
+    b3p = b3 - w3 * c2;
+    x3 = (r3 - w3 * r2p) / b3p;
+    x2 = (r2p - c2 * x3) / b2p;
+    x1 = (r1 - c1 * x2) / b1;
+    if (isfinite(x1) && isfinite(x2) && isfinite(x3)) {
+        T[0] = x1;
+        T[1] = x2;
+        T[2] = x3;
+    }
+}
+#endif /* MT_THERMAL */

@@ -12,6 +12,7 @@
 #define MF_TRANSIENT_H
 
 #include "mf_eval.h"
+#include "mt_config_gen.h" /* MT_THERMAL, MT_N_STATES, the data slots of the node temperatures (generated) */
 
 #ifdef __cplusplus
 extern "C" {
@@ -27,6 +28,8 @@ typedef struct {
     double P;       /* inflation pressure [Pa]; NaN or <= 0: INFLPRES */
     double muRoad;  /* road friction factor [-] */
     double yawRate; /* yaw rate for turn slip [rad/s] */
+    double T_ambient; /* thermal block: ambient air temperature [degC] (unused without it) */
+    double T_road;    /* thermal block: road surface temperature [degC] */
     double data[MF_MAX_DATA];
 } MTInputs;
 
@@ -49,6 +52,7 @@ typedef struct {
 typedef struct {
     MFOutputs ss;  /* Fx, Fy, Mz, My corrected for the low-speed model */
     double kappa_t, alpha_t;
+    double T_surface, T_bulk, T_gas, P_hot; /* thermal block: node temperatures [degC], the MF's pressure [Pa] */
     unsigned nonfinite; /* outputs of the last mt_outputs that were not finite and are set to 0 (to log) */
 } MTOutputs;
 
@@ -71,6 +75,8 @@ MF_API void mt_rates(const MFParams *p, const MTKin *k, const double x[2], doubl
  * (bit i: input i in MTInputs order, MT_N_INPUTS of them) of the inputs replaced, for the wrapper to log.
  */
 #define MT_N_INPUTS 8
+/* Inputs the guard checks: the kinematic ones, then T_ambient, T_road of the thermal block. */
+#define MT_N_GUARDED (MT_N_INPUTS + 2 * MT_THERMAL)
 MF_API unsigned mt_guard_inputs(const MFParams *p, MTInputs *in, MTInputs *held);
 MF_API const char *mt_input_name(unsigned i);
 
@@ -92,6 +98,27 @@ MF_API void mt_step(const MFParams *p, const MTKin *k, double x[2], double h);
  * sub-steps of mt_step.  A non-finite result keeps the state. */
 #define MT_CS_LINEAR_TOL 0.01
 MF_API void mt_advance(const MFParams *p, const MTKin *k, double x[2], double H);
+
+#if MT_THERMAL
+/*
+ * The thermal block (mftire.thermal.heat; states T = (T_s, T_b, T_g) [degC] after u, v; parameters TH_* of
+ * [MFTIRE_THERMAL] as members of MFParams).  Each function is the Python function named, term for term.
+ *
+ * mt_thermal_inputs: the MF inputs the node temperatures drive, before mt_kinematics: the pressure *in->P is
+ * the cold set pressure (NaN or <= 0: INFLPRES); with TH_PRESSURE != 0 it becomes the gas law's hot pressure
+ * (heat.hot_pressure); the data slots of the laws that read a node get its temperature.  *P_hot: the
+ * pressure the MF uses.
+ */
+MF_API void mt_thermal_inputs(const MFParams *p, const double T[3], MTInputs *in, double *P_hot);
+/* Heat inputs q = (q_s, q_b, g_air) at the outputs o (MF_WANT_FX | MF_WANT_FY at least): TH_SLIP_SHARE times
+ * heat.friction_power at the transient slips, simulation.bulk_power, heat.air_conductance. */
+MF_API void mt_thermal_heat(const MFParams *p, const MTKin *k, const MTOutputs *o, double q[3]);
+/* dT/dt = heat.node_rates. */
+MF_API void mt_thermal_rates(const MFParams *p, const double q[3], double T_amb, double T_road, const double T[3],
+                             double dT[3]);
+/* One backward-Euler step of length h (heat.implicit_step): stable for any h.  A non-finite result keeps T. */
+MF_API void mt_thermal_step(const MFParams *p, const double q[3], double T_amb, double T_road, double T[3], double h);
+#endif
 
 #ifdef __cplusplus
 }
