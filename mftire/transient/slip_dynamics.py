@@ -249,13 +249,16 @@ class TransientTyre:
         self.constants = {**DEFAULT_CONSTANTS, **{k: float(v) for k, v in (constants or {}).items()}}
         self._p = dict(tyre.flat)
         self._mu_cache: dict[float, dict] = {}
+        self._defaults: dict[str, float] | None = None
 
     def defaults(self) -> dict[str, float]:
         """Default value of every input (see :func:`input_defaults`; the thermal block's too)."""
-        out = input_defaults(self._p)
-        if self.thermal is not None:
-            out.update(thermal_input_defaults(self._p, self.thermal))
-        return out
+        if self._defaults is None:
+            out = input_defaults(self._p)
+            if self.thermal is not None:
+                out.update(thermal_input_defaults(self._p, self.thermal))
+            self._defaults = out
+        return dict(self._defaults)
 
     def _params(self, mu: float) -> dict:
         # muRoad multiplies LMUX and LMUY (as the FMU's mf_eval.c basic()).
@@ -270,7 +273,7 @@ class TransientTyre:
                 self._mu_cache[mu] = p
         return p
 
-    def _eval(self, kin_args: dict, kappa, alpha) -> dict:
+    def _eval(self, kin_args: dict, kappa, alpha, channels=None) -> dict:
         a = kin_args
         keys = ("Fz", "gamma", "phit", "Vx", "P", "omega")
         mu = np.asarray(a["mu"], dtype=float)
@@ -278,7 +281,7 @@ class TransientTyre:
         if mu.ndim == 0 or np.all(mu == mu.flat[0]):
             p = self._params(float(mu.flat[0]) if mu.size else 1.0)
             return evaluate_arrays(p, a["Fz"], kappa, alpha, *(a[k] for k in keys[1:]), self.mode, self._ext,
-                                   variables)  # fmt: skip
+                                   variables, channels)  # fmt: skip
         # friction varying over the points: one evaluation per distinct value
         keys = tuple(k for k in keys if a[k] is not None)  # omega None: free rolling (estimated)
         names = tuple(variables or ())
@@ -291,7 +294,7 @@ class TransientTyre:
             var = {n: x[sel] for n, x in zip(names, arrs[nk:], strict=True)} or None
             o = evaluate_arrays(self._params(float(m)), arrs[3][sel], arrs[1][sel], arrs[2][sel], rest["gamma"],
                                 rest["phit"], rest["Vx"], rest["P"], rest.get("omega"), self.mode, self._ext,
-                                var)  # fmt: skip
+                                var, channels)  # fmt: skip
             for k, val in o.items():
                 res.setdefault(k, np.zeros(arrs[0].shape))[sel] = val
         return res
@@ -401,6 +404,18 @@ class TransientTyre:
         names = (*FIRST_OUTPUTS, *(k for k in out if k not in FIRST_OUTPUTS))
         return {k: np.broadcast_to(out[k], np.shape(out["Fx"])) for k in names}
 
+    def slip_forces(self, kin: Kinematics, u: ArrayLike, v: ArrayLike) -> dict[str, np.ndarray]:
+        """``Fx``, ``Fy``, ``kappa_t``, ``alpha_t`` of :meth:`outputs_from` (the same numbers, only the channels
+        the heat needs evaluated)."""
+        c = self.constants
+        du, dv, _, _ = self.lag(kin, u, v)
+        kappa_t = (u + kin.w * c["TR_TAU_X"] * du) / kin.sigx  # as outputs_from (§7.3)
+        alpha_t = np.arctan((v + kin.w * c["TR_TAU_Y"] * dv) / kin.sigy)
+        ss = self._eval(kin.args, kappa_t, alpha_t, ("Fx", "Fy"))
+        z = kin.zero
+        return {"Fx": ss["Fx"] - kin.w * z["Fx"], "Fy": ss["Fy"] - kin.w * z["Fy"], "kappa_t": kappa_t,
+                "alpha_t": alpha_t}  # fmt: skip
+
     def outputs(self, x: ArrayLike, **inputs: ArrayLike) -> dict[str, np.ndarray]:
         """All outputs at state ``x = (u, v)`` (thermal block: ``(u, v, T_s, T_b, T_g)``) and the inputs
         (the thermal inputs ``T_ambient``, ``T_road`` are not needed for the outputs)."""
@@ -445,8 +460,8 @@ class TransientTyre:
         du, dv = self.rates(kin, x[0], x[1])
         if self.thermal is None:
             return np.array([du, dv], dtype=float)
-        out = self.outputs_from(kin, x[0], x[1])
-        d = self.defaults()
+        out = self.slip_forces(kin, x[0], x[1])
+        d = self._defaults or self.defaults()
         Ta, Tr = (inputs.get(k, d[k]) for k in ("T_ambient", "T_road"))
         return np.array([du, dv, *self.thermal_rates(kin, out, Ta, Tr)], dtype=float)
 
