@@ -17,9 +17,13 @@ def _cmd_export_fmu(args: argparse.Namespace) -> int:
         model_identifier=args.model_identifier,
         use_mode=args.mode,
         compiler=args.cc,
-        transient=args.transient,
+        transient=args.transient or args.thermal,
+        **({"thermal": True} if args.thermal else {}),
     )
-    kind = f"FMI {args.fmi_version}.0 Model Exchange + Co-Simulation" + (", transient" if args.transient else "")
+    transient = args.transient or args.thermal
+    kind = f"FMI {args.fmi_version}.0 Model Exchange + Co-Simulation" + (", transient" if transient else "")
+    if args.thermal:
+        kind += ", thermal block"
     print(f"mftire export-fmu: wrote {path} ({kind})")
     return 0
 
@@ -42,6 +46,10 @@ def add_parser(subparsers) -> None:
     p.add_argument("--transient", action="store_true",
                    help="transient tyre: wheel kinematics in (Fz, Vx, Vy, omega, ...), relaxation-length slip "
                    "states, low-speed model (FMI 2.0 or 3.0; see docs/transient.md)")  # fmt: skip
+    p.add_argument("--thermal", action="store_true",
+                   help="the transient tyre with its thermal block (implies --transient; the .tir must have a "
+                   "[MFTIRE_THERMAL] section, made by mftire fit-thermal). Without this flag a .tir with the "
+                   "section exported --transient gets the thermal block too")  # fmt: skip
     p.add_argument("--cc", help="C compiler command (default: $CC, then cc, gcc, clang)")
     from mftire.cli_options import add_force_option
 

@@ -70,6 +70,7 @@ def export_fmu(
     use_mode: int = vt.DEFAULT_USE_MODE,
     compiler: str | None = None,
     transient: bool = False,
+    thermal: bool | None = None,
 ) -> Path:
     """Export a tyre as an FMU.
 
@@ -91,6 +92,9 @@ def export_fmu(
     transient : bool
         Export the transient tyre instead (wheel kinematics in, relaxation-length
         states; FMI 2.0 or 3.0): :func:`mftire.fmu.transient_export.export_transient_fmu`.
+    thermal : bool, optional
+        Transient only: the thermal block (None: when the file has ``[MFTIRE_THERMAL]``; True: required,
+        an error without the section; False: left out).
 
     Returns
     -------
@@ -114,7 +118,10 @@ def export_fmu(
         from mftire.fmu.transient_export import export_transient_fmu
 
         return export_transient_fmu(tir, output, fmi_version, model_identifier=model_identifier, use_mode=use_mode,
-                                    compiler=compiler)  # fmt: skip
+                                    compiler=compiler, thermal=thermal)  # fmt: skip
+    if thermal:
+        raise FMUExportError("the thermal block is part of the transient tyre: export with transient=True "
+                             "(mftire export-fmu --transient)")  # fmt: skip
     Mode.from_code(use_mode)
     cc = find_compiler(compiler)  # fail early, before any work
     flat, name, spec = _load(tir)
