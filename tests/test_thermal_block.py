@@ -146,7 +146,7 @@ def test_constant_conditions_reach_the_analytic_steady_state(tyre, model):
 def test_fmu_agrees_with_simulate_over_a_stint(block, tyre, fmus):
     """Issue 22: the thermal block in the FMU agrees with simulate(thermal=True) to 1e-6 (reduced stint of the
     shipped run; measured on 60 s by validation/thermal_block.py); CS equals its Python mirror."""
-    s = block.stint(seconds=1.5)
+    s = block.stint(seconds=1.0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         ref = simulate(tyre, s["t"], **{k: s[k] for k in ("Fz", "Vx", "Vy", "omega", "gamma")}, thermal=True,

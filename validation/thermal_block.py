@@ -52,9 +52,7 @@ def thermal_tir():
 def stint(start: float = 470.0, seconds: float = 60.0) -> dict[str, np.ndarray]:
     """Wheel kinematics and conditions along ``seconds`` of the shipped run from ET = ``start`` (10 Hz),
     time from 0."""
-    from mftire.iotools.rig import read_ttc
-
-    df = read_ttc(RUN)
+    df = _read_run()
     df = df[(df["ET"] >= start) & (df["ET"] <= start + seconds)].reset_index(drop=True)
     t = df["ET"].to_numpy(float) - float(df["ET"].iloc[0])
     Vx = df["Vx"].to_numpy(float)
@@ -62,6 +60,18 @@ def stint(start: float = 470.0, seconds: float = 60.0) -> dict[str, np.ndarray]:
     return {"t": t, "Fz": df["Fz"].to_numpy(float), "Vx": Vx, "Vy": Vx * np.tan(df["alpha"].to_numpy(float)),
             "omega": Vx * (1.0 + df["kappa"].to_numpy(float)) / R0, "gamma": df["gamma"].to_numpy(float),
             "T_ambient": df["AMBTMP"].to_numpy(float), "T_road": df["RST"].to_numpy(float)}  # fmt: skip
+
+
+def _read_run():
+    """The shipped thermal run (``mftire.data.thermal_run()`` where the package ships it, else the file of
+    ``validation/data/thermal/``)."""
+    try:
+        from mftire.data import thermal_run
+    except ImportError:
+        from mftire.iotools.rig import read_ttc
+
+        return read_ttc(RUN)
+    return thermal_run()
 
 
 def _instance(fmu_path, kind: str):

@@ -220,6 +220,26 @@ static void store(FMModel *m, double *dst, double value)
     m->kin_ok = m->out_ok = 0;
 }
 
+/* Thermal block: whether the parameter at value reference vr refuses `value` (the bounds of [MFTIRE_THERMAL],
+ * mftire.mf.thermal_section.bounds, generated into mt_model_gen.h); the refusal is logged.  0 without the block. */
+static int thermal_param_error(FMModel *m, unsigned vr, double value)
+{
+#if MT_THERMAL
+    static const MTThermalBound bounds[] = MT_THERMAL_BOUNDS;
+    unsigned k;
+    for (k = 0; k < sizeof bounds / sizeof bounds[0]; k++)
+        if (bounds[k].offset == MT_VARS[vr].offset && MT_VARS[vr].kind == MT_K_PARAM && isfinite(value) &&
+            (bounds[k].kind == 0 ? !(value > bounds[k].bound)
+                                 : bounds[k].kind == 1 ? !(value >= bounds[k].bound) : !(value == 0.0 || value == 1.0))) {
+            logf_(m, FM_ERROR, "logStatusError", "%s = %g must be %s", MT_VAR_NAMES[vr], value, bounds[k].text);
+            return 1;
+        }
+#else
+    (void)m, (void)vr, (void)value;
+#endif
+    return 0;
+}
+
 /* Whether the model refuses the parameter value (fm_check_parameter: the bounds of mftire.mf.spec, VXLOW > 0
  * among them), or a non-positive TR_CS_STEP. */
 static int check_parameter(const FMModel *m, const double *slot, double value, char *msg, unsigned long n)
@@ -228,21 +248,6 @@ static int check_parameter(const FMModel *m, const double *slot, double value, c
         snprintf(msg, n, "%g: TR_CS_STEP must be positive", value);
         return 1;
     }
-#if MT_THERMAL
-    { /* the bounds of [MFTIRE_THERMAL] (mftire.mf.thermal_section, generated into mt_model_gen.h) */
-        static const MTThermalBound bounds[] = MT_THERMAL_BOUNDS;
-        unsigned k;
-        size_t off = (size_t)((const char *)slot - (const char *)&m->params);
-        for (k = 0; k < sizeof bounds / sizeof bounds[0]; k++)
-            if (bounds[k].offset == off && isfinite(value) &&
-                (bounds[k].kind == 0 ? !(value > bounds[k].bound)
-                                     : bounds[k].kind == 1 ? !(value >= bounds[k].bound)
-                                                           : !(value == 0.0 || value == 1.0))) {
-                snprintf(msg, n, "%g must be %s", value, bounds[k].text);
-                return 1;
-            }
-    }
-#endif
     return fm_check_parameter(&m->params, slot, value, msg, n);
 }
 
@@ -261,6 +266,7 @@ static int fm_exit_initialization(FMModel *m)
                 logf_(m, FM_ERROR, "logStatusError", "%s: %s", MT_VAR_NAMES[vr], msg);
                 return FM_ERROR;
             }
+            if (thermal_param_error(m, vr, *slot)) return FM_ERROR;
         }
     if (update_out(m, 0)) return FM_ERROR;
     m->initialized = 1;
@@ -312,6 +318,7 @@ static int fm_set_real(FMModel *m, unsigned vr, double value)
             logf_(m, FM_ERROR, "logStatusError", "%s: %s", MT_VAR_NAMES[vr], msg);
             return FM_ERROR;
         }
+        if (thermal_param_error(m, vr, value)) return FM_ERROR;
         store(m, (double *)((char *)&m->params + v->offset), value);
 #if MT_THERMAL
         { /* an initial temperature sets its state (the parameters are fixed: before initialisation only) */
