@@ -1,6 +1,12 @@
 """Transient tyre speed: one Model Exchange derivative in C, and a 4-tyre vehicle manoeuvre through fmpy.
 
-Run: ``python benchmarks/bench_transient.py [--tir FILE] [--n 200000] [--repeat 5] [--workdir DIR] [--callgrind]``.
+Run: ``python benchmarks/bench_transient.py [--tir FILE] [--n 200000] [--repeat 5] [--workdir DIR] [--callgrind]
+[--thermal]``.
+
+``--thermal``: the same with the thermal block (issue 22): the ``.tir`` of ``validation/thermal_block.py`` (a
+grip law on the surface node, a stiffness law on the bulk node, ``[MFTIRE_THERMAL]``), or ``--tir`` with a
+``[MFTIRE_THERMAL]`` section; five states; the ME derivative in C then also evaluates the forces at the
+transient slips for the heat and the node rates.
 
 1. **ME derivative in C** -- the transient C model with a small harness
    (:func:`mftire.fmu.transient_export.build_probe_library`) loops, inside C, the work of
@@ -49,15 +55,16 @@ DEFAULT_TIR = ROOT / "tests" / "data" / "tir" / "MagicFormula61_Parameters.tir"
 T_END = 10.0  #: the manoeuvre's length [s] (10,000 steps of 1 ms)
 
 
-def c_derivative_seconds(tir, tmp: Path, n: int) -> float:
+def c_derivative_seconds(tir, tmp: Path, n: int, thermal: bool = False) -> float:
     from mftire.fmu.transient_export import build_probe_library
 
     lib = ctypes.CDLL(str(build_probe_library(tir, tmp)))
-    lib.mt_probe_bench.restype = ctypes.c_double
-    lib.mt_probe_bench.argtypes = [ctypes.c_int, ctypes.POINTER(ctypes.c_double), ctypes.c_long]
+    fn = lib.mt_probe_bench_thermal if thermal else lib.mt_probe_bench
+    fn.restype = ctypes.c_double
+    fn.argtypes = [ctypes.c_int, ctypes.POINTER(ctypes.c_double), ctypes.c_long]
     inputs = (ctypes.c_double * 8)(4000.0, 20.0, 0.3, 52.0, 0.01, 2.2e5, 1.0, 0.05)
-    lib.mt_probe_bench(111, inputs, max(n // 10, 1))  # warm-up
-    return min(lib.mt_probe_bench(111, inputs, n) for _ in range(3))
+    fn(111, inputs, max(n // 10, 1))  # warm-up
+    return min(fn(111, inputs, n) for _ in range(3))
 
 
 def _vehicle_module():
@@ -276,8 +283,15 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=5, help="runs of each timing (median and best reported)")
     ap.add_argument("--workdir", help="keep the FMU, the tyre inputs and the C host here (default: a temporary folder)")
     ap.add_argument("--callgrind", action="store_true", help="also count instructions per step with valgrind")
+    ap.add_argument("--thermal", action="store_true", help="the transient FMU with its thermal block (issue 22)")
     ap.add_argument("--part", nargs=4, help=argparse.SUPPRESS)  # internal: one part under callgrind
     args = ap.parse_args(argv)
+    tir = args.tir
+    if args.thermal and args.tir == str(DEFAULT_TIR):
+        spec = importlib.util.spec_from_file_location("thermal_block", ROOT / "validation" / "thermal_block.py")
+        tb = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(tb)
+        tir = tb.thermal_tir()
     if args.part:
         run_part(args.part[0], Path(args.part[1]), Path(args.part[2]), int(args.part[3]))
         return 0
@@ -290,9 +304,10 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory(prefix="mftire-bench-") as tmp:
         tmp = Path(args.workdir or tmp)
         tmp.mkdir(parents=True, exist_ok=True)
-        t_der = c_derivative_seconds(args.tir, tmp / "probe", args.n)
-        print(f"ME derivative evaluation in C (kinematics + rates): {t_der * 1e6:.3f} µs   (target <= 2 µs)")
-        fmu = export_fmu(args.tir, tmp / "tyre_transient.fmu", transient=True)
+        t_der = c_derivative_seconds(tir, tmp / "probe", args.n, args.thermal)
+        what = "kinematics + rates" + (" + forces, heat, node rates (thermal block)" if args.thermal else "")
+        print(f"ME derivative evaluation in C ({what}): {t_der * 1e6:.3f} µs   (target <= 2 µs)")
+        fmu = export_fmu(tir, tmp / "tyre_transient.fmu", transient=True, thermal=True if args.thermal else None)
         _, res = manoeuvre(fmu, modes[0])
         last = res["t"] > T_END - 1.0
         drift = float(abs(res["V"][last]).max())

@@ -754,7 +754,7 @@ def advance_thermal(model: TransientTyre, kin: Kinematics, out: Mapping[str, np.
                     T_road: float) -> tuple[float, float, float]:  # fmt: skip
     """Advance the node temperatures ``kin.T`` by ``H`` (the FMU's Co-Simulation step of the thermal block):
     one backward-Euler step (:func:`mftire.thermal.heat.implicit_step`, stable for any ``H``) with the heat
-    inputs of the outputs ``out`` at the start of the step held."""
+    inputs of the outputs ``out`` held (the step takes those at the end of its slip step)."""
     from mftire.thermal.heat import implicit_step
 
     th = model.thermal
@@ -771,9 +771,11 @@ class TransientStepper:
     """The transient tyre stepped as the Co-Simulation FMU steps it (Python mirror of ``fmi2DoStep``).
 
     ``step(H, **inputs)`` guards the inputs (:func:`guard_inputs`, a warning for each one replaced),
-    advances the states with the inputs held (:func:`advance`; the thermal block's temperatures with
-    :func:`advance_thermal`, the heat of the outputs at the start of the step) and returns the outputs at
-    the new state.  ``x0``: ``(u, v)``, thermal ``(u, v, T_s, T_b, T_g)`` (default: the initial temperatures
+    advances the states with the inputs held (:func:`advance`) and returns the outputs at the new state.
+    Thermal block: the node temperatures the laws and the pressure read are held over the step like the
+    inputs; after the slip states, the temperatures advance (:func:`advance_thermal`) with the heat of the
+    outputs at the end of the slip step, which are the outputs returned (the node-temperature outputs are the
+    new states).  ``x0``: ``(u, v)``, thermal ``(u, v, T_s, T_b, T_g)`` (default: the initial temperatures
     of the section, else the ``T_ambient`` default).
     """
 
@@ -803,20 +805,16 @@ class TransientStepper:
 
     def step(self, H: float, **inputs: float) -> dict[str, float]:
         kin = self.set_inputs(**inputs)
-        if self.T is not None:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                out0 = self.model.outputs_from(kin, self.x[0], self.x[1])
-            T = advance_thermal(self.model, kin, out0, H, *self._thermal_inputs)
         self.x = advance(self.model, kin, self.x[0], self.x[1], H)
         self.time += H
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            if self.T is not None:
-                self.T = T
-                kin = self.set_inputs()  # the laws and the pressure at the new temperatures
             out = self.model.outputs_from(kin, self.x[0], self.x[1])
-        return {k: float(v) for k, v in out.items()}
+        out = {k: float(v) for k, v in out.items()}
+        if self.T is not None and H > 0.0:
+            self.T = advance_thermal(self.model, kin, out, H, *self._thermal_inputs)
+            out.update(zip(("T_surface", "T_bulk", "T_gas"), self.T, strict=True))
+        return out
 
 
 __all__ = [

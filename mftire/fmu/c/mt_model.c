@@ -9,8 +9,11 @@
  * Thermal block (MT_THERMAL, a .tir with [MFTIRE_THERMAL]): three more states, the node temperatures
  * x[2..4] = (T_s, T_b, T_g) [degC], which drive the MF's pressure and the laws that read a node
  * (mt_thermal_inputs, so the kinematics depend on them); their derivatives are heat.node_rates at the heat
- * of the outputs (ME), their Co-Simulation step one backward-Euler step with the heat of the outputs at the
- * start of the step (mt_thermal_step).  Initial temperatures: the parameters TH_T_INIT_*.
+ * of the outputs (ME).  Co-Simulation: the temperatures the laws and the pressure read are held over a step
+ * like the inputs; the slip states advance first, then the temperatures by one backward-Euler step
+ * (mt_thermal_step) with the heat of the forces at the end of the slip step, which are the outputs the host
+ * reads after the step (two Magic Formula evaluations per step, as without the block; the node-temperature
+ * outputs are the new states).  Initial temperatures: the parameters TH_T_INIT_*.
  *
  * Outputs are computed lazily: the first read of an output after new inputs, states or a step
  * evaluates the Magic Formula at the transient slips for the channel groups (MF_WANT_* of mf_eval.h)
@@ -52,6 +55,7 @@ struct FMModel {
 #if MT_THERMAL
     double P_hot;          /* the pressure the MF uses (mt_thermal_inputs) */
     double T_amb, T_road;  /* the guarded thermal inputs of the kinematics */
+    int T_moved;           /* a Co-Simulation step moved the temperatures since the kinematics */
 #endif
     MTKin kin;
     MTOutputs out;
@@ -158,6 +162,7 @@ static int update_kin(FMModel *m)
     }
 #endif
 #if MT_THERMAL
+    m->T_moved = 0;
     m->T_amb = in.T_ambient;
     m->T_road = in.T_road;
     mt_thermal_inputs(&m->params, &m->x[2], &in, &m->P_hot); /* the hot pressure and the laws' node temperatures */
@@ -411,20 +416,24 @@ static void fm_get_nominals(double *xn)
 static int fm_do_step(FMModel *m, double t, double h)
 {
 #if MT_THERMAL
-    double q[3];
-    if (update_out(m, MF_WANT_FX | MF_WANT_FY)) return FM_ERROR; /* the heat of the outputs at the start */
-    mt_thermal_heat(&m->params, &m->kin, &m->out, q);
+    if (m->T_moved) m->kin_ok = 0; /* the kinematics of the present temperatures */
 #endif
-    if (update_kin(m)) return FM_ERROR; /* inputs are held over the step */
+    if (update_kin(m)) return FM_ERROR; /* inputs (and node temperatures) are held over the step */
     mt_advance(&m->params, &m->kin, m->x, h);
-#if MT_THERMAL
-    if (h > 0.0) {
-        mt_thermal_step(&m->params, q, m->T_amb, m->T_road, &m->x[2], h);
-        m->kin_ok = 0; /* the laws and the pressure at the new temperatures */
-    }
-#endif
     m->time = t + h;
     m->out_ok = 0; /* the outputs at the new state are computed when read */
+#if MT_THERMAL
+    if (h > 0.0) {
+        double q[3];
+        if (update_out(m, MF_WANT_FX | MF_WANT_FY)) return FM_ERROR; /* the forces at the end of the slip step */
+        mt_thermal_heat(&m->params, &m->kin, &m->out, q);
+        mt_thermal_step(&m->params, q, m->T_amb, m->T_road, &m->x[2], h);
+        m->out.T_surface = m->x[2]; /* the new states; the other outputs read the temperatures held */
+        m->out.T_bulk = m->x[3];
+        m->out.T_gas = m->x[4];
+        m->T_moved = 1;
+    }
+#endif
     return FM_OK;
 }
 

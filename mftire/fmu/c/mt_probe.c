@@ -118,3 +118,36 @@ __attribute__((visibility("default"))) int mt_probe_thermal(int use_mode, const 
     return 0;
 }
 #endif
+
+#if MT_THERMAL
+/* Seconds per Model Exchange derivative evaluation of the thermal block (the node temperatures into the
+ * inputs, kinematics, slip rates, the forces at the transient slips, the heat, the node rates), timed in C
+ * over n calls with the inputs changing every call. */
+__attribute__((visibility("default"))) double mt_probe_bench_thermal(int use_mode, const double *inputs, long n)
+{
+    MTInputs in0, in;
+    MTKin k;
+    MTOutputs o;
+    double x[5] = {1e-3, -2e-3, 60.0, 50.0, 40.0}, dx[5], q[3], P_hot, acc = 0.0;
+    struct timespec t0, t1;
+    long i;
+    load_inputs(&in0, inputs);
+    in0.T_ambient = 20.0;
+    in0.T_road = 30.0;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    for (i = 0; i < n; i++) {
+        in = in0;
+        in.Vy = inputs[2] + 1e-9 * (double)(i & 1023);
+        mt_thermal_inputs(&MT_PARAM_START, &x[2], &in, &P_hot);
+        mt_kinematics(&MT_PARAM_START, use_mode, &in, 0u, &k, NULL, NULL);
+        mt_rates(&MT_PARAM_START, &k, x, dx);
+        mt_outputs(&MT_PARAM_START, use_mode, &k, x, MF_WANT_FX | MF_WANT_FY, &o, NULL, NULL);
+        mt_thermal_heat(&MT_PARAM_START, &k, &o, q);
+        mt_thermal_rates(&MT_PARAM_START, q, in.T_ambient, in.T_road, &x[2], &dx[2]);
+        acc += dx[0] + dx[1] + dx[2];
+    }
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    if (acc != acc) return -1.0;
+    return ((double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec)) / (double)n;
+}
+#endif
