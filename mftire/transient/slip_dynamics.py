@@ -578,7 +578,7 @@ def simulate(
     d = model.defaults()
     given = dict(Fz=Fz, Vx=Vx, Vy=Vy, omega=omega, gamma=gamma, P=P, muRoad=muRoad, yawRate=yawRate)
     if thermal:
-        given.update(T_ambient=T_ambient, T_road=T_ambient if T_road is None and not callable(T_ambient) else T_road)
+        given.update(T_ambient=T_ambient, T_road=T_ambient if T_road is None else T_road)
         for k in ("T_ambient", "T_road"):
             if given[k] is not None and not callable(given[k]) and not np.all(np.isfinite(np.asarray(given[k],
                                                                                                   dtype=float))):
@@ -591,7 +591,11 @@ def simulate(
         x0 += _initial_temperatures(model, T0, sig["T_ambient"](t[0]))
 
     def inputs_at(tt):
-        return {**{k: f(tt) for k, f in sig.items()}, **free}
+        out = {**{k: f(tt) for k, f in sig.items()}, **free}
+        if thermal and not (math.isfinite(out["T_ambient"]) and math.isfinite(out["T_road"])):
+            raise MftireInputError(f"simulate: T_ambient / T_road at t = {tt:g} s are not finite temperatures "
+                                   f"({out['T_ambient']!r}, {out['T_road']!r})")  # fmt: skip
+        return out
 
     def rhs(tt, x):
         return model.all_derivatives(x, **inputs_at(tt)).tolist()
@@ -612,6 +616,9 @@ def _initial_temperatures(model: TransientTyre, T0, T_amb0: float) -> list[float
     """The initial node temperatures of the thermal block: ``T0``, else the section's, else the ambient."""
     from mftire.thermal.simulation import initial_temperatures
 
+    if T0 is None and not math.isfinite(float(T_amb0)):
+        raise MftireInputError(f"simulate: T_ambient at t[0] is {T_amb0!r}: the initial node temperatures default "
+                               "to it; give finite temperatures (or T0)")  # fmt: skip
     T = initial_temperatures(model.thermal, float(T_amb0)) if T0 is None else tuple(np.asarray(T0, dtype=float))
     if len(T) != 3 or not all(math.isfinite(float(x)) and float(x) > -273.15 for x in T):
         raise MftireInputError(f"simulate: T0 must be three finite node temperatures above -273.15 °C, not {T0!r}")
