@@ -31,9 +31,11 @@ Programmes (``PROGRAMMES``)
                   (3-5 deg), a 2 s braking zone, and a 6 s straight at 25 m/s.
 
 ``python validation/make_thermal_runs.py [OUT_DIR]`` writes ``thermal_run.dat.gz`` (the warm-up +
-load steps programme followed by the stint, one continuous run, the shipped file in
-``validation/data/thermal/``), both programmes as separate files with ``--all``, and the true
-(noise-free) states as ``*_truth.csv.gz``.  ``--check DIR`` runs the done-when measurement
+load steps programme followed by the stint, one continuous run), both programmes as separate files with
+``--all``, and the true (noise-free) states as ``*_truth.csv.gz``.  Without ``OUT_DIR`` the run is the
+shipped file ``mftire/data/simulated_thermal_run.dat.gz`` (in the package: ``mftire demo`` fits and
+replays it; :func:`mftire.data.thermal_run`, the only copy) and the other files go to
+``validation/data/thermal/``.  ``--check DIR`` runs the done-when measurement
 (validation/README.md, "Thermal tyre").
 """
 
@@ -51,6 +53,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # run from a source checkout
 TIR = ROOT / "tirfiles" / "MF61_255-55R20_mfeval-jl.tir"
 OUT = ROOT / "validation" / "data" / "thermal"
+#: The shipped run (package data, the only copy; written by ``make()`` into the default OUT).
+RUN = ROOT / "mftire" / "data" / "simulated_thermal_run.dat.gz"
 
 FS = 10.0  #: sample rate [Hz]
 T_AMB = 22.0  #: ambient [deg C]
@@ -241,7 +245,7 @@ def make(out_dir=OUT, names=("run",), seed: int = 0) -> list[Path]:
     for name in names:
         raw, true = simulate(name, seed)
         stem = "thermal_run" if name == "run" else f"thermal_{name}"
-        p = out_dir / f"{stem}.dat.gz"
+        p = RUN if name == "run" and out_dir.resolve() == OUT.resolve() else out_dir / f"{stem}.dat.gz"
         write_ttc(raw, p, units="metric", title=TITLE)
         true.to_csv(out_dir / f"{stem}_truth.csv.gz", index=False, float_format="%.6g")
         paths.append(p)
@@ -282,7 +286,7 @@ def check(work_dir, run=None, tir=TIR, quiet: bool = False) -> dict:
 
     work = Path(work_dir)
     work.mkdir(parents=True, exist_ok=True)
-    run = Path(run or OUT / "thermal_run.dat.gz")
+    run = Path(run or RUN)
     split = split_time(tir)
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
