@@ -120,7 +120,10 @@ class ThermalCar:
         self.tyre, self.car, self.stint = tyre, car, stint
         self.params = thermal_of(tyre)
         if self.params is None:
-            raise ValueError(f"{tyre.name}: no [MFTIRE_THERMAL] section; the example needs a thermal .tir")
+            from mftire.errors import MftireInputError
+
+            raise MftireInputError(f"{tyre.name}: no [MFTIRE_THERMAL] section; the example needs a thermal .tir "
+                                   "(mftire fit-thermal writes one)")  # fmt: skip
         self.model = node_tyre(tyre, self.params)
         self.fnomin = float(tyre["FNOMIN"])
         p = self.params
