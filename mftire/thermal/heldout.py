@@ -129,6 +129,7 @@ class HeldOutCheck:
     fit: ThermalResult  #: the thermal fit (``fit.tir`` is the THERMAL.tir)
     replay: Replay  #: thermal replay of the whole series
     isothermal: Replay  #: isothermal replay of the whole series
+    measured: dict[str, np.ndarray]  #: forces of the measured-temperature model along the whole series [N]
 
     def numbers(self) -> dict[str, float]:
         """Flat numbers for reports: split, rows, surface and pressure RMS, ``{model}_{channel}_rms_N``, and per
@@ -175,7 +176,7 @@ def heldout_check(tyre, df: pd.DataFrame, split: float, *, name: str = "data", s
         errors["isothermal"][ch] = rms(iso.table[f"{ch}_model"].to_numpy(float)[held] - y)
     p_rms = rms(t["P_model"].to_numpy(float)[held] - t["P"].to_numpy(float)[held]) if "P" in t.columns else math.nan
     return HeldOutCheck(split, len(fit), int(held.sum()), rms(t["T_surface"].to_numpy(float)[held] - ir[held]), p_rms,
-                        errors, res, rep, iso)  # fmt: skip
+                        errors, res, rep, iso, {ch: np.asarray(measured[ch], float) for ch in channels})  # fmt: skip
 
 
 __all__ = ["ISOTHERMAL_KEYS", "MODELS", "HeldOutCheck", "evaluate_measured", "heldout_check", "isothermal_fit",
