@@ -79,7 +79,12 @@ def _rig_task(quick: bool, folder: str) -> tuple[RigStage, ThermalStage]:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         rig = rig_stage(folder, quick)
-        return rig, thermal_stage(folder, os.path.join(folder, "rig_fitted.tir"))
+        # scipy's BLAS, loaded in a worker after the run's limit, would start a thread per core for the thermal
+        # fit's many small SVDs (3 x its CPU time on a busy 2-core machine): held to one here, now that it is loaded
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(1, user_api="blas"):
+            return rig, thermal_stage(folder, os.path.join(folder, "rig_fitted.tir"))
 
 
 def _diagnose_task(args: tuple) -> Any:
