@@ -16,6 +16,11 @@ equations (:func:`mftire.thermal.simulation.simulate_nodes`: one backward-Euler 
 file only drives them.  The default tyre, ``validation/data/thermal/thermal_tyre.tir``, is
 ``mftire fit-thermal`` of the shipped SIMULATED thermal rig run (``--refit`` redoes it, see :data:`FIT_COMMAND`).
 
+**Range.**  The tyre's laws are fitted where the rig run went: tread surface up to 111 °C, carcass and gas up
+to 77 °C.  At the limit for 90 s the front outer tyre's surface stays inside (109 °C), but its bulk and gas nodes
+pass it (116 and 92 °C): there the stiffness law (bulk node) is extrapolated; it moves the steer angle more than
+the capability, which follows the grip law of the surface node.
+
 **Isothermal reference.**  The same car, driver and ``.tir`` with the node temperatures frozen at their start
 values (so the hot pressure too): what a steady-state MF at the start temperature predicts.
 
@@ -263,7 +268,8 @@ def headline(th: pd.DataFrame, iso: pd.DataFrame, stint: Stint) -> dict[str, flo
                                                                                                   * stint.dt),
         "T_surface_FR_max_C": float(th["T_surface_FR"].max()), "T_surface_FR_end_corner_C":
             float(c["T_surface_FR"].iloc[-1]), "T_surface_FR_end_C": float(th["T_surface_FR"].iloc[-1]),
-        "T_bulk_FR_end_C": float(th["T_bulk_FR"].iloc[-1]), "T_gas_FR_end_C": float(th["T_gas_FR"].iloc[-1]),
+        "T_bulk_FR_max_C": float(th["T_bulk_FR"].max()), "T_bulk_FR_end_C": float(th["T_bulk_FR"].iloc[-1]),
+        "T_gas_FR_end_C": float(th["T_gas_FR"].iloc[-1]),
         "P_FR_start_kPa": float(th["P_FR"].iloc[0]) / 1e3, "P_FR_max_kPa": float(th["P_FR"].max()) / 1e3,
         "delta_end_corner_deg": float(c["delta"].iloc[-1]), "delta_isothermal_deg": float(ci["delta"].iloc[-1]),
     }  # fmt: skip
