@@ -75,7 +75,8 @@ DEFAULT_TIR = ROOT / "validation" / "data" / "thermal" / "thermal_tyre.tir"
 DEFAULT_OUTPUT = ROOT / "validation" / "figures" / "thermal_vehicle.png"
 #: The command that made DEFAULT_TIR (``--refit`` runs it).
 FIT_COMMAND = ["fit-thermal", str(ROOT / "mftire" / "data" / "simulated_thermal_run.dat.gz"), "--tir",
-               str(ROOT / "tirfiles" / "MF61_255-55R20_mfeval-jl.tir"), "--output", str(DEFAULT_TIR), "--force"]
+               str(ROOT / "tirfiles" / "MF61_255-55R20_mfeval-jl.tir"), "--output", str(DEFAULT_TIR), "--plot",
+               str(DEFAULT_OUTPUT.parent / "thermal_tyre_fit.png"), "--force"]
 #: The wheels, turning left (positive ay, ISO): the right wheels are the outer ones.
 WHEELS = ("FL", "FR", "RL", "RR")
 NODES = ("surface", "bulk", "gas")
