@@ -146,8 +146,8 @@ class ThermalCar:
     def loads(self, ay: float) -> np.ndarray:
         """Wheel loads [N] (FL, FR, RL, RR) in a steady left turn at ``ay`` [m/s²] (module docstring)."""
         c = self.car
-        front, rear = c.m * c.g * c.b / c.L / 2.0, c.m * c.g * c.a / c.L / 2.0
-        d = c.m * ay * c.h / c.track
+        front, rear = c.m * c.g * c.b / c.L / 2.0, c.m * c.g * c.a / c.L / 2.0  # static axle loads, per wheel
+        d = c.m * ay * c.h / c.track  # lateral load transfer m·ay·h/t, q_front of it in front (Gillespie 1992, ch. 8)
         return np.array([front - c.q_front * d, front + c.q_front * d, rear - (1 - c.q_front) * d,
                          rear + (1 - c.q_front) * d])  # fmt: skip
 
@@ -174,6 +174,7 @@ class ThermalCar:
         ay = 0.9 * c.g
         for _ in range(iterations):
             f, r = self.axle_curves(ay, V, T)
+            # the axle forces of a steady turn, m·ay·b/L and m·ay·a/L (Gillespie 1992, ch. 6), at their peaks
             ay = min(f.max() / (c.m * c.b / c.L), r.max() / (c.m * c.a / c.L))
         return float(ay)
 
@@ -231,6 +232,7 @@ def run(tyre, car: Car = Car(), stint: Stint = Stint(), thermal: bool = True) ->
             ay = stint.driver_share * cap
             V = V_corner = float(np.sqrt(ay * stint.radius))
             af, ar = m.operating_point(ay, V, T)
+            # steady-turn side slip and steer angle (Gillespie 1992, ch. 6; Pacejka 2012, §1.3)
             beta, delta = car.b / stint.radius - ar, car.L / stint.radius + af - ar
         else:  # the straight: free rolling
             ay, V, af, ar, beta, delta = 0.0, stint.straight_speed, 0.0, 0.0, 0.0, 0.0
