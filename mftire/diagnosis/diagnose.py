@@ -52,6 +52,7 @@ from mftire.diagnosis.effects import (
     final_fit,
     is_worse,
     make_problem,
+    plausible_inputs,
     primary_rows,
     refine_effect,
     refit_without,
@@ -69,7 +70,7 @@ from mftire.diagnosis.ranking import (
 from mftire.errors import MftireInputError
 from mftire.fitting.weights import noise_std
 from mftire.iotools.sweeps import FIT_ROW, MEASURED_COLUMNS, fit_rows
-from mftire.mf.extensions import BUILTIN_VARIABLES, TARGET_CHANNELS
+from mftire.mf.extensions import BUILTIN_VARIABLES, MAX_LEVELS, TARGET_CHANNELS
 from mftire.progress import reporter
 from mftire.tyre import Tyre, TyreLike, as_tyre
 
@@ -231,15 +232,20 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
     return out if np.unique(out[out >= 0]).size >= 2 else kind_folds(sweeps, kinds)
 
 
+#: The MF's own operating inputs (a law in them is interpolated between tested levels like the MF's terms).
+MF_INPUTS = ("Fz", "Vx", "P", "gamma")
 #: Share of the sweeps, the last in test order, held out by :func:`order_fold`.
 ORDER_SHARE = 0.25
 
 
-def order_fold(df: pd.DataFrame, kinds: np.ndarray | None, share: float = ORDER_SHARE) -> np.ndarray | None:
+def order_fold(df: pd.DataFrame, kinds: np.ndarray | None, share: float = ORDER_SHARE,
+               levels: np.ndarray | None = None) -> np.ndarray | None:
     """The last ``share`` of the sweeps in test order (the time column, else the row order) as one held-out fold
     (label 0; every other row -1, never held out), so that a law is also judged on the tests that followed the
     ones it was fitted on, as new runs of a user's campaign are.  Sweeps of a kind (``kinds``) that would leave no
-    sweep of it in training are not held out.  None with fewer than 4 sweeps or nothing to hold out."""
+    sweep of it in training are not held out, nor is a sweep at an operating condition (set points, kind, and the
+    level of ``levels``: a candidate with few levels) that no earlier sweep has.  None with fewer than 4 sweeps
+    or nothing to hold out."""
     sweeps = df["sweep_id"].to_numpy()
     tcol = time_column(df)
     order = df[tcol].to_numpy(float) if tcol is not None else np.arange(len(df), dtype=float)
@@ -254,6 +260,8 @@ def order_fold(df: pd.DataFrame, kinds: np.ndarray | None, share: float = ORDER_
     cond = df[keys].astype(float).round(6).apply(tuple, axis=1) if keys else pd.Series([()] * len(df))
     if kinds is not None:
         cond = pd.Series(list(zip(cond, np.asarray(kinds), strict=True)))
+    if levels is not None and np.unique(np.round(np.asarray(levels, float), 6)).size <= MAX_LEVELS:
+        cond = pd.Series(list(zip(cond, np.round(np.asarray(levels, float), 6), strict=True)))
     cond = cond.to_numpy()
     trained = set(cond[out < 0])
     out[np.array([c not in trained for c in cond]) & (out == 0)] = -1
@@ -283,7 +291,7 @@ def extra_conditions(df: pd.DataFrame, law: Tyre, control: Tyre, channels: Seque
     take every sweep of a kind out of training, or half the rows, is not held out.  ``[(label, row mask), ...]``."""
     kinds = df["sweep_var"].to_numpy() if "sweep_var" in df.columns else None
     out: list[tuple[str, np.ndarray]] = []
-    fwd = order_fold(df, kinds)
+    fwd = order_fold(df, kinds, levels=df["_cand"].to_numpy(float) if "_cand" in df.columns else None)
     if fwd is not None:
         out.append(("the last tests", fwd == 0))
     ml, mc = _model(law, df), _model(control, df)
@@ -633,8 +641,10 @@ def _diagnose(
         folds = level_folds(v, prob.df["sweep_id"].to_numpy(), c.sweep_level, blocks=blocks, kinds=kinds)
         lv = np.unique(np.round(v[np.isfinite(v)], 9))
         n_levels = int(lv.size)
-        if n_levels == 2 and not set(lv.tolist()) <= {-1.0, 0.0, 1.0}:
-            # two levels of a quantity (not a 0/1 or ±1 flag): the law's form between or beyond them cannot be checked
+        if n_levels == 2 and not set(lv.tolist()) <= {-1.0, 0.0, 1.0} and variable not in MF_INPUTS \
+                and variable not in BUILTIN_VARIABLES:
+            # two levels of a quantity (not a 0/1 or ±1 flag, not an MF input, which the MF's own terms interpolate
+            # between tested levels as its pressure terms do): the law's form between or beyond them cannot be checked
             # on held-out data, and a user's next level is new; the cause is named, no law is written
             say(f"{variable}: two levels ({lv[0]:g}, {lv[1]:g}) of a quantity: no law can be checked between them")
             two_level.append(e.variable)
@@ -671,7 +681,7 @@ def _diagnose(
         ranked = [chosen] + [f for f in ranked if f is not chosen]
         found.append((chosen, e, (prob, [(f, f.law, by_var.get(f.variable)) for f in ranked], eff_ch, folds,
                                   blocks is not None, control.cv, dict(control.cv_channels), control,
-                                  order_fold(prob.df, kinds))))  # fmt: skip
+                                  order_fold(prob.df, kinds, levels=v))))  # fmt: skip
     # the lowest held-out error wins; a better-ranked candidate within 10 % of it is preferred
     lowest = min((f.heldout for f, _, _ in found), default=np.inf)
     best = next((t for t in found if t[0].heldout <= 1.1 * lowest), None)
@@ -713,8 +723,13 @@ def _diagnose(
         worse = [e.channel for e in errs if e.channel in FIT_CHANNELS
                  and is_worse(e.n * e.rms_after**2, e.n * e.rms_before**2, e.n, noise.get(e.channel, 0.0))]
         gain = sum(e.rms_pct_before**2 - e.rms_pct_after**2 for e in errs if e.channel in FIT_CHANNELS)
+        values_r = variable_values(prob.df, refined, cause.variable)
+        if not plausible_inputs(refined, values_r):
+            rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) moves its "
+                            "input beyond physical limits")  # fmt: skip
+            continue
         if not worse and gain > 0.0:
-            late = _worse_elsewhere(prob, refined, ext_r, ctrl_r, variable_values(prob.df, refined, cause.variable),
+            late = _worse_elsewhere(prob, refined, ext_r, ctrl_r, values_r,
                                     n_pressures, eff_ch, chans, noise, column)  # fmt: skip
             if not late:
                 accepted = (eff_r, ext_r, errs)

@@ -5,7 +5,7 @@ a slip-angle or camber offset) times a form of :mod:`mftire.mf.extensions` in th
 (or the standard pressure terms).  Each is fitted by bounded least squares on the
 training data (gross outliers removed; each channel on the rows where it is a primary
 response), together with the peak and curvature coefficients (:data:`REFIT_KEYS`) of the
-channels the law acts on (:func:`refit_channels_of`: its targets' channels, and Mz with a force),
+channels the law acts on (:func:`refit_channels_of`: its targets' channels, and Mz with Fy),
 because a base fit made on data containing the effect has absorbed part of it into them.  The other
 Magic Formula coefficients stay as given.  The inflation-pressure effect refits the
 standard MF 6.1 pressure coefficients instead of an extension section.
@@ -1032,19 +1032,20 @@ CHANNEL_COEFFICIENTS: dict[str, frozenset[str]] = {
 
 
 def refit_channels_of(law: Law) -> tuple[str, ...] | None:
-    """The channels whose main coefficients are refitted with ``law``: those it acts on, and Mz with a force
-    (the aligning moment reads the forces, Pacejka 2012 eqs 4.E71-4.E78); None (every channel) for the control
-    and the pressure law."""
+    """The channels whose main coefficients are refitted with ``law``: those it acts on, and Mz with the lateral
+    force (the aligning moment reads Fy, Pacejka 2012 eqs 4.E31-4.E32; Fx enters only through the combined-slip
+    arm, 4.E71, which no Mz coefficient refitted here carries); None (every channel) for the control and the
+    pressure law."""
     chans = set(ch for t in law.targets for ch in TARGET_CHANNELS.get(t, ()) if ch in FIT_CHANNELS)
     if not chans:
         return None
-    if chans & {"Fx", "Fy"}:
+    if "Fy" in chans:  # pure Mz reads the lateral force (eqs 4.E31-4.E32); Fx enters only combined Mz (4.E71)
         chans.add("Mz")
     return tuple(ch for ch in FIT_CHANNELS if ch in chans)
 
 
 def law_channels(fit: EffectFit) -> tuple[str, ...]:
-    """The channels whose coefficients a law's model changes: those its targets act on, and Mz with a force
+    """The channels whose coefficients a law's model changes: those its targets act on, and Mz with Fy
     (:func:`refit_channels_of`); empty for the pressure law (the standard pressure terms of every channel)."""
     chans = refit_channels_of(Law(fit.name, fit.targets, "")) if fit.targets else None
     return chans or ()
