@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 ROOT = Path(__file__).resolve().parent.parent
 _spec = importlib.util.spec_from_file_location("thermal_vehicle", ROOT / "validation" / "thermal_vehicle.py")
@@ -97,3 +99,22 @@ def test_the_script_writes_the_figure_and_the_numbers(runs, tmp_path, capsys):
     for k, v in runs[3].items():  # the numbers of the run, to the CSV's 4 significant digits
         assert got[k] == pytest.approx(v, rel=1e-3), k
     assert "fade_vs_isothermal_pct" in capsys.readouterr().out
+
+
+@settings(max_examples=25, deadline=None)
+@given(share=st.floats(0.05, 0.99), T=st.lists(st.floats(20.0, 110.0), min_size=12, max_size=12),
+       V=st.floats(10.0, 40.0))
+def test_the_operating_point_balances_the_turn_at_any_temperature(runs, share, T, V):
+    tyre = runs[0]
+    car = tv.Car()
+    m = tv.ThermalCar(tyre, car, tv.SHORT)
+    nodes = np.reshape(T, (4, 3))
+    cap = m.capability(V, nodes)
+    assert 5.0 < cap < 12.0
+    ay = share * cap
+    af, ar = m.operating_point(ay, V, nodes)
+    f = m.evaluate(m.loads(ay), -np.array([[af], [af], [ar], [ar]]), V, nodes, channels=("Fy",))["Fy"][:, 0]
+    # the steady turn's axle forces (Gillespie 1992, ch. 6), to the slip grid's resolution
+    assert f[0] + f[1] == pytest.approx(car.m * ay * car.b / car.L, rel=5e-3)
+    assert f[2] + f[3] == pytest.approx(car.m * ay * car.a / car.L, rel=5e-3)
+    assert 0.0 <= af <= np.radians(tv.SHORT.alpha_max_deg) and 0.0 <= ar <= np.radians(tv.SHORT.alpha_max_deg)
