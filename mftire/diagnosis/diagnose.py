@@ -639,9 +639,10 @@ def _diagnose(
         blocks = confounding_blocks(prob.df, v, variable=variable)
         kinds = prob.df["sweep_var"].to_numpy() if "sweep_var" in prob.df.columns else None
         folds = level_folds(v, prob.df["sweep_id"].to_numpy(), c.sweep_level, blocks=blocks, kinds=kinds)
-        lv = np.unique(np.round(v[np.isfinite(v)], 9))
-        n_levels = int(lv.size)
-        if n_levels == 2 and not set(lv.tolist()) <= {-1.0, 0.0, 1.0} and variable not in MF_INPUTS \
+        n_levels = int(np.unique(np.round(v[np.isfinite(v)], 9)).size)
+        # the levels in every row: the diagnosis's own held-out condition may be a level of the candidate
+        lv = np.unique(np.round(c.values[np.isfinite(c.values)], 9))
+        if lv.size == 2 and not set(lv.tolist()) <= {-1.0, 0.0, 1.0} and variable not in MF_INPUTS \
                 and variable not in BUILTIN_VARIABLES:
             # two levels of a quantity (not a 0/1 or ±1 flag, not an MF input, which the MF's own terms interpolate
             # between tested levels as its pressure terms do): the law's form between or beyond them cannot be checked
@@ -706,7 +707,7 @@ def _diagnose(
                "refitted (" + "; ".join(notes) + ")")
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
-                               profiles=profiles, cause=cause.variable)  # fmt: skip
+                               profiles=profiles, cause=top.variable)  # fmt: skip
     # the held-out condition: each variant's model and its control, both refitted without it, per channel; the
     # first variant (in order of preference) that no channel finds worse beyond its noise and that improves the
     # scored channels together is accepted.  A law acts on its channels only: every other coefficient stays as
@@ -741,19 +742,19 @@ def _diagnose(
                          if e.channel in worse)  # fmt: skip
         rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) "
                         + (f"made {what}" if worse else "did not improve"))
+    if accepted is None:  # no law: the cause named is the ranking's first, the strongest evidence there is
+        msg = (f"cause named, no law found: the laws that beat the control on the held-out folds lost to the model "
+               f"refitted without them on the held-out condition {column} = {values}: " + "; ".join(rejected)
+               + "; the model is left unchanged")  # fmt: skip
+        return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
+                               [], None, tried + [v[0] for v in variants], messages=[msg], data=df, train=train,
+                               not_measured=not_measured, profiles=profiles, cause=top.variable)  # fmt: skip
     effect = variants[0][0]
     named = [e for e in ranking if e.variable == effect.variable and e.significant]
     if named and effect.variable != cause.variable:  # e.g. a slip-speed law chosen for Vx: the cause is Vs
         cause = named[0]
     ranking.remove(cause)
     ranking.insert(0, cause)
-    if accepted is None:
-        msg = (f"cause named, no law found: the laws that beat the control on the held-out folds lost to the model "
-               f"refitted without them on the held-out condition {column} = {values}: " + "; ".join(rejected)
-               + "; the model is left unchanged")  # fmt: skip
-        return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
-                               [], None, tried + [v[0] for v in variants], messages=[msg], data=df, train=train,
-                               not_measured=not_measured, profiles=profiles, cause=cause.variable)  # fmt: skip
     effect, extended, errors = accepted
     if rejected:
         effect.messages.append("not chosen on the held-out condition: " + "; ".join(rejected))
@@ -788,7 +789,7 @@ def _diagnose(
                f"{', '.join(worse)} worse than the given model on those same rows; the model is left unchanged")
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                [], None, tried + [effect], messages=[msg], data=df, train=train,
-                               not_measured=not_measured, profiles=profiles, cause=cause.variable)  # fmt: skip
+                               not_measured=not_measured, profiles=profiles, cause=top.variable)  # fmt: skip
     effect.standard = {k: float(v) for k, v in extended.flat.items() if k in tyre.flat and v != tyre.flat[k]}
     effect.section = {k: v for k, v in (extended.extensions or {}).items() if k not in (tyre.extensions or {})}
     effect.parameters = {k: float(v) for k, v in effect.section.items() if isinstance(v, float) and "_C" in k}
