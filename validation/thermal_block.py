@@ -1,10 +1,10 @@
 """The thermal block of the transient FMU against ``mftire.transient.simulate(..., thermal=True)`` (issue 22).
 
-A thermal ``.tir`` (the generating MF 6.1 file with a grip law on the surface node and a stiffness law on the
-bulk node, :func:`thermal_tir`) is exported with ``mftire export-fmu --transient`` (FMI 2 and FMI 3) and driven
-along a stint of the shipped thermal run (``validation/data/thermal/thermal_run.dat.gz``: its load, speed, slip
-angle, slip ratio, ambient and road temperature, as wheel kinematics ``Vy = Vx·tan(alpha)``,
-``omega = Vx·(1 + kappa)/R0``):
+The shipped thermal ``.tir`` (``validation/data/thermal/thermal_tyre.tir``, the ``mftire fit-thermal`` result
+of the shipped run: a grip law on the surface node, a stiffness law on the bulk node; :func:`shipped_tir`) is
+exported with ``mftire export-fmu --transient`` (FMI 2 and FMI 3) and driven along a stint of the shipped thermal
+run (``mftire.data.thermal_run()``: its load, speed, slip angle, slip ratio, camber, ambient and road
+temperature, as wheel kinematics ``Vy = Vx·tan(alpha)``, ``omega = Vx·(1 + kappa)/R0``):
 
 * **Model Exchange**: the FMU's derivatives (``fmi2GetDerivatives`` / ``fmi3GetContinuousStateDerivatives``
   through fmpy) integrated by the same integrator and tolerances as :func:`mftire.transient.simulate` (LSODA):
@@ -27,7 +27,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # run from a source checkout
 TIR = ROOT / "tirfiles" / "MF61_255-55R20_mfeval-jl.tir"
-RUN = ROOT / "validation" / "data" / "thermal" / "thermal_run.dat.gz"
+RUN = ROOT / "validation" / "data" / "thermal" / "thermal_run.dat.gz"  #: where the run was before mftire.data
+SHIPPED_TIR = ROOT / "validation" / "data" / "thermal" / "thermal_tyre.tir"
 #: Channels compared.
 CHANNELS = ("T_surface", "T_bulk", "T_gas", "P_hot", "Fx", "Fy", "Mz")
 #: Initial node temperatures of the comparisons [°C] (a tyre already warm).
@@ -49,6 +50,13 @@ def thermal_tir():
     return Tyre(tp, name="thermal.tir")
 
 
+def shipped_tir():
+    """The shipped thermal ``.tir`` (``mftire fit-thermal`` of the shipped run), else :func:`thermal_tir`."""
+    from mftire.tyre import load
+
+    return load(SHIPPED_TIR) if SHIPPED_TIR.is_file() else thermal_tir()
+
+
 def stint(start: float = 470.0, seconds: float = 60.0) -> dict[str, np.ndarray]:
     """Wheel kinematics and conditions along ``seconds`` of the shipped run from ET = ``start`` (10 Hz),
     time from 0."""
@@ -65,13 +73,13 @@ def stint(start: float = 470.0, seconds: float = 60.0) -> dict[str, np.ndarray]:
 def _read_run():
     """The shipped thermal run (``mftire.data.thermal_run()`` where the package ships it, else the file of
     ``validation/data/thermal/``)."""
+    from mftire.iotools.rig import read_ttc
+
     try:
         from mftire.data import thermal_run
     except ImportError:
-        from mftire.iotools.rig import read_ttc
-
         return read_ttc(RUN)
-    return thermal_run()
+    return read_ttc(thermal_run())
 
 
 def _instance(fmu_path, kind: str):
@@ -175,10 +183,11 @@ def _dptr():
     return ctypes.POINTER(ctypes.c_double)
 
 
-def fmu_co_simulation(fmu_path, s: dict[str, np.ndarray], H: float = 1e-3, T0=T0):
+def fmu_co_simulation(fmu_path, s: dict[str, np.ndarray], H: float = 1e-3, T0=T0, tyre=None):
     """The FMU in Co-Simulation at steps ``H`` (inputs interpolated linearly, held over each step) and its Python
-    mirror :class:`mftire.transient.TransientStepper`: ``(fmu, python)``, each ``{channel: array}`` at the
-    stint's sample times, and the wall time of the FMU's steps [s]."""
+    mirror :class:`mftire.transient.TransientStepper` of ``tyre`` (the FMU's; default :func:`shipped_tir`):
+    ``(fmu, python)``, each ``{channel: array}`` at the stint's sample times, and the wall time of the FMU's
+    steps [s]."""
     import warnings
 
     from mftire.transient import TransientStepper, TransientTyre
@@ -187,7 +196,7 @@ def fmu_co_simulation(fmu_path, s: dict[str, np.ndarray], H: float = 1e-3, T0=T0
     t = s["t"]
     steps = int(round((t[-1] - t[0]) / H))
     every = max(int(round((t[1] - t[0]) / H)), 1)
-    model = TransientTyre(thermal_tir(), thermal=True)
+    model = TransientTyre(shipped_tir() if tyre is None else tyre, thermal=True)
     py = TransientStepper(model, (0.0, 0.0, *T0))
     a = {k: [] for k in CHANNELS}
     b = {k: [] for k in CHANNELS}
@@ -227,7 +236,7 @@ def main(seconds: float = 60.0) -> int:
     from mftire.fmu.export import export_fmu
     from mftire.transient import simulate
 
-    tyre = thermal_tir()
+    tyre = shipped_tir()
     s = stint(seconds=seconds)
     t0 = time.perf_counter()
     with warnings.catch_warnings():
@@ -243,7 +252,7 @@ def main(seconds: float = 60.0) -> int:
             me = differences(fmu_model_exchange(path, s), {k: ref[k].to_numpy() for k in CHANNELS})
             worst = max(worst, *me.values())
             print(f"FMI {v} ME vs simulate: " + ", ".join(f"{k} {x:.1e}" for k, x in me.items()))
-            a, b, wall = fmu_co_simulation(path, s)
+            a, b, wall = fmu_co_simulation(path, s, tyre=tyre)
             cs = differences(a, b)
             print(f"FMI {v} CS (1 ms) vs TransientStepper: " + ", ".join(f"{k} {x:.1e}" for k, x in cs.items()))
             print(f"FMI {v} CS: {seconds / wall:.0f}x real time at 1 kHz through fmpy (set 7 inputs, doStep, "
