@@ -241,6 +241,15 @@ def test_fmu_refuses_bad_thermal_parameters(fmus):
                 s.set({key: value})
         assert any("TH_CAP_SURFACE" in m and "> 0" in m for m in messages)
         assert any("TH_PRESSURE" in m and "0 or 1" in m for m in messages)
+        # a NaN temperature input: the last good value is held, with a warning naming the input
+        s.set({"T_ambient": 25.0, "Vy": 0.5})
+        s.fmu.doStep(0.0, 1e-3)
+        good = s.get(["T_surface", "Fy"])
+        s.set({"T_ambient": math.nan})
+        s.fmu.doStep(1e-3, 1e-3)
+        held = s.get(["T_surface", "Fy", "T_ambient"])
+        assert all(map(math.isfinite, held[:2])) and held[0] != good[0]
+        assert any("input 'T_ambient' not finite" in m for m in messages)
     finally:
         s.close()
 
