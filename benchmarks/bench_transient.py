@@ -3,8 +3,9 @@
 Run: ``python benchmarks/bench_transient.py [--tir FILE] [--n 200000] [--repeat 5] [--workdir DIR] [--callgrind]
 [--thermal]``.
 
-``--thermal``: the same with the thermal block (issue 22): the ``.tir`` of ``validation/thermal_block.py`` (a
-grip law on the surface node, a stiffness law on the bulk node, ``[MFTIRE_THERMAL]``), or ``--tir`` with a
+``--thermal``: the same with the thermal block (issue 22): the shipped thermal ``.tir``
+(``validation/data/thermal/thermal_tyre.tir``: a grip law on the surface node, a stiffness law on the bulk node,
+``[MFTIRE_THERMAL]``), or ``--tir`` with a
 ``[MFTIRE_THERMAL]`` section; five states; the ME derivative in C then also evaluates the forces at the
 transient slips for the heat and the node rates.
 
@@ -291,7 +292,7 @@ def main(argv=None) -> int:
         spec = importlib.util.spec_from_file_location("thermal_block", ROOT / "validation" / "thermal_block.py")
         tb = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(tb)
-        tir = tb.thermal_tir()
+        tir = tb.shipped_tir()
     if args.part:
         run_part(args.part[0], Path(args.part[1]), Path(args.part[2]), int(args.part[3]))
         return 0
