@@ -378,7 +378,10 @@ class TransientTyre:
         return rx * dcu, ry * dcv
 
     def derivatives(self, x: ArrayLike, **inputs: ArrayLike) -> np.ndarray:
-        """``[du/dt, dv/dt]`` at state ``x = (u, v)`` and the inputs (see :data:`INPUTS`)."""
+        """``[du/dt, dv/dt]`` at state ``x = (u, v)`` and the inputs (see :data:`INPUTS`); with the thermal block
+        every derivative (:meth:`all_derivatives`)."""
+        if self.thermal is not None:
+            return self.all_derivatives(x, **inputs)
         kin = self.kinematics(**inputs)
         return np.array(self.rates(kin, x[0], x[1]), dtype=float)
 
@@ -424,6 +427,9 @@ class TransientTyre:
     def _kin(self, x, inputs: Mapping[str, ArrayLike]) -> Kinematics:
         ins = {k: v for k, v in inputs.items() if k not in ("T_ambient", "T_road")}
         if self.thermal is not None:
+            if len(x) != 5:
+                raise MftireInputError("the thermal block's state is (u, v, T_s, T_b, T_g): five values, not "
+                                       f"{len(x)}")  # fmt: skip
             ins["T"] = (x[2], x[3], x[4])
         return self.kinematics(**ins)
 
