@@ -384,9 +384,10 @@ def test_host_modes_give_the_same_outputs(fmu2_path):
 
 
 @needs_c_compiler
-@pytest.mark.parametrize("key,value", [("VXLOW", 0.0), ("VXLOW", -1.0), ("TR_CS_STEP", 0.0)])
+@pytest.mark.parametrize("key,value", [("VXLOW", 0.0), ("VXLOW", -1.0), ("TR_CS_STEP", 0.0), ("TR_SAT", -0.5)])
 def test_non_physical_start_values_fail_the_initialisation(fmu2_path, key, value):
-    """VXLOW > 0 (the bounds of mftire.mf.spec, shared with the steady FMU) and TR_CS_STEP > 0."""
+    """VXLOW > 0, TR_CS_STEP > 0, TR_SAT >= 0: the bounds of mftire.parameters.PARAMETER_LIMITS (mftire.mf.spec),
+    shared with the steady FMU."""
     from fmpy.fmi1 import FMICallException
 
     from mftire.fmu.transient_host import TransientFMUs

@@ -147,7 +147,12 @@ def params_header(fields: Sequence[tuple[str, str]], data: Sequence[str] = (), o
         "typedef struct {",
     ]
     lines += [f"    double {field}; /* {c_comment(comment)} */" for field, comment in fields]
-    lines += ["} MFParams;", "", f"#define MF_N_DATA {len(data)}"]
+    lines += ["} MFParams;", ""]
+    standard = {p.key for p in PARAMETERS}
+    extra = [field for field, _ in fields if field not in standard]
+    if extra:  # members beyond the .tir's (the transient constants): what mf_spec_gen.h's bounds may index
+        lines += ["/* Members beyond the .tir parameters. */", *(f"#define MF_HAS_{field} 1" for field in extra), ""]
+    lines.append(f"#define MF_N_DATA {len(data)}")
     if data:
         lines.append(f"#define MF_DATA_NAMES {{{', '.join(c_string(d) for d in data)}}}")
     lines += ["", "#endif /* MF_PARAMS_H */", ""]
@@ -274,15 +279,23 @@ def spec_header() -> str:
         inp = c_string(w.input) if w.input else "NULL"
         lines.append(f"    {{{c_string(c_format(w.text, w.limit))}, {limit}, {inp}}}, \\")
     lines += ["}", ""]
+    standard = {p.key for p in PARAMETERS}
     lines += [
-        "/* Parameters with a physical bound (MFParams index, bound, 1: strict >, 0: >=, name). */",
+        "/* Parameters with a physical bound (MFParams index, bound, 1: strict >, 0: >=, name).  A bound on a",
+        " * member beyond the .tir parameters (MF_HAS_<key> of mf_params.h) counts where MFParams has it. */",
         "typedef struct { int index; double bound; int strict; const char *name; } MFParamBound;",
-        "#define MF_SPEC_PARAMETER_BOUNDS { \\",
     ]
+    rows = []
     for key, rule in PARAMETER_BOUNDS:
         op, value = rule.split()
-        lines.append(f"    {{MF_SPEC_PIDX({key}), {float(value)!r}, {int(op == '>')}, {c_string(key)}}}, \\")
-    lines += ["}", ""]
+        row = f"{{MF_SPEC_PIDX({key}), {float(value)!r}, {int(op == '>')}, {c_string(key)}}},"
+        if key in standard:
+            rows.append(f"    {row} \\")
+            continue
+        name = f"MF_SPEC_BOUND_{len(rows)}_{key}"
+        lines += [f"#ifdef MF_HAS_{key}", f"#define {name} {row}", "#else", f"#define {name}", "#endif"]
+        rows.append(f"    {name} \\")
+    lines += ["#define MF_SPEC_PARAMETER_BOUNDS { \\", *rows, "}", ""]
     codes = ", ".join(repr(float(c)) for c in dict.fromkeys(f.code for f in FAMILIES))
     names = ", ".join(f"{f.name} ({f.code:g})" for f in FAMILIES)
     lines += [

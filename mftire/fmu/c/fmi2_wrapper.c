@@ -240,7 +240,7 @@ FMI2_Export fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference 
     size_t i;
     CHECK_ARRAYS(c, n, vr, value);
     for (i = 0; i < n; i++) {
-        int v;
+        int v = 0;
         if (fm_get_int(INS->model, vr[i], &v) != FM_OK) return fmi2Error;
         value[i] = v;
     }

@@ -239,7 +239,7 @@ FMI3_Export fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueRefere
     if (!instance) return fmi3Error;
     if (nValues != nvr) return fail(instance, "fmi3GetInt32: only scalar variables");
     for (i = 0; i < nvr; i++) {
-        int v;
+        int v = 0;
         if (fm_get_int(INS->model, vr[i], &v) != FM_OK) return fmi3Error;
         values[i] = v;
     }
