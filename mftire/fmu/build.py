@@ -228,7 +228,7 @@ def source_files(model: str, fmi_version: int) -> dict[str, str]:
     ``fmu.c``.  The export adds the generated headers of its variable table."""
     from mftire.mf import cheaders
 
-    names = (*MODEL_SOURCES[model], "fmu_model.h", "fmu_common.h", WRAPPERS[fmi_version])
+    names = (*MODEL_SOURCES[model], "fmu_model.h", "fmu_common.h", "fmi_common.h", WRAPPERS[fmi_version])
     files = {name: read_source(name) for name in names}
     files["mf_spec_gen.h"] = cheaders.spec_header()
     files.update({h: fmi_header(h) for h in FMI_HEADERS[fmi_version]})
