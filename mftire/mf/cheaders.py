@@ -67,8 +67,9 @@ def extension_header(extensions: ExtensionSet | None = None, runtime: bool = Fal
     ]
     if runtime:
         lines.append("#define MF_EXT_RUNTIME 1 /* the term table is given at run time (mf_kernel.c) */")
-    elif not terms:
-        return "\n".join([*lines, "", "#endif /* MF_EXT_GEN_H */", ""])
+    lines += ['#include "mf_ext.h" /* what the code below uses of the evaluator (Cond, mf_dfz, mf_dpi, ...) */', ""]
+    if not (runtime or terms):
+        return "\n".join([*lines, "#endif /* MF_EXT_GEN_H */", ""])
     builtin = list(BUILTIN_VARIABLES)
     external = extensions.external_variables if extensions else ()
     forms = list(FORMS)
@@ -120,8 +121,6 @@ def extension_header(extensions: ExtensionSet | None = None, runtime: bool = Fal
         f"    default: return data[k - {len(builtin)}];",
         "    }",
         "}",
-        "",
-        "static double mf_ext_table(double u, const double *c, int n);",
         "",
         "/* f of each form of mftire.mf.extensions.FORMS (neutral coefficients give 1). */",
         "static double mf_ext_form(int form, double u, double z, double z2, double ref, const double *c, int n)",
