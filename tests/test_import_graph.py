@@ -364,3 +364,91 @@ def test_generated_extension_code_needs_only_its_interface(tmp_path):
             f"-I{C_MODEL}", str(src)]
     res = subprocess.run(argv, capture_output=True, text=True)
     assert res.returncode == 0, res.stderr[-2000:]
+
+
+# ------------------------------------------------------------------ walks: the calls of the main entry points
+#
+# A walk follows every Python call made inside mftire by one entry point (sys.setprofile) and records the module
+# of the callee and of its nearest mftire caller.  A climb is a call from a module to one in a higher layer of
+# docs/architecture.md (a callback handed down and called back up, or a lower layer reaching up by name).
+# Module bodies run by an import are not calls (the import graph above checks those).
+# ``python -m pytest tests/test_import_graph.py -k walks -s`` prints the table of docs/architecture.md.
+
+
+def walk(fn, *args, **kwargs) -> tuple[list[str], list[str]]:
+    """(the modules entered, in order of first entry; the climbs as "caller -> callee.function") of one call."""
+    import sys
+
+    rooms: dict[str, None] = {}
+    climbs: dict[str, None] = {}
+
+    def module_of(frame) -> str | None:
+        name = frame.f_globals.get("__name__", "")
+        return name if name == "mftire" or name.startswith("mftire.") else None
+
+    def profile(frame, event, arg):
+        if event != "call" or frame.f_code.co_name == "<module>":
+            return
+        callee = module_of(frame)
+        if callee is None:
+            return
+        rooms.setdefault(callee)
+        up = frame.f_back
+        while up is not None and module_of(up) is None:
+            up = up.f_back
+        caller = module_of(up) if up is not None else None
+        if caller and caller != callee and py_layer_rank(caller) < py_layer_rank(callee):
+            climbs.setdefault(f"{caller} -> {callee}.{frame.f_code.co_name}")
+
+    sys.setprofile(profile)
+    try:
+        fn(*args, **kwargs)
+    finally:
+        sys.setprofile(None)
+    return list(rooms), list(climbs)
+
+
+def _walks(tmp_path: Path) -> dict[str, tuple[list[str], list[str]]]:
+    import warnings
+
+    import numpy as np
+    import pandas as pd
+
+    from mftire.fitting import fit_tir
+    from mftire.fmu.export import export_fmu
+    from mftire.tyre import load
+
+    tir = ROOT / "tests" / "data" / "tir" / "MagicFormula61_Parameters.tir"
+    tyre = load(tir)
+    kappa = np.linspace(-0.2, 0.2, 21)
+    frames = []
+    for fz in (3000.0, 4500.0, 6000.0):
+        out = tyre.evaluate(fz, kappa, 0.0)
+        frames.append(pd.DataFrame({"Fz": fz, "kappa": kappa, "alpha": 0.0, "gamma": 0.0, "Vx": 16.7,
+                                    "P": tyre["NOMPRES"], "Fx": np.asarray(out["Fx"])}))  # fmt: skip
+    data = pd.concat(frames, ignore_index=True)
+    tyre.evaluate(4000.0, 0.05, 0.01)  # what the first call of a session loads (the kernel) is loaded
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return {
+            "Tyre.evaluate (arrays)": walk(tyre.evaluate, [3000.0, 5000.0], [0.05, -0.1], [0.01, 0.02]),
+            "Tyre.evaluate (numpy)": walk(tyre.evaluate, [3000.0, 5000.0], [0.05, -0.1], [0.01, 0.02],
+                                          backend="numpy"),
+            "Tyre.evaluate (one point)": walk(tyre.evaluate, 4000.0, 0.05, 0.01),
+            "fit_tir": walk(fit_tir, data, tir, stages="1", progress=False),
+            "export_fmu": walk(export_fmu, tyre, tmp_path / "walk.fmu"),
+            "export_fmu (transient)": walk(export_fmu, tyre, tmp_path / "walk_t.fmu", transient=True),
+        }
+
+
+@pytest.mark.skipif(not any(shutil.which(c) for c in ("cc", "gcc", "clang")), reason="no C compiler")
+def test_walks_of_the_entry_points_go_down_the_layers(tmp_path):
+    walks = _walks(tmp_path)
+    print("\n| entry point | layers entered (top first) | modules | climbs |\n|---|---|---|---|")
+    for name, (rooms, climbs) in walks.items():
+        layers = sorted({py_layer_rank(m) + 1 for m in rooms}, reverse=True)
+        print(f"| `{name}` | {', '.join(map(str, layers))} | {len(rooms)} | {len(climbs)} |")
+    for name, (rooms, _) in walks.items():
+        print(f"{name}: {' > '.join(rooms)}")
+    assert {name: climbs for name, (_, climbs) in walks.items() if climbs} == {}
+    assert all(len(rooms) >= 2 for rooms, _ in walks.values()) and len(walks["fit_tir"][0]) > 10  # it sees calls
