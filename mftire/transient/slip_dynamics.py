@@ -46,6 +46,13 @@ tyre is therefore a damped spring: Fx = Cx·(u + tau_x·du/dt) in the linear ran
 The same equations are compiled into the transient FMU (``mftire export-fmu
 --transient``, ``mftire/mf/c/mf_transient.c``); the constants of
 :data:`CONSTANTS` are its tunable parameters (one table for both).
+
+Thermal block (``thermal=True``, a ``.tir`` with ``[MFTIRE_THERMAL]``; ``docs/transient.md``): three more
+states, the node temperatures of :mod:`mftire.thermal` (tread surface, bulk/carcass, inflation gas), heated
+by the sliding friction power at the transient slips and the rolling loss of the outputs, cooled by the air
+and the road (:func:`mftire.thermal.heat.node_rates`); the gas law's hot pressure is the Magic Formula's
+pressure and each temperature law with an ``EXTn_NODE`` reads its node.  Inputs :data:`THERMAL_INPUTS`,
+outputs :data:`THERMAL_OUTPUTS`, states :data:`THERMAL_STATES`.
 """
 
 from __future__ import annotations
