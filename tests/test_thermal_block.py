@@ -21,6 +21,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import needs_c_compiler
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mftire.errors import MftireInputError
 from mftire.transient import TransientTyre, simulate
@@ -266,3 +268,21 @@ def test_a_plain_tir_gives_the_plain_transient_fmu():
     assert [v.name for v in variables if v.kind == "output"] == output_names()
     assert "#define MT_THERMAL 0" in files["mt_config_gen.h"] and "#define MT_N_STATES 2" in files["mt_config_gen.h"]
     assert "MT_STATE_START[2]" in files["mt_model_gen.h"]
+
+
+@settings(max_examples=80, deadline=None)
+@given(caps=st.tuples(*[st.floats(10.0, 1e5)] * 3), g=st.tuples(*[st.floats(0.0, 500.0)] * 5),
+       T=st.tuples(*[st.floats(-40.0, 200.0)] * 3), Ta=st.floats(-40.0, 60.0), Tr=st.floats(-40.0, 80.0),
+       q=st.tuples(st.floats(0.0, 5e4), st.floats(0.0, 5e3)), dt=st.floats(1e-4, 100.0))  # fmt: skip
+def test_node_rates_are_the_equations_of_the_implicit_step(caps, g, T, Ta, Tr, q, dt):
+    """heat.node_rates (the Model Exchange derivatives) and heat.implicit_step (the Co-Simulation step) are the
+    same node equations: the backward-Euler step satisfies C·(T⁺ − T)/dt = C·rates(T⁺) exactly."""
+    from mftire.thermal.heat import implicit_step, node_rates
+
+    g_air, g_sb, g_bg, g_ba, g_road = g
+    Tn = implicit_step(T, dt, q[0], q[1], g_air, Ta, Tr, caps, g_sb, g_bg, g_ba, g_road)
+    rates = node_rates(Tn, q[0], q[1], g_air, Ta, Tr, caps, g_sb, g_bg, g_ba, g_road)
+    for i in range(3):
+        flux = caps[i] * rates[i]  # W
+        scale = q[0] + q[1] + sum(g) * (abs(Tn[i]) + abs(T[i]) + abs(Ta) + abs(Tr) + 1.0) + caps[i] / dt * abs(T[i])
+        assert abs(caps[i] * (Tn[i] - T[i]) / dt - flux) <= 1e-10 * scale
