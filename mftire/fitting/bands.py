@@ -863,7 +863,7 @@ def _heldout_table(heldout) -> pd.DataFrame:
 
 def coverage_table(bands: Bands, heldout, channels: Sequence[str] = BAND_CHANNELS,
                    source: str | None = None) -> pd.DataFrame:
-    """Per channel: held-out points, fraction inside the prediction and the confidence band.
+    """Per channel: held-out points and sweeps, fraction inside the prediction and the confidence band.
 
     Parameters
     ----------
@@ -871,31 +871,61 @@ def coverage_table(bands: Bands, heldout, channels: Sequence[str] = BAND_CHANNEL
     heldout : DataFrame, path or sequence of paths
         Held-out measured sweeps (sweep schema, SI), not used in the fit.
     source : str, optional
-        Source whose σ applies (default: each row's ``source``; largest σ when unknown).
+        Source whose calibration applies (default: each row's ``source``; the widest band when unknown).
 
     Returns
     -------
     DataFrame
-        ``channel, n, inside_prediction, inside_confidence, nominal`` (fractions 0..1);
-        a last row ``channel = "all"`` pools every channel's points.
+        ``channel, n, sweeps, inside_prediction, se_prediction, inside_confidence, nominal`` (fractions
+        0..1); a last row ``channel = "all"`` pools every channel's points.  ``se_prediction`` is the
+        standard error of ``inside_prediction`` with the sweeps as the independent units (the points of
+        a sweep share its offset and drift: a count over few sweeps scatters far more than a binomial
+        count of its points; NaN for fewer than two sweeps).
     """
+    from mftire.segmentation.grouping import group_sweeps
+
     df = _heldout_table(heldout)
     chans = [c for c in channels if c in df.columns and df[c].notna().any() and c in bands.sigma]
     at = bands.at(df, source=source, channels=chans)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the grouping's range warnings concern the fit, not this count
+        sweep = group_sweeps(df.reset_index(drop=True))["sweep_id"].to_numpy() if len(df) else np.zeros(0, int)
     rows = []
-    tot = np.zeros(3)
+    ins_all, ok_all, sw_all = [], [], []
     for ch in chans:
         y = df[ch].to_numpy(float)
         ok = np.isfinite(y)
         ip = (y >= at[f"{ch}_pred_lo"].to_numpy()) & (y <= at[f"{ch}_pred_hi"].to_numpy())
         ic = (y >= at[f"{ch}_lo"].to_numpy()) & (y <= at[f"{ch}_hi"].to_numpy())
         n = int(ok.sum())
-        rows.append({"channel": ch, "n": n, "inside_prediction": float(ip[ok].mean()) if n else math.nan,
+        rows.append({"channel": ch, "n": n, "sweeps": int(np.unique(sweep[ok]).size),
+                     "inside_prediction": float(ip[ok].mean()) if n else math.nan,
+                     "se_prediction": _cluster_se(ip[ok], sweep[ok]),
                      "inside_confidence": float(ic[ok].mean()) if n else math.nan, "nominal": bands.level})
-        tot += (n, ip[ok].sum(), ic[ok].sum())
-    rows.append({"channel": "all", "n": int(tot[0]), "inside_prediction": tot[1] / tot[0] if tot[0] else math.nan,
-                 "inside_confidence": tot[2] / tot[0] if tot[0] else math.nan, "nominal": bands.level})
-    return pd.DataFrame(rows, columns=["channel", "n", "inside_prediction", "inside_confidence", "nominal"])
+        ins_all.append(np.column_stack([ip[ok], ic[ok]]))
+        sw_all.append(sweep[ok])
+        ok_all.append(n)
+    both = np.vstack(ins_all) if ins_all else np.zeros((0, 2), bool)
+    sw = np.concatenate(sw_all) if sw_all else np.zeros(0, int)
+    tot = int(sum(ok_all))
+    rows.append({"channel": "all", "n": tot, "sweeps": int(np.unique(sw).size),
+                 "inside_prediction": float(both[:, 0].mean()) if tot else math.nan,
+                 "se_prediction": _cluster_se(both[:, 0], sw),
+                 "inside_confidence": float(both[:, 1].mean()) if tot else math.nan, "nominal": bands.level})
+    return pd.DataFrame(rows, columns=["channel", "n", "sweeps", "inside_prediction", "se_prediction",
+                                       "inside_confidence", "nominal"])
+
+
+def _cluster_se(inside: np.ndarray, cluster: np.ndarray) -> float:
+    """Standard error of the mean of ``inside`` with clusters as the units (ratio estimator over clusters)."""
+    ids, inv = np.unique(cluster, return_inverse=True)
+    k = ids.size
+    if k < 2:
+        return math.nan
+    n = np.bincount(inv.ravel()).astype(float)
+    c = np.bincount(inv.ravel(), weights=inside.astype(float))
+    p = c.sum() / n.sum()
+    return float(math.sqrt(k / (k - 1) * np.sum((c - p * n) ** 2)) / n.sum())
 
 
 def band_coverage(bands: Bands, heldout_data, channels: Sequence[str] = BAND_CHANNELS,
