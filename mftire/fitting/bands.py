@@ -403,6 +403,7 @@ class CellScale:
     xs: np.ndarray  #: (S, d) conditions of the calibration sweeps, normalised
     us: np.ndarray  #: (S,) mean u² per sweep
     ns: np.ndarray  #: (S,) points per sweep
+    n_eff: float = math.nan  #: effective number of independent calibration points (:func:`effective_sample_size`)
 
     def factor(self, X: np.ndarray | None, exclude_own: bool = False) -> np.ndarray:
         """Local factor ``v`` at raw conditions ``X`` (rows; None: the cell's mean); ``exclude_own``:
@@ -423,13 +424,19 @@ class CellScale:
     def summary(self) -> dict[str, Any]:
         used = [c for c, s in zip(SCALE_CONDITIONS, self.sd, strict=True) if np.isfinite(s)]
         return {"bandwidth": self.h if math.isfinite(self.h) else None, "conditions": used,
-                "sweeps": int(self.us.size)}
+                "sweeps": int(self.us.size), "effective_points": self.n_eff}
 
 
 def _local_factor(xs: np.ndarray, us: np.ndarray, ns: np.ndarray, Z: np.ndarray | None, h: float,
                   exclude_own: bool = False) -> np.ndarray:
-    """Kernel-weighted mean of ``us`` (weights ``ns·exp(-d²/2h²)``) at normalised conditions ``Z``."""
-    glob = float(ns @ us / ns.sum())
+    """Kernel-weighted geometric mean of ``us`` (weights ``ns·exp(-d²/2h²)``) at normalised conditions ``Z``.
+
+    Geometric: the logarithm of the scatter is smoothed (a multiplicative model of the variance, Harvey
+    1976; Yu & Jones 2004), which interpolates a scatter that grows fast over a condition (the error of a
+    missing speed effect towards the ends of the speed range) without the upward bias of an arithmetic mean
+    between a small and a large neighbour."""
+    lu = np.log(np.maximum(us, 1e-12 * max(float(us.max()), 1e-300)))
+    glob = float(np.exp(ns @ lu / ns.sum()))
     if Z is None:
         return np.array([glob])
     if exclude_own:
@@ -442,7 +449,7 @@ def _local_factor(xs: np.ndarray, us: np.ndarray, ns: np.ndarray, Z: np.ndarray 
         w = w * np.exp(-d2 / (2.0 * h * h))
     tot = w.sum(axis=1)
     # a point far from every sweep (all weights underflow) gets the cell's mean factor
-    return np.where(tot > 1e-300, (w @ us) / np.where(tot > 1e-300, tot, 1.0), glob)
+    return np.where(tot > 1e-300, np.exp((w @ lu) / np.where(tot > 1e-300, tot, 1.0)), glob)
 
 
 def fit_cell_scale(residual: np.ndarray, f: np.ndarray, X: np.ndarray, sweep: np.ndarray,
@@ -477,8 +484,48 @@ def fit_cell_scale(residual: np.ndarray, f: np.ndarray, X: np.ndarray, sweep: np
     if best_v is None:  # fewer than three sweeps: no local factor
         best_v = np.ones(ids.size)
         us = np.ones(ids.size)
-    q = conformal_quantile(np.sqrt(u2 / best_v[inv]), level)
-    return CellScale(a, b, q, best_h, mu, sd, xs, us, ns)
+    score = np.sqrt(u2 / best_v[inv])
+    n_eff = effective_sample_size(r / np.hypot(a, b * f) / np.sqrt(best_v[inv]), inv)
+    return CellScale(a, b, grouped_conformal_quantile(score, level, n_eff), best_h, mu, sd, xs, us, ns, n_eff)
+
+
+def effective_sample_size(u: np.ndarray, group: np.ndarray) -> float:
+    """Kish's effective number of independent points ``N / (1 + (m − 1)·ρ)`` of values ``u`` in groups (sweeps),
+    ``ρ`` the intra-class correlation of one-way ANOVA (clipped to 0..1), ``m`` the mean group size
+    (ANOVA's ``m₀``); between the number of groups and of points."""
+    u = np.asarray(u, dtype=float)
+    ids, inv = np.unique(np.asarray(group), return_inverse=True)
+    inv = inv.ravel()
+    N, S = u.size, ids.size
+    if S < 2 or N <= S:
+        return float(max(S, 1))
+    n = np.bincount(inv).astype(float)
+    mean_g = np.bincount(inv, weights=u) / n
+    msb = float(n @ (mean_g - u.mean()) ** 2) / (S - 1)
+    msw = float(np.sum((u - mean_g[inv]) ** 2)) / (N - S)
+    m0 = (N - float(n @ n) / N) / (S - 1)
+    den = msb + (m0 - 1.0) * msw
+    rho = min(max((msb - msw) / den, 0.0), 1.0) if den > 0 else 0.0
+    return float(min(max(N / (1.0 + (m0 - 1.0) * rho), S), N))
+
+
+def grouped_conformal_quantile(scores: np.ndarray, level: float, n_eff: float) -> float:
+    """Conformal quantile of scores that are ``n_eff`` independent draws (the points of a sweep share its
+    offset): the empirical quantile at ``level·(1 + 1/n_eff)`` (the split-conformal rank ``(n + 1)·level``
+    with ``n = n_eff``).  When that exceeds 1 (fewer than ``level/(1 − level)`` effective draws, e.g. 19 for
+    95 %), no order statistic holds the level and the Gaussian prediction quantile
+    ``t_{n_eff−1}((1 + level)/2)·sqrt(1 + 1/n_eff)·RMS(scores)`` is used (Student's prediction interval of a
+    new draw), never below the plain split-conformal quantile of the points."""
+    s = np.asarray(scores, dtype=float)
+    s = s[np.isfinite(s)]
+    if s.size == 0:
+        return math.nan
+    lev = level * (1.0 + 1.0 / n_eff)
+    if lev < 1.0:
+        return max(float(np.quantile(s, lev, method="higher")), conformal_quantile(s, level))
+    dof = max(n_eff - 1.0, 1.0)
+    t = float(stats.t.ppf(0.5 + level / 2, dof)) * math.sqrt(1.0 + 1.0 / n_eff)
+    return max(t * math.sqrt(float(np.mean(s**2))), conformal_quantile(s, level))
 
 
 #: Fewest calibration points and sweeps of a (source, slip class) cell; smaller cells use the source's pooled cell
