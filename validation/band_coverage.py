@@ -10,8 +10,10 @@ per channel:
     cornering and combined sweeps at three loads and two cambers, with white noise of ``noise`` × the
     channel's peak on every point and a per-sweep grip scatter (each sweep's forces and moments scaled
     by ``1 + g``, ``g ~ N(0, grip)``: noise correlated within a sweep and growing with the force).
-    MF 6.1 (stages 1, 2, 3, 6, 7: Fx, Fy, Mz, Mx, My) is fitted; the new points are at the same
-    conditions.
+    MF 6.1 (stages 1, 2, 3, 6, 7: Fx, Fy, Mz, Mx, My) is fitted; the new points are counted on a new
+    campaign at the loads between the fitted ones (``new loads``: a sweep the fit did not see, what the
+    calibration on out-of-fold sweeps is made for) and on the same campaign re-measured (``same
+    conditions``, where the band is a little wide: the fit has seen those conditions).
 ``slip_speed``
     the demo's measured-like campaign (:func:`mftire.fe.programmes.programme` ``"slip_speed"`` at half
     the slip density): the FE-surrogate tyre with a friction law depending on the sliding speed, which
@@ -103,7 +105,13 @@ def study(repeats: int, replicates: int = 6, level: float = 0.95, seed: int = 0,
                                   if ch in channels)
                 fit = fit_tir(train, TIR, stages=stages, progress=False)
                 bands = bootstrap_bands(None, TIR, n=replicates, fit=fit, level=level, seed=s, grid=train.iloc[:0])
-                sets = {"same conditions": new}
+                # a new campaign at loads between the fitted ones (the conditions a band is calibrated for: a
+                # sweep the fit did not see), and the same campaign re-measured
+                loads = campaign_kw.get("loads", (0.5, 1.0, 1.5))
+                between = tuple((x + y) / 2 for x, y in zip(loads, loads[1:], strict=False))
+                other = {k: v for k, v in campaign_kw.items() if k != "loads"}
+                sets = {"new loads": campaign(s + 1, loads=between, channels=channels, **other),
+                        "same conditions": new}
                 source = "rig"
             else:
                 train, template = slip_speed_campaign(s, **campaign_kw)

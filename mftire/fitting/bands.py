@@ -20,22 +20,42 @@ where should a new measurement fall?":
    the confidence band is, if anything, a little narrow.  Restricting ``stages`` (e.g.
    ``"1,2,3"``) leaves the other stages' coefficients at the full fit in every replicate:
    those channels then get a zero-width confidence band and only the scatter term below.
-4. **Prediction band, calibrated** (:class:`Calibration`, default).  Held-out *measured*
-   points carry measurement noise, sweep-to-sweep scatter and the model's lack of fit, none of
-   which a confidence band of the mean curve holds.  The data's sweeps are split into folds
-   (``calibrate``, default 5; whole sweeps, because the noise is correlated within a sweep, or
-   the levels of a condition, ``calibrate_by``); each fold is refitted out and predicted.  Per
-   channel, source and slip class (pure longitudinal, pure lateral, combined points) the
-   out-of-fold residuals give a heteroscedastic scale ``s(f̂) = sqrt(a² + (b·f̂)²)`` and the
-   split-conformal quantile ``q`` of ``|r|/s``; the band is ``f̂ ± q·s(f̂)`` (never narrower
-   than the confidence band).  Conformal calibration holds the nominal level for points
-   exchangeable with the calibration sweeps whatever the noise distribution; a Gaussian
-   ``z·σ`` band does not (its robust σ misses heavy tails and force-dependent scatter: the
-   demo's 95 % band held 62 % of the held-out Fx points before).  Measured coverage:
-   ``validation/band_coverage.py`` (repeated campaigns, new noise) and the nested
-   cross-validated coverage ``Calibration.cv_coverage`` of every run.  With ``calibrate=0``
-   the band is the uncalibrated one: replicate quantiles and the full fit's robust residual
-   scatter σ (1.4826 × median |residual| per channel and source) in quadrature,
+4. **Prediction band, calibrated** (:class:`Calibration`, default).  What it means: a band that
+   a *new measured point* falls in with probability ``level`` — a point of a new sweep at a
+   condition the fit did not see (a new load, speed or camber between the measured ones), noise,
+   sweep offset and the model's lack of fit included; not a band of the mean curve.  Held-out
+   measured points carry all three, none of which the confidence band holds.  The data's sweeps
+   are split into folds (``calibrate``, default 5; whole sweeps, because the noise is correlated
+   within a sweep, or the levels of a condition, ``calibrate_by``); each fold is refitted out and
+   predicted.  Per channel, source and slip class (pure longitudinal, pure lateral, combined points;
+   a class with fewer than 5 sweeps uses the source's pooled cell) the out-of-fold residuals give
+   (:func:`fit_cell_scale`):
+
+   * a heteroscedastic scale ``s(f̂) = sqrt(a² + (b·f̂)²)`` (noise floor plus a part proportional
+     to the value),
+   * a local factor ``v(x)`` of the operating conditions (load, speed, pressure, camber): the
+     kernel-weighted geometric mean of the calibration sweeps' scatter near ``x``, bandwidth chosen
+     by leave-one-sweep-out likelihood (``∞``, one factor, when the data show no trend): the
+     scatter that grows with the load where the channel's value does not (Fy, My of a braking
+     sweep) is followed,
+   * the conformal quantile ``q`` of the normalised scores ``|r|/(s·sqrt(v))`` over the
+     *effective* number of independent points (Kish: the points of a sweep share its offset, so
+     12 sweeps of an offset-dominated channel are about 12 draws, not 480), with Student's
+     prediction quantile when fewer than ``level/(1 − level)`` draws make every order statistic
+     too low (:func:`grouped_conformal_quantile`).
+
+   The band is ``f̂ ± q·s(f̂)·sqrt(v(x))`` (never narrower than the confidence band).  The level
+   holds on average over new sweeps like the calibration ones: measured by
+   ``validation/band_coverage.py`` (two campaign designs re-measured with new noise) and by the
+   nested cross-validated coverage ``Calibration.cv_coverage`` of every run.  It is not a
+   guarantee at one particular condition: where the model's error differs from condition to
+   condition (a missing speed effect) a held-out condition with a smaller error than the
+   campaign's average is over-covered; re-measuring a condition the fit *has* seen gives a
+   little more than the level (the fold refits lack that sweep); and a count on a few held-out
+   sweeps scatters widely (:func:`coverage_table` gives its standard error over the sweeps).
+   Before the calibration, a Gaussian ``z·σ`` band held 62 % of the demo's held-out Fx points.
+   With ``calibrate=0`` the band is the uncalibrated one: replicate quantiles and the full fit's
+   robust residual scatter σ (1.4826 × median |residual| per channel and source) in quadrature,
    ``f̂ ± sqrt((f̂ − q)² + (z·σ)²)``.
 
 The bands evaluate replicate models with the full evaluator (:meth:`Tyre.evaluate`) in
@@ -66,7 +86,8 @@ from mftire.progress import reporter
 from mftire.tyre import Tyre
 
 __all__ = ["Bands", "bootstrap_bands", "start_bootstrap_bands", "PendingBands", "band_coverage", "coverage_table",
-           "resample_sweeps", "write_bands", "BAND_CHANNELS"]
+           "resample_sweeps", "write_bands", "BAND_CHANNELS", "Calibration", "CellScale", "fit_cell_scale",
+           "effective_sample_size", "grouped_conformal_quantile", "SCALE_CONDITIONS"]
 
 #: Channels given bands.
 BAND_CHANNELS: tuple[str, ...] = ("Fx", "Fy", "Mz", "Mx", "My")
@@ -886,7 +907,9 @@ class PendingBands:
             bands.notes[-1] = (
                 f"prediction band: conformal calibration on out-of-fold residuals ({len(fold_fits)} folds of "
                 f"{'/'.join(self.by)} groups, refitted without each fold), heteroscedastic scale "
-                "sqrt(a² + (b·f̂)²) per channel and source, band f̂ ± q·s (use for held-out measured points)")
+                "sqrt(a² + (b·f̂)²)·sqrt(v(x)) per channel, source and slip class (v: local factor of load, speed, "
+                "pressure and camber), quantile over the effective number of sweeps; band f̂ ± q·s (use for a new "
+                "measured point at a condition the fit did not see)")
         if grid is None:
             from mftire.compare.data import assign_families, curve_grid
 
