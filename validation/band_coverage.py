@@ -89,7 +89,7 @@ def _rows(i: int, what: str, cov: pd.DataFrame, bands, level: float, source: str
 
 
 def study(repeats: int, replicates: int = 6, level: float = 0.95, seed: int = 0, design: str = "synthetic",
-          channels: Sequence[str] = CHANNELS, **campaign_kw) -> pd.DataFrame:
+          channels: Sequence[str] = CHANNELS, calibrate: int = 5, **campaign_kw) -> pd.DataFrame:
     """Coverage of the prediction band on a repeated campaign, one row per repeat, counted set and channel."""
     if design not in DESIGNS:
         raise ValueError(f"design must be one of {DESIGNS}")
@@ -104,13 +104,17 @@ def study(repeats: int, replicates: int = 6, level: float = 0.95, seed: int = 0,
                 stages = ",".join(str(k) for k, ch in ((1, "Fx"), (2, "Fy"), (3, "Mz"), (6, "Mx"), (7, "My"))
                                   if ch in channels)
                 fit = fit_tir(train, TIR, stages=stages, progress=False)
-                bands = bootstrap_bands(None, TIR, n=replicates, fit=fit, level=level, seed=s, grid=train.iloc[:0])
+                bands = bootstrap_bands(None, TIR, n=replicates, fit=fit, level=level, seed=s, grid=train.iloc[:0],
+                                        calibrate=calibrate)
                 # a new campaign at loads between the fitted ones (the conditions a band is calibrated for: a
                 # sweep the fit did not see), and the same campaign re-measured
                 loads = campaign_kw.get("loads", (0.5, 1.0, 1.5))
                 between = tuple((x + y) / 2 for x, y in zip(loads, loads[1:], strict=False))
                 other = {k: v for k, v in campaign_kw.items() if k != "loads"}
-                sets = {"new loads": campaign(s + 1, loads=between, channels=channels, **other),
+                # (with the heaviest fitted load in the campaign too: the noise is a share of the campaign's peak)
+                new_l = campaign(s + 1, loads=(*between, max(loads)), channels=channels, **other)
+                f0 = with_defaults(read_tir(TIR))["FNOMIN"]
+                sets = {"new loads": new_l[~np.isclose(new_l["Fz"].to_numpy(float), max(loads) * f0)],
                         "same conditions": new}
                 source = "rig"
             else:
@@ -119,7 +123,7 @@ def study(repeats: int, replicates: int = 6, level: float = 0.95, seed: int = 0,
                 held = np.isclose(train["Vx"].to_numpy(float) * 3.6, HELDOUT_KMH)
                 fit = fit_tir(train[~held], template, progress=False)
                 bands = bootstrap_bands(None, template, n=replicates, fit=fit, level=level, seed=s,
-                                        grid=train.iloc[:0])
+                                        grid=train.iloc[:0], calibrate=calibrate)
                 at_held = np.isclose(new["Vx"].to_numpy(float) * 3.6, HELDOUT_KMH)
                 sets = {"heldout": new[at_held], "fitted": new[~at_held]}
                 source = "measured"
@@ -143,15 +147,16 @@ def main() -> None:
     ap.add_argument("--replicates", type=int, default=6)
     ap.add_argument("--level", type=float, default=0.95)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--folds", type=int, default=5, help="calibration folds (bootstrap_bands' calibrate)")
     args = ap.parse_args()
     t0 = time.perf_counter()
-    table = study(args.repeats, args.replicates, args.level, args.seed, args.design)
+    table = study(args.repeats, args.replicates, args.level, args.seed, args.design, calibrate=args.folds)
     for (i, what), g in table.groupby(["repeat", "design"], sort=False):
         print(f"repeat {i} {what}: " + ", ".join(f"{r.channel} {100 * r.inside:.1f} %" for r in g.itertuples()),
               flush=True)
     s = summary(table)
-    print(f"\n{args.design} design, nominal {100 * args.level:g} %, {args.repeats} repeats, "
-          f"{time.perf_counter() - t0:.0f} s")
+    print(f"\n{args.design} design, {args.folds} calibration folds, nominal {100 * args.level:g} %, "
+          f"{args.repeats} repeats, {time.perf_counter() - t0:.0f} s")
     for r in s.itertuples(index=False):
         print(f"  {r.design:>15} {r.channel:>3}: mean {100 * r.mean:.1f} % (s.e. {100 * r.se:.1f}, range "
               f"{100 * r.min:.1f}-{100 * r.max:.1f}; cross-validated {100 * r.cv:.1f} %)")
