@@ -160,9 +160,10 @@ def test_heteroscedastic_scale_recovers_noise_model_and_calibrates():
 
 
 def test_calibrated_bands_cover_a_repeated_campaign():
-    """Reduced simulation study of validation/band_coverage.py: 4 repeats of fit + bands (6 replicates,
-    5 calibration folds) and a re-measured campaign with new white noise and new per-sweep grip scatter.
-    The full study (40 repeats): Fx 94.7 %, Fy 96.4 % for a nominal 95 %."""
+    """Reduced simulation study of validation/band_coverage.py (synthetic design, Fx and Fy): 2 repeats of fit +
+    bands (3 replicates, 5 calibration folds of whole sweeps) and a re-measured campaign with new white noise and
+    new per-sweep grip scatter, at the same loads and at loads between them.  The full study (README figures)
+    has 5 channels and 20 repeats."""
     import importlib.util
     from pathlib import Path
 
@@ -170,14 +171,14 @@ def test_calibrated_bands_cover_a_repeated_campaign():
     spec = importlib.util.spec_from_file_location("band_coverage", path)
     study = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(study)
-    table = study.study(4)
-    s = study.summary(table).set_index("channel")
-    for ch in ("Fx", "Fy"):  # within 3.5 points of nominal (4 repeats: s.e. about 1 point)
-        assert abs(s.loc[ch, "mean"] - 0.95) <= 0.035, s
-    assert abs(s.loc["all", "mean"] - 0.95) <= 0.02, s
-    # the nested cross-validated coverage of the calibration agrees
+    table = study.study(2, replicates=3, channels=("Fx", "Fy"))
+    s = study.summary(table).set_index(["design", "channel"])
+    for design in ("same conditions", "new loads"):
+        for ch in ("Fx", "Fy"):  # a calibrated 95 % band: neither the old 62 % nor a blanket 100 %
+            assert 0.92 <= s.loc[(design, ch), "mean"] <= 0.99, s
+    # the nested cross-validated coverage of the calibration (new sweeps, by models that did not see them)
     cv = table[table["channel"] != "all"]["cv_coverage"]
-    assert abs(cv.mean() - 0.95) <= 0.03
+    assert abs(cv.mean() - 0.95) <= 0.02
 
 
 def _offset_sweeps(rng, loads, speeds, n=30, per_sweep=2):
