@@ -274,8 +274,8 @@ def headline_text(summary: dict, diag, run_time_s: float) -> str:
     cv = [f"{k.split('_')[1]} {100 * v:.1f} %" for k, v in summary.items() if k.startswith("cv_")]
     if held:
         sw = summary.get("heldout_band_sweeps")
-        L.append(f"  {lvl:g} % prediction band, held-out points inside"
-                 + (f" ({sw} sweeps; s.e. over the sweeps)" if sw else "") + ": " + ", ".join(held))
+        L.append(f"  {lvl:g} % prediction band, held-out points inside: " + ", ".join(held)
+                 + (f" ({sw} sweeps; s.e. over the sweeps)" if sw else ""))
     if cv:
         L.append("    cross-validated over sweeps (measured): " + ", ".join(cv))
     rig = summary.get("rig", {})

@@ -255,3 +255,17 @@ def test_grouped_conformal_quantile_holds_the_level_over_few_sweeps():
     assert effective_sample_size(u, group) > 0.8 * S * m
     assert grouped_conformal_quantile(np.abs(u), 0.95, S * m) == pytest.approx(
         conformal_quantile(np.abs(u), 0.95), rel=0.05)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(2, 30), st.integers(2, 40), st.floats(0.0, 3.0), st.floats(0.5, 0.99), st.integers(0, 2**31 - 1))
+def test_effective_sample_is_between_sweeps_and_points(sweeps, per, offset, level, seed):
+    from mftire.fitting.bands import conformal_quantile, effective_sample_size, grouped_conformal_quantile
+
+    rng = np.random.default_rng(seed)
+    group = np.repeat(np.arange(sweeps), per)
+    u = offset * np.repeat(rng.standard_normal(sweeps), per) + rng.standard_normal(sweeps * per)
+    n_eff = effective_sample_size(u, group)
+    assert sweeps <= n_eff <= sweeps * per
+    # never below the plain split-conformal quantile of the points
+    assert grouped_conformal_quantile(np.abs(u), level, n_eff) >= conformal_quantile(np.abs(u), level)
