@@ -57,5 +57,15 @@ def test_reduced_demo_runs_the_whole_loop(tmp_path, capsys):
         assert rig[f"heldout_{ch}_rms_pct_after"] < 1.0 < rig[f"heldout_{ch}_rms_pct_before"], (ch, rig)
     assert s["rig"]["cause"] == rig["cause"]
     assert {"rig_import_dropped", "rig_fit_stages", "rig_diagnosis_ranking", "rig_heldout"} <= set(doc["tables"])
+    # the thermal tyre (issue 22): the rig fit made thermal on the thermal run's first part, its stint replayed
+    assert "thermal stint (held out, " in tail
+    for name in ("thermal.tir", "thermal_replay.csv", "thermal_stint.png"):
+        assert (out / name).exists(), name
+    th = doc["numbers"]["thermal"]
+    assert th["data"].startswith("SIMULATED") and th["tir"].startswith("rig_fitted.tir")
+    assert th["surface_rms_K"] < 3.0 and s["thermal"]["surface_rms_K"] == th["surface_rms_K"]
+    for ch in ("Fx", "Fy"):  # the force errors include the rig fit's own: the thermal replay still beats isothermal
+        assert th[f"thermal_{ch}_rms_N"] < th[f"isothermal_{ch}_rms_N"], (ch, th)
+    assert {"thermal_heldout", "thermal_parameters", "thermal_laws"} <= set(doc["tables"])
     ext = load(out / "extended.tir")
     assert ext.extensions and ext.required_variables == []
