@@ -206,9 +206,11 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool | None, exe
     if coverage is not None and len(coverage):
         last = coverage.iloc[-1]
         summary["heldout_inside_prediction_band"] = float(last["inside_prediction"])
+        summary["heldout_band_sweeps"] = int(last["sweeps"])
         for r in coverage.itertuples(index=False):
             if r.channel != "all":
                 summary[f"heldout_{r.channel}_inside_prediction_band"] = float(r.inside_prediction)
+                summary[f"heldout_{r.channel}_inside_prediction_band_se"] = float(r.se_prediction)
     if bands.calibration is not None:
         for ch, per in bands.calibration.cv_coverage.items():
             if "measured" in per:
@@ -245,9 +247,11 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool | None, exe
             rep.add_figure(p, caption=caption)
     rep.add_heading("Uncertainty")
     rep.add_text(f"Bootstrap over sweeps, {len(bands.replicates)} replicates, level {bands.level:g}, of a fit without "
-                 "the held-out condition: confidence band of the mean curve; prediction band calibrated "
-                 "(split conformal, heteroscedastic scale per channel, source and slip class) on out-of-fold "
-                 "sweeps. " + " ".join(bands.notes))  # fmt: skip
+                 "the held-out condition: confidence band of the mean curve; prediction band (for a new measured "
+                 "point) calibrated on out-of-fold sweeps: split conformal over the effective number of sweeps, "
+                 "heteroscedastic scale per channel, source and slip class with a local factor of load, speed, "
+                 "pressure and camber. The held-out coverage counts few sweeps: its s.e. is over the sweeps. "
+                 + " ".join(bands.notes))  # fmt: skip
     if coverage is not None:
         rep.add_table(coverage, caption="held-out measured points inside the bands", key="band_coverage")
     if bands.calibration is not None:
@@ -279,11 +283,15 @@ def headline_text(summary: dict, diag, run_time_s: float) -> str:
             L.append(f"    {e.channel}: {e.rms_pct_before:.2f} % -> {e.rms_pct_after:.2f} %")
     L.append(f"  cause: {summary.get('cause')} (effect {summary.get('effect')})")
     lvl = 100 * summary.get("band_level", 0.95)
-    held = [f"{k.split('_')[1]} {100 * v:.1f} %" for k, v in summary.items()
+    held = [f"{k.split('_')[1]} {100 * v:.1f} %" + (f" (s.e. {100 * se:.1f})" if (se := summary.get(k + "_se"))
+                                                      is not None and se == se else "")
+            for k, v in summary.items()
             if k.startswith("heldout_") and k.endswith("_inside_prediction_band") and k.count("_") == 4]
     cv = [f"{k.split('_')[1]} {100 * v:.1f} %" for k, v in summary.items() if k.startswith("cv_")]
     if held:
-        L.append(f"  {lvl:g} % prediction band, held-out points inside: " + ", ".join(held))
+        sw = summary.get("heldout_band_sweeps")
+        L.append(f"  {lvl:g} % prediction band, held-out points inside: " + ", ".join(held)
+                 + (f" ({sw} sweeps; s.e. over the sweeps)" if sw else ""))
     if cv:
         L.append("    cross-validated over sweeps (measured): " + ", ".join(cv))
     rig = summary.get("rig", {})

@@ -37,9 +37,13 @@ def test_reduced_demo_runs_the_whole_loop(tmp_path, capsys):
     assert s["heldout_Fx_rms_pct_after"] <= 0.5 * s["heldout_Fx_rms_pct_before"]
     assert 0.8 <= s["heldout_inside_prediction_band"] <= 1.0
     for ch in ("Fx", "Fy", "Mz", "Mx", "My"):  # per channel: held-out points and the cross-validated coverage
-        assert 0.5 <= s[f"heldout_{ch}_inside_prediction_band"] <= 1.0
-        assert 0.6 <= s[f"cv_{ch}_inside_prediction_band"] <= 1.0
+        assert 0.8 <= s[f"heldout_{ch}_inside_prediction_band"] <= 1.0
+        assert 0.8 <= s[f"cv_{ch}_inside_prediction_band"] <= 1.0
     assert "band_cv_coverage" in doc["tables"]
+    # the FE source has many sweeps: its cross-validated coverage is near the nominal 95 % on every channel
+    # (quick run: 90.7-97.4 %; the full demo's figures are in validation/README.md)
+    fe_cv = [r for r in doc["tables"]["band_cv_coverage"] if r["source"] == "fe"]
+    assert len(fe_cv) == 5 and all(abs(r["inside_prediction"] - 0.95) <= 0.06 for r in fe_cv), fe_cv
     # every table of the page is in the JSON
     assert {"fit_stages", "diagnosis_ranking", "band_coverage"} <= set(doc["tables"])
     # the third source: the simulated raw rig run, imported, fitted and diagnosed (issue 12)

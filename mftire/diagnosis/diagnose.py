@@ -19,9 +19,17 @@ Procedure (:func:`diagnose`)
    or in one of them, is never chosen (:func:`~mftire.diagnosis.effects.worse_channels`).
 5. The held-out condition: each surviving law's model and its control, both fitted without it, per
    channel; the first law (in order of preference) that makes no scored channel worse and improves
-   them together is refitted on every row and written.  Its model changes only the coefficients of
-   the channels the law acts on.  When none holds: "cause named, no law found", the model unchanged.
-6. Before/after errors on the held-out condition per channel (before: the control): RMS, RMS in % of
+   them together, and that also holds on the extra conditions (:func:`extra_conditions`: the last
+   tests at conditions tested before, and the interior set-point levels where the law changes the
+   model most, each refitted without them), is refitted on every row and written.  Its model changes
+   only the coefficients of the channels the law acts on.  When none holds: "cause named, no law
+   found", the model unchanged.
+6. Never worse than no effect (issue 21): the law refitted on every row must fit those rows on every
+   scored channel at least as well as the given model (:func:`worse_in_sample`; a channel the law does
+   not act on keeps its given coefficients); an input law stays within physical limits
+   (:func:`~mftire.diagnosis.effects.plausible_inputs`); a candidate with two levels of a quantity (not a
+   flag, not an MF input) gets no law, since nothing can check its form between the levels.
+7. Before/after errors on the held-out condition per channel (before: the control): RMS, RMS in % of
    the channel's peak, and the share of residual variance removed.
 
 Identifiers are never candidates (:func:`mftire.diagnosis.candidates.is_identifier`).  With the
