@@ -75,13 +75,14 @@ def _run_here(folder: Path, argv: list[str]) -> int:
         os.chdir(cwd)
 
 
-def test_demo_on_the_cluster_with_a_relative_output_equals_the_local_run(cluster, tmp_path, capsys):
+def test_demo_on_the_cluster_with_a_relative_output_equals_the_local_run(cluster, quick_demo, tmp_path, capsys):
     address, workers_cwd = cluster
-    # the local run on every core (its output does not depend on --jobs): the cheaper reference on CI
-    assert _run_here(tmp_path, ["demo", "--quick", "--output", "local"]) == 0
+    # the reference: the session's local run on every core (its output does not depend on --jobs), which
+    # tests/test_demo.py checks (tests/conftest.py: quick_demo)
+    local, _, _ = quick_demo
     assert _run_here(tmp_path, ["demo", "--quick", "--output", "out", "--scheduler", address]) == 0
     assert "done: out/report.html" in capsys.readouterr().out
-    _same_outputs(tmp_path / "local", tmp_path / "out")
+    _same_outputs(local, tmp_path / "out")
     assert list(workers_cwd.iterdir()) == []  # nothing written by the workers
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []  # no staging folder left
 
