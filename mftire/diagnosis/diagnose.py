@@ -52,11 +52,14 @@ from mftire.diagnosis.effects import (
     final_fit,
     is_worse,
     make_problem,
+    plausible_inputs,
     primary_rows,
     refine_effect,
+    refit_without,
     restricted,
+    with_given_channels,
 )
-from mftire.diagnosis.holdout import default_holdout, holdout_mask, levels
+from mftire.diagnosis.holdout import SET_COLUMNS, default_holdout, holdout_mask, levels
 from mftire.diagnosis.profile import CONFOUND_R, Profiles, profile_factors
 from mftire.diagnosis.ranking import (
     CandidateScore,
@@ -67,7 +70,7 @@ from mftire.diagnosis.ranking import (
 from mftire.errors import MftireInputError
 from mftire.fitting.weights import noise_std
 from mftire.iotools.sweeps import FIT_ROW, MEASURED_COLUMNS, fit_rows
-from mftire.mf.extensions import BUILTIN_VARIABLES
+from mftire.mf.extensions import BUILTIN_VARIABLES, MAX_LEVELS, TARGET_CHANNELS
 from mftire.progress import reporter
 from mftire.tyre import Tyre, TyreLike, as_tyre
 
@@ -229,6 +232,110 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
     return out if np.unique(out[out >= 0]).size >= 2 else kind_folds(sweeps, kinds)
 
 
+#: The MF's own operating inputs (a law in them is interpolated between tested levels like the MF's terms).
+MF_INPUTS = ("Fz", "Vx", "P", "gamma")
+#: Share of the sweeps, the last in test order, held out by :func:`order_fold`.
+ORDER_SHARE = 0.25
+
+
+def order_fold(df: pd.DataFrame, kinds: np.ndarray | None, share: float = ORDER_SHARE,
+               levels: np.ndarray | None = None) -> np.ndarray | None:
+    """The last ``share`` of the sweeps in test order (the time column, else the row order) as one held-out fold
+    (label 0; every other row -1, never held out), so that a law is also judged on the tests that followed the
+    ones it was fitted on, as new runs of a user's campaign are.  Sweeps of a kind (``kinds``) that would leave no
+    sweep of it in training are not held out, nor is a sweep at an operating condition (set points, kind, and the
+    level of ``levels``: a candidate with few levels) that no earlier sweep has.  None with fewer than 4 sweeps
+    or nothing to hold out."""
+    sweeps = df["sweep_id"].to_numpy()
+    tcol = time_column(df)
+    order = df[tcol].to_numpy(float) if tcol is not None else np.arange(len(df), dtype=float)
+    start = pd.Series(order).groupby(sweeps).min().sort_values(kind="stable")
+    if len(start) < 4:
+        return None
+    last = start.index[-max(1, int(round(share * len(start)))):]
+    out = np.where(np.isin(sweeps, last), 0, -1)
+    # a last sweep at an operating condition (set points and kind) that no earlier sweep has is not held out:
+    # that would judge the extrapolation to a new load or speed, which is not the question
+    keys = [c for c in SET_POINTS if c in df.columns]
+    cond = df[keys].astype(float).round(6).apply(tuple, axis=1) if keys else pd.Series([()] * len(df))
+    if kinds is not None:
+        cond = pd.Series(list(zip(cond, np.asarray(kinds), strict=True)))
+    if levels is not None and np.unique(np.round(np.asarray(levels, float), 6)).size <= MAX_LEVELS:
+        cond = pd.Series(list(zip(cond, np.round(np.asarray(levels, float), 6), strict=True)))
+    cond = cond.to_numpy()
+    trained = set(cond[out < 0])
+    out[np.array([c not in trained for c in cond]) & (out == 0)] = -1
+    return out if np.any(out == 0) else None
+
+
+#: Operating conditions held out besides the diagnosis's own (:func:`_worse_elsewhere`), at most.
+EXTRA_CONDITIONS = 2
+
+
+def variable_values(df: pd.DataFrame, effect: EffectFit, candidate: str) -> np.ndarray | None:
+    """The values of the variable ``effect`` reads on the rows ``df`` of a problem (None for a builtin variable;
+    the candidate's values are the column ``_cand``)."""
+    if effect.variable in BUILTIN_VARIABLES:
+        return None
+    if effect.variable in df.columns:
+        return df[effect.variable].to_numpy(float)
+    return df["_cand"].to_numpy(float) if effect.variable == candidate else None
+
+
+def extra_conditions(df: pd.DataFrame, law: Tyre, control: Tyre, channels: Sequence[str], noise: Mapping[str, float],
+                     skip: str, k: int = EXTRA_CONDITIONS) -> list[tuple[str, np.ndarray]]:
+    """Conditions of the training rows ``df`` to hold out besides the diagnosis's own (column ``skip``): the
+    last tests (:func:`order_fold`), and the levels of the MF set points where the law's model and its control
+    differ most (their difference per row over each channel's noise, averaged over the level's rows; interior
+    levels only): where the law matters, it must hold on a condition it was not fitted on.  A level that would
+    take every sweep of a kind out of training, or half the rows, is not held out.  ``[(label, row mask), ...]``."""
+    kinds = df["sweep_var"].to_numpy() if "sweep_var" in df.columns else None
+    out: list[tuple[str, np.ndarray]] = []
+    fwd = order_fold(df, kinds, levels=df["_cand"].to_numpy(float) if "_cand" in df.columns else None)
+    if fwd is not None:
+        out.append(("the last tests", fwd == 0))
+    ml, mc = _model(law, df), _model(control, df)
+    change = np.zeros(len(df))
+    for ch in channels:
+        if ch in FIT_CHANNELS and noise.get(ch, 0.0) > 0:
+            d = (ml[ch] - mc[ch]) / noise[ch]
+            change += np.where(np.isfinite(d) & primary_rows(df, ch), d**2, 0.0)
+    scored = []
+    for sp in SET_POINTS:
+        if sp not in df.columns or sp.removesuffix("_set") == SET_COLUMNS.get(skip, skip).removesuffix("_set"):
+            continue
+        x = df[sp].to_numpy(float)
+        lv = np.unique(np.round(x[np.isfinite(x)], 6))
+        for v in lv[1:-1]:  # interior levels: the models interpolate, as at a user's next condition
+            rows = np.isclose(x, v)
+            if rows.mean() >= 0.5 or (kinds is not None and set(kinds[~rows]) != set(kinds)):
+                continue
+            scored.append((float(change[rows].mean()), f"{sp.removesuffix('_set')} = {v:g}", rows))
+    for _, label, rows in sorted(scored, key=lambda t: -t[0])[:k]:
+        out.append((label, rows))
+    return out
+
+
+def _worse_elsewhere(prob, effect: EffectFit, law: Tyre, control: Tyre, values: np.ndarray | None,
+                     n_pressures: int, effect_channels: Sequence[str], channels: Sequence[str],
+                     noise: Mapping[str, float], skip: str) -> list[str]:
+    """The held-out conditions of :func:`extra_conditions` on which the law's model, refitted without them the way it
+    was chosen, is worse than its control refitted the same way on a scored channel beyond its noise
+    (:func:`~mftire.diagnosis.effects.is_worse`), in words (empty: none).  A user's next data are new runs and
+    other conditions, not the diagnosis's own held-out condition: never worse than no effect (issue 21)."""
+    out = []
+    for label, rows in extra_conditions(prob.df, law, control, channels, noise, skip):
+        law_t, ctrl_t = refit_without(prob, effect, values, n_pressures, effect_channels, ~rows)
+        held = prob.df[rows].reset_index(drop=True)
+        errs = channel_errors(held, _model(ctrl_t, held), _model(law_t, held), channels)
+        worse = [e for e in errs if e.channel in FIT_CHANNELS
+                 and is_worse(e.n * e.rms_after**2, e.n * e.rms_before**2, e.n, noise.get(e.channel, 0.0))]
+        if worse:
+            out.append(f"{', '.join(f'{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g}' for e in worse)} "
+                       f"on {label}, fitted without it")  # fmt: skip
+    return out
+
+
 def kind_folds(sweeps: np.ndarray, kinds: np.ndarray | None, k: int = 3) -> np.ndarray | None:
     """Folds of whole sweeps when the candidate gives no ranges (a variable that changes within the sweeps, as
     the sign of the slip angle): the sweeps of each kind dealt in turn, in their order, to ``k`` folds, so that
@@ -372,6 +479,15 @@ def channel_errors(
     return out
 
 
+def worse_in_sample(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Sequence[str],
+                    noise: Mapping[str, float]) -> list[str]:
+    """The scored channels (:data:`FIT_CHANNELS`) that ``extended`` fits worse than ``given`` on the rows ``df``
+    (each on its primary rows) beyond the allowance of :func:`~mftire.diagnosis.effects.is_worse`."""
+    errs = channel_errors(df, _model(given, df), _model(extended, df), [c for c in channels if c in FIT_CHANNELS])
+    return [e.channel for e in errs
+            if is_worse(e.n * e.rms_after**2, e.n * e.rms_before**2, e.n, noise.get(e.channel, 0.0))]  # fmt: skip
+
+
 def diagnose(
     data: pd.DataFrame,
     tyre: TyreLike,
@@ -487,6 +603,7 @@ def _diagnose(
     n_pressures = len(levels(df[train], "P"))
     #: (chosen law, candidate, what refine_effect needs for that candidate)
     found: list[tuple[EffectFit, CandidateScore, tuple]] = []
+    two_level: list[str] = []  # candidates with two levels of a quantity: named, no law
     tried: list[EffectFit] = []
     control: EffectFit | None = None  # the refit without any effect, shared by the candidates
     dtrain = df[train].reset_index(drop=True)
@@ -523,6 +640,16 @@ def _diagnose(
         kinds = prob.df["sweep_var"].to_numpy() if "sweep_var" in prob.df.columns else None
         folds = level_folds(v, prob.df["sweep_id"].to_numpy(), c.sweep_level, blocks=blocks, kinds=kinds)
         n_levels = int(np.unique(np.round(v[np.isfinite(v)], 9)).size)
+        # the levels in every row: the diagnosis's own held-out condition may be a level of the candidate
+        lv = np.unique(np.round(c.values[np.isfinite(c.values)], 9))
+        if lv.size == 2 and not set(lv.tolist()) <= {-1.0, 0.0, 1.0} and variable not in MF_INPUTS \
+                and variable not in BUILTIN_VARIABLES:
+            # two levels of a quantity (not a 0/1 or ±1 flag, not an MF input, which the MF's own terms interpolate
+            # between tested levels as its pressure terms do): the law's form between or beyond them cannot be checked
+            # on held-out data, and a user's next level is new; the cause is named, no law is written
+            say(f"{variable}: two levels ({lv[0]:g}, {lv[1]:g}) of a quantity: no law can be checked between them")
+            two_level.append(e.variable)
+            continue
         # the laws act on the channels where the candidate is significant (a law that helps Fy is not put on Fx)
         law_ch = [ch for ch in eff_ch if ch in ("Fx", "Fy")] or [ch for ch in eff_ch if ch in chans] or chans
         scores = e.channel_scores
@@ -554,28 +681,33 @@ def _diagnose(
                         key=lambda f: (f.rejected, f.heldout))  # fmt: skip
         ranked = [chosen] + [f for f in ranked if f is not chosen]
         found.append((chosen, e, (prob, [(f, f.law, by_var.get(f.variable)) for f in ranked], eff_ch, folds,
-                                  blocks is not None, control.cv, dict(control.cv_channels), control)))  # fmt: skip
+                                  blocks is not None, control.cv, dict(control.cv_channels), control,
+                                  order_fold(prob.df, kinds, levels=v))))  # fmt: skip
     # the lowest held-out error wins; a better-ranked candidate within 10 % of it is preferred
     lowest = min((f.heldout for f, _, _ in found), default=np.inf)
     best = next((t for t in found if t[0].heldout <= 1.1 * lowest), None)
     if best is None:
         msg = ("no significant effect: candidates were flagged, but no model term explains the residual better "
                "than refitting the model without it")
+        if two_level:
+            msg = (f"cause named, no law found: {', '.join(two_level)} has two levels of a quantity in the data; a law "
+                   "between or beyond them cannot be checked on held-out data, so none is written (test a third "
+                   "level to fit one)")  # fmt: skip
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
                                profiles=profiles, cause=top.variable)  # fmt: skip
     effect, cause, context = best
     # the chosen candidate's best laws and the control, refitted with every MF coefficient
     say(f"refitting every coefficient with the laws of {effect.variable}")
-    prob, law_fits, eff_ch, folds, in_blocks, control_cv, control_channels, local_control = context
+    prob, law_fits, eff_ch, folds, in_blocks, control_cv, control_channels, local_control, forward = context
     variants, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv, control_channels,
-                                    local_control)  # fmt: skip
+                                    local_control, forward)  # fmt: skip
     if not variants:
         msg = ("no significant effect: the best laws did not beat the control once every coefficient was "
                "refitted (" + "; ".join(notes) + ")")
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
-                               profiles=profiles, cause=cause.variable)  # fmt: skip
+                               profiles=profiles, cause=top.variable)  # fmt: skip
     # the held-out condition: each variant's model and its control, both refitted without it, per channel; the
     # first variant (in order of preference) that no channel finds worse beyond its noise and that improves the
     # scored channels together is accepted.  A law acts on its channels only: every other coefficient stays as
@@ -592,26 +724,37 @@ def _diagnose(
         worse = [e.channel for e in errs if e.channel in FIT_CHANNELS
                  and is_worse(e.n * e.rms_after**2, e.n * e.rms_before**2, e.n, noise.get(e.channel, 0.0))]
         gain = sum(e.rms_pct_before**2 - e.rms_pct_after**2 for e in errs if e.channel in FIT_CHANNELS)
+        values_r = variable_values(prob.df, refined, cause.variable)
+        if not plausible_inputs(refined, values_r):
+            rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) moves its "
+                            "input beyond physical limits")  # fmt: skip
+            continue
         if not worse and gain > 0.0:
-            accepted = (eff_r, ext_r, errs)
-            break
+            late = _worse_elsewhere(prob, refined, ext_r, ctrl_r, values_r,
+                                    n_pressures, eff_ch, chans, noise, column)  # fmt: skip
+            if not late:
+                accepted = (eff_r, ext_r, errs)
+                break
+            rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) made "
+                            + "; ".join(late))
+            continue
         what = ", ".join(f"{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g}" for e in errs
                          if e.channel in worse)  # fmt: skip
         rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) "
                         + (f"made {what}" if worse else "did not improve"))
+    if accepted is None:  # no law: the cause named is the ranking's first, the strongest evidence there is
+        msg = (f"cause named, no law found: the laws that beat the control on the held-out folds lost to the model "
+               f"refitted without them on the held-out condition {column} = {values}: " + "; ".join(rejected)
+               + "; the model is left unchanged")  # fmt: skip
+        return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
+                               [], None, tried + [v[0] for v in variants], messages=[msg], data=df, train=train,
+                               not_measured=not_measured, profiles=profiles, cause=top.variable)  # fmt: skip
     effect = variants[0][0]
     named = [e for e in ranking if e.variable == effect.variable and e.significant]
     if named and effect.variable != cause.variable:  # e.g. a slip-speed law chosen for Vx: the cause is Vs
         cause = named[0]
     ranking.remove(cause)
     ranking.insert(0, cause)
-    if accepted is None:
-        msg = (f"cause named, no law found: the laws that beat the control on the held-out folds lost to the model "
-               f"refitted without them on the held-out condition {column} = {values}: " + "; ".join(rejected)
-               + "; the model is left unchanged")  # fmt: skip
-        return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
-                               [], None, tried + [v[0] for v in variants], messages=[msg], data=df, train=train,
-                               not_measured=not_measured, profiles=profiles, cause=cause.variable)  # fmt: skip
     effect, extended, errors = accepted
     if rejected:
         effect.messages.append("not chosen on the held-out condition: " + "; ".join(rejected))
@@ -630,6 +773,23 @@ def _diagnose(
     pall = drop_outliers(pall)
     values_all = pall.df["_cand"].to_numpy(float) if effect.variable not in BUILTIN_VARIABLES else None
     extended, _ = restricted(tyre, final_fit(pall, effect, values_all, n_pressures, eff_ch), effect)
+    # never worse than the model as given (issue 21): the law's model, refitted on every row, is compared with the
+    # given model on those same rows.  With one more law it must fit them at least as well on every scored
+    # channel; a channel it fits worse is a refit that went astray.  A channel the law does not act on directly
+    # keeps its given coefficients; on a channel the law acts on, the law is not written.
+    worse = worse_in_sample(pall.df, tyre, extended, chans, noise)
+    direct = {c for t in effect.targets for c in TARGET_CHANNELS.get(t, ())}
+    if worse and not set(worse) & direct:
+        extended = with_given_channels(tyre, extended, worse)
+        effect.messages.append(f"{', '.join(worse)}: the given coefficients kept (the refit with the law fitted "
+                               "the training rows worse there)")  # fmt: skip
+        worse = worse_in_sample(pall.df, tyre, extended, chans, noise)
+    if worse:
+        msg = (f"cause named, no law found: {effect.name} in {effect.variable}, refitted on every row, fits "
+               f"{', '.join(worse)} worse than the given model on those same rows; the model is left unchanged")
+        return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
+                               [], None, tried + [effect], messages=[msg], data=df, train=train,
+                               not_measured=not_measured, profiles=profiles, cause=top.variable)  # fmt: skip
     effect.standard = {k: float(v) for k, v in extended.flat.items() if k in tyre.flat and v != tyre.flat[k]}
     effect.section = {k: v for k, v in (extended.extensions or {}).items() if k not in (tyre.extensions or {})}
     effect.parameters = {k: float(v) for k, v in effect.section.items() if isinstance(v, float) and "_C" in k}

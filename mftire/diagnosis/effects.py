@@ -5,7 +5,7 @@ a slip-angle or camber offset) times a form of :mod:`mftire.mf.extensions` in th
 (or the standard pressure terms).  Each is fitted by bounded least squares on the
 training data (gross outliers removed; each channel on the rows where it is a primary
 response), together with the peak and curvature coefficients (:data:`REFIT_KEYS`) of the
-channels the law acts on (:func:`refit_channels_of`: its targets' channels, and Mz with a force),
+channels the law acts on (:func:`refit_channels_of`: its targets' channels, and Mz with Fy),
 because a base fit made on data containing the effect has absorbed part of it into them.  The other
 Magic Formula coefficients stay as given.  The inflation-pressure effect refits the
 standard MF 6.1 pressure coefficients instead of an extension section.
@@ -707,6 +707,33 @@ def trimmed(law: Law, worse: Sequence[str]) -> Law | None:
     return dataclasses.replace(law, targets=keep)  # the same law (name, form) on fewer targets
 
 
+#: The largest input correction a law may make over the rows it is fitted on: an effective pressure within
+#: 0.7-1.4 × the logged one (the ideal-gas rise of a tyre from cold to hot is some 10-20 %), a slip-angle
+#: offset within 2 deg (toe and rig misalignment) and a camber offset within 6 deg.  A larger correction is not
+#: a mis-measured input but a law standing in for something else, and extrapolates without meaning.
+INPUT_LIMITS = {"P_FACTOR": (0.7, 1.4), "ALPHA_OFFSET": (-np.radians(2.0), np.radians(2.0)),
+                "GAMMA_OFFSET": (-np.radians(6.0), np.radians(6.0))}  # fmt: skip
+
+
+def plausible_inputs(fit: EffectFit, values: np.ndarray | None) -> bool:
+    """False when an input law of ``fit`` moves its input beyond :data:`INPUT_LIMITS` over ``values`` (the fitted
+    rows' values of its variable; a law in a builtin variable or an interaction is not checked here)."""
+    if values is None or not fit.section:
+        return True
+    for t in parse_section(fit.section).terms:
+        inputs = [x for x in t.targets if x in INPUT_LIMITS]
+        if not inputs or t.variable2 is not None:
+            continue
+        f = np.asarray(t.factor(np.asarray(values, float), None), float)
+        f = f[np.isfinite(f)]
+        for x in inputs:
+            lo, hi = INPUT_LIMITS[x]
+            change = f if x == "P_FACTOR" else f - 1.0
+            if change.size and (change.min() < lo or change.max() > hi):
+                return False
+    return True
+
+
 def choose_effect(
     prob: _Problem,
     laws: Sequence[tuple[str, Law, np.ndarray | None]],
@@ -761,8 +788,8 @@ def choose_effect(
         fits.append((fit_effect(prob, law, var, v, n_pressures, warm=control.standard,
                                 pressure_channels=effect_channels, refit_channels=refit_channels_of(law)),
                      v, law))  # fmt: skip
-    good = sorted((t for t in fits if t[0].n_params > 0 and _beats(t[0], control_for(refit_channels_of(t[2])))),
-                  key=lambda t: t[0].bic)[:4]  # fmt: skip
+    good = sorted((t for t in fits if t[0].n_params > 0 and _beats(t[0], control_for(refit_channels_of(t[2])))
+                   and plausible_inputs(t[0], t[1])), key=lambda t: t[0].bic)[:4]  # fmt: skip
     all_fits = [control] + [f for f, _, _ in fits]
     if not good:
         return None, all_fits
@@ -835,6 +862,7 @@ def refine_effect(
     effect_channels: Sequence[str] | None, folds: np.ndarray | None, local_control_cv: float = float("nan"),
     local_control_channels: Mapping[str, tuple[float, int]] | None = None,
     local_control: EffectFit | None = None,
+    forward: np.ndarray | None = None,
 ) -> tuple[list[tuple[EffectFit, Tyre]], list[str]]:
     """Refit the best laws and the control with every MF coefficient (the staged fitter), then choose
     among them by held-out-sweep error, each model's law and main coefficients refitted on each fold.
@@ -849,6 +877,9 @@ def refine_effect(
     error, the law with the fewest coefficients wins (then the lowest error).
     A variant whose held-out error on any scored channel is worse than its control's beyond the noise
     (:func:`worse_channels`) is never chosen.
+    With ``forward`` (a fold of the last tests, :func:`mftire.diagnosis.diagnose.order_fold`) each variant and its
+    control are also fitted without those tests and judged on them: a variant worse there on any scored channel
+    is never chosen, because a user's new runs follow the ones the law was fitted on.
     Returns ``([(effect, extended tyre), ...], messages)``: the variants that beat their control by
     :data:`MAX_RESIDUAL_VS_CONTROL` on held-out sweeps, the preferred first (empty: none).  An effect's
     ``refit`` says how its model was refitted (``"main"`` coefficients or ``"all"``) and ``control_tyre`` is
@@ -857,6 +888,9 @@ def refine_effect(
     base = prob.tyre
     prob, idx = subsample(prob)
     folds = None if folds is None else np.asarray(folds)[idx]
+    forward = None if forward is None else np.asarray(forward)[idx]
+    if forward is not None and not np.any(forward == 0):
+        forward = None
     fits = [(f, law, None if v is None else np.asarray(v)[idx]) for f, law, v in fits]
     cols = [c for c in prob.df.columns if not str(c).startswith(("residual_", "_"))]
     train = prob.df[cols]  # the training rows without gross outliers, subsampled
@@ -883,9 +917,24 @@ def refine_effect(
         ctrl = f.control if f.control is not None else local_control
         if ctrl is None or not np.isfinite(f.cv) or f.rejected or not np.isfinite(ctrl.cv):
             continue
-        if not worse_channels(f.cv_channels, ctrl.cv_channels, prob.noise):
-            options.append((f.cv / ctrl.cv if ctrl.cv > 0 else np.inf, f, f.apply(base), ctrl.cv, ctrl.apply(base),
-                            "main"))  # fmt: skip
+        if worse_channels(f.cv_channels, ctrl.cv_channels, prob.noise):
+            continue
+        if forward is not None:
+            per_f: dict[str, tuple[float, int]] = {}
+            per_cf: dict[str, tuple[float, int]] = {}
+            chs = refit_channels_of(f.law) if f.law is not None else None
+            values = next((v for g, _, v in fits if g is f), None)
+            heldout_error(prob, f.law, f.variable, values, n_pressures, ctrl.standard, effect_channels, forward,
+                          per_channel=per_f, refit_channels=chs)  # fmt: skip
+            heldout_error(prob, CONTROL, "", None, n_pressures, ctrl.standard, effect_channels, forward,
+                          per_channel=per_cf, refit_channels=chs)  # fmt: skip
+            late = worse_channels(per_f, per_cf, prob.noise)
+            if late:
+                messages.append(f"{f.name} in {f.variable} (main coefficients): worse than the control on the last "
+                                f"tests ({', '.join(late)}), fitted without them: not chosen")  # fmt: skip
+                continue
+        options.append((f.cv / ctrl.cv if ctrl.cv > 0 else np.inf, f, f.apply(base), ctrl.cv, ctrl.apply(base),
+                        "main"))  # fmt: skip
     base_terms = {t.index for t in base.extension_set.terms}
     for fit, law, values in list(fits)[:REFINE_LAWS]:
         chs = refit_channels_of(law) if law is not None else None
@@ -899,6 +948,18 @@ def refine_effect(
                            per_channel=per, refit_channels=chs)  # fmt: skip
         cv_c, per_c = full_control(chs)
         worse = worse_channels(per, per_c, prob.noise)
+        if not worse and forward is not None:  # the last tests, the law's and the control's models fitted without them
+            per_f: dict[str, tuple[float, int]] = {}
+            per_cf: dict[str, tuple[float, int]] = {}
+            heldout_error(p, CONTROL, "", None, n_pressures, None, effect_channels, forward, extra_keys=keys,
+                          per_channel=per_f, refit_channels=chs)  # fmt: skip
+            heldout_error(replace_tyre(prob, control_tyre), CONTROL, "", None, n_pressures, None, effect_channels,
+                          forward, per_channel=per_cf, refit_channels=chs)  # fmt: skip
+            late = worse_channels(per_f, per_cf, prob.noise)
+            if late:
+                messages.append(f"{fit.name} in {fit.variable} (every coefficient): worse than the control on the "
+                                f"last tests ({', '.join(late)}), fitted without them: not chosen")  # fmt: skip
+                continue
         messages.append(f"{fit.name} in {fit.variable}: held-out-sweep error {cv:.4g} with every coefficient "
                         f"refitted (control {cv_c:.4g}), {fit.cv:.4g} with the main coefficients"
                         + (f"; worse than the control on {', '.join(worse)} ("
@@ -971,19 +1032,20 @@ CHANNEL_COEFFICIENTS: dict[str, frozenset[str]] = {
 
 
 def refit_channels_of(law: Law) -> tuple[str, ...] | None:
-    """The channels whose main coefficients are refitted with ``law``: those it acts on, and Mz with a force
-    (the aligning moment reads the forces, Pacejka 2012 eqs 4.E71-4.E78); None (every channel) for the control
-    and the pressure law."""
+    """The channels whose main coefficients are refitted with ``law``: those it acts on, and Mz with the lateral
+    force (the aligning moment reads Fy, Pacejka 2012 eqs 4.E31-4.E32; Fx enters only through the combined-slip
+    arm, 4.E71, which no Mz coefficient refitted here carries); None (every channel) for the control and the
+    pressure law."""
     chans = set(ch for t in law.targets for ch in TARGET_CHANNELS.get(t, ()) if ch in FIT_CHANNELS)
     if not chans:
         return None
-    if chans & {"Fx", "Fy"}:
+    if "Fy" in chans:  # pure Mz reads the lateral force (eqs 4.E31-4.E32); Fx enters only combined Mz (4.E71)
         chans.add("Mz")
     return tuple(ch for ch in FIT_CHANNELS if ch in chans)
 
 
 def law_channels(fit: EffectFit) -> tuple[str, ...]:
-    """The channels whose coefficients a law's model changes: those its targets act on, and Mz with a force
+    """The channels whose coefficients a law's model changes: those its targets act on, and Mz with Fy
     (:func:`refit_channels_of`); empty for the pressure law (the standard pressure terms of every channel)."""
     chans = refit_channels_of(Law(fit.name, fit.targets, "")) if fit.targets else None
     return chans or ()
@@ -1002,6 +1064,37 @@ def restricted(base: Tyre, extended: Tyre, fit: EffectFit) -> tuple[Tyre, Effect
                 if k in allowed and k in base.flat and isinstance(v, float) and v != base.flat[k]}  # fmt: skip
     section = {k: v for k, v in (extended.extensions or {}).items() if k not in (base.extensions or {})}
     return _tyre_with(base, standard, section), dataclasses.replace(fit, standard=standard, section=section)
+
+
+def with_given_channels(base: Tyre, extended: Tyre, channels: Sequence[str]) -> Tyre:
+    """``extended`` with the main coefficients of ``channels`` (:data:`CHANNEL_COEFFICIENTS`) as ``base`` has them:
+    a law's model that a refit made worse on a channel the law does not act on keeps the given coefficients there."""
+    keys = frozenset().union(*(CHANNEL_COEFFICIENTS[ch] for ch in channels if ch in CHANNEL_COEFFICIENTS))
+    standard = {k: float(v) for k, v in extended.flat.items()
+                if k in base.flat and k not in keys and isinstance(v, float) and v != base.flat[k]}  # fmt: skip
+    section = {k: v for k, v in (extended.extensions or {}).items() if k not in (base.extensions or {})}
+    return _tyre_with(base, standard, section)
+
+
+def refit_without(prob: _Problem, effect: EffectFit, values: np.ndarray | None, n_pressures: int,
+                  effect_channels: Sequence[str] | None, rows: np.ndarray) -> tuple[Tyre, Tyre]:
+    """The law's model and its control refitted the way ``effect`` was chosen (``effect.refit``: the main
+    coefficients with the law's, or every coefficient) on the rows ``rows`` of ``prob`` only, both restricted to
+    the law's channels (:func:`restricted`): a second held-out condition for the same comparison."""
+    base = prob.tyre
+    sub, idx = subsample(take(prob, rows))
+    if effect.refit == "all" or effect.law is None:
+        cols = [c for c in sub.df.columns if not str(c).startswith(("residual_", "_"))]
+        law_t = _full_refit(sub.df[cols], _tyre_with(base, {}, effect.section))
+        ctrl_t = _full_refit(sub.df[cols], base)
+    else:
+        chs = refit_channels_of(effect.law)
+        v = None if values is None else np.asarray(values)[np.flatnonzero(rows)][idx]
+        ctrl = fit_effect(sub, CONTROL, "", None, n_pressures, refit_channels=chs)
+        law_t = fit_effect(sub, effect.law, effect.variable, v, n_pressures, warm=ctrl.standard,
+                           pressure_channels=effect_channels, refit_channels=chs).apply(base)  # fmt: skip
+        ctrl_t = ctrl.apply(base)
+    return restricted(base, law_t, effect)[0], restricted(base, ctrl_t, effect)[0]
 
 
 def replace_tyre(prob: _Problem, tyre: Tyre) -> _Problem:

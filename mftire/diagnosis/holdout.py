@@ -68,6 +68,12 @@ def _keeps_every_kind(df: pd.DataFrame, col: str, value: float) -> bool:
     return set(train["kind"]) >= set(df["kind"])
 
 
+def _mean_finite(a: np.ndarray) -> float:
+    """The mean of the finite values of ``a`` (NaN when there is none, without numpy's empty-slice warning)."""
+    a = a[np.isfinite(a)]
+    return float(a.mean()) if a.size else float("nan")
+
+
 def default_holdout(
     df: pd.DataFrame, preferred: Sequence[str] = (), misfit: np.ndarray | None = None
 ) -> tuple[str, list[float]]:
@@ -100,7 +106,7 @@ def default_holdout(
             continue
         x = df[col].to_numpy(float)
         m = np.asarray(misfit, float)
-        level_misfit = {v: float(np.nanmean(m[np.isclose(x, v)])) for v in lv}
+        level_misfit = {v: _mean_finite(m[np.isclose(x, v)]) for v in lv}
         median = float(np.median(list(level_misfit.values())))
         if interior and max(level_misfit[v] for v in interior) >= median:
             return column, [float(max(interior, key=level_misfit.get))]

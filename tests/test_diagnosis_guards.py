@@ -1,0 +1,113 @@
+"""Issue 21, the hard rule: a law is never written when it can make the model worse than no effect.
+
+The guards, each with numbers: the last tests as a held-out fold (:func:`order_fold`), the conditions a law
+must also hold on (:func:`extra_conditions`), input laws within physical limits (:func:`plausible_inputs`),
+the final model never fitting its own rows worse than the given one (:func:`worse_in_sample`, a channel the
+law does not act on keeps its given coefficients: :func:`with_given_channels`), and no law in two levels of
+a quantity.  Campaigns as in tests/test_diagnosis.py (a known MF tyre, one injected effect).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from test_diagnosis import TYRE, _campaign, _measure
+
+from mftire.diagnosis.candidates import with_sweeps
+from mftire.diagnosis.diagnose import diagnose, extra_conditions, order_fold, worse_in_sample
+from mftire.diagnosis.effects import CHANNEL_COEFFICIENTS, EffectFit, plausible_inputs, with_given_channels
+from mftire.tyre import Tyre
+
+pytestmark = pytest.mark.filterwarnings("ignore::mftire.mf.inputs.MFLimitWarning")
+
+
+@pytest.fixture(scope="module")
+def grouped() -> pd.DataFrame:
+    return with_sweeps(_measure(_campaign(), None))
+
+
+@pytest.fixture(scope="module")
+def two_passes() -> pd.DataFrame:
+    """The campaign run twice: every condition of the second pass was tested in the first."""
+    one = _campaign()
+    two = one.assign(time=one["time"] + one["time"].max() + 0.5)
+    return with_sweeps(_measure(pd.concat([one, two], ignore_index=True), None))
+
+
+def test_order_fold_holds_out_the_last_quarter_of_the_sweeps_in_test_order(two_passes, grouped):
+    d = two_passes
+    kinds = d["sweep_var"].to_numpy()
+    sweeps = d["sweep_id"].to_numpy()
+    first_row = pd.Series(np.arange(len(d))).groupby(sweeps).min().sort_values()
+    n = len(first_row)
+    fold = order_fold(d, kinds)
+    assert set(np.unique(sweeps[fold == 0])) == set(first_row.index[-round(0.25 * n):])  # the last 6 of 24
+    assert set(kinds[fold < 0]) == set(kinds)  # every kind stays in training
+    # reversed time: the first rows are now the last tests
+    f2 = order_fold(d.assign(time=d["time"].max() - d["time"]), kinds)
+    assert set(np.unique(sweeps[f2 == 0])) == set(first_row.index[: round(0.25 * n)])
+    # one pass: the last sweeps are the only ones at the largest load, an extrapolation, never held out
+    assert order_fold(grouped, grouped["sweep_var"].to_numpy()) is None
+    # a kind whose sweeps all come last is not held out
+    only_last = np.where(fold == 0, "combined", kinds)
+    assert order_fold(d, only_last) is None
+    assert order_fold(d[d.sweep_id.isin(first_row.index[:3])], None) is None  # under 4 sweeps
+
+
+def test_extra_conditions_hold_out_where_the_law_matters_most(two_passes, grouped):
+    law = Tyre({**TYRE.flat, "LMUY": 0.9})  # a law acting on cornering only
+    noise = {"Fx": 30.0, "Fy": 30.0, "Mz": 1.0}
+    conds = extra_conditions(two_passes, law, TYRE, ["Fx", "Fy", "Mz"], noise, skip="Vx")
+    labels = [lab for lab, _ in conds]
+    # the last tests, and the loads: only the interior one (the largest would judge an extrapolation)
+    assert labels == ["the last tests", f"Fz = {np.median(two_passes['Fz_set'].unique()):g}"], labels
+    for _, rows in conds:
+        assert 0 < rows.sum() < 0.5 * len(two_passes)
+    # one pass has no last tests at a condition tested before; the diagnosis's own column is never held out again
+    assert extra_conditions(grouped, law, TYRE, ["Fy"], {"Fy": 30.0}, skip="Fz") == []
+
+
+def _input_fit(target: str, c1: float) -> EffectFit:
+    section = {"EXT1_TARGET": target, "EXT1_FORM": "linear", "EXT1_VARIABLE": "tread_temp", "EXT1_REF": 30.0,
+               "EXT1_SCALE": 10.0, "EXT1_MIN": 10.0, "EXT1_MAX": 50.0, "EXT1_C1": c1}  # fmt: skip
+    return EffectFit("input", "tread_temp", True, {}, section, {}, 1.0, 1.0, 0.0, 1)
+
+
+def test_input_laws_stay_within_physical_limits():
+    temp = np.linspace(10.0, 50.0, 41)  # z = (T - 30)/10 from -2 to 2
+    assert plausible_inputs(_input_fit("P_FACTOR", 0.1), temp)  # P x 0.8 .. 1.2
+    assert not plausible_inputs(_input_fit("P_FACTOR", 0.25), temp)  # P x 0.5 .. 1.5
+    assert plausible_inputs(_input_fit("ALPHA_OFFSET", np.radians(0.9)), temp)  # +-1.8 deg
+    assert not plausible_inputs(_input_fit("ALPHA_OFFSET", np.radians(1.1)), temp)  # +-2.2 deg
+    assert plausible_inputs(_input_fit("GAMMA_OFFSET", np.radians(2.9)), temp)
+    assert not plausible_inputs(_input_fit("GAMMA_OFFSET", np.radians(3.1)), temp)
+    assert plausible_inputs(_input_fit("LMUY", 0.4), temp)  # a scaling factor is not an input
+    assert plausible_inputs(_input_fit("P_FACTOR", 0.5), None)  # a builtin variable: not checked here
+
+
+def test_final_model_never_fits_its_rows_worse_than_the_given_one(grouped):
+    noise = {"Fx": 30.0, "Fy": 30.0, "Mz": 1.0}
+    assert worse_in_sample(grouped, TYRE, TYRE, ["Fx", "Fy", "Mz"], noise) == []
+    astray = Tyre({**TYRE.flat, "QDZ1": 1.3 * TYRE["QDZ1"], "PDX1": 0.97 * TYRE["PDX1"]})
+    assert worse_in_sample(grouped, TYRE, astray, ["Fx", "Fy", "Mz"], noise) == ["Fx", "Mz"]
+    kept = with_given_channels(TYRE, astray, ["Mz"])  # Mz keeps its given coefficients, Fx its refit
+    assert kept["QDZ1"] == TYRE["QDZ1"] and kept["PDX1"] == astray["PDX1"]
+    assert "QDZ1" in CHANNEL_COEFFICIENTS["Mz"]
+    assert worse_in_sample(grouped, TYRE, kept, ["Fx", "Fy", "Mz"], noise) == ["Fx"]
+
+
+def test_no_law_in_two_levels_of_a_quantity():
+    """Grip falls with a rim temperature tested at two levels only: the cause is named, no law is written (a
+    third level could sit anywhere on a curve through two points); the same effect in a 0/1 flag gets its law."""
+    base = _campaign()
+    sweep = with_sweeps(base)["sweep_id"].factorize()[0]
+    # hot in 6 of the 12 sweeps, two at each load, not aligned with the speeds or the sweep kinds
+    hot = np.array([1, 0, 0, 1, 0, 1, 1, 0, 1, 1, 0, 0], float)[sweep]
+    section = {"EXT1_TARGET": "LMUX LMUY", "EXT1_FORM": "linear", "EXT1_VARIABLE": "hot", "EXT1_C1": -0.15}
+    d = _measure(base, section, {"hot": hot}).assign(rim_temp=25.0 + 40.0 * hot)
+    res = diagnose(d, TYRE, n_perm=19, seed=0, progress=False)
+    assert res.extended is None and res.cause == "rim_temp", (res.cause, res.messages)
+    assert "two levels" in res.messages[0]
+    flag = diagnose(_measure(base, section, {"hot": hot}).assign(wet=hot), TYRE, n_perm=19, seed=0, progress=False)
+    assert flag.extended is not None and flag.effect.variable == "wet", flag.messages
