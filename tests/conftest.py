@@ -60,7 +60,7 @@ def _no_windows_dll(request):
     keeps the cross compiler and checks the DLL of every FMU kind.  Module scope, autouse: active before the
     module's own (module-scoped) fixtures export their FMUs.  Subprocesses (CLI runs, Dask workers) are not
     affected, nor is the session's quick demo (:func:`quick_demo`)."""
-    if request.module.__name__ in WINDOWS_DLL_MODULES:
+    if request.module.__name__.rsplit(".", 1)[-1] in WINDOWS_DLL_MODULES:
         yield
         return
     with pytest.MonkeyPatch.context() as mp:
