@@ -14,6 +14,10 @@
    file (``mftire/data/simulated_ttc_run.dat.gz``, 100 Hz, SAE axes, grip depending on
    the tread temperature) imported, fitted, diagnosed, and the error before and after on
    a held-out load.
+8. The thermal tyre (:func:`thermal_stage`): the rig stage's MF 6.1 fit made thermal with
+   ``fit-thermal`` on the first part of the shipped SIMULATED continuous thermal run
+   (``mftire/data/simulated_thermal_run.dat.gz``), its held-out stint replayed, against the model
+   fed the measured temperature and an isothermal fit.
 """
 
 from __future__ import annotations
@@ -35,7 +39,8 @@ from mftire.progress import Progress
 
 #: Files and folders the demo writes into its output folder.
 OUTPUT_NAMES = ("fe_sweeps.csv", "measured_sweeps.csv", "fitted.tir", "extended.tir", "tyre.fmu", "report.html",
-                "report.json", "headline.png", "rig_sweeps.csv", "rig_fitted.tir", "rig_run.png")
+                "report.json", "headline.png", "rig_sweeps.csv", "rig_fitted.tir", "rig_run.png", "thermal.tir",
+                "thermal_replay.csv", "thermal_stint.png")
 
 
 def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progress: bool | None = None,
@@ -67,12 +72,19 @@ def run_demo(output: str | os.PathLike = "demo_out", quick: bool = False, progre
     return summary
 
 
-def _rig_task(quick: bool, folder: str) -> RigStage:
-    """:func:`rig_stage` as a task for the executor (warnings silenced in the worker too); it writes into a
-    scratch ``folder`` of the worker, whose files :class:`~mftire.parallel.FilesTask` returns to the client."""
+def _rig_task(quick: bool, folder: str) -> tuple[RigStage, ThermalStage]:
+    """:func:`rig_stage`, then :func:`thermal_stage` on its fitted ``.tir``, as a task for the executor
+    (warnings silenced in the worker too); they write into a scratch ``folder`` of the worker, whose files
+    :class:`~mftire.parallel.FilesTask` returns to the client."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return rig_stage(folder, quick)
+        rig = rig_stage(folder, quick)
+        # scipy's BLAS, loaded in a worker after the run's limit, would start a thread per core for the thermal
+        # fit's many small SVDs (3 x its CPU time on a busy 2-core machine): held to one here, now that it is loaded
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(1, user_api="blas"):
+            return rig, thermal_stage(folder, os.path.join(folder, "rig_fitted.tir"))
 
 
 def _diagnose_task(args: tuple) -> Any:
@@ -175,8 +187,9 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool | None, exe
     os.makedirs(fig_dir, exist_ok=True)
     plots = comp.plots(fig_dir, executor=executor)
 
-    step("third source: the simulated raw rig run imported, fitted, diagnosed" + (" (quick)" if quick else ""))
-    rig, rig_files = rig_pending.result()[0]
+    step("third source: the simulated raw rig run imported, fitted, diagnosed" + (" (quick)" if quick else "")
+         + "; the thermal tyre fitted and replayed")  # fmt: skip
+    (rig, thermal), rig_files = rig_pending.result()[0]
     write_files(out, rig_files)  # computed on a worker, written here
 
     step("HTML report")
@@ -193,15 +206,18 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool | None, exe
     if coverage is not None and len(coverage):
         last = coverage.iloc[-1]
         summary["heldout_inside_prediction_band"] = float(last["inside_prediction"])
+        summary["heldout_band_sweeps"] = int(last["sweeps"])
         for r in coverage.itertuples(index=False):
             if r.channel != "all":
                 summary[f"heldout_{r.channel}_inside_prediction_band"] = float(r.inside_prediction)
+                summary[f"heldout_{r.channel}_inside_prediction_band_se"] = float(r.se_prediction)
     if bands.calibration is not None:
         for ch, per in bands.calibration.cv_coverage.items():
             if "measured" in per:
                 summary[f"cv_{ch}_inside_prediction_band"] = per["measured"]
     summary["rig"] = {k: rig.summary[k] for k in ("cause", "effect", "heldout_load_N")}
     summary["rig"].update({k: v for k, v in rig.summary.items() if k.startswith("heldout_") and "rms" in k})
+    summary["thermal"] = {k: thermal.summary[k] for k in THERMAL_SUMMARY_KEYS if k in thermal.summary}
     rep.add_numbers("summary", summary)
     rep.add_heading("Fit")
     rep.add_table(pd.DataFrame([{"stage": s.number, "name": s.name, "channel": s.channel, "points": s.n_points,
@@ -231,9 +247,11 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool | None, exe
             rep.add_figure(p, caption=caption)
     rep.add_heading("Uncertainty")
     rep.add_text(f"Bootstrap over sweeps, {len(bands.replicates)} replicates, level {bands.level:g}, of a fit without "
-                 "the held-out condition: confidence band of the mean curve; prediction band calibrated "
-                 "(split conformal, heteroscedastic scale per channel, source and slip class) on out-of-fold "
-                 "sweeps. " + " ".join(bands.notes))  # fmt: skip
+                 "the held-out condition: confidence band of the mean curve; prediction band (for a new measured "
+                 "point) calibrated on out-of-fold sweeps: split conformal over the effective number of sweeps, "
+                 "heteroscedastic scale per channel, source and slip class with a local factor of load, speed, "
+                 "pressure and camber. The held-out coverage counts few sweeps: its s.e. is over the sweeps. "
+                 + " ".join(bands.notes))  # fmt: skip
     if coverage is not None:
         rep.add_table(coverage, caption="held-out measured points inside the bands", key="band_coverage")
     if bands.calibration is not None:
@@ -242,11 +260,13 @@ def _run_demo(output: str | os.PathLike, quick: bool, progress: bool | None, exe
                       caption="cross-validated coverage: each fold of sweeps against the band calibrated on the "
                               "others, by a model fitted without it", key="band_cv_coverage")  # fmt: skip
     _rig_section(rep, rig, out)
+    _thermal_section(rep, thermal, out)
     rep.add_heading("Outputs")
     rep.add_numbers("files", {"fitted_tir": "fitted.tir", "extended_tir": "extended.tir" if extended else None,
                               "fmu": fmu_info, "diagnosis": "diagnosis/diagnosis.md",
                               "rig_sweeps": "rig_sweeps.csv", "rig_fitted_tir": "rig_fitted.tir",
-                              "rig_diagnosis": "rig_diagnosis/diagnosis.md"})  # fmt: skip
+                              "rig_diagnosis": "rig_diagnosis/diagnosis.md", "thermal_tir": "thermal.tir",
+                              "thermal_replay": "thermal_replay.csv"})  # fmt: skip
     rep.write(os.path.join(out, "report.html"), os.path.join(out, "report.json"))
     _headline(comp, diag, os.path.join(out, "headline.png"))
     return summary, headline_text(summary, diag, reporter.elapsed())
@@ -263,11 +283,15 @@ def headline_text(summary: dict, diag, run_time_s: float) -> str:
             L.append(f"    {e.channel}: {e.rms_pct_before:.2f} % -> {e.rms_pct_after:.2f} %")
     L.append(f"  cause: {summary.get('cause')} (effect {summary.get('effect')})")
     lvl = 100 * summary.get("band_level", 0.95)
-    held = [f"{k.split('_')[1]} {100 * v:.1f} %" for k, v in summary.items()
+    held = [f"{k.split('_')[1]} {100 * v:.1f} %" + (f" (s.e. {100 * se:.1f})" if (se := summary.get(k + "_se"))
+                                                      is not None and se == se else "")
+            for k, v in summary.items()
             if k.startswith("heldout_") and k.endswith("_inside_prediction_band") and k.count("_") == 4]
     cv = [f"{k.split('_')[1]} {100 * v:.1f} %" for k, v in summary.items() if k.startswith("cv_")]
     if held:
-        L.append(f"  {lvl:g} % prediction band, held-out points inside: " + ", ".join(held))
+        sw = summary.get("heldout_band_sweeps")
+        L.append(f"  {lvl:g} % prediction band, held-out points inside: " + ", ".join(held)
+                 + (f" ({sw} sweeps; s.e. over the sweeps)" if sw else ""))
     if cv:
         L.append("    cross-validated over sweeps (measured): " + ", ".join(cv))
     rig = summary.get("rig", {})
@@ -276,6 +300,13 @@ def headline_text(summary: dict, diag, run_time_s: float) -> str:
                  + ", ".join(f"{ch} {rig[f'heldout_{ch}_rms_pct_before']:.2f} -> "
                              f"{rig[f'heldout_{ch}_rms_pct_after']:.2f} %" for ch in ("Fx", "Fy")
                              if f"heldout_{ch}_rms_pct_before" in rig))
+    th = summary.get("thermal", {})
+    if th:
+        L.append(f"  thermal stint (held out, {th['heldout_rows']} rows): surface temperature "
+                 f"{th['surface_rms_K']:.2f} K RMS; RMS error replay / fed the measured temperature / isothermal fit: "
+                 + ", ".join(f"{ch} {th[f'thermal_{ch}_rms_N']:.0f} / {th[f'measured_temperature_{ch}_rms_N']:.0f} / "
+                             f"{th[f'isothermal_{ch}_rms_N']:.0f} N" for ch in ("Fx", "Fy")
+                             if f"thermal_{ch}_rms_N" in th))
     return "\n".join(L)
 
 
@@ -428,6 +459,125 @@ def _rig_section(rep, rig: RigStage, out: str) -> None:
         p = os.path.join(folder, png)
         if os.path.exists(p):
             rep.add_figure(p, caption="rig: " + png[:-4].replace("_", " "))
+
+
+#: The shipped thermal run's stint starts at this time [s] (``validation/make_thermal_runs.split_time``): the
+#: thermal fit uses the warm-up and load steps before it, the stint is held out.
+THERMAL_SPLIT_S = 470.0
+#: The thermal stage's numbers in the demo's summary (and its closing lines).
+THERMAL_SUMMARY_KEYS = ("heldout_rows", "surface_rms_K", "pressure_rms_kPa", "thermal_Fx_rms_N", "thermal_Fy_rms_N",
+                        "measured_temperature_Fx_rms_N", "measured_temperature_Fy_rms_N", "isothermal_Fx_rms_N",
+                        "isothermal_Fy_rms_N", "Fx_ratio_to_measured_temperature", "Fy_ratio_to_measured_temperature",
+                        "Fx_cut_vs_isothermal", "Fy_cut_vs_isothermal")  # fmt: skip
+
+
+@dataclass
+class ThermalStage:
+    """What :func:`thermal_stage` produced."""
+
+    summary: dict
+    table: pd.DataFrame  #: RMS error of Fx, Fy on the held-out stint per model
+    parameters: pd.DataFrame  #: the fitted thermal parameters with their standard errors
+    laws: pd.DataFrame  #: each temperature law, its node and the held-out errors of the nodes tried
+
+
+def thermal_stage(output: str | os.PathLike, tir: str | os.PathLike) -> ThermalStage:
+    """The demo's thermal tyre (issue 22), on SIMULATED data.
+
+    The shipped continuous thermal rig run (:func:`mftire.data.thermal_run`: TTC layout, 10 Hz, 680 s, the
+    same 255/55 R20 parameter set as the rig stage's run, a layered tread model and a sealed tyre) is read
+    as ``mftire fit-thermal`` reads it; the thermal tyre is fitted to ``tir`` (the rig stage's MF 6.1 fit) on
+    ``ET <= THERMAL_SPLIT_S`` (warm-up and load steps) and the stint after it replayed from kinematics and
+    conditions only (:func:`mftire.thermal.heldout.heldout_check`, as ``mftire replay``), against the same laws
+    fed the measured temperature and an isothermal fit.  Writes ``thermal.tir``, ``thermal_replay.csv`` (the
+    replay, as ``mftire replay`` writes it) and ``thermal_stint.png``.
+    """
+    import numpy as np
+
+    from mftire.data import thermal_run
+    from mftire.iotools.rig import read_ttc
+    from mftire.plotting import subplots
+    from mftire.thermal.heldout import heldout_check
+    from mftire.thermal.thermal_fit import UNITS, measured_surface
+
+    out = os.fspath(output)
+    t0, c0 = time.perf_counter(), time.process_time()
+    path = thermal_run()
+    df = read_ttc(path)
+    chk = heldout_check(tir, df, THERMAL_SPLIT_S, name=os.path.basename(path))
+    write_tir(chk.fit.tir, os.path.join(out, "thermal.tir"))
+    with atomic_path(os.path.join(out, "thermal_replay.csv")) as tmp:
+        chk.replay.table.to_csv(tmp, index=False)
+    th = chk.fit.thermal
+    summary: dict = {
+        "data": "SIMULATED continuous thermal rig run (not measured): mftire/data/simulated_thermal_run.dat.gz, "
+                "made by validation/make_thermal_runs.py",
+        "tir": "rig_fitted.tir (the rig stage's MF 6.1 fit)", "raw_rows": len(df),
+        **chk.numbers(), "fit_surface_rms_K": th.rms_surface, "fit_pressure_rms_kPa": th.rms_pressure / 1e3,
+        "laws": "; ".join(f"EXT{c.index} {c.description}: node {c.node}" for c in chk.fit.laws),
+        "replay_iterations": chk.replay.iterations,
+    }  # fmt: skip
+    params = pd.DataFrame([{"parameter": f"TH_{k.upper()}", "value": getattr(th.params, k), "sigma": v,
+                            "unit": UNITS[k]} for k, v in th.sigma.items()])  # fmt: skip
+    laws = pd.DataFrame([{"law": f"EXT{c.index} {c.description}", "node": c.node,
+                          **{f"heldout_{k}": v for k, v in c.heldout.items()}} for c in chk.fit.laws])  # fmt: skip
+
+    # the run, the split and the held-out stint: surface temperature, Fy error of the three models, pressure
+    t = df["ET"].to_numpy(float)
+    held = t > THERMAL_SPLIT_S
+    rep, iso = chk.replay.table, chk.isothermal.table
+    fig, axs = subplots(3, 1, figsize=(8.0, 7.5), sharex=True, constrained_layout=True)
+    axs[0].plot(t, measured_surface(df), ".", ms=1.5, color="0.5", label="measured (mean of TSTI/TSTC/TSTO)")
+    axs[0].plot(t, rep["T_surface"], lw=1.0, color="C3", label="surface node (replay)")
+    axs[0].plot(t, rep["T_bulk"], lw=0.8, ls="--", color="C1", label="bulk node")
+    axs[0].set_ylabel("temperature [°C]")
+    axs[0].legend(fontsize=7, loc="upper left")
+    y = df["Fy"].to_numpy(float)
+    for lab, f, c in (("isothermal fit", iso["Fy_model"], "0.3"), ("fed the measured temperature",
+                      chk.measured["Fy"], "C0"), ("thermal replay (no temperature input)", rep["Fy_model"], "C3")):
+        axs[1].plot(t[held], (np.asarray(f, float) - y)[held], lw=0.6, color=c,
+                    label=f"{lab}: RMS {np.sqrt(np.mean(((np.asarray(f, float) - y)[held]) ** 2)):.0f} N")
+    axs[1].set_ylabel("Fy error [N]")
+    axs[1].legend(fontsize=7, loc="lower left")
+    if "P" in rep.columns:
+        axs[2].plot(t, rep["P"] / 1e3, ".", ms=1.5, color="0.5", label="measured")
+    axs[2].plot(t, rep["P_model"] / 1e3, lw=1.0, color="C3", label="gas law of the gas node (replay)")
+    axs[2].set_ylabel("pressure [kPa]")
+    axs[2].set_xlabel("ET [s]")
+    axs[2].legend(fontsize=7, loc="upper left")
+    for a in axs:
+        a.axvspan(THERMAL_SPLIT_S, t[-1], color="0.92", lw=0)
+        a.grid(alpha=0.3)
+    axs[0].set_title(f"SIMULATED thermal rig run: fit on ET ≤ {THERMAL_SPLIT_S:g} s, the stint held out (shaded): "
+                     f"surface {chk.surface_rms:.2f} K RMS", fontsize=10)  # fmt: skip
+    with atomic_path(os.path.join(out, "thermal_stint.png")) as tmp:
+        fig.savefig(tmp, format="png", dpi=100)
+    summary["stage_s"] = time.perf_counter() - t0  # with the figure
+    summary["stage_cpu_s"] = time.process_time() - c0  # this process's CPU time
+    return ThermalStage(summary, chk.table(), params, laws)
+
+
+def _thermal_section(rep, thermal: ThermalStage, out: str) -> None:
+    """The report section of the thermal stage."""
+    s = thermal.summary
+    rep.add_heading("Thermal tyre: fitted on a continuous rig run, its held-out stint replayed (SIMULATED)")
+    rep.add_text("Simulated, not measured: a continuous flat-track run of the same tyre (TTC layout, 10 Hz, SAE "
+                 "axes) made by validation/make_thermal_runs.py from a richer thermal model than the one fitted "
+                 "(four conduction layers through the tread, a carcass and the gas, a grip law with a threshold, "
+                 "a sealed tyre). The rig stage's MF 6.1 fit is made thermal (three nodes, gas law, temperature "
+                 f"laws; mftire fit-thermal) on ET <= {s['split_s']:g} s, and the stint after it is replayed from "
+                 "kinematics and conditions only (mftire replay), against the same laws fed the measured "
+                 "temperature and pressure, and an isothermal fit (LMUX, LMUY, LKX, LKY refitted at the cold "
+                 "pressure). The force errors include the MF fit's own error.")  # fmt: skip
+    rep.add_numbers("thermal", s)
+    rep.add_table(thermal.table, caption=f"held-out stint ({s['heldout_rows']} rows): RMS error per model",
+                  key="thermal_heldout")  # fmt: skip
+    rep.add_table(thermal.parameters, caption="fitted thermal parameters, ± one standard error (a lower bound: "
+                  "the residuals are correlated in time)", key="thermal_parameters")  # fmt: skip
+    rep.add_table(thermal.laws, caption="temperature laws: the node each reads, by held-out error",
+                  key="thermal_laws")  # fmt: skip
+    rep.add_figure(os.path.join(out, "thermal_stint.png"), caption="thermal run: surface temperature, Fy error on "
+                   "the held-out stint, pressure")  # fmt: skip
 
 
 def _headline(comp, diag, path: str) -> None:

@@ -571,6 +571,10 @@ PARAMETER_LIMITS: tuple[Limit, ...] = (
     Limit("VXLOW", ">", 0.0, "the low-speed reduction divides by it: NaN at standstill"),
     Limit("LMUX", ">=", 0.0, "a negative friction scale turns Fx against the slip"),
     Limit("LMUY", ">=", 0.0, "a negative friction scale turns Fy against the slip"),
+    # The transient model's constants (mftire.transient.CONSTANTS: not in a .tir; checked where they are set).
+    Limit("TR_SAT", ">=", 0.0, "a negative saturation slip turns the carcass deflection against the slip "
+          "(0: linear relaxation)"),
+    Limit("TR_CS_STEP", ">", 0.0, "the Co-Simulation integrator takes ceil(H/TR_CS_STEP) sub-steps"),
 )
 #: Ranges whose lower end must be below the upper end (mode 1xx clips every input into them).
 RANGE_PAIRS: tuple[tuple[str, str, str], ...] = (

@@ -61,32 +61,27 @@ class Progress:
         print(text, end=end, file=self.stream, flush=True)
         self._open = end != "\n"
 
+    def _passed_on(self, msg: str) -> bool:
+        """Whether nothing is left to write here: reporting is off, or the sink took the message."""
+        if self.enabled and self.sink is not None:
+            self.sink(msg)
+        return not self.enabled or self.sink is not None
+
     def __call__(self, msg: str) -> None:
         """One progress line."""
-        if not self.enabled:
-            return
-        if self.sink is not None:
-            self.sink(msg)
-            return
-        self._write(f"[{self.elapsed():6.1f} s] {self.name}: {msg}")
+        if not self._passed_on(msg):
+            self._write(f"[{self.elapsed():6.1f} s] {self.name}: {msg}")
 
     def step(self, msg: str) -> None:
         """The next numbered step (``[i/total t s] name: msg``)."""
         self.i += 1
-        if not self.enabled:
-            return
-        if self.sink is not None:
-            self.sink(msg)
-            return
-        of = f"/{self.total}" if self.total else ""
-        self._write(f"[{self.i}{of} {self.elapsed():5.1f} s] {self.name}: {msg}")
+        if not self._passed_on(msg):
+            of = f"/{self.total}" if self.total else ""
+            self._write(f"[{self.i}{of} {self.elapsed():5.1f} s] {self.name}: {msg}")
 
     def update(self, msg: str) -> None:
         """Rewrite the current line in place (on a terminal; a plain line elsewhere)."""
-        if not self.enabled:
-            return
-        if self.sink is not None:
-            self.sink(msg)
+        if self._passed_on(msg):
             return
         if _is_terminal(self.stream):
             print(f"\r[{self.elapsed():6.1f} s] {self.name}: {msg}\x1b[K", end="", file=self.stream, flush=True)

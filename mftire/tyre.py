@@ -68,7 +68,7 @@ class Tyre:
         #: The parameters as a :class:`TirParameters` (a mapping is converted; its
         #: non-standard keys outside sections are kept in :attr:`flat` only).
         self.parameters: TirParameters = as_parameters(params, unknown="drop")
-        self.flat: dict[str, float] = with_defaults(params)
+        self.flat: dict[str, float] = with_defaults(params.flat() if isinstance(params, TirParameters) else params)
         code = MODEL_CODES.get(self.parameters.model)
         if code is not None:  # internal model code of the evaluator, not the file's FITTYP (mftire.mf.family)
             self.flat["FITTYP"] = code

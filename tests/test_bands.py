@@ -160,9 +160,10 @@ def test_heteroscedastic_scale_recovers_noise_model_and_calibrates():
 
 
 def test_calibrated_bands_cover_a_repeated_campaign():
-    """Reduced simulation study of validation/band_coverage.py: 4 repeats of fit + bands (6 replicates,
-    5 calibration folds) and a re-measured campaign with new white noise and new per-sweep grip scatter.
-    The full study (40 repeats): Fx 94.7 %, Fy 96.4 % for a nominal 95 %."""
+    """Reduced simulation study of validation/band_coverage.py (synthetic design, Fx and Fy): 2 repeats of fit +
+    bands (3 replicates, 5 calibration folds of whole sweeps) and a re-measured campaign with new white noise and
+    new per-sweep grip scatter, at the same loads and at loads between them.  The full study (README figures)
+    has 5 channels and 20 repeats."""
     import importlib.util
     from pathlib import Path
 
@@ -170,11 +171,101 @@ def test_calibrated_bands_cover_a_repeated_campaign():
     spec = importlib.util.spec_from_file_location("band_coverage", path)
     study = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(study)
-    table = study.study(4)
-    s = study.summary(table).set_index("channel")
-    for ch in ("Fx", "Fy"):  # within 3.5 points of nominal (4 repeats: s.e. about 1 point)
-        assert abs(s.loc[ch, "mean"] - 0.95) <= 0.035, s
-    assert abs(s.loc["all", "mean"] - 0.95) <= 0.02, s
-    # the nested cross-validated coverage of the calibration agrees
+    table = study.study(2, replicates=3, channels=("Fx", "Fy"))
+    s = study.summary(table).set_index(["design", "channel"])
+    for design in ("same conditions", "new loads"):
+        for ch in ("Fx", "Fy"):  # a calibrated 95 % band: neither the old 62 % nor a blanket 100 %
+            assert 0.92 <= s.loc[(design, ch), "mean"] <= 0.99, s
+    # the nested cross-validated coverage of the calibration (new sweeps, by models that did not see them)
     cv = table[table["channel"] != "all"]["cv_coverage"]
-    assert abs(cv.mean() - 0.95) <= 0.03
+    assert abs(cv.mean() - 0.95) <= 0.02
+
+
+def _offset_sweeps(rng, loads, speeds, n=30, per_sweep=2):
+    """Residuals of sweeps at (load, speed) conditions: a per-sweep offset and white noise, both with an RMS
+    that grows with the load and is U-shaped in speed (a model error large at the ends of the speed range)."""
+    rows = []
+    sid = 0
+    for fz in loads:
+        for v in speeds:
+            for _ in range(per_sweep):
+                sd = 20.0 * (fz / 4000.0) * (1.0 + ((v - 60.0) / 40.0) ** 2)
+                r = sd * (0.7 * rng.standard_normal() + 0.7 * rng.standard_normal(n))
+                rows.append(pd.DataFrame({"r": r, "f": rng.uniform(-50, 50, n), "Fz": fz, "Vx": v / 3.6,
+                                          "P": 2.2e5, "gamma": 0.0, "sweep": sid}))
+                sid += 1
+    return pd.concat(rows, ignore_index=True)
+
+
+def test_local_scale_follows_the_scatter_over_the_conditions():
+    """The prediction band's local factor (fit_cell_scale): calibrated on sweeps (3 per condition) whose scatter
+    grows with the load and is U-shaped in speed, the band holds 95 % overall and far more evenly per load on
+    new sweeps than one scale for all conditions (which over-covers light and under-covers heavy loads), and it
+    does not under-cover at an interior speed it was not calibrated at."""
+    from mftire.fitting.bands import SCALE_CONDITIONS, conformal_quantile, fit_cell_scale, heteroscedastic_scale
+
+    rng = np.random.default_rng(7)
+    loads, speeds = (2000.0, 4000.0, 6000.0, 8000.0), (20.0, 40.0, 60.0, 100.0, 120.0)
+    cal = _offset_sweeps(rng, loads, speeds, per_sweep=3)
+    cols = list(SCALE_CONDITIONS)
+    cs = fit_cell_scale(cal["r"].to_numpy(), cal["f"].to_numpy(), cal[cols].to_numpy(float),
+                        cal["sweep"].to_numpy(), 0.95)
+    assert cs.h < np.inf  # the scatter does depend on the conditions: a finite bandwidth wins
+    a, b = heteroscedastic_scale(cal["r"].to_numpy(), cal["f"].to_numpy())
+    q0 = conformal_quantile(np.abs(cal["r"]) / np.hypot(a, b * cal["f"]), 0.95)
+    new = _offset_sweeps(rng, loads, (*speeds, 80.0), per_sweep=40)
+    inside = np.abs(new["r"]) <= cs.half_width(new["f"].to_numpy(), new[cols].to_numpy(float))
+    inside0 = np.abs(new["r"]) <= q0 * np.hypot(a, b * new["f"])
+    seen = new["Vx"] != 80 / 3.6
+    assert inside[seen].mean() == pytest.approx(0.95, abs=0.02)
+    dev = (inside[seen].groupby(new["Fz"][seen]).mean() - 0.95).abs()
+    dev0 = (inside0[seen].groupby(new["Fz"][seen]).mean() - 0.95).abs()
+    assert dev.max() <= 0.04 and dev0.max() >= 0.08, (dev, dev0)
+    assert inside[~seen].mean() >= 0.93  # 80 km/h: between the scatter of 60 and 100 km/h
+    # calibration residuals without any trend over the conditions: the band holds the level
+    flat = rng.standard_normal(len(cal)) * 10.0
+    cs_flat = fit_cell_scale(flat, cal["f"].to_numpy(), cal[cols].to_numpy(float), cal["sweep"].to_numpy(), 0.95)
+    w = cs_flat.half_width(new["f"].to_numpy(), new[cols].to_numpy(float))
+    assert (np.abs(rng.standard_normal(len(new)) * 10.0) <= w).mean() == pytest.approx(0.95, abs=0.02)
+
+
+def test_grouped_conformal_quantile_holds_the_level_over_few_sweeps():
+    """Scores of 12 sweeps dominated by a per-sweep offset (the demo's Mx): the point-level conformal quantile
+    is an order statistic of about 12 offsets and covers new sweeps about 12/13 of the time on average; the
+    quantile over Kish's effective sample (effective_sample_size) holds 95 % within 1.5 points.  Points with
+    no sweep effect keep their plain conformal quantile."""
+    from mftire.fitting.bands import conformal_quantile, effective_sample_size, grouped_conformal_quantile
+
+    rng = np.random.default_rng(3)
+    S, m, trials = 12, 20, 600
+    group = np.repeat(np.arange(S), m)
+    plain, grouped, neff = [], [], []
+    for _ in range(trials):
+        u = np.repeat(rng.standard_normal(S), m) + 0.2 * rng.standard_normal(S * m)
+        n_eff = effective_sample_size(u, group)
+        neff.append(n_eff)
+        new = np.abs(np.repeat(rng.standard_normal(50), m) + 0.2 * rng.standard_normal(50 * m))
+        plain.append(np.mean(new <= conformal_quantile(np.abs(u), 0.95)))
+        grouped.append(np.mean(new <= grouped_conformal_quantile(np.abs(u), 0.95, n_eff)))
+    assert np.median(neff) == pytest.approx(S, rel=0.15)  # about one independent draw per sweep
+    assert np.mean(plain) < 0.925  # the point-level order statistic under-covers new sweeps
+    assert np.mean(grouped) == pytest.approx(0.95, abs=0.015)
+    # independent points: the effective sample is every point and the quantile the plain conformal one
+    u = rng.standard_normal(S * m)
+    assert effective_sample_size(u, group) > 0.8 * S * m
+    assert grouped_conformal_quantile(np.abs(u), 0.95, S * m) == pytest.approx(
+        conformal_quantile(np.abs(u), 0.95), rel=0.05)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(2, 30), st.integers(2, 40), st.floats(0.0, 3.0), st.floats(0.5, 0.99), st.integers(0, 2**31 - 1))
+def test_effective_sample_is_between_sweeps_and_points(sweeps, per, offset, level, seed):
+    from mftire.fitting.bands import conformal_quantile, effective_sample_size, grouped_conformal_quantile
+
+    rng = np.random.default_rng(seed)
+    group = np.repeat(np.arange(sweeps), per)
+    u = offset * np.repeat(rng.standard_normal(sweeps), per) + rng.standard_normal(sweeps * per)
+    n_eff = effective_sample_size(u, group)
+    assert sweeps <= n_eff <= sweeps * per
+    # never below the plain split-conformal quantile of the points
+    assert grouped_conformal_quantile(np.abs(u), level, n_eff) >= conformal_quantile(np.abs(u), level)

@@ -882,10 +882,11 @@ def test_tir_binary_file_is_named_as_such(run):
 def test_tir_limits_table_names_known_keys():
     from mftire.iotools.tir_checks import PARAMETER_LIMITS, RANGE_PAIRS
     from mftire.parameters import BY_KEY
+    from mftire.transient import DEFAULT_CONSTANTS
 
     keys = [lim.key for lim in PARAMETER_LIMITS] + [k for pair in RANGE_PAIRS for k in pair[:2]]
-    assert all(k in BY_KEY for k in keys)
-    flat = with_defaults_of(MF61)
+    assert all(k in BY_KEY or k in DEFAULT_CONSTANTS for k in keys)  # .tir keys and the transient constants
+    flat = {**with_defaults_of(MF61), **DEFAULT_CONSTANTS}
     assert all(lim.holds(flat[lim.key]) for lim in PARAMETER_LIMITS)  # the defaults and MF61 pass
     from mftire.parameters import parameter_bounds
 

@@ -1,4 +1,4 @@
-"""Exact Jacobians of the fitting stages (mftire.fitting.derivatives) against finite differences,
+"""Exact Jacobians of the fitting stages (mftire.mf.derivatives) against finite differences,
 and the fit with them against the finite-difference fit."""
 
 from __future__ import annotations

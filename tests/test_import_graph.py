@@ -20,7 +20,12 @@ package imports names from the root package; the last test checks exactly that.
 from __future__ import annotations
 
 import ast
+import re
+import shutil
+import subprocess
 from pathlib import Path
+
+import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "mftire"
@@ -160,7 +165,7 @@ def test_no_module_imports_names_from_the_root_package():
 
 
 # ------------------------------------------------------------------ the layer order (docs/architecture.md)
-# Python layers only; checks of the C sources' #includes and the generated headers live in their own functions.
+# Python layers only; the C sources' #includes and the generated headers are checked at the end of this file.
 
 #: The layers of docs/architecture.md, bottom first: a module may import only from its own layer or below.
 PY_LAYERS: tuple[tuple[str, ...], ...] = (
@@ -268,3 +273,181 @@ def test_package_module_maps_name_existing_modules():
         listed = set(re.findall(r"^``(\w+)``\s", doc, flags=re.M))
         present = {m.rsplit(".", 1)[-1] for m in MODULES if m.startswith(pkg + ".") and m.count(".") == 2}
         assert listed == present, (pkg, sorted(listed ^ present))
+
+
+# ------------------------------------------------------------------ the C files: #includes (docs/architecture.md)
+
+C_MODEL = PACKAGE / "mf" / "c"
+C_FMU = PACKAGE / "fmu" / "c"
+#: The headers an FMU's export generates next to the sources (its variable table, the FMI standard's headers).
+FMU_GENERATED = {"mf_model_gen.h", "mt_model_gen.h", "mf_params.h", "mf_ext_gen.h"} | {
+    f"fmi{v}{h}" for v in (2, 3) for h in ("Functions.h", "FunctionTypes.h", "TypesPlatform.h", "PlatformTypes.h")
+}
+
+
+def _c_includes(text: str) -> list[tuple[int, str, bool]]:
+    """(line, file, after code) for every ``#include "file"`` of a C text: ``after code`` when a line of code
+    (not a comment, a blank or a preprocessor line) stands before it."""
+    text = re.sub(r"/\*.*?\*/", lambda m: "\n" * m.group(0).count("\n"), text, flags=re.S)
+    out, code = [], False
+    for i, line in enumerate(text.splitlines(), 1):
+        line = line.split("//")[0].strip()
+        m = re.match(r'#\s*include\s+"([^"]+)"', line)
+        if m:
+            out.append((i, m.group(1), code))
+        elif line and not line.startswith("#") and not line.endswith("\\"):
+            code = True
+    return out
+
+
+def _generated_c_headers() -> dict[str, str]:
+    """The generated headers as their generators write them (the model's committed ones and an FMU's)."""
+    from mftire.fmu import variables as vt
+    from mftire.fmu.transient_export import transient_model_header, transient_variable_table
+    from mftire.mf import cheaders
+    from mftire.mf.extensions import parse_section
+    from mftire.parameters import with_defaults
+
+    flat = with_defaults({"FITTYP": 61.0})
+    ext = parse_section({"EXT1_TARGET": "LMUX", "EXT1_FORM": "quadratic", "EXT1_VARIABLE": "dfz", "EXT1_C1": 0.1,
+                         "EXT1_C2": 0.01})  # fmt: skip
+    table = vt.variable_table(flat, vt.DEFAULT_USE_MODE, ext)
+    out = {"mf_spec_gen.h": cheaders.spec_header(), **{f"kernel/{k}": v for k, v in cheaders.kernel_headers().items()}}
+    out["fmu mf_ext_gen.h"] = cheaders.extension_header(ext)
+    out["fmu mf_params.h"] = vt.params_header(table, ext)
+    out["fmu mf_model_gen.h"] = vt.model_header(table, "id", 2)
+    out["fmu mt_model_gen.h"] = transient_model_header(transient_variable_table(flat), "id")
+    return out
+
+
+def test_c_includes_go_down_the_layers():
+    """The C model (mftire/mf/c) includes only its own files and the generated headers its build provides;
+    the FMI wrappers (mftire/fmu/c) include the model's headers, their own and the FMU's generated ones --
+    nothing in mf/c reaches up into fmu/c.  The generated headers include only the model's interfaces: the
+    extension code (mf_ext_gen.h) only mf_ext.h, the value-reference tables only the model they describe."""
+    mf_files = {p.name for p in C_MODEL.glob("*.[ch]")} | {p.name for p in (C_MODEL / "kernel").glob("*.h")}
+    fmu_files = {p.name for p in C_FMU.glob("*.[ch]")}
+    bad = [(p.name, name) for p in C_MODEL.glob("*.[ch]") for _, name, _ in _c_includes(p.read_text("utf-8"))
+           if name not in mf_files or name in fmu_files]
+    bad += [(p.name, name) for p in C_FMU.glob("*.[ch]") for _, name, _ in _c_includes(p.read_text("utf-8"))
+            if name not in mf_files | fmu_files | FMU_GENERATED]
+    assert bad == []
+    allowed = {"mf_ext_gen.h": {"mf_ext.h"}, "mf_model_gen.h": {"mf_eval.h"}, "mt_model_gen.h": {"mf_transient.h"},
+               "mf_params.h": set(), "mf_spec_gen.h": set()}  # fmt: skip
+    for key, text in _generated_c_headers().items():
+        name = key.split()[-1].split("/")[-1]
+        assert {inc for _, inc, _ in _c_includes(text)} <= allowed[name], key
+
+
+def test_c_headers_are_included_at_the_top():
+    """Every ``#include`` of a header stands before the first line of code of its file, hand-written or
+    generated: no file reaches into another's middle (a ``.c`` file included into a translation unit, as
+    mf_kernel.c includes mf_eval.c, is composition, not an interface, and may follow its settings)."""
+    texts = {p.name: p.read_text("utf-8") for d in (C_MODEL, C_FMU) for p in d.glob("*.[ch]")}
+    texts.update(_generated_c_headers())
+    late = [f"{name}:{line} includes {inc} after code" for name, text in texts.items()
+            for line, inc, after in _c_includes(text) if after and inc.endswith(".h")]
+    assert late == []
+    assert any(inc == "mf_ext_gen.h" for _, inc, _ in _c_includes(texts["mf_eval.c"]))  # the check sees it
+
+
+@pytest.mark.skipif(not any(shutil.which(c) for c in ("cc", "gcc", "clang")), reason="no C compiler")
+def test_generated_extension_code_needs_only_its_interface(tmp_path):
+    """mf_ext_gen.h (every builtin variable and form: the array kernel's) compiles on its own with mf_ext.h:
+    it uses nothing of mf_eval.c that the interface does not declare."""
+    cc = next(c for c in ("cc", "gcc", "clang") if shutil.which(c))
+    src = tmp_path / "ext_only.c"
+    src.write_text('#define MF_FN static\n#include "mf_ext_gen.h"\n'
+                   "double probe(const MFParams *p, const Cond *c) { return mf_ext_var(7, p, c, 0)"
+                   " * mf_ext_form(5, 1.0, 0.5, 0.0, 1.0, 0, 2); }\n", encoding="utf-8")  # fmt: skip
+    argv = [cc, "-std=c99", "-Werror=implicit-function-declaration", "-fsyntax-only", f"-I{C_MODEL / 'kernel'}",
+            f"-I{C_MODEL}", str(src)]
+    res = subprocess.run(argv, capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr[-2000:]
+
+
+# ------------------------------------------------------------------ walks: the calls of the main entry points
+#
+# A walk follows every Python call made inside mftire by one entry point (sys.setprofile) and records the module
+# of the callee and of its nearest mftire caller.  A climb is a call from a module to one in a higher layer of
+# docs/architecture.md (a callback handed down and called back up, or a lower layer reaching up by name).
+# Module bodies run by an import are not calls (the import graph above checks those).
+# ``python -m pytest tests/test_import_graph.py -k walks -s`` prints the table of docs/architecture.md.
+
+
+def walk(fn, *args, **kwargs) -> tuple[list[str], list[str]]:
+    """(the modules entered, in order of first entry; the climbs as "caller -> callee.function") of one call."""
+    import sys
+
+    rooms: dict[str, None] = {}
+    climbs: dict[str, None] = {}
+
+    def module_of(frame) -> str | None:
+        name = frame.f_globals.get("__name__", "")
+        return name if name == "mftire" or name.startswith("mftire.") else None
+
+    def profile(frame, event, arg):
+        if event != "call" or frame.f_code.co_name == "<module>":
+            return
+        callee = module_of(frame)
+        if callee is None:
+            return
+        rooms.setdefault(callee)
+        up = frame.f_back
+        while up is not None and module_of(up) is None:
+            up = up.f_back
+        caller = module_of(up) if up is not None else None
+        if caller and caller != callee and py_layer_rank(caller) < py_layer_rank(callee):
+            climbs.setdefault(f"{caller} -> {callee}.{frame.f_code.co_name}")
+
+    sys.setprofile(profile)
+    try:
+        fn(*args, **kwargs)
+    finally:
+        sys.setprofile(None)
+    return list(rooms), list(climbs)
+
+
+def _walks(tmp_path: Path) -> dict[str, tuple[list[str], list[str]]]:
+    import warnings
+
+    import numpy as np
+    import pandas as pd
+
+    from mftire.fitting import fit_tir
+    from mftire.fmu.export import export_fmu
+    from mftire.tyre import load
+
+    tir = ROOT / "tests" / "data" / "tir" / "MagicFormula61_Parameters.tir"
+    tyre = load(tir)
+    kappa = np.linspace(-0.2, 0.2, 21)
+    frames = []
+    for fz in (3000.0, 4500.0, 6000.0):
+        out = tyre.evaluate(fz, kappa, 0.0)
+        frames.append(pd.DataFrame({"Fz": fz, "kappa": kappa, "alpha": 0.0, "gamma": 0.0, "Vx": 16.7,
+                                    "P": tyre["NOMPRES"], "Fx": np.asarray(out["Fx"])}))  # fmt: skip
+    data = pd.concat(frames, ignore_index=True)
+    tyre.evaluate(4000.0, 0.05, 0.01)  # what the first call of a session loads (the kernel) is loaded
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return {
+            "Tyre.evaluate (arrays)": walk(tyre.evaluate, [3000.0, 5000.0], [0.05, -0.1], [0.01, 0.02]),
+            "Tyre.evaluate (numpy)": walk(tyre.evaluate, [3000.0, 5000.0], [0.05, -0.1], [0.01, 0.02],
+                                          backend="numpy"),
+            "Tyre.evaluate (one point)": walk(tyre.evaluate, 4000.0, 0.05, 0.01),
+            "fit_tir": walk(fit_tir, data, tir, stages="1", progress=False),
+            "export_fmu": walk(export_fmu, tyre, tmp_path / "walk.fmu"),  # (transient=True: 0 climbs too, +4 s)
+        }
+
+
+@pytest.mark.skipif(not any(shutil.which(c) for c in ("cc", "gcc", "clang")), reason="no C compiler")
+def test_walks_of_the_entry_points_go_down_the_layers(tmp_path):
+    walks = _walks(tmp_path)
+    print("\n| entry point | layers entered (top first) | modules | climbs |\n|---|---|---|---|")
+    for name, (rooms, climbs) in walks.items():
+        layers = sorted({py_layer_rank(m) + 1 for m in rooms}, reverse=True)
+        print(f"| `{name}` | {', '.join(map(str, layers))} | {len(rooms)} | {len(climbs)} |")
+    for name, (rooms, _) in walks.items():
+        print(f"{name}: {' > '.join(rooms)}")
+    assert {name: climbs for name, (_, climbs) in walks.items() if climbs} == {}
+    assert all(len(rooms) >= 2 for rooms, _ in walks.values()) and len(walks["fit_tir"][0]) > 10  # it sees calls

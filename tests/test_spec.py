@@ -135,22 +135,3 @@ def test_a_dummy_output_added_to_the_spec_alone_reaches_python_kernel_and_fmu(tm
         assert dummy == rl and 0.2 < rl[0] < 0.4, res
     assert res["point"][0] == res["point"][1]
     assert res["fmu"][0] == res["fmu"][1] and abs(res["fmu"][0] - res["point"][1]) < 1e-9
-
-
-def test_c_includes_go_down_the_layers():
-    """The C model (mftire/mf/c) includes only its own files and the generated headers its build provides;
-    the FMI wrappers (mftire/fmu/c) include the model's headers, their own and the FMU's generated ones --
-    nothing in mf/c reaches up into fmu/c, and no file writes another layer's headers (cheaders.py is in mf)."""
-    fmu_dir = ROOT / "mftire" / "fmu" / "c"
-    mf_files = {p.name for p in C_DIR.glob("*.[ch]")} | {p.name for p in (C_DIR / "kernel").glob("*.h")}
-    fmu_files = {p.name for p in fmu_dir.glob("*.[ch]")}
-    fmu_generated = {"mf_model_gen.h", "mt_model_gen.h"} | {
-        f"fmi{v}{h}" for v in (2, 3) for h in ("Functions.h", "FunctionTypes.h", "TypesPlatform.h", "PlatformTypes.h")
-    }
-    for path in C_DIR.glob("*.[ch]"):
-        for name in re.findall(r'#include "([^"]+)"', path.read_text(encoding="utf-8")):
-            assert name in mf_files, (path.name, name)
-            assert name not in fmu_files, (path.name, name)
-    for path in fmu_dir.glob("*.[ch]"):
-        for name in re.findall(r'#include "([^"]+)"', path.read_text(encoding="utf-8")):
-            assert name in mf_files | fmu_files | fmu_generated, (path.name, name)

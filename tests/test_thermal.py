@@ -18,7 +18,7 @@ from mftire.thermal.thermal_fit import fit_thermal_parameters
 
 ROOT = Path(__file__).resolve().parent.parent
 TIR = ROOT / "tirfiles" / "MF61_255-55R20_mfeval-jl.tir"
-RUN = ROOT / "validation" / "data" / "thermal" / "thermal_run.dat.gz"
+RUN = ROOT / "mftire" / "data" / "simulated_thermal_run.dat.gz"  # mftire.data.thermal_run()
 
 P = ThermalParameters(cap_surface=1800.0, cap_bulk=15000.0, cap_gas=160.0, g_surface_bulk=180.0, g_bulk_gas=6.0,
                       g_bulk_ambient=10.0, h_air0=10.0, h_air1=12.0, g_road=60.0, roll_loss=0.01, hysteresis=0.03)

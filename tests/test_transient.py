@@ -15,6 +15,7 @@ import pytest
 from conftest import REFERENCE_TYRES, needs_c_compiler
 from scipy.integrate import solve_ivp
 
+from mftire.errors import MftireInputError
 from mftire.fmu.transient_export import output_names
 from mftire.transient import FIRST_OUTPUTS, TransientTyre, simulate, step_exact
 from mftire.tyre import load
@@ -383,10 +384,20 @@ def test_host_modes_give_the_same_outputs(fmu2_path):
     assert len({tuple(row) for row in runs[0][-1]}) == 4
 
 
+@pytest.mark.parametrize("key,value", [("TR_SAT", -0.5), ("TR_SAT", -1e-300), ("TR_CS_STEP", 0.0)])
+def test_non_physical_constants_are_refused(tyre, key, value):
+    """The transient constants' bounds are those of mftire.parameters.PARAMETER_LIMITS (the FMU's C check reads
+    the same table): a negative TR_SAT would turn the carcass deflection against the slip."""
+    with pytest.raises(MftireInputError, match=rf"transient constant {key} = .* must be >"):
+        TransientTyre(tyre, constants={key: value})
+    TransientTyre(tyre, constants={key: 0.0 if key == "TR_SAT" else 1e-9})  # on or above the bound: taken
+
+
 @needs_c_compiler
-@pytest.mark.parametrize("key,value", [("VXLOW", 0.0), ("VXLOW", -1.0), ("TR_CS_STEP", 0.0)])
+@pytest.mark.parametrize("key,value", [("VXLOW", 0.0), ("VXLOW", -1.0), ("TR_CS_STEP", 0.0), ("TR_SAT", -0.5)])
 def test_non_physical_start_values_fail_the_initialisation(fmu2_path, key, value):
-    """VXLOW > 0 (the bounds of mftire.mf.spec, shared with the steady FMU) and TR_CS_STEP > 0."""
+    """VXLOW > 0, TR_CS_STEP > 0, TR_SAT >= 0: the bounds of mftire.parameters.PARAMETER_LIMITS (mftire.mf.spec),
+    shared with the steady FMU."""
     from fmpy.fmi1 import FMICallException
 
     from mftire.fmu.transient_host import TransientFMUs
@@ -496,7 +507,6 @@ def test_simulate_free_rolling_default_and_varying_friction(tyre):
 
 def test_model_extensions_refused(tmp_path):
     """[MFTIRE_EXTENSIONS] are not part of the transient model yet: a clear error, in Python and at export."""
-    from mftire.errors import MftireInputError
     from mftire.extensions import SECTION
     from mftire.fmu.export import FMUExportError, export_fmu
     from mftire.iotools.tir import read_tir

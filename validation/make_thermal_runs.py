@@ -31,9 +31,11 @@ Programmes (``PROGRAMMES``)
                   (3-5 deg), a 2 s braking zone, and a 6 s straight at 25 m/s.
 
 ``python validation/make_thermal_runs.py [OUT_DIR]`` writes ``thermal_run.dat.gz`` (the warm-up +
-load steps programme followed by the stint, one continuous run, the shipped file in
-``validation/data/thermal/``), both programmes as separate files with ``--all``, and the true
-(noise-free) states as ``*_truth.csv.gz``.  ``--check DIR`` runs the done-when measurement
+load steps programme followed by the stint, one continuous run), both programmes as separate files with
+``--all``, and the true (noise-free) states as ``*_truth.csv.gz``.  Without ``OUT_DIR`` the run is the
+shipped file ``mftire/data/simulated_thermal_run.dat.gz`` (in the package: ``mftire demo`` fits and
+replays it; :func:`mftire.data.thermal_run`, the only copy) and the other files go to
+``validation/data/thermal/``.  ``--check DIR`` runs the done-when measurement
 (validation/README.md, "Thermal tyre").
 """
 
@@ -51,6 +53,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # run from a source checkout
 TIR = ROOT / "tirfiles" / "MF61_255-55R20_mfeval-jl.tir"
 OUT = ROOT / "validation" / "data" / "thermal"
+#: The shipped run (package data, the only copy; written by ``make()`` into the default OUT).
+RUN = ROOT / "mftire" / "data" / "simulated_thermal_run.dat.gz"
 
 FS = 10.0  #: sample rate [Hz]
 T_AMB = 22.0  #: ambient [deg C]
@@ -241,7 +245,7 @@ def make(out_dir=OUT, names=("run",), seed: int = 0) -> list[Path]:
     for name in names:
         raw, true = simulate(name, seed)
         stem = "thermal_run" if name == "run" else f"thermal_{name}"
-        p = out_dir / f"{stem}.dat.gz"
+        p = RUN if name == "run" and out_dir.resolve() == OUT.resolve() else out_dir / f"{stem}.dat.gz"
         write_ttc(raw, p, units="metric", title=TITLE)
         true.to_csv(out_dir / f"{stem}_truth.csv.gz", index=False, float_format="%.6g")
         paths.append(p)
@@ -266,9 +270,10 @@ def check(work_dir, run=None, tir=TIR, quiet: bool = False) -> dict:
     1. ``mftire fit-thermal RUN --tir TIR --output THERMAL.tir --fit-until SPLIT``;
     2. ``mftire replay RUN --tir THERMAL.tir --output replay.csv``, errors on ET > SPLIT;
     3. the same laws fed the measured temperature (mean IR) and the measured pressure, fitted on
-       ET <= SPLIT (:func:`mftire.thermal.thermal_fit.fit_laws` with every node the measurement);
-    4. the isothermal fit: LMUX, LMUY, LKX, LKY of TIR refitted on ET <= SPLIT at the cold pressure,
-       written as ISO.tir and replayed (``mftire replay RUN --tir ISO.tir``).
+       ET <= SPLIT (:func:`mftire.thermal.heldout.measured_temperature_model`);
+    4. the isothermal fit: LMUX, LMUY, LKX, LKY of TIR refitted on ET <= SPLIT at the cold pressure
+       (:func:`mftire.thermal.heldout.isothermal_fit`), written as ISO.tir and replayed
+       (``mftire replay RUN --tir ISO.tir``).
     """
     import contextlib
     import io
@@ -277,12 +282,11 @@ def check(work_dir, run=None, tir=TIR, quiet: bool = False) -> dict:
     from mftire.cli import main
     from mftire.iotools.rig import read_ttc
     from mftire.iotools.tir import write_tir
-    from mftire.thermal.thermal_fit import _force_rows, fit_laws, measured_surface, with_default_laws
-    from mftire.tyre import Tyre
+    from mftire.thermal.thermal_fit import measured_surface
 
     work = Path(work_dir)
     work.mkdir(parents=True, exist_ok=True)
-    run = Path(run or OUT / "thermal_run.dat.gz")
+    run = Path(run or RUN)
     split = split_time(tir)
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
@@ -300,38 +304,15 @@ def check(work_dir, run=None, tir=TIR, quiet: bool = False) -> dict:
            "pressure_rms_kPa": _rms(rep["P_model"][held] - rep["P"][held]) / 1e3}  # fmt: skip
     for ch in ("Fx", "Fy"):
         res[f"{ch}_replay"] = _rms(rep[f"{ch}_model"][held] - rep[ch][held])
-    # the model fed the measured temperature and pressure
-    base = Tyre(with_default_laws(mftire.load(tir).parameters, float(np.round(np.nanmedian(ir[fit])))))
+    # the two references (mftire.thermal.heldout, as mftire demo's thermal stage): the laws fed the measured
+    # temperature and pressure; the isothermal fit, replayed with the command
+    from mftire.thermal.heldout import evaluate_measured, isothermal_fit, measured_temperature_model
+
     dfit = df[fit].reset_index(drop=True)
-    meas_T = np.repeat(ir[:, None], 3, axis=1)
-    laws = [t.index for t in base.extension_set.terms]
-    coeffs, _, _ = fit_laws(base, dfit, meas_T[fit], dfit["P"].to_numpy(), {n: "surface" for n in laws},
-                            _force_rows(dfit))  # fmt: skip
-    base.flat.update(coeffs)
-    f = base.evaluate(df["Fz"].to_numpy(), df["kappa"].to_numpy(), df["alpha"].to_numpy(), df["gamma"].to_numpy(),
-                      Vx=df["Vx"].to_numpy(), P=df["P"].to_numpy(), temperature=ir)  # fmt: skip
+    f = evaluate_measured(measured_temperature_model(mftire.load(tir), dfit), df)
     for ch in ("Fx", "Fy"):
         res[f"{ch}_measured_T"] = _rms(f[ch][held] - df[ch].to_numpy()[held])
-    # the isothermal fit: scaling factors refitted at the cold pressure
-    from scipy.optimize import least_squares
-
-    iso = mftire.load(tir)
-    rows = _force_rows(dfit)
-    p0 = float(df["P"].iloc[0])
-    keys = ("LMUX", "LMUY", "LKX", "LKY")
-    x0 = np.array([iso.flat[k] for k in keys])
-
-    def r(x):
-        iso.flat.update(dict(zip(keys, x, strict=True)))
-        o = iso.evaluate(dfit["Fz"].to_numpy()[rows], dfit["kappa"].to_numpy()[rows], dfit["alpha"].to_numpy()[rows],
-                         dfit["gamma"].to_numpy()[rows], Vx=dfit["Vx"].to_numpy()[rows], P=p0, channels=("Fx", "Fy"))
-        return np.concatenate([o["Fx"] - dfit["Fx"].to_numpy()[rows], o["Fy"] - dfit["Fy"].to_numpy()[rows]])
-
-    sol = least_squares(r, x0, diff_step=1e-4)
-    p = iso.parameters.copy()
-    for k, v in zip(keys, sol.x, strict=True):
-        p.set(k, float(v))
-    write_tir(p, work / "ISO.tir")
+    write_tir(isothermal_fit(mftire.load(tir), dfit), work / "ISO.tir")
     with contextlib.redirect_stdout(out):
         main(["replay", str(run), "--tir", str(work / "ISO.tir"), "--output", str(work / "replay_iso.csv"), "--force"])
     rep_iso = pd.read_csv(work / "replay_iso.csv")

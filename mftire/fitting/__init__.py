@@ -11,7 +11,6 @@ Small pure functions in the spirit of pvlib's ``ivtools``:
 ``fitter``         :func:`fit_tir`, :class:`FitResult`, :class:`StageResult`
 ``fit_report``     report.md, metrics.json and one PNG per sweep family
 ``synthetic``      synthetic sweeps from a ``.tir`` (tests, benchmark)
-``derivatives``    algorithmic derivatives of the channels for the exact Jacobian
 ``bands``          bootstrap confidence and prediction bands over sweeps
 ``fit_batch``      one fit per input file as a task (``mftire fit --each``)
 ``cli``            ``mftire fit``

@@ -20,22 +20,42 @@ where should a new measurement fall?":
    the confidence band is, if anything, a little narrow.  Restricting ``stages`` (e.g.
    ``"1,2,3"``) leaves the other stages' coefficients at the full fit in every replicate:
    those channels then get a zero-width confidence band and only the scatter term below.
-4. **Prediction band, calibrated** (:class:`Calibration`, default).  Held-out *measured*
-   points carry measurement noise, sweep-to-sweep scatter and the model's lack of fit, none of
-   which a confidence band of the mean curve holds.  The data's sweeps are split into folds
-   (``calibrate``, default 5; whole sweeps, because the noise is correlated within a sweep, or
-   the levels of a condition, ``calibrate_by``); each fold is refitted out and predicted.  Per
-   channel, source and slip class (pure longitudinal, pure lateral, combined points) the
-   out-of-fold residuals give a heteroscedastic scale ``s(f̂) = sqrt(a² + (b·f̂)²)`` and the
-   split-conformal quantile ``q`` of ``|r|/s``; the band is ``f̂ ± q·s(f̂)`` (never narrower
-   than the confidence band).  Conformal calibration holds the nominal level for points
-   exchangeable with the calibration sweeps whatever the noise distribution; a Gaussian
-   ``z·σ`` band does not (its robust σ misses heavy tails and force-dependent scatter: the
-   demo's 95 % band held 62 % of the held-out Fx points before).  Measured coverage:
-   ``validation/band_coverage.py`` (repeated campaigns, new noise) and the nested
-   cross-validated coverage ``Calibration.cv_coverage`` of every run.  With ``calibrate=0``
-   the band is the uncalibrated one: replicate quantiles and the full fit's robust residual
-   scatter σ (1.4826 × median |residual| per channel and source) in quadrature,
+4. **Prediction band, calibrated** (:class:`Calibration`, default).  What it means: a band that
+   a *new measured point* falls in with probability ``level`` — a point of a new sweep at a
+   condition the fit did not see (a new load, speed or camber between the measured ones), noise,
+   sweep offset and the model's lack of fit included; not a band of the mean curve.  Held-out
+   measured points carry all three, none of which the confidence band holds.  The data's sweeps
+   are split into folds (``calibrate``, default 5; whole sweeps, because the noise is correlated
+   within a sweep, or the levels of a condition, ``calibrate_by``); each fold is refitted out and
+   predicted.  Per channel, source and slip class (pure longitudinal, pure lateral, combined points;
+   a class with fewer than 5 sweeps uses the source's pooled cell) the out-of-fold residuals give
+   (:func:`fit_cell_scale`):
+
+   * a heteroscedastic scale ``s(f̂) = sqrt(a² + (b·f̂)²)`` (noise floor plus a part proportional
+     to the value),
+   * a local factor ``v(x)`` of the operating conditions (load, speed, pressure, camber): the
+     kernel-weighted geometric mean of the calibration sweeps' scatter near ``x``, bandwidth chosen
+     by leave-one-sweep-out likelihood (``∞``, one factor, when the data show no trend): the
+     scatter that grows with the load where the channel's value does not (Fy, My of a braking
+     sweep) is followed,
+   * the conformal quantile ``q`` of the normalised scores ``|r|/(s·sqrt(v))`` over the
+     *effective* number of independent points (Kish: the points of a sweep share its offset, so
+     12 sweeps of an offset-dominated channel are about 12 draws, not 480), with Student's
+     prediction quantile when fewer than ``level/(1 − level)`` draws make every order statistic
+     too low (:func:`grouped_conformal_quantile`).
+
+   The band is ``f̂ ± q·s(f̂)·sqrt(v(x))`` (never narrower than the confidence band).  The level
+   holds on average over new sweeps like the calibration ones: measured by
+   ``validation/band_coverage.py`` (two campaign designs re-measured with new noise) and by the
+   nested cross-validated coverage ``Calibration.cv_coverage`` of every run.  It is not a
+   guarantee at one particular condition: where the model's error differs from condition to
+   condition (a missing speed effect) a held-out condition with a smaller error than the
+   campaign's average is over-covered; re-measuring a condition the fit *has* seen gives a
+   little more than the level (the fold refits lack that sweep); and a count on a few held-out
+   sweeps scatters widely (:func:`coverage_table` gives its standard error over the sweeps).
+   Before the calibration, a Gaussian ``z·σ`` band held 62 % of the demo's held-out Fx points.
+   With ``calibrate=0`` the band is the uncalibrated one: replicate quantiles and the full fit's
+   robust residual scatter σ (1.4826 × median |residual| per channel and source) in quadrature,
    ``f̂ ± sqrt((f̂ − q)² + (z·σ)²)``.
 
 The bands evaluate replicate models with the full evaluator (:meth:`Tyre.evaluate`) in
@@ -66,7 +86,8 @@ from mftire.progress import reporter
 from mftire.tyre import Tyre
 
 __all__ = ["Bands", "bootstrap_bands", "start_bootstrap_bands", "PendingBands", "band_coverage", "coverage_table",
-           "resample_sweeps", "write_bands", "BAND_CHANNELS"]
+           "resample_sweeps", "write_bands", "BAND_CHANNELS", "Calibration", "CellScale", "fit_cell_scale",
+           "effective_sample_size", "grouped_conformal_quantile", "SCALE_CONDITIONS"]
 
 #: Channels given bands.
 BAND_CHANNELS: tuple[str, ...] = ("Fx", "Fy", "Mz", "Mx", "My")
@@ -178,7 +199,7 @@ class Bands:
             out[f"{ch}_hi"] = f + dhi
             if self.calibration is not None and ch in self.calibration.q:
                 # calibrated: q·s(f̂), never narrower than the confidence band
-                w = self.calibration.half_width(ch, f, src, slip_class(points))
+                w = self.calibration.half_width(ch, f, src, slip_class(points), points)
                 out[f"{ch}_pred_lo"] = f - np.maximum(w, dlo)
                 out[f"{ch}_pred_hi"] = f + np.maximum(w, dhi)
             else:
@@ -228,11 +249,29 @@ class Calibration:
       ``s(f̂) = sqrt(a² + (b·f̂)²)`` (a noise floor plus a part
       proportional to the force, e.g. grip scatter, fitted by non-negative least squares of
       ``r²`` on ``[1, f̂²]``; ``a`` is kept ≥ 10 % of the RMS residual), and
-    * the split-conformal quantile ``q`` of the scores ``|r| / s(f̂)``: the
+    * a local factor ``v(x)`` of the operating conditions ``x`` (load, speed, pressure, camber:
+      :data:`SCALE_CONDITIONS`): the kernel-weighted mean of the normalised squared residuals
+      ``u² = r²/s(f̂)²`` of the calibration sweeps near ``x`` (Gaussian kernel, each condition in
+      units of its spread over the cell's sweeps; Fan & Yao 1998, variance by local smoothing).  Its
+      bandwidth is chosen per cell from :data:`_BANDWIDTHS` by the Gaussian likelihood of each
+      sweep's residuals under the factor made of the *other* sweeps (leave one sweep out), and
+      ``∞`` (one factor for the cell, the plain scale) wins whenever the data show no predictable
+      trend over the conditions.  A held-out condition (a new speed, a new load) thus gets the
+      scatter of the sweeps nearest to it, where the model's error differs from condition to
+      condition (a missing speed effect: large at the ends of the speed range), and noise that
+      grows with the load is followed even where the channel's own value does not grow
+      (Fy and My in a braking sweep);
+    * the split-conformal quantile ``q`` of the scores ``|r| / (s(f̂)·sqrt(v₋(x)))`` (``v₋``: the
+      factor without the point's own sweep, as for a new measurement): the
       ``ceil((n + 1)·level)``-th smallest (Vovk et al. 2005; Lei et al. 2018, normalised
       scores; Barber et al. 2021 for cross-fitting).
 
-    The prediction band is ``f̂ ± q·s(f̂)`` (never narrower than the confidence band).
+    The prediction band is ``f̂ ± q·s(f̂)·sqrt(v(x))`` (never narrower than the confidence band).
+    It is a band for a new *measured point* (noise, sweep offsets and the model's lack of fit
+    included), not for the mean curve.  Its level holds on average over new sweeps exchangeable
+    with the calibration sweeps; at one particular condition it holds only as well as the local
+    factor follows the error there, and on a few sweeps the counted coverage scatters widely
+    (points of one sweep share its offset: three sweeps give three draws, not 120).
 
     Attributes
     ----------
@@ -249,6 +288,9 @@ class Calibration:
         ``{channel: {cell: q}}`` conformal quantiles of the normalised scores.
     n : dict
         ``{channel: {cell: points}}`` calibration points.
+    cells : dict
+        ``{channel: {cell: CellScale}}`` the fitted scale of each cell (the numbers above and the
+        local factor).
     failed : int
         Fold fits that failed (their points are left out).
     cv_coverage : dict
@@ -263,28 +305,30 @@ class Calibration:
     scale: dict[str, dict[str, tuple[float, float]]]
     q: dict[str, dict[str, float]]
     n: dict[str, dict[str, int]]
+    cells: dict[str, dict[str, CellScale]] = field(default_factory=dict)
     failed: int = 0
     cv_coverage: dict[str, dict[str, float]] = field(default_factory=dict)
 
     def half_width(self, channel: str, f: np.ndarray, sources: np.ndarray | None,
-                   slip: np.ndarray | None = None) -> np.ndarray:
-        """Half-width ``q·s(f̂)`` [channel unit] of the prediction band at model values ``f``, per row
-        for the given source labels and slip classes (:func:`slip_class`).  A (source, slip class) cell
-        without calibration points takes the source's pooled cell; an unknown source, or None, the
-        widest source."""
+                   slip: np.ndarray | None = None, conditions: pd.DataFrame | None = None) -> np.ndarray:
+        """Half-width ``q·s(f̂, x)`` [channel unit] of the prediction band at model values ``f``, per row
+        for the given source labels, slip classes (:func:`slip_class`) and operating conditions
+        (``conditions``: columns of :data:`SCALE_CONDITIONS`; None: the cell's mean local factor).  A
+        (source, slip class) cell without calibration points takes the source's pooled cell; an unknown
+        source, or None, the widest source."""
         f = np.asarray(f, dtype=float)
         n = f.shape[0]
         slip = np.full(n, "*", dtype=object) if slip is None else np.asarray(slip, dtype=object)
-        per_q, per_s = self.q[channel], self.scale[channel]
+        per_q = self.q[channel]
         srcs = sorted({c.split("|")[0] for c in per_q})
+        X = _condition_matrix(conditions, n)
 
         def width(src: str) -> np.ndarray:
             out = np.full(n, np.nan)
             for cls in set(slip.tolist()):
                 m = slip == cls
                 cell = f"{src}|{cls}" if f"{src}|{cls}" in per_q else f"{src}|*"
-                a, b = per_s[cell]
-                out[m] = per_q[cell] * np.hypot(a, b * f[m])
+                out[m] = self.cells[channel][cell].half_width(f[m], None if X is None else X[m])
             return out
 
         w = {src: width(src) for src in srcs}
@@ -301,7 +345,8 @@ class Calibration:
     def to_dict(self) -> dict[str, Any]:
         return {"level": self.level, "by": self.by, "folds": self.folds, "failed": self.failed,
                 "scale": {c: {s: {"a": v[0], "b": v[1]} for s, v in per.items()} for c, per in self.scale.items()},
-                "q": self.q, "n": self.n, "cv_coverage": self.cv_coverage}
+                "q": self.q, "n": self.n, "cv_coverage": self.cv_coverage,
+                "local": {c: {k: cs.summary() for k, cs in per.items()} for c, per in self.cells.items()}}
 
 
 #: Tolerances of :func:`slip_class`: |α| below 0.5° is "no side slip", |κ| below 0.01 "no longitudinal slip".
@@ -344,8 +389,170 @@ def heteroscedastic_scale(residual: np.ndarray, f: np.ndarray) -> tuple[float, f
     return a, b
 
 
-#: Fewest calibration points of a (source, slip class) cell; smaller cells use the source's pooled cell.
+#: Operating conditions of the local factor of the prediction band's scale (:class:`CellScale`).
+SCALE_CONDITIONS: tuple[str, ...] = ("Fz", "Vx", "P", "gamma")
+#: Kernel bandwidths tried for the local factor [spread of each condition over the cell's sweeps]; ``inf``: one
+#: factor for the whole cell.
+_BANDWIDTHS = (0.35, 0.5, 0.7, 1.0, 1.4, 2.0, math.inf)
+
+
+def _condition_matrix(points: pd.DataFrame | None, n: int) -> np.ndarray | None:
+    """``(n, len(SCALE_CONDITIONS))`` operating conditions of ``points`` (NaN for a missing column)."""
+    if points is None:
+        return None
+    return np.column_stack([points[c].to_numpy(float) if c in points.columns else np.full(n, np.nan)
+                            for c in SCALE_CONDITIONS])
+
+
+@dataclass
+class CellScale:
+    """Scale of the prediction band in one calibration cell: ``q·sqrt(a² + (b·f̂)²)·sqrt(v(x))``.
+
+    ``v(x)`` is the local factor of the operating conditions ``x`` (:data:`SCALE_CONDITIONS`): the
+    kernel-weighted mean, over the calibration sweeps, of each sweep's mean normalised squared residual
+    ``u²`` (kernel ``exp(-d²/2h²)`` times the sweep's points; ``d`` the distance in units of each
+    condition's spread ``sd`` over the sweeps; conditions that do not vary are left out); ``h = inf``
+    gives one factor for the cell.
+    """
+
+    a: float  #: noise floor [channel unit]
+    b: float  #: part proportional to the model value [-]
+    q: float  #: conformal quantile of the normalised scores [-]
+    h: float  #: kernel bandwidth [spread units]; inf: no local factor
+    mu: np.ndarray  #: centre of each condition (NaN: not used)
+    sd: np.ndarray  #: spread of each condition over the sweeps (NaN: not used)
+    xs: np.ndarray  #: (S, d) conditions of the calibration sweeps, normalised
+    us: np.ndarray  #: (S,) mean u² per sweep
+    ns: np.ndarray  #: (S,) points per sweep
+    n_eff: float = math.nan  #: effective number of independent calibration points (:func:`effective_sample_size`)
+
+    def factor(self, X: np.ndarray | None, exclude_own: bool = False) -> np.ndarray:
+        """Local factor ``v`` at raw conditions ``X`` (rows; None: the cell's mean); ``exclude_own``:
+        ``X`` are the calibration sweeps themselves and each leaves itself out."""
+        return _local_factor(self.xs, self.us, self.ns, None if X is None else self._norm(X), self.h, exclude_own)
+
+    def _norm(self, X: np.ndarray) -> np.ndarray:
+        use = np.isfinite(self.sd)
+        Z = (X[:, use] - self.mu[use]) / self.sd[use]
+        return np.where(np.isfinite(Z), Z, 0.0)  # a missing condition counts as the centre
+
+    def half_width(self, f: np.ndarray, X: np.ndarray | None = None) -> np.ndarray:
+        """Half-width [channel unit] at model values ``f`` and raw conditions ``X``."""
+        f = np.asarray(f, dtype=float)
+        v = self.factor(X) if X is not None else np.full(f.shape, self.factor(None)[0])
+        return self.q * np.hypot(self.a, self.b * f) * np.sqrt(v)
+
+    def summary(self) -> dict[str, Any]:
+        used = [c for c, s in zip(SCALE_CONDITIONS, self.sd, strict=True) if np.isfinite(s)]
+        return {"bandwidth": self.h if math.isfinite(self.h) else None, "conditions": used,
+                "sweeps": int(self.us.size), "effective_points": self.n_eff}
+
+
+def _local_factor(xs: np.ndarray, us: np.ndarray, ns: np.ndarray, Z: np.ndarray | None, h: float,
+                  exclude_own: bool = False) -> np.ndarray:
+    """Kernel-weighted geometric mean of ``us`` (weights ``ns·exp(-d²/2h²)``) at normalised conditions ``Z``.
+
+    Geometric: the logarithm of the scatter is smoothed (a multiplicative model of the variance, Harvey
+    1976; Yu & Jones 2004), which interpolates a scatter that grows fast over a condition (the error of a
+    missing speed effect towards the ends of the speed range) without the upward bias of an arithmetic mean
+    between a small and a large neighbour."""
+    lu = np.log(np.maximum(us, 1e-12 * max(float(us.max()), 1e-300)))
+    glob = float(np.exp(ns @ lu / ns.sum()))
+    if Z is None:
+        return np.array([glob])
+    if exclude_own:
+        w = np.broadcast_to(ns, (len(Z), ns.size)).copy()
+        np.fill_diagonal(w, 0.0)
+    else:
+        w = np.broadcast_to(ns, (len(Z), ns.size)).astype(float)
+    if math.isfinite(h) and xs.shape[1]:
+        d2 = ((Z[:, None, :] - xs[None, :, :]) ** 2).sum(axis=2)
+        w = w * np.exp(-d2 / (2.0 * h * h))
+    tot = w.sum(axis=1)
+    # a point far from every sweep (all weights underflow) gets the cell's mean factor
+    return np.where(tot > 1e-300, np.exp((w @ lu) / np.where(tot > 1e-300, tot, 1.0)), glob)
+
+
+def fit_cell_scale(residual: np.ndarray, f: np.ndarray, X: np.ndarray, sweep: np.ndarray,
+                   level: float) -> CellScale:
+    """:class:`CellScale` of out-of-fold residuals ``r`` at model values ``f``, raw conditions ``X``
+    (rows of :data:`SCALE_CONDITIONS`) and sweep labels ``sweep``."""
+    r = np.asarray(residual, dtype=float)
+    f = np.asarray(f, dtype=float)
+    a, b = heteroscedastic_scale(r, f)
+    u2 = (r / np.hypot(a, b * f)) ** 2
+    ids, inv = np.unique(np.asarray(sweep), return_inverse=True)
+    inv = inv.ravel()
+    ns = np.bincount(inv).astype(float)
+    us = np.bincount(inv, weights=u2) / ns
+    # each sweep's conditions: the median of its points (loads wander about their set point)
+    xs_raw = np.vstack([np.nanmedian(X[inv == i], axis=0) for i in range(ids.size)])
+    mu = np.nanmean(xs_raw, axis=0)
+    sd = np.nanstd(xs_raw, axis=0)
+    vary = np.isfinite(sd) & (sd > 1e-6 * np.maximum(np.abs(mu), 1.0))
+    mu, sd = np.where(vary, mu, np.nan), np.where(vary, sd, np.nan)
+    xs = (xs_raw[:, vary] - mu[vary]) / sd[vary]
+    best_h, best_v = math.inf, None
+    if ids.size >= 3:
+        best = math.inf
+        for h in _BANDWIDTHS:
+            if math.isfinite(h) and not vary.any():
+                continue
+            v = np.maximum(_local_factor(xs, us, ns, xs, h, exclude_own=True), 1e-12)
+            nll = float(ns @ (np.log(v) + us / v))  # Gaussian likelihood of each sweep's points, leave-one-sweep-out
+            if not math.isfinite(best) or nll < best - 1e-9 * abs(best):  # ties: the wider kernel (listed later) loses
+                best, best_h, best_v = nll, h, v
+    if best_v is None:  # fewer than three sweeps: no local factor
+        best_v = np.ones(ids.size)
+        us = np.ones(ids.size)
+    score = np.sqrt(u2 / best_v[inv])
+    n_eff = effective_sample_size(r / np.hypot(a, b * f) / np.sqrt(best_v[inv]), inv)
+    return CellScale(a, b, grouped_conformal_quantile(score, level, n_eff), best_h, mu, sd, xs, us, ns, n_eff)
+
+
+def effective_sample_size(u: np.ndarray, group: np.ndarray) -> float:
+    """Kish's effective number of independent points ``N / (1 + (m − 1)·ρ)`` of values ``u`` in groups (sweeps),
+    ``ρ`` the intra-class correlation of one-way ANOVA (clipped to 0..1), ``m`` the mean group size
+    (ANOVA's ``m₀``); between the number of groups and of points."""
+    u = np.asarray(u, dtype=float)
+    ids, inv = np.unique(np.asarray(group), return_inverse=True)
+    inv = inv.ravel()
+    N, S = u.size, ids.size
+    if S < 2 or N <= S:
+        return float(max(S, 1))
+    n = np.bincount(inv).astype(float)
+    mean_g = np.bincount(inv, weights=u) / n
+    msb = float(n @ (mean_g - u.mean()) ** 2) / (S - 1)
+    msw = float(np.sum((u - mean_g[inv]) ** 2)) / (N - S)
+    m0 = (N - float(n @ n) / N) / (S - 1)
+    den = msb + (m0 - 1.0) * msw
+    rho = min(max((msb - msw) / den, 0.0), 1.0) if den > 0 else 0.0
+    return float(min(max(N / (1.0 + (m0 - 1.0) * rho), S), N))
+
+
+def grouped_conformal_quantile(scores: np.ndarray, level: float, n_eff: float) -> float:
+    """Conformal quantile of scores that are ``n_eff`` independent draws (the points of a sweep share its
+    offset): the empirical quantile at ``level·(1 + 1/n_eff)`` (the split-conformal rank ``(n + 1)·level``
+    with ``n = n_eff``).  When that exceeds 1 (fewer than ``level/(1 − level)`` effective draws, e.g. 19 for
+    95 %), no order statistic holds the level and the Gaussian prediction quantile
+    ``t_{n_eff−1}((1 + level)/2)·sqrt(1 + 1/n_eff)·RMS(scores)`` is used (Student's prediction interval of a
+    new draw), never below the plain split-conformal quantile of the points."""
+    s = np.asarray(scores, dtype=float)
+    s = s[np.isfinite(s)]
+    if s.size == 0:
+        return math.nan
+    lev = level * (1.0 + 1.0 / n_eff)
+    if lev < 1.0:
+        return max(float(np.quantile(s, lev, method="higher")), conformal_quantile(s, level))
+    dof = max(n_eff - 1.0, 1.0)
+    t = float(stats.t.ppf(0.5 + level / 2, dof)) * math.sqrt(1.0 + 1.0 / n_eff)
+    return max(t * math.sqrt(float(np.mean(s**2))), conformal_quantile(s, level))
+
+
+#: Fewest calibration points and sweeps of a (source, slip class) cell; smaller cells use the source's pooled cell
+#: (the points of a sweep share its offset and drift: the sweeps, not the points, are the independent draws).
 _MIN_CELL = 40
+_MIN_CELL_SWEEPS = 5
 
 
 def _fold_ids(table: pd.DataFrame, by: Sequence[str], folds: int, rng: np.random.Generator) -> np.ndarray:
@@ -384,25 +591,30 @@ def _calibrate(table: pd.DataFrame, fold: np.ndarray, results: list, mode: int, 
             fhat[c][rows] = ev[c]
     src = table["source"].astype(str).to_numpy()
     cls = slip_class(table)
+    X = _condition_matrix(table, len(table))
+    sweep = table["sweep_id"].to_numpy()
     scale: dict = {}
     qs: dict = {}
     ns: dict = {}
+    cells: dict = {}
     for c in chans:
         y = table[c].to_numpy(float)
         ok = np.isfinite(y) & np.isfinite(fhat[c])
         for s in sorted(set(src)):
             for k in ("*", "longitudinal", "lateral", "combined"):
                 m = ok & (src == s) & ((cls == k) if k != "*" else True)
-                if m.sum() < (5 if k == "*" else _MIN_CELL):
+                if k != "*" and (m.sum() < _MIN_CELL or np.unique(sweep[m]).size < _MIN_CELL_SWEEPS):
                     continue
-                r, f = y[m] - fhat[c][m], fhat[c][m]
-                a, b = heteroscedastic_scale(r, f)
+                if m.sum() < 5:
+                    continue
+                cs = fit_cell_scale(y[m] - fhat[c][m], fhat[c][m], X[m], sweep[m], level)
                 cell = f"{s}|{k}"
-                scale.setdefault(c, {})[cell] = (a, b)
-                qs.setdefault(c, {})[cell] = conformal_quantile(np.abs(r) / np.hypot(a, b * f), level)
+                cells.setdefault(c, {})[cell] = cs
+                scale.setdefault(c, {})[cell] = (cs.a, cs.b)
+                qs.setdefault(c, {})[cell] = cs.q
                 ns.setdefault(c, {})[cell] = int(m.sum())
     cv: dict = {}
-    for c in qs:  # nested: each fold against scale and quantile from the other folds
+    for c in qs:  # nested: each fold against the cell's scale, local factor and quantile from the other folds
         y = table[c].to_numpy(float)
         ok = np.isfinite(y) & np.isfinite(fhat[c])
         for s in sorted(set(src)):
@@ -412,20 +624,18 @@ def _calibrate(table: pd.DataFrame, fold: np.ndarray, results: list, mode: int, 
                 cell = f"{s}|{k}" if f"{s}|{k}" in qs[c] else f"{s}|*"
                 if cell not in qs[c]:
                     continue
-                m = ok & (src == s) & (cls == k) if cell.endswith(k) else ok & (src == s) & (cls == k)
+                m = ok & (src == s) & (cls == k)
                 mc = ok & (src == s) & ((cls == k) if cell.endswith(k) else True)  # the cell's calibration points
                 for i in range(len(results)):
                     test, train = m & (fold == i), mc & (fold != i)
                     if not test.any() or train.sum() < 5:
                         continue
-                    a, b = heteroscedastic_scale(y[train] - fhat[c][train], fhat[c][train])
-                    q = conformal_quantile(np.abs(y[train] - fhat[c][train]) / np.hypot(a, b * fhat[c][train]),
-                                           level)
-                    inside[test] = np.abs(y[test] - fhat[c][test]) <= q * np.hypot(a, b * fhat[c][test])
+                    cs = fit_cell_scale(y[train] - fhat[c][train], fhat[c][train], X[train], sweep[train], level)
+                    inside[test] = np.abs(y[test] - fhat[c][test]) <= cs.half_width(fhat[c][test], X[test])
                     used[test] = True
             if used.any():
                 cv.setdefault(c, {})[s] = float(inside[used].mean())
-    return Calibration(level, by, len(results), scale, qs, ns, failed, cv)
+    return Calibration(level, by, len(results), scale, qs, ns, cells, failed, cv)
 
 
 def _column_quantiles(mat: np.ndarray, q: tuple[float, float]) -> np.ndarray:
@@ -697,7 +907,9 @@ class PendingBands:
             bands.notes[-1] = (
                 f"prediction band: conformal calibration on out-of-fold residuals ({len(fold_fits)} folds of "
                 f"{'/'.join(self.by)} groups, refitted without each fold), heteroscedastic scale "
-                "sqrt(a² + (b·f̂)²) per channel and source, band f̂ ± q·s (use for held-out measured points)")
+                "sqrt(a² + (b·f̂)²)·sqrt(v(x)) per channel, source and slip class (v: local factor of load, speed, "
+                "pressure and camber), quantile over the effective number of sweeps; band f̂ ± q·s (use for a new "
+                "measured point at a condition the fit did not see)")
         if grid is None:
             from mftire.compare.data import assign_families, curve_grid
 
@@ -721,7 +933,7 @@ def _heldout_table(heldout) -> pd.DataFrame:
 
 def coverage_table(bands: Bands, heldout, channels: Sequence[str] = BAND_CHANNELS,
                    source: str | None = None) -> pd.DataFrame:
-    """Per channel: held-out points, fraction inside the prediction and the confidence band.
+    """Per channel: held-out points and sweeps, fraction inside the prediction and the confidence band.
 
     Parameters
     ----------
@@ -729,31 +941,61 @@ def coverage_table(bands: Bands, heldout, channels: Sequence[str] = BAND_CHANNEL
     heldout : DataFrame, path or sequence of paths
         Held-out measured sweeps (sweep schema, SI), not used in the fit.
     source : str, optional
-        Source whose σ applies (default: each row's ``source``; largest σ when unknown).
+        Source whose calibration applies (default: each row's ``source``; the widest band when unknown).
 
     Returns
     -------
     DataFrame
-        ``channel, n, inside_prediction, inside_confidence, nominal`` (fractions 0..1);
-        a last row ``channel = "all"`` pools every channel's points.
+        ``channel, n, sweeps, inside_prediction, se_prediction, inside_confidence, nominal`` (fractions
+        0..1); a last row ``channel = "all"`` pools every channel's points.  ``se_prediction`` is the
+        standard error of ``inside_prediction`` with the sweeps as the independent units (the points of
+        a sweep share its offset and drift: a count over few sweeps scatters far more than a binomial
+        count of its points; NaN for fewer than two sweeps).
     """
+    from mftire.segmentation.grouping import group_sweeps
+
     df = _heldout_table(heldout)
     chans = [c for c in channels if c in df.columns and df[c].notna().any() and c in bands.sigma]
     at = bands.at(df, source=source, channels=chans)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the grouping's range warnings concern the fit, not this count
+        sweep = group_sweeps(df.reset_index(drop=True))["sweep_id"].to_numpy() if len(df) else np.zeros(0, int)
     rows = []
-    tot = np.zeros(3)
+    ins_all, ok_all, sw_all = [], [], []
     for ch in chans:
         y = df[ch].to_numpy(float)
         ok = np.isfinite(y)
         ip = (y >= at[f"{ch}_pred_lo"].to_numpy()) & (y <= at[f"{ch}_pred_hi"].to_numpy())
         ic = (y >= at[f"{ch}_lo"].to_numpy()) & (y <= at[f"{ch}_hi"].to_numpy())
         n = int(ok.sum())
-        rows.append({"channel": ch, "n": n, "inside_prediction": float(ip[ok].mean()) if n else math.nan,
+        rows.append({"channel": ch, "n": n, "sweeps": int(np.unique(sweep[ok]).size),
+                     "inside_prediction": float(ip[ok].mean()) if n else math.nan,
+                     "se_prediction": _cluster_se(ip[ok], sweep[ok]),
                      "inside_confidence": float(ic[ok].mean()) if n else math.nan, "nominal": bands.level})
-        tot += (n, ip[ok].sum(), ic[ok].sum())
-    rows.append({"channel": "all", "n": int(tot[0]), "inside_prediction": tot[1] / tot[0] if tot[0] else math.nan,
-                 "inside_confidence": tot[2] / tot[0] if tot[0] else math.nan, "nominal": bands.level})
-    return pd.DataFrame(rows, columns=["channel", "n", "inside_prediction", "inside_confidence", "nominal"])
+        ins_all.append(np.column_stack([ip[ok], ic[ok]]))
+        sw_all.append(sweep[ok])
+        ok_all.append(n)
+    both = np.vstack(ins_all) if ins_all else np.zeros((0, 2), bool)
+    sw = np.concatenate(sw_all) if sw_all else np.zeros(0, int)
+    tot = int(sum(ok_all))
+    rows.append({"channel": "all", "n": tot, "sweeps": int(np.unique(sw).size),
+                 "inside_prediction": float(both[:, 0].mean()) if tot else math.nan,
+                 "se_prediction": _cluster_se(both[:, 0], sw),
+                 "inside_confidence": float(both[:, 1].mean()) if tot else math.nan, "nominal": bands.level})
+    return pd.DataFrame(rows, columns=["channel", "n", "sweeps", "inside_prediction", "se_prediction",
+                                       "inside_confidence", "nominal"])
+
+
+def _cluster_se(inside: np.ndarray, cluster: np.ndarray) -> float:
+    """Standard error of the mean of ``inside`` with clusters as the units (ratio estimator over clusters)."""
+    ids, inv = np.unique(cluster, return_inverse=True)
+    k = ids.size
+    if k < 2:
+        return math.nan
+    n = np.bincount(inv.ravel()).astype(float)
+    c = np.bincount(inv.ravel(), weights=inside.astype(float))
+    p = c.sum() / n.sum()
+    return float(math.sqrt(k / (k - 1) * np.sum((c - p * n) ** 2)) / n.sum())
 
 
 def band_coverage(bands: Bands, heldout_data, channels: Sequence[str] = BAND_CHANNELS,

@@ -12,7 +12,7 @@ problem solved with :func:`scipy.optimize.least_squares` (trust-region reflectiv
 * bounds from :mod:`mftire.fitting.stages` (widened to hold the template value) and
   parameter scales ``x_scale = max(|start|, typical magnitude)``;
 * exact Jacobians: algorithmic (reverse-mode) derivatives through the model pipeline
-  (:mod:`mftire.fitting.derivatives`), finite differences only for a stage that fits
+  (:mod:`mftire.mf.derivatives`), finite differences only for a stage that fits
   an extension coefficient; BLAS held to one thread inside the solver (threadpoolctl);
 * two passes: first the nominal and load coefficients, then every identified
   coefficient;
@@ -40,13 +40,14 @@ from scipy.optimize import least_squares
 from threadpoolctl import threadpool_limits
 
 from mftire.errors import MftireInputError
-from mftire.fitting import derivatives, initial
+from mftire.fitting import initial
 from mftire.fitting.identify import DataLevels, data_levels, split_identified
 from mftire.fitting.model import Inputs, Model, fitting_mode, predict
 from mftire.fitting.stages import FITTED_KEYS, STAGES, Coefficient, Stage, resolve_stages
 from mftire.fitting.weights import load_sweep_files, noise_std, parse_weights, prepare_table, row_weights
 from mftire.iotools.sweeps import fit_rows
 from mftire.iotools.tir import TirParameters, read_tir
+from mftire.mf import derivatives
 from mftire.mf.extensions import SECTION, ExtensionSet, parse_section
 from mftire.mf.modes import Mode
 from mftire.parameters import with_defaults
@@ -205,7 +206,7 @@ class _Evaluator:
     Piece 1 (conditioning, eqs 4.E1–4.E8 inputs) runs once.  For the moments, the forces
     and the zero-camber lateral force of eq 4.E74 are computed once when no coefficient
     of ``fitted`` changes them (aligning, overturning and rolling coefficients only).
-    :meth:`jacobian` differentiates algorithmically (:mod:`mftire.fitting.derivatives`);
+    :meth:`jacobian` differentiates algorithmically (:mod:`mftire.mf.derivatives`);
     not :attr:`exact` (finite differences instead) when an extension coefficient is fitted.
     """
 
@@ -218,7 +219,7 @@ class _Evaluator:
         self.exact = not set(fitted) & set(ext.coefficient_keys)
 
     def value(self, q: Mapping) -> np.ndarray:
-        """The channel (a :class:`~mftire.fitting.derivatives.Var` when ``q`` holds some)."""
+        """The channel (a :class:`~mftire.mf.derivatives.Var` when ``q`` holds some)."""
         return getattr(self.model.channels(q, (self.channel,), self.given), self.channel)  # eqs 4.E9 ... A48
 
     def __call__(self, q: Mapping) -> np.ndarray:
@@ -226,7 +227,10 @@ class _Evaluator:
 
     def jacobian(self, q: Mapping, keys: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
         """The channel (n,) and its derivatives by ``q[keys]`` (n, k)."""
-        return derivatives.jacobian(self.value, q, keys, self.n)
+        qv, leaves = derivatives.seed(q, keys)  # seed, evaluate here, sweep: mftire.mf calls nothing up here
+        with np.errstate(all="ignore"):
+            out = self.value(qv)
+        return derivatives.sweep(out, leaves, self.n)
 
 
 # ------------------------------------------------------------------------------------
@@ -629,7 +633,7 @@ def fit_tir(
         model without them); reported as not identified, "fixed by the user".
     jacobian : {"exact", "2-point"}
         ``"exact"`` (default): algorithmic (reverse-mode) derivatives through the model
-        (:mod:`mftire.fitting.derivatives`; finite differences for a stage that fits an
+        (:mod:`mftire.mf.derivatives`; finite differences for a stage that fits an
         extension coefficient); ``"2-point"``: forward finite differences everywhere
         (slower; the reference the exact derivatives are tested against).
 
@@ -644,7 +648,7 @@ def fit_tir(
     tmpl = _as_template(template)
     from mftire.input_checks import check_constants  # the one parameter check (mftire.iotools.tir_checks)
 
-    check_constants(with_defaults(tmpl), getattr(tmpl, "path", None) or "template", tmpl.sections.get(SECTION))
+    check_constants(with_defaults(tmpl.flat()), getattr(tmpl, "path", None) or "template", tmpl.sections.get(SECTION))
     if tmpl.fittyp not in (61, 62):
         raise MftireInputError(
             f"template FITTYP {tmpl.get('FITTYP')!r}: fitting needs an MF 6.1 or 6.2 template (FITTYP 61 or 62)"
@@ -664,7 +668,7 @@ def fit_tir(
         raise MftireInputError(
             f"the template's [{SECTION}] reads {', '.join(missing)}: no such column in the data"
         )
-    p0 = with_defaults(tmpl)
+    p0 = with_defaults(tmpl.flat())  # the layer below takes a plain mapping
     for t in ext.terms:  # coefficients absent from the section start at the form's start values
         for k in t.coefficient_keys:
             p0.setdefault(k, t.start(k))
@@ -728,7 +732,7 @@ def fit_tir(
     ran = [r for r in results if r.status == "fitted"]
     return FitResult(
         parameters=fitted,
-        flat=with_defaults(fitted),
+        flat=with_defaults(fitted.flat()),
         template=p0,
         stages=results,
         identified=identified,

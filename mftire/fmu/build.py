@@ -30,8 +30,8 @@ WRAPPER_C = Path(__file__).parent / "c"
 #: The hand-written C of each model behind the one model interface (``c/fmu_model.h``): the evaluator, the
 #: model's own C, and its implementation of the interface.
 MODEL_SOURCES: dict[str, tuple[str, ...]] = {
-    "steady": ("mf_eval.c", "mf_eval.h", "mf_model.c", "mf_model.h"),
-    "transient": ("mf_eval.c", "mf_eval.h", "mf_transient.c", "mf_transient.h", "mt_model.c"),
+    "steady": ("mf_eval.c", "mf_eval.h", "mf_ext.h", "mf_model.c", "mf_model.h"),
+    "transient": ("mf_eval.c", "mf_eval.h", "mf_ext.h", "mf_transient.c", "mf_transient.h", "mt_model.c"),
 }
 #: The FMI wrapper of each FMI version (thin, over fmu_model.h; the same for every model).
 WRAPPERS = {2: "fmi2_wrapper.c", 3: "fmi3_wrapper.c"}
@@ -228,7 +228,7 @@ def source_files(model: str, fmi_version: int) -> dict[str, str]:
     ``fmu.c``.  The export adds the generated headers of its variable table."""
     from mftire.mf import cheaders
 
-    names = (*MODEL_SOURCES[model], "fmu_model.h", "fmu_common.h", WRAPPERS[fmi_version])
+    names = (*MODEL_SOURCES[model], "fmu_model.h", "fmu_common.h", "fmi_common.h", WRAPPERS[fmi_version])
     files = {name: read_source(name) for name in names}
     files["mf_spec_gen.h"] = cheaders.spec_header()
     files.update({h: fmi_header(h) for h in FMI_HEADERS[fmi_version]})

@@ -119,6 +119,7 @@ from mftire.iotools.sweeps import (
     DIMENSIONS,
     MEASURED_COLUMNS,
     REQUIRED_COLUMNS,
+    to_numbers,
     unit_factor,
     unit_offset,
 )
@@ -242,10 +243,8 @@ def _numeric(path: str, df: pd.DataFrame, column: str, skip: int, allow_nan: boo
     """Column as float64; a non-numeric (or, unless ``allow_nan``, empty) cell raises naming line and column."""
     s = df[column]
     if not pd.api.types.is_numeric_dtype(s) or pd.api.types.is_bool_dtype(s):
-        conv = pd.to_numeric(s, errors="coerce")
-        bad = conv.isna() & s.notna()
-        if bad.any():
-            i = int(np.flatnonzero(bad.to_numpy())[0])
+        conv, i = to_numbers(s)
+        if i is not None:
             raise MftireInputError(
                 f"{path}:{_data_line(path, i, skip)}: column {column!r}: {str(s.iloc[i])!r} is not a number"
             )

@@ -56,6 +56,7 @@ __all__ = [
     "FIT_ROW",
     "fit_rows",
     "COLUMN_ALIASES",
+    "to_numbers",
 ]
 
 #: Operating-condition inputs every sweep table must have (SI).
@@ -262,6 +263,14 @@ class SweepReport:
         lines.append(f"  measured channels: {', '.join(self.measured_channels) or 'none'}")
         lines.extend(f"  {m}" for m in self.messages)
         return "\n".join(lines)
+
+
+def to_numbers(raw: pd.Series) -> tuple[pd.Series, int | None]:
+    """``raw`` as numbers (NaN where a cell is empty or not a number) and the position of the first cell that
+    holds something that is not a number (None when there is none): the readers name its line in the error."""
+    num = pd.to_numeric(raw, errors="coerce")
+    bad = (num.isna() & raw.notna()).to_numpy()
+    return num, (int(np.flatnonzero(bad)[0]) if bad.any() else None)
 
 
 def _numeric_column(df: pd.DataFrame, column: str, name: str) -> pd.Series:

@@ -991,17 +991,15 @@ def _check_fittyp(params: TirParameters, where: dict, section_line: dict, source
         named = FORMAT_MODELS.get(token) or OTHER_MODELS.get(token)
         model = FITTYP_MODELS[fittyp]
         same = {named, model} <= {"PAC2002", "MF-Tyre 5.0"} or named == model  # one equation set (docs)
+        reason = None
         if named is not None and not same:
-            fline = next((where[k] for k in where if k[1] == "PROPERTY_FILE_FORMAT"), (lineno, line))
             reason = (f"PROPERTY_FILE_FORMAT = {fmt!r} names {named}, but FITTYP = {fittyp} ({model}) "
                       f"decides: the file is evaluated as {model}")
-            if strict:
-                raise FittypError(reason + " (strict reading)", source, fline[0], fline[1])
-            warnings.warn(TirWarning(f"{source}, line {fline[0]}: {reason}"), stacklevel=4)
         elif named is None and token not in GENERIC_FORMATS and fmt is not None:
-            fline = next((where[k] for k in where if k[1] == "PROPERTY_FILE_FORMAT"), (lineno, line))
             reason = (f"PROPERTY_FILE_FORMAT = {fmt!r} is not a format mftire knows ('USER', 'PAC2002', 'MF_05', "
                       f"'MF_52', 'MF_61', 'MF_62'); FITTYP = {fittyp} ({model}) decides")
+        if reason is not None:  # an error when reading strictly, else a warning, at the PROPERTY_FILE_FORMAT line
+            fline = next((where[k] for k in where if k[1] == "PROPERTY_FILE_FORMAT"), (lineno, line))
             if strict:
                 raise FittypError(reason + " (strict reading)", source, fline[0], fline[1])
             warnings.warn(TirWarning(f"{source}, line {fline[0]}: {reason}"), stacklevel=4)

@@ -61,7 +61,7 @@ import pandas as pd
 
 from mftire.errors import MftireInputError
 from mftire.iotools.atomic import write_text_atomic
-from mftire.iotools.sweeps import convert_from_si, validate_sweeps
+from mftire.iotools.sweeps import convert_from_si, to_numbers, validate_sweeps
 from mftire.iotools.units import DIMENSIONS, SI_UNITS, is_known_unit, unit_factor
 
 __all__ = ["TYDEX_CHANNELS", "TYDEX_VARIABLES", "read_tydex", "write_tydex", "parse_tydex"]
@@ -253,10 +253,8 @@ def _parse_data(path: str, rows: list[tuple[int, str]], keys: list[str]) -> pd.D
     out = pd.DataFrame(index=table.index)
     for j, key in enumerate(keys):
         raw = table.iloc[:, j]
-        num = pd.to_numeric(raw, errors="coerce")
-        bad = num.isna() & raw.notna()
-        if bad.any():
-            i = int(np.flatnonzero(bad.to_numpy())[0])
+        num, i = to_numbers(raw)
+        if i is not None:
             raise MftireInputError(
                 f"{path}:{rows[i][0]}: channel {key!r} value {raw.iloc[i]!r} is not a number"
             )

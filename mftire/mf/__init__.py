@@ -21,6 +21,7 @@ pressure changes", Vehicle System Dynamics 48:S1):
 ``relaxation``       carcass stiffnesses and relaxation lengths
 ``solver``           the one pipeline (prepare, forces, outputs): the 30 output channels
 ``extensions``       model extensions: scaling factors as functions of a variable
+``derivatives``      exact derivatives of a channel by its coefficients (reverse mode, the fit's Jacobian)
 ``thermal_section``  the ``[MFTIRE_THERMAL]`` section: thermal parameters, the node of each temperature law
 ``kernel``           the compiled array kernel (the C model over arrays, loaded with ctypes)
 ``_kernel_build``    how the kernel is compiled (setup.py and ``python -m mftire.mf.kernel build``)

@@ -18,7 +18,8 @@ from pathlib import Path
 #: The C model directory, relative to the repository / installed package root.
 CSOURCE = Path("mftire") / "mf" / "c"
 #: The translation unit (it includes mf_eval.c) and every file it reads.
-SOURCES = ("mf_kernel.c", "mf_eval.c", "mf_eval.h", "mf_spec_gen.h", "kernel/mf_params.h", "kernel/mf_ext_gen.h")
+SOURCES = ("mf_kernel.c", "mf_eval.c", "mf_eval.h", "mf_ext.h", "mf_spec_gen.h", "kernel/mf_params.h",
+           "kernel/mf_ext_gen.h")
 #: Name of the setuptools Extension that builds the kernel (loaded with ctypes: no Python C API) ...
 MODULE = "mftire.mf._mfkernel"
 #: ... and its file name in mftire/mf/: not a module's suffix, so that nothing imports it.

@@ -67,8 +67,9 @@ def extension_header(extensions: ExtensionSet | None = None, runtime: bool = Fal
     ]
     if runtime:
         lines.append("#define MF_EXT_RUNTIME 1 /* the term table is given at run time (mf_kernel.c) */")
-    elif not terms:
-        return "\n".join([*lines, "", "#endif /* MF_EXT_GEN_H */", ""])
+    lines += ['#include "mf_ext.h" /* what the code below uses of the evaluator (Cond, mf_dfz, mf_dpi, ...) */', ""]
+    if not (runtime or terms):
+        return "\n".join([*lines, "#endif /* MF_EXT_GEN_H */", ""])
     builtin = list(BUILTIN_VARIABLES)
     external = extensions.external_variables if extensions else ()
     forms = list(FORMS)
@@ -121,8 +122,6 @@ def extension_header(extensions: ExtensionSet | None = None, runtime: bool = Fal
         "    }",
         "}",
         "",
-        "static double mf_ext_table(double u, const double *c, int n);",
-        "",
         "/* f of each form of mftire.mf.extensions.FORMS (neutral coefficients give 1). */",
         "static double mf_ext_form(int form, double u, double z, double z2, double ref, const double *c, int n)",
         "{",
@@ -147,7 +146,12 @@ def params_header(fields: Sequence[tuple[str, str]], data: Sequence[str] = (), o
         "typedef struct {",
     ]
     lines += [f"    double {field}; /* {c_comment(comment)} */" for field, comment in fields]
-    lines += ["} MFParams;", "", f"#define MF_N_DATA {len(data)}"]
+    lines += ["} MFParams;", ""]
+    standard = {p.key for p in PARAMETERS}
+    extra = [field for field, _ in fields if field not in standard]
+    if extra:  # members beyond the .tir's (the transient constants): what mf_spec_gen.h's bounds may index
+        lines += ["/* Members beyond the .tir parameters. */", *(f"#define MF_HAS_{field} 1" for field in extra), ""]
+    lines.append(f"#define MF_N_DATA {len(data)}")
     if data:
         lines.append(f"#define MF_DATA_NAMES {{{', '.join(c_string(d) for d in data)}}}")
     lines += ["", "#endif /* MF_PARAMS_H */", ""]
@@ -274,15 +278,23 @@ def spec_header() -> str:
         inp = c_string(w.input) if w.input else "NULL"
         lines.append(f"    {{{c_string(c_format(w.text, w.limit))}, {limit}, {inp}}}, \\")
     lines += ["}", ""]
+    standard = {p.key for p in PARAMETERS}
     lines += [
-        "/* Parameters with a physical bound (MFParams index, bound, 1: strict >, 0: >=, name). */",
+        "/* Parameters with a physical bound (MFParams index, bound, 1: strict >, 0: >=, name).  A bound on a",
+        " * member beyond the .tir parameters (MF_HAS_<key> of mf_params.h) counts where MFParams has it. */",
         "typedef struct { int index; double bound; int strict; const char *name; } MFParamBound;",
-        "#define MF_SPEC_PARAMETER_BOUNDS { \\",
     ]
+    rows = []
     for key, rule in PARAMETER_BOUNDS:
         op, value = rule.split()
-        lines.append(f"    {{MF_SPEC_PIDX({key}), {float(value)!r}, {int(op == '>')}, {c_string(key)}}}, \\")
-    lines += ["}", ""]
+        row = f"{{MF_SPEC_PIDX({key}), {float(value)!r}, {int(op == '>')}, {c_string(key)}}},"
+        if key in standard:
+            rows.append(f"    {row} \\")
+            continue
+        name = f"MF_SPEC_BOUND_{len(rows)}_{key}"
+        lines += [f"#ifdef MF_HAS_{key}", f"#define {name} {row}", "#else", f"#define {name}", "#endif"]
+        rows.append(f"    {name} \\")
+    lines += ["#define MF_SPEC_PARAMETER_BOUNDS { \\", *rows, "}", ""]
     codes = ", ".join(repr(float(c)) for c in dict.fromkeys(f.code for f in FAMILIES))
     names = ", ".join(f"{f.name} ({f.code:g})" for f in FAMILIES)
     lines += [

@@ -184,8 +184,10 @@ FAMILIES: tuple[Family, ...] = (
 
 
 #: Parameters with a physical bound, refused outside it (the FMU's tunable parameters at every set; the
-#: ``.tir`` checks of :mod:`mftire.iotools.tir_checks` refuse the same in a file): (key, "> 0" or ">= 0").
-#: One table with every other consumer: :data:`mftire.parameters.PARAMETER_LIMITS` (evaluate, info, fit, export).
+#: ``.tir`` checks of :mod:`mftire.iotools.tir_checks` refuse the same in a file, the transient model its
+#: constants ``TR_*``): (key, "> 0" or ">= 0").  One table with every other consumer:
+#: :data:`mftire.parameters.PARAMETER_LIMITS` (evaluate, info, fit, export, the transient tyre).  In C a bound on
+#: a key beyond the ``.tir`` parameters counts where ``MFParams`` has the member (``MF_HAS_<key>``).
 PARAMETER_BOUNDS: tuple[tuple[str, str], ...] = parameter_bounds()
 
 

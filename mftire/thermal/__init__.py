@@ -9,6 +9,8 @@ Modules (the ``[MFTIRE_THERMAL]`` section itself is read by :mod:`mftire.mf.ther
 - :mod:`mftire.thermal.heat`: heat sources, heat paths, gas law, the implicit step (pure functions);
 - :mod:`mftire.thermal.simulation`: node temperatures along a series, :func:`replay` of a measured series;
 - :mod:`mftire.thermal.thermal_fit`: ``fit_thermal`` (thermal parameters, laws and their nodes);
+- :mod:`mftire.thermal.heldout`: the held-out check of a thermal fit (fit on the first part of a series,
+  replay the rest, against the model fed the measured temperature and an isothermal fit);
 - :mod:`mftire.thermal.series`: reading the series (raw rig file or imported CSV);
 - :mod:`mftire.thermal.cli`: ``mftire fit-thermal`` and ``mftire replay``.
 """

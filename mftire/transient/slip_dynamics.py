@@ -61,6 +61,7 @@ import pandas as pd
 from numpy.typing import ArrayLike
 
 from mftire.errors import MftireInputError
+from mftire.iotools.tir_checks import value_errors
 from mftire.mf.modes import Mode
 from mftire.mf.solver import evaluate_arrays
 
@@ -208,6 +209,9 @@ class TransientTyre:
         self.tyre = tyre
         self.mode = int(mode)
         self.constants = {**DEFAULT_CONSTANTS, **{k: float(v) for k, v in (constants or {}).items()}}
+        bad = value_errors(self.constants)  # the bounds of mftire.parameters.PARAMETER_LIMITS (TR_SAT >= 0, ...)
+        if bad:
+            raise MftireInputError(f"transient constant {bad[0]}")
         self._p = dict(tyre.flat)
         self._mu_cache: dict[float, dict] = {}
 

@@ -14,90 +14,52 @@
 #include <string.h>
 
 #include "fmi2Functions.h"
-#include "fmu_model.h"
-
-typedef enum { FMI2_INSTANTIATED, FMI2_INIT, FMI2_RUNNING, FMI2_TERMINATED, FMI2_ERROR } FMI2State;
+#include "fmi_common.h"
 
 typedef struct {
-    fmi2CallbackFunctions cb;     /* the importer's callbacks (copied) */
-    char *name;                   /* instance name (allocated with cb.allocateMemory) */
-    fmi2Type type;
-    FMI2State state;
-    int log_errors, log_warnings; /* categories logStatusError / logStatusWarning on */
-    FMModel *model;               /* allocated with cb.allocateMemory */
+    FIInstance fi;            /* first: what both wrappers keep (fmi_common.h) */
+    fmi2CallbackFunctions cb; /* the importer's callbacks (copied) */
+    char *name;               /* instance name (allocated with cb.allocateMemory) */
 } Instance;
 
 #define INS ((Instance *)c)
 
 /* ------------------------------------------------------------------ logging */
 
-/* The message is formatted here and passed as the format string with every '%' doubled, without variadic
- * arguments: a logger that formats (printf-style, as the standard asks) and a plain callback that does not
- * both show the same text. */
-static void emit(const fmi2CallbackFunctions *cb, const char *name, fmi2Status status, const char *category,
-                 const char *fmt, va_list ap)
+/* The message goes to the logger as the format string with every '%' doubled, without variadic arguments: a
+ * logger that formats (printf-style, as the standard asks) and a plain callback that does not both show the
+ * same text. */
+static void log_to(const fmi2CallbackFunctions *cb, const char *name, int status, const char *category,
+                   const char *message)
 {
-    char buf[512], esc[1024];
+    char esc[1024];
     size_t i, j;
-    vsnprintf(buf, sizeof buf, fmt, ap);
-    for (i = j = 0; buf[i] && j + 2 < sizeof esc; i++) {
-        if (buf[i] == '%') esc[j++] = '%';
-        esc[j++] = buf[i];
+    if (!cb || !cb->logger) return;
+    for (i = j = 0; message[i] && j + 2 < sizeof esc; i++) {
+        if (message[i] == '%') esc[j++] = '%';
+        esc[j++] = message[i];
     }
     esc[j] = '\0';
-    cb->logger(cb->componentEnvironment, name, status, category, esc);
+    cb->logger(cb->componentEnvironment, name ? name : "", (fmi2Status)status, category, esc);
 }
 
-/* Log through the importer's logger, unless the category is switched off. */
-static void wlogf(const Instance *ins, fmi2Status status, const char *category, const char *fmt, ...)
+/* fi_emit_fn of fmi_common.h. */
+static void emit(const FIInstance *fi, int status, const char *category, const char *message)
 {
-    va_list ap;
-    if (!ins || !ins->cb.logger) return;
-    if (status == fmi2Warning && !ins->log_warnings) return;
-    if (status == fmi2Error && !ins->log_errors) return;
-    va_start(ap, fmt);
-    emit(&ins->cb, ins->name, status, category, fmt, ap);
-    va_end(ap);
-}
-
-/* The model's logger (fmu_model.h). */
-static void model_log(void *host, int status, const char *category, const char *message)
-{
-    wlogf((const Instance *)host, (fmi2Status)status, category, "%s", message);
-}
-
-/* Before an instance exists: straight to the importer's logger. */
-static void log_early(const fmi2CallbackFunctions *cb, const char *name, const char *fmt, ...)
-{
-    va_list ap;
-    if (!cb || !cb->logger) return;
-    va_start(ap, fmt);
-    emit(cb, name ? name : "", fmi2Error, "logStatusError", fmt, ap);
-    va_end(ap);
+    const Instance *ins = (const Instance *)fi;
+    log_to(&ins->cb, ins->name, status, category, message);
 }
 
 static fmi2Status unsupported(fmi2Component c, const char *fn)
 {
-    if (c) wlogf(INS, fmi2Error, "logStatusError", "%s is not supported", fn);
-    return fmi2Error;
-}
-
-/* A call in a state where the standard does not allow it: an error (the instance stays usable). */
-static fmi2Status wrong_state(fmi2Component c, const char *fn)
-{
-    static const char *const names[] = {"instantiated", "initialization mode", "running", "terminated", "error"};
-    wlogf(INS, fmi2Error, "logStatusError", "%s is not allowed in state '%s'", fn, names[INS->state]);
-    return fmi2Error;
+    return (fmi2Status)fi_fail(FI(c), "%s is not supported", fn);
 }
 
 /* Start of the value-access functions: a NULL component, or NULL arrays with n > 0, is an error. */
 #define CHECK_ARRAYS(c, n, a, b)                                                                                  \
     do {                                                                                                          \
         if (!(c)) return fmi2Error;                                                                               \
-        if ((n) > 0 && (!(a) || !(b))) {                                                                          \
-            wlogf(INS, fmi2Error, "logStatusError", "%s: NULL array argument", __func__);                       \
-            return fmi2Error;                                                                                     \
-        }                                                                                                         \
+        if ((n) > 0 && (!(a) || !(b))) return (fmi2Status)fi_fail(FI(c), "%s: NULL array argument", __func__); \
     } while (0)
 
 /* ------------------------------------------------------------------ life cycle */
@@ -108,16 +70,19 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
 {
     Instance *ins;
     const char *name = instanceName ? instanceName : "";
+    char msg[256];
     (void)fmuResourceLocation;
     (void)visible;
     (void)loggingOn; /* warnings are rate-limited whatever the debug logging (fmu_model.h) */
     if (!functions || !functions->allocateMemory || !functions->freeMemory) {
-        log_early(functions, name, "fmi2Instantiate: allocateMemory and freeMemory callbacks are required");
+        log_to(functions, name, FM_ERROR, "logStatusError",
+               "fmi2Instantiate: allocateMemory and freeMemory callbacks are required");
         return NULL;
     }
     if (!fmuGUID || strcmp(fmuGUID, fm_guid()) != 0) {
-        log_early(functions, name, "fmi2Instantiate: wrong GUID %s (this binary is %s)", fmuGUID ? fmuGUID : "(null)",
-                  fm_guid());
+        snprintf(msg, sizeof msg, "fmi2Instantiate: wrong GUID %s (this binary is %s)", fmuGUID ? fmuGUID : "(null)",
+                 fm_guid());
+        log_to(functions, name, FM_ERROR, "logStatusError", msg);
         return NULL;
     }
     ins = (Instance *)functions->allocateMemory(1, sizeof(Instance));
@@ -125,18 +90,15 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     memset(ins, 0, sizeof *ins);
     ins->cb = *functions;
     ins->name = (char *)functions->allocateMemory(strlen(name) + 1, 1);
-    ins->model = (FMModel *)functions->allocateMemory(1, fm_size());
-    if (!ins->name || !ins->model) {
+    ins->fi.model = (FMModel *)functions->allocateMemory(1, fm_size());
+    if (!ins->name || !ins->fi.model) {
         if (ins->name) functions->freeMemory(ins->name);
-        if (ins->model) functions->freeMemory(ins->model);
+        if (ins->fi.model) functions->freeMemory(ins->fi.model);
         functions->freeMemory(ins);
         return NULL;
     }
     strcpy(ins->name, name);
-    ins->type = fmuType;
-    ins->state = FMI2_INSTANTIATED;
-    ins->log_errors = ins->log_warnings = 1;
-    fm_init(ins->model, model_log, ins);
+    fi_init(&ins->fi, ins->fi.model, fmuType == fmi2CoSimulation, emit);
     return ins;
 }
 
@@ -145,7 +107,7 @@ FMI2_Export void fmi2FreeInstance(fmi2Component c)
     fmi2CallbackFreeMemory fr;
     if (!c) return;
     fr = INS->cb.freeMemory;
-    fr(INS->model);
+    fr(INS->fi.model);
     fr(INS->name);
     fr(c);
 }
@@ -156,24 +118,7 @@ FMI2_Export const char *fmi2GetVersion(void) { return fmi2Version; }
 FMI2_Export fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
                                            const fmi2String categories[])
 {
-    size_t i;
-    if (!c) return fmi2Error;
-    if (nCategories == 0) {
-        INS->log_errors = INS->log_warnings = 1;
-        return fmi2OK;
-    }
-    for (i = 0; i < nCategories; i++) {
-        const char *cat = categories[i];
-        if (!cat) continue;
-        if (strcmp(cat, "logAll") == 0) INS->log_errors = INS->log_warnings = loggingOn ? 1 : 0;
-        else if (strcmp(cat, "logStatusWarning") == 0) INS->log_warnings = loggingOn ? 1 : 0;
-        else if (strcmp(cat, "logStatusError") == 0) INS->log_errors = loggingOn ? 1 : 0;
-        else {
-            wlogf(INS, fmi2Error, "logStatusError", "unknown log category '%s'", cat);
-            return fmi2Error;
-        }
-    }
-    return fmi2OK;
+    return (fmi2Status)fi_set_debug_logging(FI(c), loggingOn, nCategories, categories);
 }
 
 FMI2_Export fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
@@ -183,46 +128,22 @@ FMI2_Export fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranc
     (void)tolerance;
     (void)stopTimeDefined;
     (void)stopTime;
-    if (!c) return fmi2Error;
-    if (INS->state != FMI2_INSTANTIATED) return wrong_state(c, "fmi2SetupExperiment");
-    fm_set_time(INS->model, startTime);
-    return fmi2OK;
+    if (fi_in_state(FI(c), FI_INSTANTIATED, "fmi2SetupExperiment") != FM_OK) return fmi2Error;
+    return (fmi2Status)fi_set_time(FI(c), startTime);
 }
 
 FMI2_Export fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 {
-    if (!c) return fmi2Error;
-    if (INS->state != FMI2_INSTANTIATED) return wrong_state(c, "fmi2EnterInitializationMode");
-    INS->state = FMI2_INIT;
-    return fmi2OK;
+    return (fmi2Status)fi_enter_initialization(FI(c), "fmi2EnterInitializationMode");
 }
 
 FMI2_Export fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
-    if (!c) return fmi2Error;
-    if (INS->state != FMI2_INIT) return wrong_state(c, "fmi2ExitInitializationMode");
-    if (fm_exit_initialization(INS->model) != FM_OK) { /* outputs are valid straight after initialisation */
-        INS->state = FMI2_ERROR;
-        return fmi2Error;
-    }
-    INS->state = FMI2_RUNNING;
-    return fmi2OK;
+    return (fmi2Status)fi_exit_initialization(FI(c), "fmi2ExitInitializationMode");
 }
 
-FMI2_Export fmi2Status fmi2Terminate(fmi2Component c)
-{
-    if (!c) return fmi2Error;
-    INS->state = FMI2_TERMINATED;
-    return fmi2OK;
-}
-
-FMI2_Export fmi2Status fmi2Reset(fmi2Component c)
-{
-    if (!c) return fmi2Error;
-    fm_reset(INS->model);
-    INS->state = FMI2_INSTANTIATED;
-    return fmi2OK;
-}
+FMI2_Export fmi2Status fmi2Terminate(fmi2Component c) { return (fmi2Status)fi_terminate(FI(c)); }
+FMI2_Export fmi2Status fmi2Reset(fmi2Component c) { return (fmi2Status)fi_reset(FI(c)); }
 
 /* ------------------------------------------------------------------ variables */
 
@@ -231,7 +152,7 @@ FMI2_Export fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[
     size_t i;
     CHECK_ARRAYS(c, n, vr, value);
     for (i = 0; i < n; i++)
-        if (fm_get_real(INS->model, vr[i], &value[i]) != FM_OK) return fmi2Error;
+        if (fm_get_real(INS->fi.model, vr[i], &value[i]) != FM_OK) return fmi2Error;
     return fmi2OK;
 }
 
@@ -240,8 +161,8 @@ FMI2_Export fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference 
     size_t i;
     CHECK_ARRAYS(c, n, vr, value);
     for (i = 0; i < n; i++) {
-        int v;
-        if (fm_get_int(INS->model, vr[i], &v) != FM_OK) return fmi2Error;
+        int v = 0;
+        if (fm_get_int(INS->fi.model, vr[i], &v) != FM_OK) return fmi2Error;
         value[i] = v;
     }
     return fmi2OK;
@@ -252,7 +173,7 @@ FMI2_Export fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[
     size_t i;
     CHECK_ARRAYS(c, n, vr, value);
     for (i = 0; i < n; i++)
-        if (fm_set_real(INS->model, vr[i], value[i]) != FM_OK) return fmi2Error;
+        if (fm_set_real(INS->fi.model, vr[i], value[i]) != FM_OK) return fmi2Error;
     return fmi2OK;
 }
 
@@ -262,7 +183,7 @@ FMI2_Export fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference 
     size_t i;
     CHECK_ARRAYS(c, n, vr, value);
     for (i = 0; i < n; i++)
-        if (fm_set_int(INS->model, vr[i], value[i]) != FM_OK) return fmi2Error;
+        if (fm_set_int(INS->fi.model, vr[i], value[i]) != FM_OK) return fmi2Error;
     return fmi2OK;
 }
 
@@ -271,9 +192,7 @@ FMI2_Export fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference 
 static fmi2Status no_vars(fmi2Component c, size_t n, const char *what)
 {
     if (!c) return fmi2Error;
-    if (n == 0) return fmi2OK;
-    wlogf(INS, fmi2Error, "logStatusError", "the model has no %s variables", what);
-    return fmi2Error;
+    return n == 0 ? fmi2OK : (fmi2Status)fi_fail(FI(c), "the model has no %s variables", what);
 }
 
 FMI2_Export fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Boolean value[])
@@ -380,12 +299,7 @@ FMI2_Export fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean 
     return fmi2OK;
 }
 
-FMI2_Export fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
-{
-    if (!c) return fmi2Error;
-    fm_set_time(INS->model, time);
-    return fmi2OK;
-}
+FMI2_Export fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) { return (fmi2Status)fi_set_time(FI(c), time); }
 
 FMI2_Export fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real ei[], size_t ni)
 {
@@ -393,40 +307,22 @@ FMI2_Export fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real ei[], si
     return (c && ni == 0) ? fmi2OK : fmi2Error;
 }
 
-/* The continuous states (none for the steady-state tyre). */
-static fmi2Status states_call(fmi2Component c, const char *fn, size_t nx, const void *array)
-{
-    if (!c) return fmi2Error;
-    if (nx != fm_n_states() || (nx > 0 && !array)) {
-        wlogf(INS, fmi2Error, "logStatusError", "%s: %u continuous states, not %u", fn, fm_n_states(), (unsigned)nx);
-        return fmi2Error;
-    }
-    return fmi2OK;
-}
-
+/* The continuous states (none for the steady-state tyre; fmi_common.h checks the count). */
 FMI2_Export fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx)
 {
-    if (states_call(c, "fmi2SetContinuousStates", nx, x) != fmi2OK) return fmi2Error;
-    return nx ? (fmi2Status)fm_set_states(INS->model, x) : fmi2OK;
+    return (fmi2Status)fi_set_states(FI(c), "fmi2SetContinuousStates", nx, x);
 }
-
 FMI2_Export fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
 {
-    if (states_call(c, "fmi2GetContinuousStates", nx, x) != fmi2OK) return fmi2Error;
-    return nx ? (fmi2Status)fm_get_states(INS->model, x) : fmi2OK;
+    return (fmi2Status)fi_get_states(FI(c), "fmi2GetContinuousStates", nx, x);
 }
-
 FMI2_Export fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx)
 {
-    if (states_call(c, "fmi2GetDerivatives", nx, dx) != fmi2OK) return fmi2Error;
-    return nx ? (fmi2Status)fm_get_derivatives(INS->model, dx) : fmi2OK;
+    return (fmi2Status)fi_get_derivatives(FI(c), "fmi2GetDerivatives", nx, dx);
 }
-
 FMI2_Export fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real xn[], size_t nx)
 {
-    if (states_call(c, "fmi2GetNominalsOfContinuousStates", nx, xn) != fmi2OK) return fmi2Error;
-    if (nx) fm_get_nominals(xn);
-    return fmi2OK;
+    return (fmi2Status)fi_get_nominals(FI(c), "fmi2GetNominalsOfContinuousStates", nx, xn);
 }
 
 /* ------------------------------------------------------------------ Co-Simulation */
@@ -435,14 +331,7 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunication
                                   fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
     (void)noSetFMUStatePriorToCurrentPoint;
-    if (!c) return fmi2Error;
-    if (INS->type != fmi2CoSimulation) return unsupported(c, "fmi2DoStep (Model Exchange instance)");
-    if (INS->state != FMI2_RUNNING) return wrong_state(c, "fmi2DoStep");
-    if (!(communicationStepSize >= 0.0)) {
-        wlogf(INS, fmi2Error, "logStatusError", "fmi2DoStep: invalid step size %g", communicationStepSize);
-        return fmi2Error;
-    }
-    return (fmi2Status)fm_do_step(INS->model, currentCommunicationPoint, communicationStepSize);
+    return (fmi2Status)fi_do_step(FI(c), "fmi2DoStep", currentCommunicationPoint, communicationStepSize);
 }
 
 FMI2_Export fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,
@@ -479,7 +368,7 @@ FMI2_Export fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s
 {
     if (!c || !value) return fmi2Error;
     if (s != fmi2LastSuccessfulTime) return fmi2Discard;
-    *value = fm_time(INS->model);
+    *value = fm_time(INS->fi.model);
     return fmi2OK;
 }
 

@@ -12,55 +12,34 @@
 #include <string.h>
 
 #include "fmi3Functions.h"
-#include "fmu_model.h"
-
-typedef enum { ST_INSTANTIATED, ST_INIT, ST_RUNNING, ST_TERMINATED, ST_ERROR } State;
+#include "fmi_common.h"
 
 typedef struct {
-    FMModel *model;
+    FIInstance fi; /* first: what both wrappers keep (fmi_common.h) */
     fmi3InstanceEnvironment env;
     fmi3LogMessageCallback logger;
     char *name;
-    int cosim;
-    State state;
-    int log_errors, log_warnings;
 } Instance;
 
 #define INS ((Instance *)instance)
 
-static void wlog(const Instance *ins, fmi3Status status, const char *category, const char *message)
+/* fi_emit_fn of fmi_common.h. */
+static void emit(const FIInstance *fi, int status, const char *category, const char *message)
 {
-    if (!ins || !ins->logger) return;
-    if (status == fmi3Warning && !ins->log_warnings) return;
-    if (status == fmi3Error && !ins->log_errors) return;
-    ins->logger(ins->env, status, category, message);
-}
-
-/* The model's logger (fmu_model.h). */
-static void model_log(void *host, int status, const char *category, const char *message)
-{
-    wlog((const Instance *)host, (fmi3Status)status, category, message);
+    const Instance *ins = (const Instance *)fi;
+    if (ins->logger) ins->logger(ins->env, (fmi3Status)status, category, message);
 }
 
 static fmi3Status fail(fmi3Instance instance, const char *what)
 {
-    if (instance) wlog(INS, fmi3Error, "logStatusError", what);
-    return fmi3Error;
-}
-
-/* A call in a state where the standard does not allow it: an error (the instance stays usable). */
-static fmi3Status wrong_state(fmi3Instance instance, const char *fn)
-{
-    static const char *const names[] = {"instantiated", "initialization mode", "running", "terminated", "error"};
-    char msg[160];
-    snprintf(msg, sizeof msg, "%s is not allowed in state '%s'", fn, names[INS->state]);
-    return fail(instance, msg);
+    return (fmi3Status)fi_fail(FI(instance), "%s", what);
 }
 
 static Instance *create(fmi3String name, fmi3String token, fmi3Boolean loggingOn, fmi3InstanceEnvironment env,
                         fmi3LogMessageCallback logger, int cosim)
 {
     Instance *ins;
+    FMModel *model;
     (void)loggingOn; /* warnings are rate-limited whatever the debug logging (fmu_model.h) */
     if (!token || strcmp(token, fm_guid()) != 0) {
         if (logger) logger(env, fmi3Error, "logStatusError", "wrong instantiationToken for this binary");
@@ -69,20 +48,17 @@ static Instance *create(fmi3String name, fmi3String token, fmi3Boolean loggingOn
     ins = (Instance *)calloc(1, sizeof(Instance));
     if (!ins) return NULL;
     ins->name = (char *)malloc(strlen(name ? name : "") + 1);
-    ins->model = (FMModel *)calloc(1, fm_size());
-    if (!ins->name || !ins->model) {
+    model = (FMModel *)calloc(1, fm_size());
+    if (!ins->name || !model) {
         free(ins->name);
-        free(ins->model);
+        free(model);
         free(ins);
         return NULL;
     }
     strcpy(ins->name, name ? name : "");
     ins->env = env;
     ins->logger = logger;
-    ins->cosim = cosim;
-    ins->state = ST_INSTANTIATED;
-    ins->log_errors = ins->log_warnings = 1;
-    fm_init(ins->model, model_log, ins);
+    fi_init(&ins->fi, model, cosim, emit);
     return ins;
 }
 
@@ -93,21 +69,7 @@ FMI3_Export const char *fmi3GetVersion(void) { return fmi3Version; }
 FMI3_Export fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, size_t nCategories,
                                            const fmi3String categories[])
 {
-    size_t i;
-    if (!instance) return fmi3Error;
-    if (nCategories == 0) {
-        INS->log_errors = INS->log_warnings = 1;
-        return fmi3OK;
-    }
-    for (i = 0; i < nCategories; i++) {
-        const char *cat = categories[i];
-        if (!cat) continue;
-        if (strcmp(cat, "logAll") == 0) INS->log_errors = INS->log_warnings = loggingOn ? 1 : 0;
-        else if (strcmp(cat, "logStatusWarning") == 0) INS->log_warnings = loggingOn ? 1 : 0;
-        else if (strcmp(cat, "logStatusError") == 0) INS->log_errors = loggingOn ? 1 : 0;
-        else return fail(instance, "unknown log category");
-    }
-    return fmi3OK;
+    return (fmi3Status)fi_set_debug_logging(FI(instance), loggingOn, nCategories, categories);
 }
 
 FMI3_Export fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String instantiationToken,
@@ -159,7 +121,7 @@ FMI3_Export fmi3Instance fmi3InstantiateScheduledExecution(
 FMI3_Export void fmi3FreeInstance(fmi3Instance instance)
 {
     if (!instance) return;
-    free(INS->model);
+    free(INS->fi.model);
     free(INS->name);
     free(instance);
 }
@@ -172,41 +134,19 @@ FMI3_Export fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Bo
     (void)tolerance;
     (void)stopTimeDefined;
     (void)stopTime;
-    if (!instance) return fmi3Error;
-    if (INS->state != ST_INSTANTIATED) return wrong_state(instance, "fmi3EnterInitializationMode");
-    fm_set_time(INS->model, startTime);
-    INS->state = ST_INIT;
-    return fmi3OK;
+    if (fi_enter_initialization(FI(instance), "fmi3EnterInitializationMode") != FM_OK) return fmi3Error;
+    return (fmi3Status)fi_set_time(FI(instance), startTime);
 }
 
 FMI3_Export fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
 {
-    if (!instance) return fmi3Error;
-    if (INS->state != ST_INIT) return wrong_state(instance, "fmi3ExitInitializationMode");
-    if (fm_exit_initialization(INS->model) != FM_OK) { /* outputs are valid straight after initialisation */
-        INS->state = ST_ERROR;
-        return fmi3Error;
-    }
-    INS->state = ST_RUNNING;
-    return fmi3OK;
+    return (fmi3Status)fi_exit_initialization(FI(instance), "fmi3ExitInitializationMode");
 }
 
 FMI3_Export fmi3Status fmi3EnterEventMode(fmi3Instance instance) { return instance ? fmi3OK : fmi3Error; }
 
-FMI3_Export fmi3Status fmi3Terminate(fmi3Instance instance)
-{
-    if (!instance) return fmi3Error;
-    INS->state = ST_TERMINATED;
-    return fmi3OK;
-}
-
-FMI3_Export fmi3Status fmi3Reset(fmi3Instance instance)
-{
-    if (!instance) return fmi3Error;
-    fm_reset(INS->model);
-    INS->state = ST_INSTANTIATED;
-    return fmi3OK;
-}
+FMI3_Export fmi3Status fmi3Terminate(fmi3Instance instance) { return (fmi3Status)fi_terminate(FI(instance)); }
+FMI3_Export fmi3Status fmi3Reset(fmi3Instance instance) { return (fmi3Status)fi_reset(FI(instance)); }
 
 /* ------------------------------------------------------------------ variables */
 
@@ -217,7 +157,7 @@ FMI3_Export fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueRefe
     if (!instance) return fmi3Error;
     if (nValues != nvr) return fail(instance, "fmi3GetFloat64: only scalar variables (nValues == nValueReferences)");
     for (i = 0; i < nvr; i++)
-        if (fm_get_real(INS->model, vr[i], &values[i]) != FM_OK) return fmi3Error;
+        if (fm_get_real(INS->fi.model, vr[i], &values[i]) != FM_OK) return fmi3Error;
     return fmi3OK;
 }
 
@@ -228,7 +168,7 @@ FMI3_Export fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueRefe
     if (!instance) return fmi3Error;
     if (nValues != nvr) return fail(instance, "fmi3SetFloat64: only scalar variables (nValues == nValueReferences)");
     for (i = 0; i < nvr; i++)
-        if (fm_set_real(INS->model, vr[i], values[i]) != FM_OK) return fmi3Error;
+        if (fm_set_real(INS->fi.model, vr[i], values[i]) != FM_OK) return fmi3Error;
     return fmi3OK;
 }
 
@@ -239,8 +179,8 @@ FMI3_Export fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueRefere
     if (!instance) return fmi3Error;
     if (nValues != nvr) return fail(instance, "fmi3GetInt32: only scalar variables");
     for (i = 0; i < nvr; i++) {
-        int v;
-        if (fm_get_int(INS->model, vr[i], &v) != FM_OK) return fmi3Error;
+        int v = 0;
+        if (fm_get_int(INS->fi.model, vr[i], &v) != FM_OK) return fmi3Error;
         values[i] = v;
     }
     return fmi3OK;
@@ -253,7 +193,7 @@ FMI3_Export fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueRefere
     if (!instance) return fmi3Error;
     if (nValues != nvr) return fail(instance, "fmi3SetInt32: only scalar variables");
     for (i = 0; i < nvr; i++)
-        if (fm_set_int(INS->model, vr[i], values[i]) != FM_OK) return fmi3Error;
+        if (fm_set_int(INS->fi.model, vr[i], values[i]) != FM_OK) return fmi3Error;
     return fmi3OK;
 }
 
@@ -507,32 +447,17 @@ FMI3_Export fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Bo
 
 FMI3_Export fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
 {
-    if (!instance) return fmi3Error;
-    fm_set_time(INS->model, time);
-    return fmi3OK;
+    return (fmi3Status)fi_set_time(FI(instance), time);
 }
 
-/* The continuous states (none for the steady-state tyre). */
-static fmi3Status states_call(fmi3Instance instance, const char *fn, size_t nx, const void *array)
-{
-    char msg[160];
-    if (!instance) return fmi3Error;
-    if (nx != fm_n_states() || (nx > 0 && !array)) {
-        snprintf(msg, sizeof msg, "%s: %u continuous states, not %u", fn, fm_n_states(), (unsigned)nx);
-        return fail(instance, msg);
-    }
-    return fmi3OK;
-}
-
+/* The continuous states (none for the steady-state tyre; fmi_common.h checks the count). */
 FMI3_Export fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 x[], size_t nx)
 {
-    if (states_call(instance, "fmi3SetContinuousStates", nx, x) != fmi3OK) return fmi3Error;
-    return nx ? (fmi3Status)fm_set_states(INS->model, x) : fmi3OK;
+    return (fmi3Status)fi_set_states(FI(instance), "fmi3SetContinuousStates", nx, x);
 }
 FMI3_Export fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 dx[], size_t nx)
 {
-    if (states_call(instance, "fmi3GetContinuousStateDerivatives", nx, dx) != fmi3OK) return fmi3Error;
-    return nx ? (fmi3Status)fm_get_derivatives(INS->model, dx) : fmi3OK;
+    return (fmi3Status)fi_get_derivatives(FI(instance), "fmi3GetContinuousStateDerivatives", nx, dx);
 }
 FMI3_Export fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 ei[], size_t ni)
 {
@@ -541,14 +466,11 @@ FMI3_Export fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64
 }
 FMI3_Export fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 x[], size_t nx)
 {
-    if (states_call(instance, "fmi3GetContinuousStates", nx, x) != fmi3OK) return fmi3Error;
-    return nx ? (fmi3Status)fm_get_states(INS->model, x) : fmi3OK;
+    return (fmi3Status)fi_get_states(FI(instance), "fmi3GetContinuousStates", nx, x);
 }
 FMI3_Export fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 xn[], size_t nx)
 {
-    if (states_call(instance, "fmi3GetNominalsOfContinuousStates", nx, xn) != fmi3OK) return fmi3Error;
-    if (nx) fm_get_nominals(xn);
-    return fmi3OK;
+    return (fmi3Status)fi_get_nominals(FI(instance), "fmi3GetNominalsOfContinuousStates", nx, xn);
 }
 FMI3_Export fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n)
 {
@@ -581,15 +503,12 @@ FMI3_Export fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentComm
 {
     fmi3Status status;
     (void)noSetFMUStatePriorToCurrentPoint;
-    if (!instance) return fmi3Error;
-    if (!INS->cosim) return fail(instance, "fmi3DoStep: not a Co-Simulation instance");
-    if (INS->state != ST_RUNNING) return wrong_state(instance, "fmi3DoStep");
-    if (!(communicationStepSize >= 0.0)) return fail(instance, "fmi3DoStep: invalid step size");
-    status = (fmi3Status)fm_do_step(INS->model, currentCommunicationPoint, communicationStepSize);
+    status = (fmi3Status)fi_do_step(FI(instance), "fmi3DoStep", currentCommunicationPoint, communicationStepSize);
+    if (!instance) return status;
     if (eventHandlingNeeded) *eventHandlingNeeded = fmi3False;
     if (terminateSimulation) *terminateSimulation = fmi3False;
     if (earlyReturn) *earlyReturn = fmi3False;
-    if (lastSuccessfulTime) *lastSuccessfulTime = fm_time(INS->model);
+    if (lastSuccessfulTime) *lastSuccessfulTime = fm_time(INS->fi.model);
     return status;
 }
 

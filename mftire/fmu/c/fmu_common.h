@@ -1,7 +1,7 @@
 /*
  * fmu_common.h -- what both models behind fmu_model.h (mf_model.c, mt_model.c) do alike: log through the
- * wrapper's logger, rate-limit repeated warnings, refuse non-physical parameters.  Static functions of the
- * FMU's one translation unit (fmu.c).
+ * wrapper's logger, rate-limit repeated warnings, refuse non-physical parameters and modes, check everything
+ * at the end of the initialisation.  Static functions of the FMU's one translation unit (fmu.c).
  */
 #ifndef FMU_COMMON_H
 #define FMU_COMMON_H
@@ -62,6 +62,97 @@ FM_FN int fm_check_parameter(const MFParams *p, const double *slot, double value
         return mf_check_fittyp(&trial, msg, n) != MF_OK;
     }
     return 0;
+}
+
+/* ------------------------------------------------------------------ what every model's FMI calls do alike
+ *
+ * A model instance (struct FMModel of the model file) has the members log and host: logf_(m, ...) logs through
+ * them.  The helpers below take the logger and the model's parameters explicitly. */
+#define logf_(m, status, category, ...) fm_logf((m)->log, (m)->host, status, category, __VA_ARGS__)
+
+/* The error of an evaluation that returned rc (MF_BAD_MODE, else a FITTYP the evaluator refuses), logged: the
+ * evaluator's own message.  Returns FM_ERROR. */
+FM_FN int fm_eval_error(fm_log_fn log, void *host, const MFParams *p, int use_mode, int rc)
+{
+    char msg[256];
+    if (rc == MF_BAD_MODE) mf_check_mode(use_mode, msg, sizeof msg);
+    else mf_check_fittyp(p, msg, sizeof msg);
+    fm_logf(log, host, FM_ERROR, "logStatusError", "%s", msg);
+    return FM_ERROR;
+}
+
+/* Whether the parameter `name` at `slot` of p may take `value` now: a fixed parameter is not set after the
+ * initialisation (fixed_now), and fm_check_parameter refuses non-physical values.  FM_OK, else the refusal is
+ * logged and FM_ERROR returned (the parameter keeps its value). */
+FM_FN int fm_parameter_ok(fm_log_fn log, void *host, const MFParams *p, const double *slot, double value,
+                          int fixed_now, const char *name)
+{
+    char msg[256];
+    if (fixed_now) {
+        fm_logf(log, host, FM_ERROR, "logStatusError", "%s is a fixed parameter: it can only be set before "
+                "initialisation", name);
+        return FM_ERROR;
+    }
+    if (fm_check_parameter(p, slot, value, msg, sizeof msg)) {
+        fm_logf(log, host, FM_ERROR, "logStatusError", "%s: %s", name, msg);
+        return FM_ERROR;
+    }
+    return FM_OK;
+}
+
+/* A model's parameter at value reference vr: its slot in p and its name, or NULL where vr is no parameter
+ * (each model reads its generated value-reference table). */
+typedef const double *(*fm_param_fn)(const MFParams *p, unsigned vr, const char **name);
+
+/* The checks of ExitInitializationMode, alike for every model: the FITTYP and the mode, then each parameter of
+ * the value references 0..n_vars-1 (fm_parameter_ok: the start values and those set before).  FM_OK, else the
+ * first refusal is logged and FM_ERROR returned. */
+FM_FN int fm_check_initialization(fm_log_fn log, void *host, const MFParams *p, int use_mode, unsigned n_vars,
+                                  fm_param_fn param)
+{
+    char msg[256];
+    const char *name;
+    const double *slot;
+    unsigned vr;
+    if (mf_check_fittyp(p, msg, sizeof msg) != MF_OK || mf_check_mode(use_mode, msg, sizeof msg) != MF_OK) {
+        fm_logf(log, host, FM_ERROR, "logStatusError", "%s", msg);
+        return FM_ERROR;
+    }
+    for (vr = 0; vr < n_vars; vr++)
+        if ((slot = param(p, vr, &name)) != NULL && fm_parameter_ok(log, host, p, slot, *slot, 0, name) != FM_OK)
+            return FM_ERROR;
+    return FM_OK;
+}
+
+/* The error for a value reference vr that is not a variable of type `type` ("Real", "Integer") of the model,
+ * logged.  Returns FM_ERROR. */
+FM_FN int fm_not_a(fm_log_fn log, void *host, unsigned vr, const char *type)
+{
+    fm_logf(log, host, FM_ERROR, "logStatusError", "value reference %u is not a%s %s variable", vr,
+            type[0] == 'I' ? "n" : "", type);
+    return FM_ERROR;
+}
+
+/* useMode, the one Integer variable of every model (value reference vr_mode): read into *value. */
+FM_FN int fm_get_mode(fm_log_fn log, void *host, unsigned vr, unsigned vr_mode, int mode, int *value)
+{
+    if (vr != vr_mode) return fm_not_a(log, host, vr, "Integer");
+    *value = mode;
+    return FM_OK;
+}
+
+/* useMode set to value, where the evaluator takes it: FM_OK (*mode set), else the refusal is logged and
+ * FM_ERROR returned. */
+FM_FN int fm_set_mode(fm_log_fn log, void *host, unsigned vr, unsigned vr_mode, int value, int *mode)
+{
+    char msg[256];
+    if (vr != vr_mode) return fm_not_a(log, host, vr, "Integer");
+    if (mf_check_mode(value, msg, sizeof msg) != MF_OK) {
+        fm_logf(log, host, FM_ERROR, "logStatusError", "%s", msg);
+        return FM_ERROR;
+    }
+    *mode = value;
+    return FM_OK;
 }
 
 #endif /* FMU_COMMON_H */

@@ -55,8 +55,6 @@ static unsigned fm_dependencies(unsigned *vrs, unsigned room)
     return n;
 }
 
-#define logf_(m, status, category, ...) fm_logf((m)->log, (m)->host, status, category, __VA_ARGS__)
-
 static void fm_reset(FMModel *m)
 {
     m->params = MF_PARAM_START;
@@ -91,27 +89,18 @@ static void on_warning(void *ctx, int kind, const char *message)
     if (kind >= 0 && kind < MF_W_COUNT) limited_warning(m, &m->warn[kind], message);
 }
 
-static int check_parameter(const FMModel *m, const double *slot, double value, char *msg, unsigned long n)
+/* The parameter at value reference vr (fm_param_fn of fmu_common.h). */
+static const double *param_at(const MFParams *p, unsigned vr, const char **name)
 {
-    return fm_check_parameter(&m->params, slot, value, msg, n);
+    if (MF_VARS[vr].kind != MF_K_PARAM) return NULL;
+    *name = MF_VAR_NAMES[vr];
+    return (const double *)((const char *)p + MF_VARS[vr].offset);
 }
 
 static int fm_exit_initialization(FMModel *m)
 {
-    char msg[256];
-    unsigned vr;
-    if (mf_check_fittyp(&m->params, msg, sizeof msg) != MF_OK || mf_check_mode(m->use_mode, msg, sizeof msg) != MF_OK) {
-        logf_(m, FM_ERROR, "logStatusError", "%s", msg);
+    if (fm_check_initialization(m->log, m->host, &m->params, m->use_mode, MF_N_VARS, param_at) != FM_OK)
         return FM_ERROR;
-    }
-    for (vr = 0; vr < MF_N_VARS; vr++)
-        if (MF_VARS[vr].kind == MF_K_PARAM) {
-            const double *slot = (const double *)((const char *)&m->params + MF_VARS[vr].offset);
-            if (check_parameter(m, slot, *slot, msg, sizeof msg)) {
-                logf_(m, FM_ERROR, "logStatusError", "%s: %s", MF_VAR_NAMES[vr], msg);
-                return FM_ERROR;
-            }
-        }
     if (update(m) != FM_OK) return FM_ERROR; /* outputs are valid straight after initialisation */
     m->initialized = 1;
     return FM_OK;
@@ -229,7 +218,6 @@ static void guard_outputs(FMModel *m)
 /* Evaluate if the inputs, parameters or mode changed. */
 static int update(FMModel *m)
 {
-    char msg[256];
     int rc;
     MFInputs in;
     if (!m->dirty) return FM_OK;
@@ -238,12 +226,7 @@ static int update(FMModel *m)
     guard_inputs(m, &in);
     rc = mf_evaluate(&m->params, m->use_mode, &in, &m->outputs, on_warning, m);
     if (rc == MF_OK) guard_outputs(m);
-    if (rc != MF_OK) {
-        if (rc == MF_BAD_MODE) mf_check_mode(m->use_mode, msg, sizeof msg);
-        else mf_check_fittyp(&m->params, msg, sizeof msg);
-        logf_(m, FM_ERROR, "logStatusError", "%s", msg);
-        return FM_ERROR;
-    }
+    if (rc != MF_OK) return fm_eval_error(m->log, m->host, &m->params, m->use_mode, rc);
     m->dirty = 0;
     return FM_OK;
 }
@@ -264,14 +247,12 @@ static int fm_get_real(FMModel *m, unsigned vr, double *value)
     default: break;
     }
 bad:
-    logf_(m, FM_ERROR, "logStatusError", "value reference %u is not a Real variable", vr);
-    return FM_ERROR;
+    return fm_not_a(m->log, m->host, vr, "Real");
 }
 
 static int fm_set_real(FMModel *m, unsigned vr, double value)
 {
     const MFVarInfo *v;
-    char msg[256];
     if (vr >= MF_N_VARS) goto bad;
     v = &MF_VARS[vr];
     if (v->kind == MF_K_INPUT) {
@@ -281,15 +262,9 @@ static int fm_set_real(FMModel *m, unsigned vr, double value)
     }
     if (v->kind == MF_K_PARAM) {
         double *slot = (double *)((char *)&m->params + v->offset);
-        if (v->fixed && m->initialized) {
-            logf_(m, FM_ERROR, "logStatusError", "%s is a fixed parameter: it can only be set before initialisation",
-                  MF_VAR_NAMES[vr]);
+        if (fm_parameter_ok(m->log, m->host, &m->params, slot, value, v->fixed && m->initialized,
+                            MF_VAR_NAMES[vr]) != FM_OK)
             return FM_ERROR;
-        }
-        if (check_parameter(m, slot, value, msg, sizeof msg)) { /* refused: the parameter keeps its value */
-            logf_(m, FM_ERROR, "logStatusError", "%s: %s", MF_VAR_NAMES[vr], msg);
-            return FM_ERROR;
-        }
         *slot = value;
         m->dirty = 1;
         return FM_OK;
@@ -300,32 +275,17 @@ static int fm_set_real(FMModel *m, unsigned vr, double value)
         return FM_ERROR;
     }
 bad:
-    logf_(m, FM_ERROR, "logStatusError", "value reference %u is not a Real variable", vr);
-    return FM_ERROR;
+    return fm_not_a(m->log, m->host, vr, "Real");
 }
 
 static int fm_get_int(FMModel *m, unsigned vr, int *value)
 {
-    if (vr == MF_VR_USEMODE) {
-        *value = m->use_mode;
-        return FM_OK;
-    }
-    logf_(m, FM_ERROR, "logStatusError", "value reference %u is not an Integer variable", vr);
-    return FM_ERROR;
+    return fm_get_mode(m->log, m->host, vr, MF_VR_USEMODE, m->use_mode, value);
 }
 
 static int fm_set_int(FMModel *m, unsigned vr, int value)
 {
-    char msg[256];
-    if (vr != MF_VR_USEMODE) {
-        logf_(m, FM_ERROR, "logStatusError", "value reference %u is not an Integer variable", vr);
-        return FM_ERROR;
-    }
-    if (mf_check_mode(value, msg, sizeof msg) != MF_OK) {
-        logf_(m, FM_ERROR, "logStatusError", "%s", msg);
-        return FM_ERROR;
-    }
-    m->use_mode = value;
+    if (fm_set_mode(m->log, m->host, vr, MF_VR_USEMODE, value, &m->use_mode) != FM_OK) return FM_ERROR;
     m->dirty = 1;
     return FM_OK;
 }

@@ -79,8 +79,6 @@ static unsigned fm_dependencies(unsigned *vrs, unsigned room)
     return n;
 }
 
-#define logf_(m, status, category, ...) fm_logf((m)->log, (m)->host, status, category, __VA_ARGS__)
-
 static void on_warning(void *ctx, int kind, const char *message)
 {
     FMModel *m = (FMModel *)ctx;
@@ -119,11 +117,7 @@ static void fm_init(FMModel *m, fm_log_fn log, void *host)
 
 static int bad_code(FMModel *m, int rc)
 {
-    char msg[256];
-    if (rc == MF_BAD_MODE) mf_check_mode(m->use_mode, msg, sizeof msg);
-    else mf_check_fittyp(&m->params, msg, sizeof msg);
-    logf_(m, FM_ERROR, "logStatusError", "%s", msg);
-    return 1;
+    return fm_eval_error(m->log, m->host, &m->params, m->use_mode, rc);
 }
 
 /* The kinematics, with the rolling offsets of the output groups read so far. */
@@ -181,33 +175,19 @@ static void store(FMModel *m, double *dst, double value)
     m->kin_ok = m->out_ok = 0;
 }
 
-/* Whether the model refuses the parameter value (fm_check_parameter: the bounds of mftire.mf.spec, VXLOW > 0
- * among them), or a non-positive TR_CS_STEP. */
-static int check_parameter(const FMModel *m, const double *slot, double value, char *msg, unsigned long n)
+/* The parameter at value reference vr (fm_param_fn of fmu_common.h; the bounds of mftire.mf.spec, VXLOW > 0,
+ * TR_SAT >= 0 and TR_CS_STEP > 0 among them, are checked by fm_parameter_ok). */
+static const double *param_at(const MFParams *p, unsigned vr, const char **name)
 {
-    if (slot == &m->params.TR_CS_STEP && !(value > 0.0)) {
-        snprintf(msg, n, "%g: TR_CS_STEP must be positive", value);
-        return 1;
-    }
-    return fm_check_parameter(&m->params, slot, value, msg, n);
+    if (MT_VARS[vr].kind != MT_K_PARAM) return NULL;
+    *name = MT_VAR_NAMES[vr];
+    return (const double *)((const char *)p + MT_VARS[vr].offset);
 }
 
 static int fm_exit_initialization(FMModel *m)
 {
-    char msg[256];
-    unsigned vr;
-    if (mf_check_fittyp(&m->params, msg, sizeof msg) != MF_OK || mf_check_mode(m->use_mode, msg, sizeof msg) != MF_OK) {
-        logf_(m, FM_ERROR, "logStatusError", "%s", msg);
+    if (fm_check_initialization(m->log, m->host, &m->params, m->use_mode, MT_N_VARS, param_at) != FM_OK)
         return FM_ERROR;
-    }
-    for (vr = 0; vr < MT_N_VARS; vr++)
-        if (MT_VARS[vr].kind == MT_K_PARAM) {
-            const double *slot = (const double *)((const char *)&m->params + MT_VARS[vr].offset);
-            if (check_parameter(m, slot, *slot, msg, sizeof msg)) {
-                logf_(m, FM_ERROR, "logStatusError", "%s: %s", MT_VAR_NAMES[vr], msg);
-                return FM_ERROR;
-            }
-        }
     if (update_out(m, 0)) return FM_ERROR;
     m->initialized = 1;
     return FM_OK;
@@ -236,14 +216,12 @@ static int fm_get_real(FMModel *m, unsigned vr, double *value)
     default: break;
     }
 bad:
-    logf_(m, FM_ERROR, "logStatusError", "value reference %u is not a Real variable", vr);
-    return FM_ERROR;
+    return fm_not_a(m->log, m->host, vr, "Real");
 }
 
 static int fm_set_real(FMModel *m, unsigned vr, double value)
 {
     const MTVarInfo *v;
-    char msg[256];
     if (vr >= MT_N_VARS) goto bad;
     v = &MT_VARS[vr];
     switch (v->kind) {
@@ -251,14 +229,9 @@ static int fm_set_real(FMModel *m, unsigned vr, double value)
         store(m, (double *)((char *)&m->inputs + v->offset), value);
         return FM_OK;
     case MT_K_PARAM:
-        if (v->fixed && m->initialized) {
-            logf_(m, FM_ERROR, "logStatusError", "%s is a fixed parameter", MT_VAR_NAMES[vr]);
+        if (fm_parameter_ok(m->log, m->host, &m->params, (const double *)((const char *)&m->params + v->offset), value,
+                            v->fixed && m->initialized, MT_VAR_NAMES[vr]) != FM_OK)
             return FM_ERROR;
-        }
-        if (check_parameter(m, (const double *)((const char *)&m->params + v->offset), value, msg, sizeof msg)) {
-            logf_(m, FM_ERROR, "logStatusError", "%s: %s", MT_VAR_NAMES[vr], msg);
-            return FM_ERROR;
-        }
         store(m, (double *)((char *)&m->params + v->offset), value);
         return FM_OK;
     case MT_K_STATE:
@@ -275,32 +248,17 @@ static int fm_set_real(FMModel *m, unsigned vr, double value)
         return FM_ERROR;
     }
 bad:
-    logf_(m, FM_ERROR, "logStatusError", "value reference %u is not a Real variable", vr);
-    return FM_ERROR;
+    return fm_not_a(m->log, m->host, vr, "Real");
 }
 
 static int fm_get_int(FMModel *m, unsigned vr, int *value)
 {
-    if (vr != MT_VR_USEMODE) {
-        logf_(m, FM_ERROR, "logStatusError", "value reference %u is not an Integer variable", vr);
-        return FM_ERROR;
-    }
-    *value = m->use_mode;
-    return FM_OK;
+    return fm_get_mode(m->log, m->host, vr, MT_VR_USEMODE, m->use_mode, value);
 }
 
 static int fm_set_int(FMModel *m, unsigned vr, int value)
 {
-    char msg[256];
-    if (vr != MT_VR_USEMODE) {
-        logf_(m, FM_ERROR, "logStatusError", "value reference %u is not an Integer variable", vr);
-        return FM_ERROR;
-    }
-    if (mf_check_mode(value, msg, sizeof msg) != MF_OK) {
-        logf_(m, FM_ERROR, "logStatusError", "%s", msg);
-        return FM_ERROR;
-    }
-    m->use_mode = value;
+    if (fm_set_mode(m->log, m->host, vr, MT_VR_USEMODE, value, &m->use_mode) != FM_OK) return FM_ERROR;
     m->kin_ok = m->out_ok = 0;
     return FM_OK;
 }

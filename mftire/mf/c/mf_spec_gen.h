@@ -91,8 +91,19 @@ typedef struct { const char *format; int limit; const char *input; } MFWarningSp
     {"Ey over limit (>1), eq 4.E24; clipped to 1.", -1, NULL}, \
 }
 
-/* Parameters with a physical bound (MFParams index, bound, 1: strict >, 0: >=, name). */
+/* Parameters with a physical bound (MFParams index, bound, 1: strict >, 0: >=, name).  A bound on a
+ * member beyond the .tir parameters (MF_HAS_<key> of mf_params.h) counts where MFParams has it. */
 typedef struct { int index; double bound; int strict; const char *name; } MFParamBound;
+#ifdef MF_HAS_TR_SAT
+#define MF_SPEC_BOUND_11_TR_SAT {MF_SPEC_PIDX(TR_SAT), 0.0, 0, "TR_SAT"},
+#else
+#define MF_SPEC_BOUND_11_TR_SAT
+#endif
+#ifdef MF_HAS_TR_CS_STEP
+#define MF_SPEC_BOUND_12_TR_CS_STEP {MF_SPEC_PIDX(TR_CS_STEP), 0.0, 1, "TR_CS_STEP"},
+#else
+#define MF_SPEC_BOUND_12_TR_CS_STEP
+#endif
 #define MF_SPEC_PARAMETER_BOUNDS { \
     {MF_SPEC_PIDX(FNOMIN), 0.0, 1, "FNOMIN"}, \
     {MF_SPEC_PIDX(FNOMIN), 1.0, 0, "FNOMIN"}, \
@@ -105,6 +116,8 @@ typedef struct { int index; double bound; int strict; const char *name; } MFPara
     {MF_SPEC_PIDX(VXLOW), 0.0, 1, "VXLOW"}, \
     {MF_SPEC_PIDX(LMUX), 0.0, 0, "LMUX"}, \
     {MF_SPEC_PIDX(LMUY), 0.0, 0, "LMUY"}, \
+    MF_SPEC_BOUND_11_TR_SAT \
+    MF_SPEC_BOUND_12_TR_CS_STEP \
 }
 
 /* The model codes (FITTYP) the evaluator handles: MF 5.2 (6), MF 6.1 (61), MF 6.2 (62), PAC2002 (2002), MF-Tyre 5.0 (2002). */

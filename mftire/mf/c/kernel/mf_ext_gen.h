@@ -4,6 +4,8 @@
 
 #define MF_N_TERMS 0
 #define MF_EXT_RUNTIME 1 /* the term table is given at run time (mf_kernel.c) */
+#include "mf_ext.h" /* what the code below uses of the evaluator (Cond, mf_dfz, mf_dpi, ...) */
+
 #define MF_TARGET_FX_OFFSET (-1)
 #define MF_TARGET_FY_OFFSET (-2)
 #define MF_TARGET_ALPHA_OFFSET (-3)
@@ -37,8 +39,6 @@ static double mf_ext_var(int k, const MFParams *p, const Cond *c, const double *
     default: return data[k - 11];
     }
 }
-
-static double mf_ext_table(double u, const double *c, int n);
 
 /* f of each form of mftire.mf.extensions.FORMS (neutral coefficients give 1). */
 static double mf_ext_form(int form, double u, double z, double z2, double ref, const double *c, int n)

@@ -20,6 +20,9 @@ derivative ``sign``; ``maximum``/``minimum``/``where`` pass the derivative of th
 branch taken.  The extension forms are not all differentiable (table lookups), so
 stages that fit an extension coefficient use finite differences
 (see :mod:`mftire.fitting.fitter`).
+
+It lives beside the equations (layer 4 of docs/architecture.md), not in the fitting: the equations' own
+arithmetic calls into :class:`Var`, so a call path from :mod:`mftire.mf` into it stays in its layer.
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["Var", "jacobian"]
+__all__ = ["Var", "jacobian", "seed", "sweep"]
 
 
 class Var:
@@ -230,20 +233,20 @@ _NO_DERIVATIVE = {np.sign, np.less, np.less_equal, np.greater, np.greater_equal,
                   np.isfinite, np.isnan, np.isinf, np.floor, np.ceil, np.round}  # fmt: skip
 
 
-def jacobian(
-    f: Callable[[Mapping[str, object]], object], q: Mapping[str, float], keys: Sequence[str], n: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """``f(q)`` (shape ``(n,)``) and its Jacobian ``d f(q) / d q[keys]`` (shape ``(n, len(keys))``).
-
-    ``f`` maps a parameter dictionary to a channel at ``n`` operating points through
-    elementwise numpy operations.  Derivatives that are not finite are returned as 0.
-    """
+def seed(q: Mapping[str, float], keys: Sequence[str]) -> tuple[dict, list[Var]]:
+    """``q`` with the coefficients ``keys`` replaced by :class:`Var` leaves, and the leaves (for :func:`sweep`):
+    evaluate the channel at the returned mapping (under ``np.errstate(all="ignore")``), then sweep."""
     leaves = [Var(float(q[k])) for k in keys]
     qv = dict(q)
     qv.update(zip(keys, leaves, strict=True))
+    return qv, leaves
+
+
+def sweep(out: object, leaves: Sequence[Var], n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The channel ``out`` (shape ``(n,)``, computed from a :func:`seed` mapping) and its Jacobian by the
+    ``leaves`` (shape ``(n, len(leaves))``): the backward sweep.  Derivatives that are not finite are 0."""
     with np.errstate(all="ignore"):
-        out = f(qv)
-        jac = np.zeros((n, len(keys)))
+        jac = np.zeros((n, len(leaves)))
         if not isinstance(out, Var):
             return np.broadcast_to(np.asarray(out, dtype=float), (n,)).copy(), jac
         # topological order (parents before children), iteratively: a depth-first post-order
@@ -291,3 +294,18 @@ def jacobian(
                 node.adj = None
         value = np.broadcast_to(np.asarray(out.v, dtype=float), (n,)).copy()
     return value, np.where(np.isfinite(jac), jac, 0.0)
+
+
+def jacobian(
+    f: Callable[[Mapping[str, object]], object], q: Mapping[str, float], keys: Sequence[str], n: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """``f(q)`` (shape ``(n,)``) and its Jacobian ``d f(q) / d q[keys]`` (shape ``(n, len(keys))``).
+
+    ``f`` maps a parameter dictionary to a channel at ``n`` operating points through
+    elementwise numpy operations: :func:`seed`, ``f``, :func:`sweep` (a caller in a higher layer
+    runs the three itself, so that nothing here calls back up).
+    """
+    qv, leaves = seed(q, keys)
+    with np.errstate(all="ignore"):
+        out = f(qv)
+    return sweep(out, leaves, n)
