@@ -26,9 +26,11 @@ distributed = pytest.importorskip("distributed", reason="Dask distributed not in
                                   "'mftire[dask]'); the Dask paths are not tested")  # fmt: skip
 
 ROOT = Path(__file__).resolve().parents[1]
-#: what differs from run to run whatever runs the tasks: the rig stage's import and stage seconds, the report's
-#: time stamp, and the FMU's size (its cross-compiled Windows DLL carries the link time in its PE header)
-_TIMINGS = re.compile(rb'("?(?:import_s|stage_s)"?(?:</td><td>|: )|generated |bytes(?:&#x27;|"|\')?: )[-+0-9.e:T ]+')
+#: what differs from run to run whatever runs the tasks: the rig stage's import and stage seconds, the thermal
+#: stage's seconds and CPU seconds, the report's time stamp, and the FMU's size (its cross-compiled Windows DLL
+#: carries the link time in its PE header)
+_TIMINGS = re.compile(rb'("?(?:import_s|stage_s|stage_cpu_s)"?(?:</td><td>|: )|generated |bytes(?:&#x27;|"|\')?: )'
+                      rb'[-+0-9.e:T ]+')
 
 
 @pytest.fixture(scope="module")
