@@ -104,9 +104,10 @@ TARGET_CHANNELS: dict[str, tuple[str, ...]] = {
     **{k: ("Fy",) for k in ("LCY", "LMUY", "LEY", "LKY", "LKYC", "LHY", "LVY", "LYKA", "LVYKA", "FY_OFFSET")},
     **{k: ("Mz",) for k in ("LTR", "LRES", "LKZC", "LS")},
     "LMX": ("Mx",), "LVMX": ("Mx",), "LMY": ("My",), "LFZO": ("Fx", "Fy"),
-    # an input law moves the input of every channel that reads it: the slip angle enters Fx through the
-    # combined-slip weighting (Pacejka 2012 eqs 4.E54-4.E57), the camber through the friction of Fx (4.E13)
-    "ALPHA_OFFSET": ("Fy", "Mz", "Fx"), "GAMMA_OFFSET": ("Fy", "Mz", "Fx"), "P_FACTOR": ("Fx", "Fy", "Mz"),
+    # an input law acts on the channels whose pure-slip equations read that input: the slip angle those of Fy
+    # and Mz (Fx reads it only through the combined-slip weighting, eqs 4.E54-4.E57, no coefficient refitted
+    # here), the camber also the friction of Fx (Pacejka 2012 eq 4.E13, PDX3), the pressure all three
+    "ALPHA_OFFSET": ("Fy", "Mz"), "GAMMA_OFFSET": ("Fy", "Mz", "Fx"), "P_FACTOR": ("Fx", "Fy", "Mz"),
 }  # fmt: skip
 
 #: Variables the evaluator derives from its own (conditioned) inputs: name -> (meaning,
