@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from mftire.fmu import portable
 from mftire.fmu.export import FMUExportError, find_compiler
 
 DATA = Path(__file__).parent / "data"
@@ -41,6 +42,54 @@ def in_tmp(tmp_path: Path):
     os.chdir(tmp_path)
     yield tmp_path
     os.chdir(cwd)
+
+
+_MINGW_COMPILER = portable.mingw_compiler  # the real one, whatever a test module patched
+
+#: Test modules that check the Windows DLL of an exported FMU (binaries/win64, binaries/x86_64-windows).
+WINDOWS_DLL_MODULES = {"test_c_portability"}
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _no_windows_dll(request):
+    """FMUs exported in this process by the other test modules carry no cross-compiled Windows DLL.
+
+    ``export_fmu`` also builds ``binaries/win64`` when the MinGW-w64 cross compiler is on PATH (a few seconds
+    per FMU, most of an export's time); no test outside :data:`WINDOWS_DLL_MODULES` loads or checks that DLL,
+    and a failed DLL build only warns, so building it there proves nothing.  tests/test_c_portability.py
+    keeps the cross compiler and checks the DLL of every FMU kind.  Module scope, autouse: active before the
+    module's own (module-scoped) fixtures export their FMUs.  Subprocesses (CLI runs, Dask workers) are not
+    affected, nor is the session's quick demo (:func:`quick_demo`)."""
+    if request.module.__name__.rsplit(".", 1)[-1] in WINDOWS_DLL_MODULES:
+        yield
+        return
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(portable, "mingw_compiler", lambda: None)
+        yield
+
+
+@pytest.fixture(scope="session")
+def quick_demo(tmp_path_factory) -> tuple[Path, str, str]:
+    """``mftire demo --quick --output local`` run once for the session, from a folder of its own (a relative
+    output, as a user runs it): (the output folder, what the run printed on stdout, on stderr).
+    tests/test_demo.py checks this run; tests/test_dask_cluster.py compares a run on a Dask cluster with it."""
+    import contextlib
+    import io
+
+    from mftire.cli import main
+
+    here = tmp_path_factory.mktemp("quick_demo")
+    out, err = io.StringIO(), io.StringIO()
+    cwd = os.getcwd()
+    os.chdir(here)
+    try:  # the demo as a user runs it: its FMU with the Windows DLL when the cross compiler is there
+        with pytest.MonkeyPatch.context() as mp, contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            mp.setattr(portable, "mingw_compiler", _MINGW_COMPILER)
+            rc = main(["demo", "--quick", "--output", "local"])
+    finally:
+        os.chdir(cwd)
+    assert rc == 0, err.getvalue()
+    return here / "local", out.getvalue(), err.getvalue()
 
 
 def have_c_compiler() -> bool:

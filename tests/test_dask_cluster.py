@@ -26,9 +26,11 @@ distributed = pytest.importorskip("distributed", reason="Dask distributed not in
                                   "'mftire[dask]'); the Dask paths are not tested")  # fmt: skip
 
 ROOT = Path(__file__).resolve().parents[1]
-#: what differs from run to run whatever runs the tasks: the rig stage's import and stage seconds, the report's
-#: time stamp, and the FMU's size (its cross-compiled Windows DLL carries the link time in its PE header)
-_TIMINGS = re.compile(rb'("?(?:import_s|stage_s)"?(?:</td><td>|: )|generated |bytes(?:&#x27;|"|\')?: )[-+0-9.e:T ]+')
+#: what differs from run to run whatever runs the tasks: the rig stage's import and stage seconds, the thermal
+#: stage's seconds and CPU seconds, the report's time stamp, and the FMU's size (its cross-compiled Windows DLL
+#: carries the link time in its PE header)
+_TIMINGS = re.compile(rb'("?(?:import_s|stage_s|stage_cpu_s)"?(?:</td><td>|: )|generated |bytes(?:&#x27;|"|\')?: )'
+                      rb'[-+0-9.e:T ]+')
 
 
 @pytest.fixture(scope="module")
@@ -75,13 +77,14 @@ def _run_here(folder: Path, argv: list[str]) -> int:
         os.chdir(cwd)
 
 
-def test_demo_on_the_cluster_with_a_relative_output_equals_the_local_run(cluster, tmp_path, capsys):
+def test_demo_on_the_cluster_with_a_relative_output_equals_the_local_run(cluster, quick_demo, tmp_path, capsys):
     address, workers_cwd = cluster
-    # the local run on every core (its output does not depend on --jobs): the cheaper reference on CI
-    assert _run_here(tmp_path, ["demo", "--quick", "--output", "local"]) == 0
+    # the reference: the session's local run on every core (its output does not depend on --jobs), which
+    # tests/test_demo.py checks (tests/conftest.py: quick_demo)
+    local, _, _ = quick_demo
     assert _run_here(tmp_path, ["demo", "--quick", "--output", "out", "--scheduler", address]) == 0
     assert "done: out/report.html" in capsys.readouterr().out
-    _same_outputs(tmp_path / "local", tmp_path / "out")
+    _same_outputs(local, tmp_path / "out")
     assert list(workers_cwd.iterdir()) == []  # nothing written by the workers
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []  # no staging folder left
 

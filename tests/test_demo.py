@@ -7,17 +7,15 @@ import json
 import re
 
 from mftire import load
-from mftire.cli import main
 
 
-def test_reduced_demo_runs_the_whole_loop(tmp_path, capsys):
-    out = tmp_path / "demo"
-    assert main(["demo", "--output", str(out), "--quick"]) == 0
-    printed = capsys.readouterr()
+def test_reduced_demo_runs_the_whole_loop(quick_demo):
+    out, stdout, stderr = quick_demo  # `mftire demo --quick`, run once for the session (tests/conftest.py)
     # progress goes to stderr, and only on a terminal (tests/test_progress.py)
-    assert "[9/9" not in printed.out + printed.err
+    assert "[9/9" not in stdout + stderr
     # the closing summary on stdout: held-out errors before and after, the cause, the band coverage, the run time
-    tail = printed.out[printed.out.index("done in "):]
+    tail = stdout[stdout.index("done in "):]
+    assert "done: local/report.html" in tail
     assert re.search(r"held-out Vx = \d+ km/h", tail) and re.search(r"Fx: \d+\.\d\d % -> \d+\.\d\d %", tail)
     assert "cause: Vs" in tail and "prediction band, held-out points inside: Fx " in tail
     assert "cross-validated over sweeps (measured): Fx " in tail and "rig run: cause TS" in tail

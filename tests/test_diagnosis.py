@@ -97,6 +97,14 @@ def base_df():
     return _campaign()
 
 
+@pytest.fixture(scope="module")
+def vs_case(base_df):
+    """The slip-speed campaign, its refitted tyre and its diagnosis, made once for the tests that read them."""
+    d = _measure(base_df, VS_DECAY)
+    fitted = _refit(d)
+    return d, fitted, diagnose(d, fitted, progress=False)
+
+
 def test_derived_candidates_have_fixed_names(base_df):
     d = with_sweeps(_measure(base_df, None))
     names = [c.name for c in candidates(d)]
@@ -114,9 +122,8 @@ def test_null_campaign_reports_nothing(base_df):
     assert res.effect is None and res.extended is None
 
 
-def test_slip_speed_effect_is_named_and_removed(base_df):
-    d = _measure(base_df, VS_DECAY)
-    res = diagnose(d, _refit(d), progress=False)
+def test_slip_speed_effect_is_named_and_removed(vs_case):
+    _, _, res = vs_case
     assert res.significant
     assert res.ranking[0].variable == "Vs"
     assert res.effect.name == "slip_speed_friction"
@@ -147,9 +154,8 @@ def test_left_right_asymmetry(base_df):
     assert fy.rms_after <= 0.7 * fy.rms_before
 
 
-def test_report_files_and_round_trip(base_df, tmp_path):
-    d = _measure(base_df, VS_DECAY)
-    res = diagnose(d, _refit(d), progress=False)
+def test_report_files_and_round_trip(vs_case, tmp_path):
+    _, _, res = vs_case
     doc = write_report(res, tmp_path)
     on_disk = json.loads((tmp_path / "diagnosis.json").read_text())
     assert on_disk == json.loads(json.dumps(doc, default=float))
@@ -175,11 +181,10 @@ def test_holdout_rules(base_df):
         parse_holdout("Vx")
 
 
-def test_cli_diagnose(base_df, tmp_path, capsys):
-    d = _measure(base_df, VS_DECAY)
+def test_cli_diagnose(vs_case, tmp_path, capsys):
+    d, tyre, _ = vs_case
     data = tmp_path / "data.csv"
     d.to_csv(data, index=False)
-    tyre = _refit(d)
     from mftire import write_tir
 
     tir = tmp_path / "fitted.tir"

@@ -41,10 +41,25 @@ def _diagnose(name: str, out: Path) -> dict:
     return json.loads((out / "diagnosis.json").read_text())
 
 
+@pytest.fixture(scope="module")
+def diagnosed(tmp_path_factory):
+    """``mftire diagnose`` of each shipped campaign, run once for the module: name -> (its output folder,
+    its diagnosis.json).  The tests read the folder and write only into their own tmp_path."""
+    done: dict[str, tuple[Path, dict]] = {}
+
+    def get(name: str) -> tuple[Path, dict]:
+        if name not in done:
+            out = tmp_path_factory.mktemp(f"diagnose_{name}")
+            done[name] = (out, _diagnose(name, out))
+        return done[name]
+
+    return get
+
+
 @pytest.mark.parametrize("name", sorted(CASES))
-def test_campaign_cause_and_heldout_improvement(name, tmp_path):
+def test_campaign_cause_and_heldout_improvement(name, diagnosed):
     causes, effects = CASES[name]
-    doc = _diagnose(name, tmp_path)
+    _, doc = diagnosed(name)
     assert doc["significant"] is True
     assert doc["ranking"][0]["variable"] in causes, doc["ranking"][:3]
     assert doc["effect"]["name"] in effects
@@ -66,9 +81,9 @@ def test_null_campaign_has_no_finding(tmp_path):
     assert not (tmp_path / "extended.tir").exists()
 
 
-def test_extended_model_round_trips_and_reads_plainly(tmp_path):
-    doc = _diagnose("fade", tmp_path)
-    path = tmp_path / doc["extended_tir"]
+def test_extended_model_round_trips_and_reads_plainly(diagnosed, tmp_path):
+    folder, doc = diagnosed("fade")
+    path = folder / doc["extended_tir"]
     params = read_tir(path)
     again = tmp_path / "again.tir"
     from mftire import write_tir
@@ -94,13 +109,13 @@ def test_extended_model_round_trips_and_reads_plainly(tmp_path):
 
 @needs_c_compiler
 @pytest.mark.parametrize("name", sorted(CASES))
-def test_diagnosed_tir_evaluates_everywhere_on_the_data_columns(name, tmp_path):
+def test_diagnosed_tir_evaluates_everywhere_on_the_data_columns(name, diagnosed, tmp_path):
     """Every .tir diagnose writes evaluates with `mftire evaluate`, `mftire compare` and the FMU on
     the columns of the data it was diagnosed on (closed variables), and the FMU agrees with Python."""
     import pandas as pd
 
-    doc = _diagnose(name, tmp_path / "diag")
-    ext_path = tmp_path / "diag" / doc["extended_tir"]
+    folder, doc = diagnosed(name)
+    ext_path = folder / doc["extended_tir"]
     sweeps = DATA / name / "sweeps.csv"
     assert main(["evaluate", str(ext_path), "--input", str(sweeps), "--output", str(tmp_path / "ev.csv")]) == 0
     assert main(["compare", "--tir", str(ext_path), "--data", str(sweeps), "--output", str(tmp_path / "cmp"),

@@ -63,7 +63,7 @@ _SCRIPT = textwrap.dedent(
     with warnings.catch_warnings():  # the test's own silence, scoped
         warnings.simplefilter("ignore")
         data = synthetic_sweeps(read_tir(tir), [0.7 * F0, 1.2 * F0], [0.0], n_kappa=15, n_alpha=15, n_combined=5,
-                                noise=0.002, seed=3)
+                                noise=0.002, seed=3, channels=("Fx", "Fy"))  # two channels: fewer figures
     data["source"] = "syn"
     write_comparison(compare([tir], data, n_grid=21), os.path.join(out, "compare"))
     fit = fit_tir(data, tir, stages="1", progress=False)

@@ -438,6 +438,14 @@ def test_import_fit_recovers_the_generating_tyre(tmp_path, gen):
     assert rms["Fx"] < 2.0 and rms["Fy"] < 2.0, rms
 
 
+#: The chain fits and diagnoses every ``CHAIN_PAIR_STEP``-th pair of sweeps (one up, one down) of the shipped
+#: file, 134 of its 400 (the demo: 100 and 68), with every flagged row (left out of the fits, they feed the
+#: diagnosis' accumulators): the same findings in a quarter of the fit and diagnosis time of the whole file
+#: (measured with this fixture on 2026-11-26, whole file / this subset: a tread temperature first, p = 0.02 /
+#: 0.005; held-out Fx error cut by 87 / 87 %, Fy by 83 / 83 %; 275 s / 69 s on a loaded 2-core machine).
+CHAIN_PAIR_STEP = 3
+
+
 @pytest.fixture(scope="module")
 def chain(tmp_path_factory, imported, gen):
     """The shipped file: import -> fit (held-out load 0.7 FNOMIN) -> diagnose with that load held out."""
@@ -449,6 +457,8 @@ def chain(tmp_path_factory, imported, gen):
     table, _ = imported
     table.to_csv(d / "sweeps.csv", index=False)
     data, _ = load_sweep_files([d / "sweeps.csv"])  # what mftire fit / diagnose read
+    data = data[~data["fit_row"] | ((data["sweep_id"] // 2) % CHAIN_PAIR_STEP == 0)].reset_index(drop=True)
+    assert data.loc[data["fit_row"], "sweep_id"].nunique() == 2 * len(range(0, 200, CHAIN_PAIR_STEP))
     held = np.isclose(data["Fz_set"], 0.7 * FNOMIN, rtol=0.05) & data["fit_row"]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
