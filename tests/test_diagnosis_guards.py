@@ -17,6 +17,7 @@ from test_diagnosis import TYRE, _campaign, _measure
 from mftire.diagnosis.candidates import with_sweeps
 from mftire.diagnosis.diagnose import diagnose, extra_conditions, order_fold, worse_in_sample
 from mftire.diagnosis.effects import CHANNEL_COEFFICIENTS, EffectFit, plausible_inputs, with_given_channels
+from mftire.mf.extensions import identifier_name
 from mftire.tyre import Tyre
 
 pytestmark = pytest.mark.filterwarnings("ignore::mftire.mf.inputs.MFLimitWarning")
@@ -111,3 +112,14 @@ def test_no_law_in_two_levels_of_a_quantity():
     assert "two levels" in res.messages[0]
     flag = diagnose(_measure(base, section, {"hot": hot}).assign(wet=hot), TYRE, n_perm=19, seed=0, progress=False)
     assert flag.extended is not None and flag.effect.variable == "wet", flag.messages
+
+
+@pytest.mark.parametrize("name", ["FILENR", "runno", "RunNumber", "rownum", "seqnr", "record_id", "file3", "SEG_NO"])
+def test_identifier_names_run_together_are_identifiers(name):
+    assert identifier_name(name)
+
+
+@pytest.mark.parametrize("name", ["runway_temp", "TSTC", "track_temp", "humidity", "noise", "keyword", "sweep_dir",
+                                  "compound_batch", "tread_depth"])
+def test_physical_names_are_not_identifiers(name):
+    assert not identifier_name(name)

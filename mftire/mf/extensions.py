@@ -134,12 +134,19 @@ NOT_IDENTIFIERS = frozenset({"sweep_dir", "sweep_direction"})
 
 def identifier_name(name: str) -> bool:
     """True when ``name`` names an identifier: one of its words (split at ``_``, ``-``, ``.``, spaces,
-    digits and camel-case humps) is in :data:`IDENTIFIER_WORDS` (``run``, ``sweep_id``, ``RunNumber``,
-    ``seg_no``, ``file3``); not the sweep direction (:data:`NOT_IDENTIFIERS`)."""
+    digits and camel-case humps) is in :data:`IDENTIFIER_WORDS`, or is two of them run together (``run``,
+    ``sweep_id``, ``RunNumber``, ``seg_no``, ``file3``, ``FILENR``, ``runno``); not the sweep direction
+    (:data:`NOT_IDENTIFIERS`)."""
     if str(name).strip().lower() in NOT_IDENTIFIERS:
         return False
     words = re.findall(r"[A-Z]?[a-z]+|[A-Z]+(?![a-z])", re.sub(r"[^A-Za-z]+", " ", str(name)))
-    return any(w.lower() in IDENTIFIER_WORDS for w in words)
+    return any(_identifier_word(w.lower()) for w in words)
+
+
+def _identifier_word(w: str) -> bool:
+    """``w`` is an identifier word, or two run together as one-case names write them (``FILENR``, ``runno``)."""
+    return w in IDENTIFIER_WORDS or any(w.startswith(a) and w[len(a):] in IDENTIFIER_WORDS
+                                        for a in IDENTIFIER_WORDS if len(a) >= 3)  # fmt: skip
 
 
 #: The warning of a variable outside the range its term was fitted on (modes 1xx; the FMU's C says the same).
