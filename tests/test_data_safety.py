@@ -1182,8 +1182,12 @@ def test_fmu_and_demo_signal_to_the_parent_stops_everything_within_3_s(tmp_path,
     argv = (["demo", "--quick", "--jobs", "2", "--output", str(out)] if cmd == "demo" else
             ["export-fmu", str(MF61), "--output", str(out)])
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1]), "TMPDIR": str(tmpdir)}
+    # Ctrl-C's default disposition in the command, however the test run was started: a test run started in the
+    # background of a non-interactive shell ignores SIGINT, the command would inherit that, and Python keeps an
+    # inherited SIG_IGN (as it should: nohup and background jobs ask for it)
     proc = subprocess.Popen([sys.executable, "-m", "mftire.cli", *argv], env=env, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # fmt: skip
     try:
         wanted = ("python",) if cmd == "demo" else ("cc", "gcc", "clang", "cc1", "as", "collect2", "ld")
         start = time.monotonic()

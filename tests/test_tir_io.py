@@ -664,6 +664,9 @@ def tir_parameters(draw):
     return params
 
 
+# random keys in the standard sections are unknown keys ("did you mean ...?" warnings, issue 26): expected here,
+# since the test is of losslessness, and an unknown key is kept and written back as it was
+@pytest.mark.filterwarnings("ignore::mftire.iotools.tir.TirWarning")
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(tir_parameters())
 def test_random_parameters_round_trip_exactly(params):
@@ -673,6 +676,7 @@ def test_random_parameters_round_trip_exactly(params):
     assert snapshot(again) == snapshot(params)
 
 
+@pytest.mark.filterwarnings("ignore::mftire.iotools.tir.TirWarning")
 @settings(max_examples=50, deadline=None)
 @given(tir_parameters())
 def test_random_parameters_round_trip_through_file(tmp_path_factory, params):
