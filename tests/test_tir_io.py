@@ -667,7 +667,7 @@ def tir_parameters(draw):
 # random keys in the standard sections are unknown keys ("did you mean ...?" warnings, issue 26): expected here,
 # since the test is of losslessness, and an unknown key is kept and written back as it was
 @pytest.mark.filterwarnings("ignore::mftire.iotools.tir.TirWarning")
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(tir_parameters())
 def test_random_parameters_round_trip_exactly(params):
     text = format_tir(params)
