@@ -248,31 +248,31 @@ ORDER_SHARE = 0.25
 
 def order_fold(df: pd.DataFrame, kinds: np.ndarray | None, share: float = ORDER_SHARE,
                levels: np.ndarray | None = None) -> np.ndarray | None:
-    """The latest tests at each operating condition tested more than once, as one held-out fold (label 0; every
-    other row -1, never held out): at each condition (set points, sweep kind ``kinds``, and the level of
-    ``levels``: a candidate with few levels) the last ``share`` of its sweeps in test order (the time column, else
-    the row order), at least one, never all.  A law is so also judged on the tests that followed the ones it was
-    fitted on, at every condition where it acts, as a user's new runs are; a condition tested once stays in
-    training (holding it out would judge an extrapolation to a new load or speed).  None with fewer than 4
-    sweeps or nothing to hold out."""
+    """The last ``share`` of the sweeps in test order (the time column, else the row order) as one held-out fold
+    (label 0; every other row -1, never held out), so that a law is also judged on the tests that followed the
+    ones it was fitted on, as new runs of a user's campaign are.  Sweeps of a kind (``kinds``) that would leave no
+    sweep of it in training are not held out, nor is a sweep at an operating condition (set points, kind, and the
+    level of ``levels``: a candidate with few levels) that no earlier sweep has.  None with fewer than 4 sweeps
+    or nothing to hold out."""
     sweeps = df["sweep_id"].to_numpy()
     tcol = time_column(df)
     order = df[tcol].to_numpy(float) if tcol is not None else np.arange(len(df), dtype=float)
+    start = pd.Series(order).groupby(sweeps).min().sort_values(kind="stable")
+    if len(start) < 4:
+        return None
+    last = start.index[-max(1, int(round(share * len(start)))):]
+    out = np.where(np.isin(sweeps, last), 0, -1)
+    # a last sweep at an operating condition (set points and kind) that no earlier sweep has is not held out:
+    # that would judge the extrapolation to a new load or speed, which is not the question
     keys = [c for c in SET_POINTS if c in df.columns]
     cond = df[keys].astype(float).round(6).apply(tuple, axis=1) if keys else pd.Series([()] * len(df))
     if kinds is not None:
         cond = pd.Series(list(zip(cond, np.asarray(kinds), strict=True)))
     if levels is not None and np.unique(np.round(np.asarray(levels, float), 6)).size <= MAX_LEVELS:
         cond = pd.Series(list(zip(cond, np.round(np.asarray(levels, float), 6), strict=True)))
-    table = pd.DataFrame({"start": order, "cond": cond.to_numpy(), "sweep": sweeps}).groupby("sweep").agg(
-        start=("start", "min"), cond=("cond", "first"))
-    if len(table) < 4:
-        return None
-    held: list = []
-    for _, g in table.groupby("cond", sort=False):
-        if len(g) >= 2:
-            held += list(g.sort_values("start", kind="stable").index[-max(1, int(share * len(g))):])
-    out = np.where(np.isin(sweeps, held), 0, -1)
+    cond = cond.to_numpy()
+    trained = set(cond[out < 0])
+    out[np.array([c not in trained for c in cond]) & (out == 0)] = -1
     return out if np.any(out == 0) else None
 
 
