@@ -92,6 +92,19 @@ def quick_demo(tmp_path_factory) -> tuple[Path, str, str]:
     return here / "local", out.getvalue(), err.getvalue()
 
 
+def load_validation(name: str):
+    """The script ``validation/<name>.py`` as a module (registered in ``sys.modules`` under ``name``)."""
+    import importlib.util
+    import sys
+
+    path = Path(__file__).resolve().parents[1] / "validation" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
 def have_c_compiler() -> bool:
     """True when a C compiler for FMU binaries is on PATH."""
     try:

@@ -12,15 +12,13 @@
 from __future__ import annotations
 
 import ctypes
-import importlib.util
 import math
-import sys
 import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import needs_c_compiler
+from conftest import load_validation, needs_c_compiler
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -31,17 +29,9 @@ ROOT = Path(__file__).resolve().parents[1]
 PLAIN = ROOT / "tirfiles" / "MF61_255-55R20_mfeval-jl.tir"
 
 
-def _load(name: str):
-    spec = importlib.util.spec_from_file_location(name, ROOT / "validation" / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[name] = mod
-    spec.loader.exec_module(mod)
-    return mod
-
-
 @pytest.fixture(scope="module")
 def block():
-    return _load("thermal_block")
+    return load_validation("thermal_block")
 
 
 @pytest.fixture(scope="module")
@@ -194,7 +184,7 @@ def test_fmpy_validation_and_simulation(fmus):
 def test_fuzz_thermal_fmu(fmus, interface):
     """The transient fuzz with T_ambient, T_road fuzzed too (reduced; full: validation/transient_fuzz.py
     --thermal): no non-finite output, state or derivative; ME after the fuzz equals a fresh instance."""
-    fz = _load("transient_fuzz")
+    fz = load_validation("transient_fuzz")
     r = fz.fuzz(fmus[2], interface, 1500, seed=31 if interface == "CS" else 32)
     assert r["bad"] == [], r["bad"][:3]
     assert r["errors"] == 0 and r["guard_warnings"] > 0

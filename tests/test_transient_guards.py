@@ -11,15 +11,13 @@
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
 import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import REFERENCE_TYRES, needs_c_compiler
+from conftest import REFERENCE_TYRES, load_validation, needs_c_compiler
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -28,14 +26,6 @@ from mftire.tyre import load
 
 ROOT = Path(__file__).resolve().parents[1]
 TIR = REFERENCE_TYRES["JuliaMF61"]
-
-
-def _load(name: str):
-    spec = importlib.util.spec_from_file_location(name, ROOT / "validation" / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[name] = mod
-    spec.loader.exec_module(mod)
-    return mod
 
 
 @pytest.fixture(scope="module")
@@ -125,7 +115,7 @@ def test_python_guard_holds_the_last_good_value(tyre):
 @needs_c_compiler
 @pytest.mark.parametrize("interface", ["CS", "ME"])
 def test_fuzz_transient_fmu(fmu_path, interface):
-    fz = _load("transient_fuzz")
+    fz = load_validation("transient_fuzz")
     r = fz.fuzz(fmu_path, interface, 4000, seed=5 if interface == "CS" else 6)
     assert r["bad"] == [], r["bad"][:3]
     assert r["diff"] <= 1e-12  # forces after the fuzz equal a clean run's
@@ -136,7 +126,7 @@ def test_fuzz_transient_fmu(fmu_path, interface):
 def test_one_infinite_input_changes_nothing(fmu_path, tyre):
     """Issue 23 case 2: one step with Vx, Fz, omega or muRoad at ±Inf (or omega 1e300, saturated) in a braking
     run with combined slip: the FMU holds the last good value, so the run equals the clean one bit for bit."""
-    fz = _load("transient_fuzz")
+    fz = load_validation("transient_fuzz")
     clean = fz.clean_manoeuvre(600)
     clean[:, 3] = 0.8 * clean[:, 1] / 0.31  # braking
     clean[:, 0] = 4000.0  # constant load: a held value is the value
@@ -167,7 +157,7 @@ def test_one_infinite_input_changes_nothing(fmu_path, tyre):
 @needs_c_compiler
 def test_quarter_car_stop_and_hold_at_10_ms(fmu_path, tyre):
     """Reduced validation/quarter_car.py: 10 ms steps, FMU and Python, locked and not locked, slope hold."""
-    qc = _load("quarter_car")
+    qc = load_validation("quarter_car")
     car = qc.QuarterCar(t_end=9.0)
     Re0 = qc.free_rolling_radius(tyre, car.m * car.g, car.V0)
     # 1,200 N·m at 10 ms: the wheel-spin mode (h·sqrt(Cx·Re²/I) ~ 2.1) is at the limit of explicit coupling and
