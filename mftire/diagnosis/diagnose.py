@@ -241,7 +241,7 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
 
 
 #: The MF's own operating inputs (a law in them is interpolated between tested levels like the MF's terms).
-MF_INPUTS = ("Fz", "Vx", "P", "gamma")
+MF_INPUTS = tuple(SET_COLUMNS)
 #: Share of the sweeps, the last in test order, held out by :func:`order_fold`.
 ORDER_SHARE = 0.25
 
@@ -310,7 +310,7 @@ def extra_conditions(df: pd.DataFrame, law: Tyre, control: Tyre, channels: Seque
             change += np.where(np.isfinite(d) & primary_rows(df, ch), d**2, 0.0)
     scored = []
     for sp in SET_POINTS:
-        if sp not in df.columns or sp.removesuffix("_set") == SET_COLUMNS.get(skip, skip).removesuffix("_set"):
+        if sp not in df.columns or sp == SET_COLUMNS.get(skip, skip):
             continue
         x = df[sp].to_numpy(float)
         lv = np.unique(np.round(x[np.isfinite(x)], 6))
@@ -336,9 +336,8 @@ def _worse_elsewhere(prob, effect: EffectFit, law: Tyre, control: Tyre, values: 
     for label, rows in extra_conditions(prob.df, law, control, channels, noise, skip):
         law_t, ctrl_t = refit_without(prob, effect, values, n_pressures, effect_channels, ~rows)
         held = prob.df[rows].reset_index(drop=True)
-        errs = channel_errors(held, _model(ctrl_t, held), _model(law_t, held), channels)
-        worse = [e for e in errs if e.channel in FIT_CHANNELS and is_worse(
-            e.n * e.rms_after**2, e.n * e.rms_before**2, e.n, noise.get(e.channel, 0.0), GUARD_ALLOWANCE)]
+        worse = worse_errors(channel_errors(held, _model(ctrl_t, held), _model(law_t, held), channels), noise,
+                             GUARD_ALLOWANCE)  # fmt: skip
         if worse:
             out.append(f"{', '.join(f'{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g}' for e in worse)} "
                        f"on {label}, fitted without it")  # fmt: skip
@@ -496,14 +495,20 @@ def channel_errors(
 GUARD_ALLOWANCE = 2.0
 
 
+def worse_errors(errs: Sequence[ChannelError], noise: Mapping[str, float], scale: float = 1.0) -> list[ChannelError]:
+    """The scored channels' (:data:`FIT_CHANNELS`) errors of ``errs`` whose "after" is worse than their "before"
+    beyond ``scale`` × the allowance of :func:`~mftire.diagnosis.effects.is_worse` (``noise``: per channel)."""
+    return [e for e in errs if e.channel in FIT_CHANNELS
+            and is_worse(e.n * e.rms_after**2, e.n * e.rms_before**2, e.n, noise.get(e.channel, 0.0), scale)]
+
+
 def worse_in_sample(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Sequence[str],
                     noise: Mapping[str, float]) -> list[str]:
     """The scored channels (:data:`FIT_CHANNELS`) that ``extended`` fits worse than ``given`` on the rows ``df``
     (each on its primary rows) beyond :data:`GUARD_ALLOWANCE` × the allowance of
     :func:`~mftire.diagnosis.effects.is_worse`."""
-    errs = channel_errors(df, _model(given, df), _model(extended, df), [c for c in channels if c in FIT_CHANNELS])
-    return [e.channel for e in errs if is_worse(e.n * e.rms_after**2, e.n * e.rms_before**2, e.n,
-                                                noise.get(e.channel, 0.0), GUARD_ALLOWANCE)]  # fmt: skip
+    errs = channel_errors(df, _model(given, df), _model(extended, df), channels)
+    return [e.channel for e in worse_errors(errs, noise, GUARD_ALLOWANCE)]
 
 
 def diagnose(
@@ -736,19 +741,18 @@ def _diagnose(
     rejected: list[str] = []
     accepted = None
     for refined, extended in variants:
-        ext_r, eff_r = restricted(tyre, extended, refined)
-        ctrl_r, _ = restricted(tyre, refined.control_tyre, refined)
-        errs = channel_errors(dtest, _model(ctrl_r, dtest), _model(ext_r, dtest), chans)
-        # the scored channels, those the laws are fitted on (Mx and My follow the forces through models of
-        # their own and are reported, not scored)
-        worse = [e.channel for e in errs if e.channel in FIT_CHANNELS
-                 and is_worse(e.n * e.rms_after**2, e.n * e.rms_before**2, e.n, noise.get(e.channel, 0.0))]
-        gain = sum(e.rms_pct_before**2 - e.rms_pct_after**2 for e in errs if e.channel in FIT_CHANNELS)
         values_r = variable_values(prob.df, refined, cause.variable)
         if not plausible_inputs(refined, values_r):
             rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) moves its "
                             "input beyond physical limits")  # fmt: skip
             continue
+        ext_r, eff_r = restricted(tyre, extended, refined)
+        ctrl_r, _ = restricted(tyre, refined.control_tyre, refined)
+        errs = channel_errors(dtest, _model(ctrl_r, dtest), _model(ext_r, dtest), chans)
+        # the scored channels, those the laws are fitted on (Mx and My follow the forces through models of
+        # their own and are reported, not scored)
+        worse = [e.channel for e in worse_errors(errs, noise)]
+        gain = sum(e.rms_pct_before**2 - e.rms_pct_after**2 for e in errs if e.channel in FIT_CHANNELS)
         if not worse and gain > 0.0:
             late = _worse_elsewhere(prob, refined, ext_r, ctrl_r, values_r,
                                     n_pressures, eff_ch, chans, noise, column)  # fmt: skip

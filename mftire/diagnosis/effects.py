@@ -913,25 +913,31 @@ def refine_effect(
     # each law as fitted locally (its held-out error from choose_effect) and refitted in full; each variant
     # must beat the control refitted the same way (the same channels, the same coefficients)
     options: list[tuple] = []
-    for f, _, _ in fits:
+    def late(law_prob: _Problem, law: Law, variable: str, values: np.ndarray | None, warm: Mapping[str, float] | None,
+             ctrl_prob: _Problem, ctrl_warm: Mapping[str, float] | None, chs: tuple[str, ...] | None,
+             extra_keys: Sequence[str] = ()) -> list[str]:
+        """The channels on which a law's model, fitted without the last tests (``forward``), is worse there than
+        its control fitted the same way (:func:`worse_channels`)."""
+        per_f: dict[str, tuple[float, int]] = {}
+        per_c: dict[str, tuple[float, int]] = {}
+        heldout_error(law_prob, law, variable, values, n_pressures, warm, effect_channels, forward,
+                      extra_keys=extra_keys, per_channel=per_f, refit_channels=chs)  # fmt: skip
+        heldout_error(ctrl_prob, CONTROL, "", None, n_pressures, ctrl_warm, effect_channels, forward,
+                      per_channel=per_c, refit_channels=chs)  # fmt: skip
+        return worse_channels(per_f, per_c, prob.noise)
+
+    for f, _, values in fits:
         ctrl = f.control if f.control is not None else local_control
         if ctrl is None or not np.isfinite(f.cv) or f.rejected or not np.isfinite(ctrl.cv):
             continue
         if worse_channels(f.cv_channels, ctrl.cv_channels, prob.noise):
             continue
         if forward is not None:
-            per_f: dict[str, tuple[float, int]] = {}
-            per_cf: dict[str, tuple[float, int]] = {}
             chs = refit_channels_of(f.law) if f.law is not None else None
-            values = next((v for g, _, v in fits if g is f), None)
-            heldout_error(prob, f.law, f.variable, values, n_pressures, ctrl.standard, effect_channels, forward,
-                          per_channel=per_f, refit_channels=chs)  # fmt: skip
-            heldout_error(prob, CONTROL, "", None, n_pressures, ctrl.standard, effect_channels, forward,
-                          per_channel=per_cf, refit_channels=chs)  # fmt: skip
-            late = worse_channels(per_f, per_cf, prob.noise)
-            if late:
+            worse_late = late(prob, f.law, f.variable, values, ctrl.standard, prob, ctrl.standard, chs)
+            if worse_late:
                 messages.append(f"{f.name} in {f.variable} (main coefficients): worse than the control on the last "
-                                f"tests ({', '.join(late)}), fitted without them: not chosen")  # fmt: skip
+                                f"tests ({', '.join(worse_late)}), fitted without them: not chosen")  # fmt: skip
                 continue
         options.append((f.cv / ctrl.cv if ctrl.cv > 0 else np.inf, f, f.apply(base), ctrl.cv, ctrl.apply(base),
                         "main"))  # fmt: skip
@@ -949,16 +955,10 @@ def refine_effect(
         cv_c, per_c = full_control(chs)
         worse = worse_channels(per, per_c, prob.noise)
         if not worse and forward is not None:  # the last tests, the law's and the control's models fitted without them
-            per_f: dict[str, tuple[float, int]] = {}
-            per_cf: dict[str, tuple[float, int]] = {}
-            heldout_error(p, CONTROL, "", None, n_pressures, None, effect_channels, forward, extra_keys=keys,
-                          per_channel=per_f, refit_channels=chs)  # fmt: skip
-            heldout_error(replace_tyre(prob, control_tyre), CONTROL, "", None, n_pressures, None, effect_channels,
-                          forward, per_channel=per_cf, refit_channels=chs)  # fmt: skip
-            late = worse_channels(per_f, per_cf, prob.noise)
-            if late:
+            worse_late = late(p, CONTROL, "", None, None, replace_tyre(prob, control_tyre), None, chs, keys)
+            if worse_late:
                 messages.append(f"{fit.name} in {fit.variable} (every coefficient): worse than the control on the "
-                                f"last tests ({', '.join(late)}), fitted without them: not chosen")  # fmt: skip
+                                f"last tests ({', '.join(worse_late)}), fitted without them: not chosen")  # fmt: skip
                 continue
         messages.append(f"{fit.name} in {fit.variable}: held-out-sweep error {cv:.4g} with every coefficient "
                         f"refitted (control {cv_c:.4g}), {fit.cv:.4g} with the main coefficients"
@@ -1060,20 +1060,24 @@ def restricted(base: Tyre, extended: Tyre, fit: EffectFit) -> tuple[Tyre, Effect
     if not chans:
         return extended, fit
     allowed = frozenset().union(*(CHANNEL_COEFFICIENTS[ch] for ch in chans))
+    tyre, standard, section = _with_coefficients(base, extended, allowed.__contains__)
+    return tyre, dataclasses.replace(fit, standard=standard, section=section)
+
+
+def _with_coefficients(base: Tyre, extended: Tyre, keep) -> tuple[Tyre, dict[str, float], dict[str, object]]:
+    """``base`` with the new extension terms of ``extended`` and those of its changed standard coefficients whose
+    key ``keep`` accepts: ``(tyre, standard coefficients taken, section taken)``."""
     standard = {k: float(v) for k, v in extended.flat.items()
-                if k in allowed and k in base.flat and isinstance(v, float) and v != base.flat[k]}  # fmt: skip
+                if keep(k) and k in base.flat and isinstance(v, float) and v != base.flat[k]}  # fmt: skip
     section = {k: v for k, v in (extended.extensions or {}).items() if k not in (base.extensions or {})}
-    return _tyre_with(base, standard, section), dataclasses.replace(fit, standard=standard, section=section)
+    return _tyre_with(base, standard, section), standard, section
 
 
 def with_given_channels(base: Tyre, extended: Tyre, channels: Sequence[str]) -> Tyre:
     """``extended`` with the main coefficients of ``channels`` (:data:`CHANNEL_COEFFICIENTS`) as ``base`` has them:
     a law's model that a refit made worse on a channel the law does not act on keeps the given coefficients there."""
     keys = frozenset().union(*(CHANNEL_COEFFICIENTS[ch] for ch in channels if ch in CHANNEL_COEFFICIENTS))
-    standard = {k: float(v) for k, v in extended.flat.items()
-                if k in base.flat and k not in keys and isinstance(v, float) and v != base.flat[k]}  # fmt: skip
-    section = {k: v for k, v in (extended.extensions or {}).items() if k not in (base.extensions or {})}
-    return _tyre_with(base, standard, section)
+    return _with_coefficients(base, extended, lambda k: k not in keys)[0]
 
 
 def refit_without(prob: _Problem, effect: EffectFit, values: np.ndarray | None, n_pressures: int,
