@@ -125,7 +125,10 @@ def study(repeats: int, replicates: int = 6, level: float = 0.95, seed: int = 0,
                 bands = bootstrap_bands(None, template, n=replicates, fit=fit, level=level, seed=s,
                                         grid=train.iloc[:0], calibrate=calibrate)
                 at_held = np.isclose(new["Vx"].to_numpy(float) * 3.6, HELDOUT_KMH)
-                sets = {"heldout": new[at_held], "fitted": new[~at_held]}
+                # the held-out sweeps of this campaign (as in the demo: sweeps of the campaign the fit and the
+                # calibration did not see), and a new campaign (new offsets and a new drift: beyond the claim)
+                sets = {"heldout": train[held], "new campaign heldout": new[at_held],
+                        "new campaign fitted": new[~at_held]}
                 source = "measured"
         for what, df in sets.items():
             rows += _rows(i, what, coverage_table(bands, df, channels=channels), bands, level, source)

@@ -315,6 +315,27 @@ def _save(fig, path: str, dpi: int) -> None:
         fig.savefig(tmp, dpi=dpi, format="png")
 
 
+def _write(fig, path: str, dpi: int) -> str | None:
+    """Write ``fig`` to ``path`` (None: no figure, nothing written); the path written or None."""
+    if fig is None:
+        return None
+    _save(fig, path, dpi)
+    return path
+
+
+def _style_legend(labels: Mapping[float, str], colors: Mapping, models: Sequence[str], styles: Mapping,
+                  model_prefix: str, sources: Sequence[str], markers: Mapping, data_prefix: str) -> list:
+    """Legend handles of the summary figures: a colour per condition value (``labels``), a line style per model,
+    a marker per data source."""
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], color=colors[v], lw=3, label=lab) for v, lab in labels.items()]
+    handles += [Line2D([], [], color="k", linestyle=styles[m], label=f"{model_prefix}: {m}") for m in models]
+    handles += [Line2D([], [], color="0.3", marker=markers[s], linestyle="none", label=f"{data_prefix}: {s}")
+                for s in sources]
+    return handles
+
+
 def _pg_panels(df: pd.DataFrame) -> list[tuple[float, float]]:
     """(γ, P) panels of the summary figures."""
     return sorted({(float(a), float(b)) for a, b in df[["gamma_set", "P_set"]].to_numpy(float)})
@@ -348,7 +369,6 @@ def stiffness_figure(stiffness: pd.DataFrame, heldout: Heldout | None = None):
     one colour per speed; data markers, model lines.  None without stiffness values."""
     if stiffness.empty or stiffness["C_Fa"].notna().sum() == 0:
         return None
-    from matplotlib.lines import Line2D
 
     sources = list(dict.fromkeys(stiffness["source"]))
     models = [w for w in dict.fromkeys(stiffness["who"]) if w != "data"]
@@ -380,9 +400,8 @@ def stiffness_figure(stiffness: pd.DataFrame, heldout: Heldout | None = None):
         r, c = divmod(k, ncol)
         axes[2 * r, c].set_visible(False)
         axes[2 * r + 1, c].set_visible(False)
-    handles = [Line2D([], [], color=colors[v], lw=3, label=_speed_label(v, heldout)) for v in colors]
-    handles += [Line2D([], [], color="k", linestyle=styles[m], label=f"MF: {m}") for m in models]
-    handles += [Line2D([], [], color="0.3", marker=markers[s], linestyle="none", label=f"data: {s}") for s in sources]
+    handles = _style_legend({v: _speed_label(v, heldout) for v in colors}, colors, models, styles, "MF",
+                            sources, markers, "data")
     fig.suptitle("Cornering and aligning stiffness against load (linear LSQ over |α| ≤ 2.5°), colour = speed",
                  fontsize=_FONT + 2)
     _finish(fig, handles, width - _LEGEND_W, 0.96)
@@ -391,11 +410,7 @@ def stiffness_figure(stiffness: pd.DataFrame, heldout: Heldout | None = None):
 
 def plot_stiffness(stiffness: pd.DataFrame, path: str, dpi: int = 90, heldout: Heldout | None = None) -> str | None:
     """Write :func:`stiffness_figure` to ``path``."""
-    fig = stiffness_figure(stiffness, heldout)
-    if fig is None:
-        return None
-    _save(fig, path, dpi)
-    return path
+    return _write(stiffness_figure(stiffness, heldout), path, dpi)
 
 
 def trail_figure(trail: pd.DataFrame, grid: pd.DataFrame, grid_predictions: Mapping[str, pd.DataFrame],
@@ -405,7 +420,6 @@ def trail_figure(trail: pd.DataFrame, grid: pd.DataFrame, grid_predictions: Mapp
     gr = grid[grid["family"] == "cornering"]
     if trail.empty and gr.empty:
         return None
-    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     if trail.empty:
@@ -465,10 +479,8 @@ def trail_figure(trail: pd.DataFrame, grid: pd.DataFrame, grid_predictions: Mapp
         for c in range(ncol):
             if (r, c) not in used:
                 axes[r, c].set_visible(False)
-    handles = [Line2D([], [], color=colors[v], lw=3, label=f"Fz {v:.0f} N") for v in loads]
-    handles += [Line2D([], [], color="k", linestyle=styles[m], label=f"MF t: {m}") for m in models]
-    handles += [Line2D([], [], color="0.3", marker=markers[s], linestyle="none", label=f"−Mz/Fy: {s}")
-                for s in sources]
+    handles = _style_legend({v: f"Fz {v:.0f} N" for v in loads}, colors, models, styles, "MF t", sources, markers,
+                            "−Mz/Fy")
     if heldout is not None:
         handles.append(Patch(facecolor="none", edgecolor="tab:red", lw=2, label="held-out condition"))
     fig.suptitle(f"Pneumatic trail against α, {len(keys)} conditions (data: −Mz/Fy where |Fy| ≥ 10 % of the "
@@ -480,11 +492,7 @@ def trail_figure(trail: pd.DataFrame, grid: pd.DataFrame, grid_predictions: Mapp
 def plot_trail(trail: pd.DataFrame, grid: pd.DataFrame, grid_predictions: Mapping[str, pd.DataFrame], path: str,
                dpi: int = 90, heldout: Heldout | None = None) -> str | None:
     """Write :func:`trail_figure` to ``path``."""
-    fig = trail_figure(trail, grid, grid_predictions, heldout)
-    if fig is None:
-        return None
-    _save(fig, path, dpi)
-    return path
+    return _write(trail_figure(trail, grid, grid_predictions, heldout), path, dpi)
 
 
 def free_rolling_figure(free: pd.DataFrame, heldout: Heldout | None = None):
@@ -492,7 +500,6 @@ def free_rolling_figure(free: pd.DataFrame, heldout: Heldout | None = None):
     data markers, model lines.  None without free-rolling values."""
     if free.empty:
         return None
-    from matplotlib.lines import Line2D
 
     sources = list(dict.fromkeys(free["source"]))
     models = [m for m in dict.fromkeys(free["model"]) if m]
@@ -519,9 +526,8 @@ def free_rolling_figure(free: pd.DataFrame, heldout: Heldout | None = None):
         ax.grid(True, lw=0.3)
     for k in range(len(pgs), nrow * ncol):
         axes[divmod(k, ncol)].set_visible(False)
-    handles = [Line2D([], [], color=colors[v], lw=3, label=_speed_label(v, heldout)) for v in colors]
-    handles += [Line2D([], [], color="k", linestyle=styles[m], label=f"MF: {m}") for m in models]
-    handles += [Line2D([], [], color="0.3", marker=markers[s], linestyle="none", label=f"data: {s}") for s in sources]
+    handles = _style_legend({v: _speed_label(v, heldout) for v in colors}, colors, models, styles, "MF",
+                            sources, markers, "data")
     fig.suptitle("Free-rolling Fx (κ = 0) against load, colour = speed", fontsize=_FONT + 2)
     _finish(fig, handles, width - _LEGEND_W, 0.93)
     return fig
@@ -529,11 +535,7 @@ def free_rolling_figure(free: pd.DataFrame, heldout: Heldout | None = None):
 
 def plot_free_rolling(free: pd.DataFrame, path: str, dpi: int = 90, heldout: Heldout | None = None) -> str | None:
     """Write :func:`free_rolling_figure` to ``path``."""
-    fig = free_rolling_figure(free, heldout)
-    if fig is None:
-        return None
-    _save(fig, path, dpi)
-    return path
+    return _write(free_rolling_figure(free, heldout), path, dpi)
 
 
 #: Curve key columns (re-exported for band tables).
