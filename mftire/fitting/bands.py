@@ -514,7 +514,9 @@ def fit_cell_scale(residual: np.ndarray, f: np.ndarray, X: np.ndarray, sweep: np
     mu, sd = np.where(keep, mu, np.nan), np.where(keep, sd, np.nan)
     xs = (xs_raw[:, keep] - mu[keep]) / sd[keep]
     score = np.sqrt(u2 / best_v[inv])
-    n_eff = effective_sample_size(r / np.hypot(a, b * f) / np.sqrt(best_v[inv]), inv)
+    # the effective number of draws of the scores themselves (Kish): offset-dominated sweeps have alike scores
+    # within a sweep (one draw a sweep), sweeps of one shape a spread of scores within each sweep
+    n_eff = effective_sample_size(score, inv)
     fallback = grouped_conformal_quantile(score, level, n_eff)
     # fewer effective draws than level/(1 − level) (offset-dominated sweeps): Student's prediction quantile
     q = fallback if n_eff * (1.0 - level) < level else sweep_jackknife_quantile(score, inv, level, fallback)
