@@ -87,7 +87,7 @@ from mftire.tyre import Tyre
 
 __all__ = ["Bands", "bootstrap_bands", "start_bootstrap_bands", "PendingBands", "band_coverage", "coverage_table",
            "resample_sweeps", "write_bands", "BAND_CHANNELS", "Calibration", "CellScale", "fit_cell_scale",
-           "effective_sample_size", "grouped_conformal_quantile", "sweep_jackknife_quantile", "SCALE_CONDITIONS"]
+           "effective_sample_size", "grouped_conformal_quantile", "SCALE_CONDITIONS"]
 
 #: Channels given bands.
 BAND_CHANNELS: tuple[str, ...] = ("Fx", "Fy", "Mz", "Mx", "My")
@@ -491,73 +491,23 @@ def fit_cell_scale(residual: np.ndarray, f: np.ndarray, X: np.ndarray, sweep: np
     sd = np.nanstd(xs_raw, axis=0)
     vary = np.isfinite(sd) & (sd > 1e-6 * np.maximum(np.abs(mu), 1.0))
     mu, sd = np.where(vary, mu, np.nan), np.where(vary, sd, np.nan)
-    # candidate kernels: every varying condition together, or one condition alone (the scatter may follow the
-    # speed and not the load: an isotropic kernel over both would blur a speed trend with the load's neighbours)
-    cols = np.flatnonzero(vary)
-    subsets = [cols] + ([np.array([c]) for c in cols] if cols.size > 1 else [])
-    best_h, best_v, best_use = math.inf, None, cols
+    xs = (xs_raw[:, vary] - mu[vary]) / sd[vary]
+    best_h, best_v = math.inf, None
     if ids.size >= 3:
         best = math.inf
-        for use in subsets:
-            xs_u = (xs_raw[:, use] - mu[use]) / sd[use]
-            for h in _BANDWIDTHS:
-                if math.isfinite(h) and not use.size:
-                    continue
-                if not math.isfinite(h) and use is not subsets[0]:
-                    continue  # one factor for the cell: tried once
-                v = np.maximum(_local_factor(xs_u, us, ns, xs_u, h, exclude_own=True), 1e-12)
-                nll = float(ns @ (np.log(v) + us / v))  # Gaussian likelihood of the sweeps' points, one left out
-                if not math.isfinite(best) or nll < best - 1e-9 * abs(best):  # ties: the candidate tried first wins
-                    best, best_h, best_v, best_use = nll, h, v, use
-    keep = np.zeros(vary.size, bool)
-    keep[best_use if math.isfinite(best_h) else cols] = True
-    mu, sd = np.where(keep, mu, np.nan), np.where(keep, sd, np.nan)
-    xs = (xs_raw[:, keep] - mu[keep]) / sd[keep]
+        for h in _BANDWIDTHS:
+            if math.isfinite(h) and not vary.any():
+                continue
+            v = np.maximum(_local_factor(xs, us, ns, xs, h, exclude_own=True), 1e-12)
+            nll = float(ns @ (np.log(v) + us / v))  # Gaussian likelihood of each sweep's points, leave-one-sweep-out
+            if not math.isfinite(best) or nll < best - 1e-9 * abs(best):  # ties: the wider kernel (listed later) loses
+                best, best_h, best_v = nll, h, v
+    if best_v is None:  # fewer than three sweeps: no local factor
+        best_v = np.ones(ids.size)
+        us = np.ones(ids.size)
     score = np.sqrt(u2 / best_v[inv])
-    # the effective number of draws of the scores themselves (Kish): offset-dominated sweeps have alike scores
-    # within a sweep (one draw a sweep), sweeps of one shape a spread of scores within each sweep
-    n_eff = effective_sample_size(score, inv)
-    fallback = grouped_conformal_quantile(score, level, n_eff)
-    # fewer effective draws than level/(1 − level) (offset-dominated sweeps): Student's prediction quantile
-    q = fallback if n_eff * (1.0 - level) < level else sweep_jackknife_quantile(score, inv, level, fallback)
-    return CellScale(a, b, q, best_h, mu, sd, xs, us, ns, n_eff)
-
-
-def sweep_jackknife_quantile(scores: np.ndarray, sweep: np.ndarray, level: float, fallback: float) -> float:
-    """Quantile of the scores whose level is calibrated on left-out sweeps: the smallest ``λ`` such that each
-    sweep's points, against the ``λ``-quantile of the *other* sweeps' scores, are inside at ``level`` on average
-    (leave one sweep out; the points of a sweep share its offset and shape, so the sweep is the unit that is
-    held out, as a new sweep is).  The quantile of all the scores at that ``λ`` is returned.  When even the
-    largest score of the other sweeps does not reach the level (few sweeps, each a draw of a sweep offset), no
-    order statistic holds it and ``fallback`` is returned (:func:`grouped_conformal_quantile`).  Unlike a
-    rank correction over an effective sample size, the level adapts to how the scores are spread over the
-    sweeps: sweeps of one shape (a systematic model error) keep a quantile near ``level``, offset-dominated
-    sweeps need the top of the range."""
-    s = np.asarray(scores, dtype=float)
-    g = np.asarray(sweep)
-    ok = np.isfinite(s)
-    s, g = s[ok], g[ok]
-    ids, inv = np.unique(g, return_inverse=True)
-    inv = inv.ravel()
-    if ids.size < 3:
-        return fallback
-    others = [np.sort(s[inv != j]) for j in range(ids.size)]
-    own = [s[inv == j] for j in range(ids.size)]
-
-    def inside(lam: float) -> float:
-        return sum(int(np.sum(o <= np.quantile(x, lam, method="higher"))) for o, x in zip(own, others, strict=True)) \
-            / s.size
-
-    if inside(1.0) < level:
-        return fallback
-    lo, hi = level, 1.0
-    if inside(lo) >= level:
-        hi = lo
-    else:
-        while hi - lo > 1e-4:  # bisection on the level (the leave-one-sweep-out coverage grows with it)
-            mid = 0.5 * (lo + hi)
-            lo, hi = (lo, mid) if inside(mid) >= level else (mid, hi)
-    return float(np.quantile(s, hi, method="higher"))
+    n_eff = effective_sample_size(r / np.hypot(a, b * f) / np.sqrt(best_v[inv]), inv)
+    return CellScale(a, b, grouped_conformal_quantile(score, level, n_eff), best_h, mu, sd, xs, us, ns, n_eff)
 
 
 def effective_sample_size(u: np.ndarray, group: np.ndarray) -> float:
