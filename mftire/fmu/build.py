@@ -30,7 +30,7 @@ WRAPPER_C = Path(__file__).parent / "c"
 #: The hand-written C of each model behind the one model interface (``c/fmu_model.h``): the evaluator, the
 #: model's own C, and its implementation of the interface.
 MODEL_SOURCES: dict[str, tuple[str, ...]] = {
-    "steady": ("mf_eval.c", "mf_eval.h", "mf_ext.h", "mf_model.c", "mf_model.h"),
+    "steady": ("mf_eval.c", "mf_eval.h", "mf_ext.h", "mf_model.c"),
     "transient": ("mf_eval.c", "mf_eval.h", "mf_ext.h", "mf_transient.c", "mf_transient.h", "mt_model.c"),
 }
 #: The FMI wrapper of each FMI version (thin, over fmu_model.h; the same for every model).

@@ -1,7 +1,8 @@
 /*
- * fmu_common.h -- what both models behind fmu_model.h (mf_model.c, mt_model.c) do alike: log through the
- * wrapper's logger, rate-limit repeated warnings, refuse non-physical parameters and modes, check everything
- * at the end of the initialisation.  Static functions of the FMU's one translation unit (fmu.c).
+ * fmu_common.h -- what both models behind fmu_model.h (mf_model.c, mt_model.c) do alike: the value-reference
+ * table and its accessors, log through the wrapper's logger, rate-limit repeated warnings, refuse
+ * non-physical parameters and modes, check everything at the end of the initialisation.  Static functions of
+ * the FMU's one translation unit (fmu.c).
  */
 #ifndef FMU_COMMON_H
 #define FMU_COMMON_H
@@ -12,6 +13,64 @@
 
 #include "fmu_model.h"
 #include "mf_eval.h"
+
+/* ------------------------------------------------------------------ the value-reference table
+ *
+ * One table type for every model: each model's generated header (mf_model_gen.h, mt_model_gen.h, written by
+ * mftire.fmu.variables.value_reference_table) fills <P>_VARS[<P>_N_VARS] and <P>_VAR_NAMES, and the model
+ * passes them to the accessors below as one FMVarTable. */
+enum { FM_K_TIME = 0, FM_K_INPUT, FM_K_OUTPUT, FM_K_MODE, FM_K_PARAM, FM_K_STATE, FM_K_DER };
+
+typedef struct {
+    unsigned char kind;    /* FM_K_* */
+    unsigned char fixed;   /* parameter with variability "fixed" */
+    unsigned char want;    /* outputs: the channel groups (MF_WANT_*) they need */
+    unsigned short offset; /* byte offset in the model's inputs / outputs / MFParams; state index */
+} FMVarInfo;
+
+typedef struct {
+    const FMVarInfo *vars;
+    const char *const *names;
+    unsigned n;
+} FMVarTable;
+
+/* The entry of value reference vr (NULL where vr is no variable). */
+FM_FN const FMVarInfo *fm_var(const FMVarTable *t, unsigned vr) { return vr < t->n ? &t->vars[vr] : NULL; }
+
+/* The double of entry v in the struct at base (inputs, outputs or MFParams, as its kind says). */
+FM_FN double *fm_slot(const void *base, const FMVarInfo *v) { return (double *)((char *)base + v->offset); }
+
+/* An output or a state derivative. */
+FM_FN int fm_var_is_unknown(const FMVarTable *t, unsigned vr)
+{
+    const FMVarInfo *v = fm_var(t, vr);
+    return v && (v->kind == FM_K_OUTPUT || v->kind == FM_K_DER);
+}
+
+/* What every unknown depends on: the inputs, then the states (fm_dependencies of fmu_model.h). */
+FM_FN unsigned fm_var_dependencies(const FMVarTable *t, unsigned *vrs, unsigned room)
+{
+    unsigned vr, n = 0, pass;
+    for (pass = 0; pass < 2; pass++)
+        for (vr = 0; vr < t->n; vr++)
+            if (t->vars[vr].kind == (pass ? FM_K_STATE : FM_K_INPUT)) {
+                if (vrs && n < room) vrs[n] = vr;
+                n++;
+            }
+    return n;
+}
+
+/* The value of a time, input or parameter variable, read alike by every model: 1 (*value set), else 0 (an
+ * output, a state, ...: the model's own). */
+FM_FN int fm_get_known(const FMVarInfo *v, double time, const void *inputs, const MFParams *p, double *value)
+{
+    switch (v->kind) {
+    case FM_K_TIME: *value = time; return 1;
+    case FM_K_INPUT: *value = *fm_slot(inputs, v); return 1;
+    case FM_K_PARAM: *value = *fm_slot(p, v); return 1;
+    default: return 0;
+    }
+}
 
 /* Format and log through the wrapper's logger (log may be NULL). */
 FM_FN void fm_logf(fm_log_fn log, void *host, int status, const char *category, const char *fmt, ...)
@@ -100,26 +159,29 @@ FM_FN int fm_parameter_ok(fm_log_fn log, void *host, const MFParams *p, const do
     return FM_OK;
 }
 
-/* A model's parameter at value reference vr: its slot in p and its name, or NULL where vr is no parameter
- * (each model reads its generated value-reference table). */
-typedef const double *(*fm_param_fn)(const MFParams *p, unsigned vr, const char **name);
+/* Whether the parameter of value reference vr (entry v of table t) may be set to `value` now (fm_parameter_ok;
+ * `initialized`: after ExitInitializationMode). */
+FM_FN int fm_set_parameter_ok(fm_log_fn log, void *host, const FMVarTable *t, const MFParams *p, unsigned vr,
+                              double value, int initialized)
+{
+    const FMVarInfo *v = &t->vars[vr];
+    return fm_parameter_ok(log, host, p, fm_slot(p, v), value, v->fixed && initialized, t->names[vr]);
+}
 
 /* The checks of ExitInitializationMode, alike for every model: the FITTYP and the mode, then each parameter of
- * the value references 0..n_vars-1 (fm_parameter_ok: the start values and those set before).  FM_OK, else the
- * first refusal is logged and FM_ERROR returned. */
-FM_FN int fm_check_initialization(fm_log_fn log, void *host, const MFParams *p, int use_mode, unsigned n_vars,
-                                  fm_param_fn param)
+ * the table (fm_parameter_ok: the start values and those set before).  FM_OK, else the first refusal is logged
+ * and FM_ERROR returned. */
+FM_FN int fm_check_initialization(fm_log_fn log, void *host, const MFParams *p, int use_mode, const FMVarTable *t)
 {
     char msg[256];
-    const char *name;
-    const double *slot;
     unsigned vr;
     if (mf_check_fittyp(p, msg, sizeof msg) != MF_OK || mf_check_mode(use_mode, msg, sizeof msg) != MF_OK) {
         fm_logf(log, host, FM_ERROR, "logStatusError", "%s", msg);
         return FM_ERROR;
     }
-    for (vr = 0; vr < n_vars; vr++)
-        if ((slot = param(p, vr, &name)) != NULL && fm_parameter_ok(log, host, p, slot, *slot, 0, name) != FM_OK)
+    for (vr = 0; vr < t->n; vr++)
+        if (t->vars[vr].kind == FM_K_PARAM && fm_set_parameter_ok(log, host, t, p, vr, *fm_slot(p, &t->vars[vr]), 0)
+            != FM_OK)
             return FM_ERROR;
     return FM_OK;
 }

@@ -14,8 +14,10 @@
 #include <string.h>
 
 #include "fmu_common.h"
-#include "mf_model.h"
 #include "mf_model_gen.h"
+
+/* The value-reference table (fmu_common.h). */
+static const FMVarTable TABLE = {MF_VARS, MF_VAR_NAMES, MF_N_VARS};
 
 /* Counters of the input/output guards: 9 inputs, MF_MAX_DATA data inputs, the outputs. */
 #define MF_GUARD_SLOTS (9 + MF_MAX_DATA + 1)
@@ -40,20 +42,10 @@ static int update(FMModel *m);
 static const char *fm_guid(void) { return MF_GUID; }
 static size_t fm_size(void) { return sizeof(FMModel); }
 static unsigned fm_n_states(void) { return 0; }
-static int fm_is_unknown(unsigned vr) { return vr < MF_N_VARS && MF_VARS[vr].kind == MF_K_OUTPUT; }
+static int fm_is_unknown(unsigned vr) { return fm_var_is_unknown(&TABLE, vr); }
+static unsigned fm_dependencies(unsigned *vrs, unsigned room) { return fm_var_dependencies(&TABLE, vrs, room); }
 static void fm_set_time(FMModel *m, double t) { m->time = t; }
 static double fm_time(const FMModel *m) { return m->time; }
-
-static unsigned fm_dependencies(unsigned *vrs, unsigned room)
-{
-    unsigned vr, n = 0;
-    for (vr = 0; vr < MF_N_VARS; vr++)
-        if (MF_VARS[vr].kind == MF_K_INPUT) {
-            if (vrs && n < room) vrs[n] = vr;
-            n++;
-        }
-    return n;
-}
 
 static void fm_reset(FMModel *m)
 {
@@ -89,17 +81,9 @@ static void on_warning(void *ctx, int kind, const char *message)
     if (kind >= 0 && kind < MF_W_COUNT) limited_warning(m, &m->warn[kind], message);
 }
 
-/* The parameter at value reference vr (fm_param_fn of fmu_common.h). */
-static const double *param_at(const MFParams *p, unsigned vr, const char **name)
-{
-    if (MF_VARS[vr].kind != MF_K_PARAM) return NULL;
-    *name = MF_VAR_NAMES[vr];
-    return (const double *)((const char *)p + MF_VARS[vr].offset);
-}
-
 static int fm_exit_initialization(FMModel *m)
 {
-    if (fm_check_initialization(m->log, m->host, &m->params, m->use_mode, MF_N_VARS, param_at) != FM_OK)
+    if (fm_check_initialization(m->log, m->host, &m->params, m->use_mode, &TABLE) != FM_OK)
         return FM_ERROR;
     if (update(m) != FM_OK) return FM_ERROR; /* outputs are valid straight after initialisation */
     m->initialized = 1;
@@ -202,8 +186,8 @@ static void guard_outputs(FMModel *m)
     for (i = 0; i < n; i++) bad |= !isfinite(o[i]);
     if (!bad) return; /* the usual case: no look-up of the names */
     for (vr = 0; vr < MF_N_VARS; vr++)
-        if (MF_VARS[vr].kind == MF_K_OUTPUT) {
-            double *y = (double *)((char *)&m->outputs + MF_VARS[vr].offset);
+        if (MF_VARS[vr].kind == FM_K_OUTPUT) {
+            double *y = fm_slot(&m->outputs, &MF_VARS[vr]);
             if (!isfinite(*y)) {
                 char text[160];
                 snprintf(text, sizeof text, "output '%s' = %g is not finite; set to 0.", MF_VAR_NAMES[vr], *y);
@@ -233,49 +217,37 @@ static int update(FMModel *m)
 
 static int fm_get_real(FMModel *m, unsigned vr, double *value)
 {
-    const MFVarInfo *v;
-    if (vr >= MF_N_VARS) goto bad;
-    v = &MF_VARS[vr];
-    switch (v->kind) {
-    case MF_K_TIME: *value = m->time; return FM_OK;
-    case MF_K_INPUT: *value = *(const double *)((const char *)&m->inputs + v->offset); return FM_OK;
-    case MF_K_PARAM: *value = *(const double *)((const char *)&m->params + v->offset); return FM_OK;
-    case MF_K_OUTPUT:
-        if (update(m) != FM_OK) return FM_ERROR;
-        *value = *(const double *)((const char *)&m->outputs + v->offset);
-        return FM_OK;
-    default: break;
-    }
-bad:
-    return fm_not_a(m->log, m->host, vr, "Real");
+    const FMVarInfo *v = fm_var(&TABLE, vr);
+    if (!v) return fm_not_a(m->log, m->host, vr, "Real");
+    if (fm_get_known(v, m->time, &m->inputs, &m->params, value)) return FM_OK;
+    if (v->kind != FM_K_OUTPUT) return fm_not_a(m->log, m->host, vr, "Real");
+    if (update(m) != FM_OK) return FM_ERROR;
+    *value = *fm_slot(&m->outputs, v);
+    return FM_OK;
 }
 
 static int fm_set_real(FMModel *m, unsigned vr, double value)
 {
-    const MFVarInfo *v;
-    if (vr >= MF_N_VARS) goto bad;
-    v = &MF_VARS[vr];
-    if (v->kind == MF_K_INPUT) {
-        *(double *)((char *)&m->inputs + v->offset) = value;
+    const FMVarInfo *v = fm_var(&TABLE, vr);
+    if (!v) return fm_not_a(m->log, m->host, vr, "Real");
+    switch (v->kind) {
+    case FM_K_INPUT:
+        *fm_slot(&m->inputs, v) = value;
         m->dirty = 1;
         return FM_OK;
-    }
-    if (v->kind == MF_K_PARAM) {
-        double *slot = (double *)((char *)&m->params + v->offset);
-        if (fm_parameter_ok(m->log, m->host, &m->params, slot, value, v->fixed && m->initialized,
-                            MF_VAR_NAMES[vr]) != FM_OK)
+    case FM_K_PARAM:
+        if (fm_set_parameter_ok(m->log, m->host, &TABLE, &m->params, vr, value, m->initialized) != FM_OK)
             return FM_ERROR;
-        *slot = value;
+        *fm_slot(&m->params, v) = value;
         m->dirty = 1;
         return FM_OK;
-    }
-    if (v->kind == MF_K_OUTPUT || v->kind == MF_K_TIME) {
+    case FM_K_OUTPUT:
+    case FM_K_TIME:
         logf_(m, FM_ERROR, "logStatusError", "%s cannot be set (causality %s)", MF_VAR_NAMES[vr],
-              v->kind == MF_K_OUTPUT ? "output" : "independent");
+              v->kind == FM_K_OUTPUT ? "output" : "independent");
         return FM_ERROR;
+    default: return fm_not_a(m->log, m->host, vr, "Real");
     }
-bad:
-    return fm_not_a(m->log, m->host, vr, "Real");
 }
 
 static int fm_get_int(FMModel *m, unsigned vr, int *value)

@@ -17,7 +17,7 @@
  *
  * Outputs are computed lazily: the first read of an output after new inputs, states or a step
  * evaluates the Magic Formula at the transient slips for the channel groups (MF_WANT_* of mf_eval.h)
- * of every output read so far (MTVarInfo.want), and the zero-slip evaluation of the kinematics computes
+ * of every output read so far (FMVarInfo.want), and the zero-slip evaluation of the kinematics computes
  * the rolling offsets only below VXLOW and only for those groups.  Each output equals the full
  * evaluation (mt_outputs with MF_WANT_ALL) bit for bit; a group read for the first time is added
  * (one more evaluation then).  An input set to its present value (bit for bit) changes nothing.
@@ -34,6 +34,9 @@
 #include "fmu_common.h"
 #include "mf_transient.h"
 #include "mt_model_gen.h"
+
+/* The value-reference table (fmu_common.h). */
+static const FMVarTable TABLE = {MT_VARS, MT_VAR_NAMES, MT_N_VARS};
 
 /* The input guard of the transient model (mt_guard_inputs of mf_transient.c: non-finite inputs hold their last
  * good value, inputs beyond their physical bounds are saturated), where the model provides it. */
@@ -74,24 +77,10 @@ struct FMModel {
 static const char *fm_guid(void) { return MT_GUID; }
 static size_t fm_size(void) { return sizeof(FMModel); }
 static unsigned fm_n_states(void) { return MT_N_STATES; }
-static int fm_is_unknown(unsigned vr)
-{
-    return vr < MT_N_VARS && (MT_VARS[vr].kind == MT_K_OUTPUT || MT_VARS[vr].kind == MT_K_DER);
-}
+static int fm_is_unknown(unsigned vr) { return fm_var_is_unknown(&TABLE, vr); }
+static unsigned fm_dependencies(unsigned *vrs, unsigned room) { return fm_var_dependencies(&TABLE, vrs, room); }
 static void fm_set_time(FMModel *m, double t) { m->time = t; }
 static double fm_time(const FMModel *m) { return m->time; }
-
-static unsigned fm_dependencies(unsigned *vrs, unsigned room)
-{
-    unsigned vr, n = 0, pass;
-    for (pass = 0; pass < 2; pass++)
-        for (vr = 0; vr < MT_N_VARS; vr++)
-            if (MT_VARS[vr].kind == (pass ? MT_K_STATE : MT_K_INPUT)) {
-                if (vrs && n < room) vrs[n] = vr;
-                n++;
-            }
-    return n;
-}
 
 static void on_warning(void *ctx, int kind, const char *message)
 {
@@ -227,7 +216,7 @@ static int thermal_param_error(FMModel *m, unsigned vr, double value)
     static const MTThermalBound bounds[] = MT_THERMAL_BOUNDS;
     unsigned k;
     for (k = 0; k < sizeof bounds / sizeof bounds[0]; k++)
-        if (bounds[k].offset == MT_VARS[vr].offset && MT_VARS[vr].kind == MT_K_PARAM && isfinite(value) &&
+        if (bounds[k].offset == MT_VARS[vr].offset && MT_VARS[vr].kind == FM_K_PARAM && isfinite(value) &&
             (bounds[k].kind == 0 ? !(value > bounds[k].bound)
                                  : bounds[k].kind == 1 ? !(value >= bounds[k].bound) : !(value == 0.0 || value == 1.0))) {
             logf_(m, FM_ERROR, "logStatusError", "%s = %g must be %s", MT_VAR_NAMES[vr], value, bounds[k].text);
@@ -239,24 +228,15 @@ static int thermal_param_error(FMModel *m, unsigned vr, double value)
     return 0;
 }
 
-/* The parameter at value reference vr (fm_param_fn of fmu_common.h; the bounds of mftire.mf.spec, VXLOW > 0,
- * TR_SAT >= 0 and TR_CS_STEP > 0 among them, are checked by fm_parameter_ok). */
-static const double *param_at(const MFParams *p, unsigned vr, const char **name)
-{
-    if (MT_VARS[vr].kind != MT_K_PARAM) return NULL;
-    *name = MT_VAR_NAMES[vr];
-    return (const double *)((const char *)p + MT_VARS[vr].offset);
-}
-
+/* The parameters are checked by fm_check_initialization (the bounds of mftire.mf.spec, VXLOW > 0, TR_SAT >= 0
+ * and TR_CS_STEP > 0 among them), then by thermal_param_error. */
 static int fm_exit_initialization(FMModel *m)
 {
-    if (fm_check_initialization(m->log, m->host, &m->params, m->use_mode, MT_N_VARS, param_at) != FM_OK)
-        return FM_ERROR;
+    if (fm_check_initialization(m->log, m->host, &m->params, m->use_mode, &TABLE) != FM_OK) return FM_ERROR;
     {
         unsigned vr; /* the bounds of [MFTIRE_THERMAL] (thermal block) */
         for (vr = 0; vr < MT_N_VARS; vr++)
-            if (MT_VARS[vr].kind == MT_K_PARAM &&
-                thermal_param_error(m, vr, *(const double *)((const char *)&m->params + MT_VARS[vr].offset)))
+            if (MT_VARS[vr].kind == FM_K_PARAM && thermal_param_error(m, vr, *fm_slot(&m->params, &MT_VARS[vr])))
                 return FM_ERROR;
     }
     if (update_out(m, 0)) return FM_ERROR;
@@ -266,44 +246,37 @@ static int fm_exit_initialization(FMModel *m)
 
 static int fm_get_real(FMModel *m, unsigned vr, double *value)
 {
-    const MTVarInfo *v;
+    const FMVarInfo *v = fm_var(&TABLE, vr);
     double dx[MT_N_STATES];
-    if (vr >= MT_N_VARS) goto bad;
-    v = &MT_VARS[vr];
+    if (!v) return fm_not_a(m->log, m->host, vr, "Real");
+    if (fm_get_known(v, m->time, &m->inputs, &m->params, value)) return FM_OK;
     switch (v->kind) {
-    case MT_K_TIME: *value = m->time; return FM_OK;
-    case MT_K_INPUT: *value = *(const double *)((const char *)&m->inputs + v->offset); return FM_OK;
-    case MT_K_PARAM: *value = *(const double *)((const char *)&m->params + v->offset); return FM_OK;
-    case MT_K_STATE: *value = m->x[v->offset]; return FM_OK;
-    case MT_K_DER:
+    case FM_K_STATE: *value = m->x[v->offset]; return FM_OK;
+    case FM_K_DER:
         if (derivatives(m, dx)) return FM_ERROR;
         *value = dx[v->offset];
         return FM_OK;
-    case MT_K_OUTPUT:
+    case FM_K_OUTPUT:
         if (update_out(m, v->want)) return FM_ERROR;
-        *value = *(const double *)((const char *)&m->out + v->offset);
+        *value = *fm_slot(&m->out, v);
         return FM_OK;
-    default: break;
+    default: return fm_not_a(m->log, m->host, vr, "Real");
     }
-bad:
-    return fm_not_a(m->log, m->host, vr, "Real");
 }
 
 static int fm_set_real(FMModel *m, unsigned vr, double value)
 {
-    const MTVarInfo *v;
-    if (vr >= MT_N_VARS) goto bad;
-    v = &MT_VARS[vr];
+    const FMVarInfo *v = fm_var(&TABLE, vr);
+    if (!v) return fm_not_a(m->log, m->host, vr, "Real");
     switch (v->kind) {
-    case MT_K_INPUT:
-        store(m, (double *)((char *)&m->inputs + v->offset), value);
+    case FM_K_INPUT:
+        store(m, fm_slot(&m->inputs, v), value);
         return FM_OK;
-    case MT_K_PARAM:
-        if (fm_parameter_ok(m->log, m->host, &m->params, (const double *)((const char *)&m->params + v->offset), value,
-                            v->fixed && m->initialized, MT_VAR_NAMES[vr]) != FM_OK)
+    case FM_K_PARAM:
+        if (fm_set_parameter_ok(m->log, m->host, &TABLE, &m->params, vr, value, m->initialized) != FM_OK)
             return FM_ERROR;
         if (thermal_param_error(m, vr, value)) return FM_ERROR;
-        store(m, (double *)((char *)&m->params + v->offset), value);
+        store(m, fm_slot(&m->params, v), value);
 #if MT_THERMAL
         { /* an initial temperature sets its state (the parameters are fixed: before initialisation only) */
             static const size_t init[3] = {offsetof(MFParams, TH_T_INIT_SURFACE), offsetof(MFParams, TH_T_INIT_BULK),
@@ -314,7 +287,7 @@ static int fm_set_real(FMModel *m, unsigned vr, double value)
         }
 #endif
         return FM_OK;
-    case MT_K_STATE:
+    case FM_K_STATE:
         if (m->initialized) {
             logf_(m, FM_ERROR, "logStatusError", "%s: set states with fmi2SetContinuousStates / "
                   "fmi3SetContinuousStates", MT_VAR_NAMES[vr]);
@@ -328,8 +301,6 @@ static int fm_set_real(FMModel *m, unsigned vr, double value)
         logf_(m, FM_ERROR, "logStatusError", "%s cannot be set", MT_VAR_NAMES[vr]);
         return FM_ERROR;
     }
-bad:
-    return fm_not_a(m->log, m->host, vr, "Real");
 }
 
 static int fm_get_int(FMModel *m, unsigned vr, int *value)
