@@ -10,6 +10,7 @@
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "fmu_model.h"
 #include "mf_eval.h"
@@ -125,9 +126,50 @@ FM_FN int fm_check_parameter(const MFParams *p, const double *slot, double value
 
 /* ------------------------------------------------------------------ what every model's FMI calls do alike
  *
- * A model instance (struct FMModel of the model file) has the members log and host: logf_(m, ...) logs through
- * them.  The helpers below take the logger and the model's parameters explicitly. */
-#define logf_(m, status, category, ...) fm_logf((m)->log, (m)->host, status, category, __VA_ARGS__)
+ * A model instance (struct FMModel of the model file) starts with an FMBase (its first member, b): what every
+ * model keeps alike.  logf_(m, ...) logs through its logger.  The helpers below take the logger and the
+ * model's parameters explicitly. */
+typedef struct {
+    fm_log_fn log;
+    void *host;                  /* the wrapper's instance */
+    double time;
+    int use_mode;
+    int initialized;             /* after ExitInitializationMode */
+    unsigned long evals;         /* evaluations so far (the clock of the warning rate limit) */
+    FMWarnSlot warn[MF_W_COUNT]; /* the evaluator's warnings, per kind */
+} FMBase;
+
+#define FM_BASE(m) ((FMBase *)(m))
+#define logf_(m, status, category, ...) fm_logf((m)->b.log, (m)->b.host, status, category, __VA_ARGS__)
+
+/* The model interface's life cycle and clock, alike for every model (fmu_model.h; fm_reset is the model's). */
+FM_FN void fm_init(FMModel *m, fm_log_fn log, void *host)
+{
+    memset(m, 0, fm_size());
+    FM_BASE(m)->log = log;
+    FM_BASE(m)->host = host;
+    fm_reset(m);
+}
+
+FM_FN void fm_set_time(FMModel *m, double t) { FM_BASE(m)->time = t; }
+FM_FN double fm_time(const FMModel *m) { return ((const FMBase *)m)->time; }
+
+/* What every model's fm_reset does alike: time 0, the start value of useMode, not initialised, no evaluation
+ * and no warning yet. */
+FM_FN void fm_base_reset(FMBase *b, int use_mode)
+{
+    b->time = 0.0;
+    b->use_mode = use_mode;
+    b->initialized = 0;
+    b->evals = 0;
+    memset(b->warn, 0, sizeof b->warn);
+}
+
+/* A warning through the rate limit at the model's clock (slot: its kind, or a guard of the model). */
+FM_FN void fm_base_warn(FMBase *b, FMWarnSlot *slot, const char *message)
+{
+    fm_warn(b->log, b->host, slot, b->evals, b->time, message);
+}
 
 /* The error of an evaluation that returned rc (MF_BAD_MODE, else a FITTYP the evaluator refuses), logged: the
  * evaluator's own message.  Returns FM_ERROR. */

@@ -47,6 +47,7 @@ static const FMVarTable TABLE = {MT_VARS, MT_VAR_NAMES, MT_N_VARS};
 #endif
 
 struct FMModel {
+    FMBase b; /* first: what every model keeps (fmu_common.h); b.evals counts output and derivative evaluations */
     MFParams params;
     MTInputs inputs;
 #if MT_HAS_GUARD
@@ -65,13 +66,6 @@ struct FMModel {
     int kin_ok, out_ok;
     unsigned out_have; /* channel groups of out (valid when out_ok) */
     unsigned out_want; /* channel groups of every output read so far */
-    int use_mode;
-    double time;
-    int initialized;
-    unsigned long evals; /* output and derivative evaluations so far (the clock of the warning rate limit) */
-    FMWarnSlot warn[MF_W_COUNT];
-    fm_log_fn log;
-    void *host;
 };
 
 static const char *fm_guid(void) { return MT_GUID; }
@@ -79,15 +73,13 @@ static size_t fm_size(void) { return sizeof(FMModel); }
 static unsigned fm_n_states(void) { return MT_N_STATES; }
 static int fm_is_unknown(unsigned vr) { return fm_var_is_unknown(&TABLE, vr); }
 static unsigned fm_dependencies(unsigned *vrs, unsigned room) { return fm_var_dependencies(&TABLE, vrs, room); }
-static void fm_set_time(FMModel *m, double t) { m->time = t; }
-static double fm_time(const FMModel *m) { return m->time; }
 
 static void on_warning(void *ctx, int kind, const char *message)
 {
     FMModel *m = (FMModel *)ctx;
     if (kind == MF_W_LOW_SPEED || kind < 0 || kind >= MF_W_COUNT) return; /* the transient model replaces
                                                                                MFeval's low-speed mode */
-    fm_warn(m->log, m->host, &m->warn[kind], m->evals, m->time, message);
+    fm_base_warn(&m->b, &m->b.warn[kind], message);
 }
 
 static void fm_reset(FMModel *m)
@@ -103,26 +95,14 @@ static void fm_reset(FMModel *m)
         unsigned i;
         for (i = 0; i < MT_N_STATES; i++) m->x[i] = MT_STATE_START[i];
     }
-    m->use_mode = MT_USEMODE_START;
-    m->time = 0.0;
+    fm_base_reset(&m->b, MT_USEMODE_START);
     m->kin_ok = m->out_ok = 0;
     m->out_have = m->out_want = 0;
-    m->initialized = 0;
-    m->evals = 0;
-    memset(m->warn, 0, sizeof m->warn);
-}
-
-static void fm_init(FMModel *m, fm_log_fn log, void *host)
-{
-    memset(m, 0, sizeof *m);
-    m->log = log;
-    m->host = host;
-    fm_reset(m);
 }
 
 static int bad_code(FMModel *m, int rc)
 {
-    return fm_eval_error(m->log, m->host, &m->params, m->use_mode, rc);
+    return fm_eval_error(m->b.log, m->b.host, &m->params, m->b.use_mode, rc);
 }
 
 /* The kinematics, with the rolling offsets of the output groups read so far. */
@@ -140,7 +120,7 @@ static int update_kin(FMModel *m)
             if (bad & (1u << i)) {
                 snprintf(text, sizeof text, "input '%s' not finite or out of range: the last good value or the "
                          "bound is used", mt_input_name(i));
-                fm_warn(m->log, m->host, &m->guard[i], m->evals, m->time, text);
+                fm_base_warn(&m->b, &m->guard[i], text);
             }
     }
 #endif
@@ -150,7 +130,7 @@ static int update_kin(FMModel *m)
     m->T_road = in.T_road;
     mt_thermal_inputs(&m->params, &m->x[2], &in, &m->P_hot); /* the hot pressure and the laws' node temperatures */
 #endif
-    rc = mt_kinematics(&m->params, m->use_mode, &in, m->out_want, &m->kin, on_warning, m);
+    rc = mt_kinematics(&m->params, m->b.use_mode, &in, m->out_want, &m->kin, on_warning, m);
     if (rc != MF_OK) return bad_code(m, rc);
     m->kin_ok = 1;
     return 0;
@@ -162,15 +142,15 @@ static int update_out(FMModel *m, unsigned want)
     int rc;
     m->out_want |= want;
     if (m->out_ok && !(m->out_want & ~m->out_have)) return 0;
-    m->evals++; /* the clock of the warning rate limit: output evaluations and derivative evaluations */
+    m->b.evals++; /* the clock of the warning rate limit: output evaluations and derivative evaluations */
     if (update_kin(m)) return 1;
-    rc = mt_outputs(&m->params, m->use_mode, &m->kin, m->x, m->out_want, &m->out, on_warning, m);
+    rc = mt_outputs(&m->params, m->b.use_mode, &m->kin, m->x, m->out_want, &m->out, on_warning, m);
     if (rc != MF_OK) return bad_code(m, rc);
 #if MT_HAS_GUARD
     if (m->out.nonfinite) {
         char text[96];
         snprintf(text, sizeof text, "%u output(s) not finite, set to 0", m->out.nonfinite);
-        fm_warn(m->log, m->host, &m->nonfinite, m->evals, m->time, text);
+        fm_base_warn(&m->b, &m->nonfinite, text);
     }
 #endif
 #if MT_THERMAL
@@ -232,7 +212,7 @@ static int thermal_param_error(FMModel *m, unsigned vr, double value)
  * and TR_CS_STEP > 0 among them), then by thermal_param_error. */
 static int fm_exit_initialization(FMModel *m)
 {
-    if (fm_check_initialization(m->log, m->host, &m->params, m->use_mode, &TABLE) != FM_OK) return FM_ERROR;
+    if (fm_check_initialization(m->b.log, m->b.host, &m->params, m->b.use_mode, &TABLE) != FM_OK) return FM_ERROR;
     {
         unsigned vr; /* the bounds of [MFTIRE_THERMAL] (thermal block) */
         for (vr = 0; vr < MT_N_VARS; vr++)
@@ -240,7 +220,7 @@ static int fm_exit_initialization(FMModel *m)
                 return FM_ERROR;
     }
     if (update_out(m, 0)) return FM_ERROR;
-    m->initialized = 1;
+    m->b.initialized = 1;
     return FM_OK;
 }
 
@@ -248,8 +228,8 @@ static int fm_get_real(FMModel *m, unsigned vr, double *value)
 {
     const FMVarInfo *v = fm_var(&TABLE, vr);
     double dx[MT_N_STATES];
-    if (!v) return fm_not_a(m->log, m->host, vr, "Real");
-    if (fm_get_known(v, m->time, &m->inputs, &m->params, value)) return FM_OK;
+    if (!v) return fm_not_a(m->b.log, m->b.host, vr, "Real");
+    if (fm_get_known(v, m->b.time, &m->inputs, &m->params, value)) return FM_OK;
     switch (v->kind) {
     case FM_K_STATE: *value = m->x[v->offset]; return FM_OK;
     case FM_K_DER:
@@ -260,20 +240,20 @@ static int fm_get_real(FMModel *m, unsigned vr, double *value)
         if (update_out(m, v->want)) return FM_ERROR;
         *value = *fm_slot(&m->out, v);
         return FM_OK;
-    default: return fm_not_a(m->log, m->host, vr, "Real");
+    default: return fm_not_a(m->b.log, m->b.host, vr, "Real");
     }
 }
 
 static int fm_set_real(FMModel *m, unsigned vr, double value)
 {
     const FMVarInfo *v = fm_var(&TABLE, vr);
-    if (!v) return fm_not_a(m->log, m->host, vr, "Real");
+    if (!v) return fm_not_a(m->b.log, m->b.host, vr, "Real");
     switch (v->kind) {
     case FM_K_INPUT:
         store(m, fm_slot(&m->inputs, v), value);
         return FM_OK;
     case FM_K_PARAM:
-        if (fm_set_parameter_ok(m->log, m->host, &TABLE, &m->params, vr, value, m->initialized) != FM_OK)
+        if (fm_set_parameter_ok(m->b.log, m->b.host, &TABLE, &m->params, vr, value, m->b.initialized) != FM_OK)
             return FM_ERROR;
         if (thermal_param_error(m, vr, value)) return FM_ERROR;
         store(m, fm_slot(&m->params, v), value);
@@ -288,7 +268,7 @@ static int fm_set_real(FMModel *m, unsigned vr, double value)
 #endif
         return FM_OK;
     case FM_K_STATE:
-        if (m->initialized) {
+        if (m->b.initialized) {
             logf_(m, FM_ERROR, "logStatusError", "%s: set states with fmi2SetContinuousStates / "
                   "fmi3SetContinuousStates", MT_VAR_NAMES[vr]);
             return FM_ERROR;
@@ -305,12 +285,12 @@ static int fm_set_real(FMModel *m, unsigned vr, double value)
 
 static int fm_get_int(FMModel *m, unsigned vr, int *value)
 {
-    return fm_get_mode(m->log, m->host, vr, MT_VR_USEMODE, m->use_mode, value);
+    return fm_get_mode(m->b.log, m->b.host, vr, MT_VR_USEMODE, m->b.use_mode, value);
 }
 
 static int fm_set_int(FMModel *m, unsigned vr, int value)
 {
-    if (fm_set_mode(m->log, m->host, vr, MT_VR_USEMODE, value, &m->use_mode) != FM_OK) return FM_ERROR;
+    if (fm_set_mode(m->b.log, m->b.host, vr, MT_VR_USEMODE, value, &m->b.use_mode) != FM_OK) return FM_ERROR;
     m->kin_ok = m->out_ok = 0;
     return FM_OK;
 }
@@ -335,7 +315,7 @@ static int fm_get_states(FMModel *m, double *x)
 
 static int fm_get_derivatives(FMModel *m, double *dx)
 {
-    m->evals++;
+    m->b.evals++;
     return derivatives(m, dx) ? FM_ERROR : FM_OK;
 }
 
@@ -355,7 +335,7 @@ static int fm_do_step(FMModel *m, double t, double h)
 #endif
     if (update_kin(m)) return FM_ERROR; /* inputs (and node temperatures) are held over the step */
     mt_advance(&m->params, &m->kin, m->x, h);
-    m->time = t + h;
+    m->b.time = t + h;
     m->out_ok = 0; /* the outputs at the new state are computed when read */
 #if MT_THERMAL
     if (h > 0.0) {

@@ -53,30 +53,32 @@ __attribute__((visibility("default"))) int mt_probe_rates(int use_mode, const do
     return 0;
 }
 
+/* Every output at the 8 kinematic inputs and the state x, from the full evaluation (all channel groups). */
+static int outputs_at(int use_mode, const double *inputs, const double *x, MTOutputs *o)
+{
+    MTInputs in;
+    MTKin k;
+    load_inputs(&in, inputs);
+    return evaluate_all(use_mode, &in, x, &k, o);
+}
+
 /* Outputs (Fx, Fy, Mz, Mx, My, kappa_t, alpha_t) at the state x. */
 __attribute__((visibility("default"))) int mt_probe_outputs(int use_mode, const double *inputs, const double *x,
                                                             double *y)
 {
-    MTInputs in;
-    MTKin k;
     MTOutputs o;
-    int rc;
-    load_inputs(&in, inputs);
-    if ((rc = evaluate_all(use_mode, &in, x, &k, &o)) != 0) return rc;
-    copy_forces(&o, y);
-    return 0;
+    int rc = outputs_at(use_mode, inputs, x, &o);
+    if (rc == 0) copy_forces(&o, y);
+    return rc;
 }
 
 /* Every output (value-reference order) at the state x, from the full evaluation (all channel groups). */
 __attribute__((visibility("default"))) int mt_probe_all_outputs(int use_mode, const double *inputs, const double *x,
                                                                 double *y)
 {
-    MTInputs in;
-    MTKin k;
     MTOutputs o;
-    int rc, vr, i = 0;
-    load_inputs(&in, inputs);
-    if ((rc = evaluate_all(use_mode, &in, x, &k, &o)) != 0) return rc;
+    int vr, i = 0, rc = outputs_at(use_mode, inputs, x, &o);
+    if (rc) return rc;
     for (vr = 0; vr < MT_N_VARS; vr++)
         if (MT_VARS[vr].kind == FM_K_OUTPUT) y[i++] = *fm_slot(&o, &MT_VARS[vr]);
     return 0;
