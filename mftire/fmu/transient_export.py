@@ -23,11 +23,10 @@ generated ``mt_config_gen.h`` (:func:`mftire.mf.cheaders.transient_config_header
 from __future__ import annotations
 
 import os
-import re
 import subprocess
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
-from xml.sax.saxutils import quoteattr
 
 from mftire.errors import MftireError
 from mftire.fmu import variables as vt
@@ -38,9 +37,9 @@ from mftire.fmu.build import (
     UNITY,
     FMUExportError,
     _load,
-    _platform,
+    check_export,
+    export_identifier,
     find_compiler,
-    model_identifier_for,
     package_fmu,
     read_source,
     source_files,
@@ -275,109 +274,10 @@ def transient_model_description_xml(
     variables: list[vt.Variable], model_identifier: str, model_name: str, description: str, sources: list[str],
     fmi_version: int = 2,
 ) -> str:
-    """``modelDescription.xml`` (FMI 2.0 or 3.0, ME + CS) with the states and their derivatives."""
-    if fmi_version == 3:
-        return _xml3(variables, model_identifier, model_name, description)
-    if fmi_version != 2:
-        raise ValueError(f"fmi_version must be 2 or 3, not {fmi_version!r}")
-    a = vt._attrs
-    token = vt.guid(variables, 2)
-    lines = [
-        '<?xml version="1.0" encoding="UTF-8"?>',
-        f'<fmiModelDescription fmiVersion="2.0"{a(modelName=model_name, guid=token, description=description)}'
-        f'{a(generationTool="mftire", variableNamingConvention="flat")} numberOfEventIndicators="0">',
-    ]
-    src = ["    <SourceFiles>"] + [f"      <File name={quoteattr(s)}/>" for s in sources] + ["    </SourceFiles>"]
-    lines += [
-        f"  <ModelExchange modelIdentifier={quoteattr(model_identifier)}"
-        ' completedIntegratorStepNotNeeded="true" canNotUseMemoryManagementFunctions="true"'
-        ' canBeInstantiatedOnlyOncePerProcess="false">',
-        *src,
-        "  </ModelExchange>",
-        f"  <CoSimulation modelIdentifier={quoteattr(model_identifier)}"
-        ' canHandleVariableCommunicationStepSize="true" canNotUseMemoryManagementFunctions="true"'
-        ' canBeInstantiatedOnlyOncePerProcess="false">',
-        *src,
-        "  </CoSimulation>",
-    ]
-    lines += vt._unit_definitions(variables, 2)
-    lines += vt._log_categories()
-    lines.append('  <DefaultExperiment startTime="0" stopTime="1" stepSize="0.001"/>')
-    lines.append("  <ModelVariables>")
-    index: dict[int, int] = {}
-    state_index: dict[str, int] = {}
-    for i, v in enumerate(variables, start=1):
-        index[v.vr] = i
-        if v.kind == "state":
-            state_index[v.field] = i
-        initial = {"state": "exact" if v.start is not None else "calculated", "der": "calculated"}.get(
-            v.kind, v.initial if v.kind != "input" else None)
-        attrs = a(name=v.name, valueReference=v.vr, description=v.description, causality=v.causality,
-                  variability=v.variability, initial=initial)  # fmt: skip
-        inner = a(unit=v.unit if v.type == "Real" else None,
-                  derivative=state_index[v.field] if v.kind == "der" else None,
-                  start=None if v.start is None else vt._fmt(v.start))  # fmt: skip
-        lines.append(f"    <ScalarVariable{attrs}><{v.type}{inner}/></ScalarVariable> <!-- {i} -->")
-    lines.append("  </ModelVariables>")
-    inputs = [index[v.vr] for v in variables if v.kind == "input"]
-    states = [index[v.vr] for v in variables if v.kind == "state"]
-    deps = " ".join(map(str, inputs + states))
-    lines.append("  <ModelStructure>")
-    lines.append("    <Outputs>")
-    lines += [f'      <Unknown index="{index[v.vr]}" dependencies="{deps}"/>' for v in variables if v.kind == "output"]
-    lines.append("    </Outputs>")
-    lines.append("    <Derivatives>")
-    lines += [f'      <Unknown index="{index[v.vr]}" dependencies="{deps}"/>' for v in variables if v.kind == "der"]
-    lines.append("    </Derivatives>")
-    lines.append("    <InitialUnknowns>")
-    lines += [f'      <Unknown index="{index[v.vr]}"/>' for v in variables
-              if v.kind in ("output", "der") or (v.kind == "state" and v.start is None)]  # fmt: skip
-    lines.append("    </InitialUnknowns>")
-    lines.append("  </ModelStructure>")
-    lines.append("</fmiModelDescription>")
-    return "\n".join(lines) + "\n"
-
-
-def _xml3(variables: list[vt.Variable], model_identifier: str, model_name: str, description: str) -> str:
-    """``modelDescription.xml`` of FMI 3.0: the states (``initial="exact"``), their derivatives (``derivative``:
-    the state's value reference), every output and derivative depending on every input and state."""
-    a = vt._attrs
-    token = vt.guid(variables, 3)
-    lines = [
-        '<?xml version="1.0" encoding="UTF-8"?>',
-        f'<fmiModelDescription fmiVersion="3.0"{a(modelName=model_name, instantiationToken=token)}'
-        f'{a(description=description, generationTool="mftire", variableNamingConvention="flat")}>',
-        f"  <ModelExchange modelIdentifier={quoteattr(model_identifier)} canBeInstantiatedOnlyOncePerProcess=\"false\""
-        ' needsCompletedIntegratorStep="false"/>',
-        f"  <CoSimulation modelIdentifier={quoteattr(model_identifier)} canHandleVariableCommunicationStepSize=\"true\""
-        ' canBeInstantiatedOnlyOncePerProcess="false" providesIntermediateUpdate="false"'
-        ' canReturnEarlyAfterIntermediateUpdate="false"/>',
-    ]
-    lines += vt._unit_definitions(variables, 3)
-    lines += vt._log_categories()
-    lines.append('  <DefaultExperiment startTime="0" stopTime="1" stepSize="0.001"/>')
-    lines.append("  <ModelVariables>")
-    state_vr = {v.field: v.vr for v in variables if v.kind == "state"}
-    for v in variables:
-        tag = "Float64" if v.type == "Real" else "Int32"
-        initial = {"state": "exact" if v.start is not None else "calculated", "der": "calculated"}.get(
-            v.kind, v.initial if v.kind != "input" else None)
-        attrs = a(name=v.name, valueReference=v.vr, description=v.description, causality=v.causality,
-                  variability=v.variability, initial=initial, unit=v.unit if v.type == "Real" else None,
-                  derivative=state_vr[v.field] if v.kind == "der" else None,
-                  start=None if v.start is None else vt._fmt(v.start))  # fmt: skip
-        lines.append(f"    <{tag}{attrs}/>")
-    lines.append("  </ModelVariables>")
-    deps = " ".join(str(v.vr) for v in variables if v.kind in ("input", "state"))
-    lines.append("  <ModelStructure>")
-    lines += [f'    <Output valueReference="{v.vr}" dependencies="{deps}"/>' for v in variables if v.kind == "output"]
-    lines += [f'    <ContinuousStateDerivative valueReference="{v.vr}" dependencies="{deps}"/>'
-              for v in variables if v.kind == "der"]  # fmt: skip
-    lines += [f'    <InitialUnknown valueReference="{v.vr}"/>' for v in variables
-              if v.kind in ("output", "der") or (v.kind == "state" and v.start is None)]  # fmt: skip
-    lines.append("  </ModelStructure>")
-    lines.append("</fmiModelDescription>")
-    return "\n".join(lines) + "\n"
+    """``modelDescription.xml`` (FMI 2.0 or 3.0, ME + CS) with the states and their derivatives
+    (:func:`mftire.fmu.variables.model_description_xml`; default step 1 ms)."""
+    return vt.model_description_xml(variables, model_identifier, fmi_version, model_name, description, sources,
+                                    step_size=0.001)  # fmt: skip
 
 
 def generate_transient_sources(
@@ -447,22 +347,11 @@ def export_transient_fmu(
     (``mt_advance`` of ``mf_transient.c``).  The model identifier is, by default, the file name,
     ``_transient`` and a short hash of the parameters.  See ``docs/transient.md``.
     """
-    from mftire.mf.modes import Mode
-
-    if fmi_version not in (2, 3):
-        raise FMUExportError(f"fmi_version must be 2 or 3, not {fmi_version!r}")
-    Mode.from_code(use_mode)
-    cc = find_compiler(compiler)
+    cc = check_export(fmi_version, use_mode, compiler)
     flat, name, th = _check_transient(tir, thermal)
-    if model_identifier is None:
-        table = transient_variable_table(flat, use_mode, th)
-        ident = model_identifier_for(name + "_transient", vt.guid(table, fmi_version))
-    else:
-        ident = model_identifier
-    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", ident):
-        raise FMUExportError(f"model identifier {ident!r} is not a C identifier")
+    table = partial(transient_variable_table, flat, use_mode, th)
+    ident = export_identifier(model_identifier, name + "_transient", table, fmi_version)
     variables, files = generate_transient_sources(flat, ident, use_mode, fmi_version, th)
-    platform, suffix = _platform(fmi_version)
     description = (
         f"Transient Magic Formula tyre {name} (FITTYP {int(flat['FITTYP'])}) exported by mftire: wheel kinematics "
         "in, relaxation-length slip states u, v, low-speed model; ISO-W axes, SI units"
@@ -473,7 +362,7 @@ def export_transient_fmu(
     xml = transient_model_description_xml(variables, ident, name, description, [UNITY], fmi_version)
     docs = documentation_files(model_name=name, model_identifier=ident, description=description, variables=variables,
                                flat=flat, fmi_version=fmi_version, transient=True)  # fmt: skip
-    return package_fmu(output, xml, files, ident, platform, suffix, cc, docs)
+    return package_fmu(output, xml, files, ident, fmi_version, cc, docs)
 
 
 #: The C harness of :func:`build_probe_library` (``mftire/fmu/c/mt_probe.c``).

@@ -411,25 +411,34 @@ def model_description_xml(
     description: str,
     sources: list[str],
     generation_tool: str = "mftire",
+    step_size: float | None = None,
 ) -> str:
-    """``modelDescription.xml`` for FMI 2.0 (``fmi_version=2``) or 3.0 (``3``), ME + CS."""
+    """``modelDescription.xml`` for FMI 2.0 (``fmi_version=2``) or 3.0 (``3``), ME + CS, of any model's variable
+    table: the steady-state tyre's, or the transient tyre's with its continuous states (kind ``"state"``, start
+    None: calculated) and their derivatives (kind ``"der"``, ``field``: the state's index).  Every output and
+    derivative depends on every input and state.  ``step_size``: the default experiment's step."""
+    if fmi_version not in (2, 3):
+        raise ValueError(f"fmi_version must be 2 or 3, not {fmi_version!r}")
     token = guid(variables, fmi_version)
-    inputs = [v for v in variables if v.kind == "input"]
-    outputs = [v for v in variables if v.kind == "output"]
-    head = '<?xml version="1.0" encoding="UTF-8"?>'
+    states = [v for v in variables if v.kind == "state"]
+    # the initial unknowns: the outputs, the derivatives and the calculated states; with states, their
+    # dependencies are left to the default (every known of the initialisation)
+    initial = [v for v in variables if v.kind in ("output", "der") or (v.kind == "state" and v.start is None)]
     common = dict(
         modelName=model_name,
         description=description,
         generationTool=generation_tool,
         variableNamingConvention="flat",
     )
+    lines = ['<?xml version="1.0" encoding="UTF-8"?>']
     if fmi_version == 2:
-        lines = [head, f'<fmiModelDescription fmiVersion="2.0"{_attrs(guid=token, **common)}'
-                       f' numberOfEventIndicators="0">']  # fmt: skip
+        head = f'<fmiModelDescription fmiVersion="2.0"{_attrs(guid=token, **common)} numberOfEventIndicators="0">'
+        lines.append(head)
         src = ["    <SourceFiles>"] + [f"      <File name={quoteattr(s)}/>" for s in sources] + ["    </SourceFiles>"]
         lines += [
             f"  <ModelExchange modelIdentifier={quoteattr(model_identifier)}"
-            ' canNotUseMemoryManagementFunctions="true" canBeInstantiatedOnlyOncePerProcess="false">',
+            ' completedIntegratorStepNotNeeded="true" canNotUseMemoryManagementFunctions="true"'
+            ' canBeInstantiatedOnlyOncePerProcess="false">',
             *src,
             "  </ModelExchange>",
             f"  <CoSimulation modelIdentifier={quoteattr(model_identifier)}"
@@ -438,59 +447,53 @@ def model_description_xml(
             *src,
             "  </CoSimulation>",
         ]
-        lines += _unit_definitions(variables, 2)
-        lines += _log_categories()
-        lines.append('  <DefaultExperiment startTime="0" stopTime="1"/>')
-        lines.append("  <ModelVariables>")
-        index: dict[int, int] = {}
-        for i, v in enumerate(variables, start=1):
-            index[v.vr] = i
-            attrs = _attrs(
-                name=v.name, valueReference=v.vr, description=v.description, causality=v.causality,
-                variability=v.variability, initial=v.initial if v.kind != "input" else None,
-            )  # fmt: skip
-            inner = _attrs(unit=v.unit if v.type == "Real" else None, start=None if v.start is None else _fmt(v.start))
-            lines.append(f"    <ScalarVariable{attrs}><{v.type}{inner}/></ScalarVariable> <!-- {i} -->")
-        lines.append("  </ModelVariables>")
-        deps = " ".join(str(index[v.vr]) for v in inputs)
-        lines.append("  <ModelStructure>")
-        lines.append("    <Outputs>")
-        lines += [f'      <Unknown index="{index[v.vr]}" dependencies="{deps}"/>' for v in outputs]
-        lines.append("    </Outputs>")
-        lines.append("    <InitialUnknowns>")
-        lines += [f'      <Unknown index="{index[v.vr]}" dependencies="{deps}"/>' for v in outputs]
-        lines.append("    </InitialUnknowns>")
-        lines.append("  </ModelStructure>")
-        lines.append("</fmiModelDescription>")
-        return "\n".join(lines) + "\n"
-
-    if fmi_version != 3:
-        raise ValueError(f"fmi_version must be 2 or 3, not {fmi_version!r}")
-    lines = [head, f'<fmiModelDescription fmiVersion="3.0"{_attrs(instantiationToken=token, **common)}>']
-    lines += [
-        f"  <ModelExchange modelIdentifier={quoteattr(model_identifier)}"
-        ' canBeInstantiatedOnlyOncePerProcess="false"/>',
-        f"  <CoSimulation modelIdentifier={quoteattr(model_identifier)}"
-        ' canHandleVariableCommunicationStepSize="true" canBeInstantiatedOnlyOncePerProcess="false"'
-        ' providesIntermediateUpdate="false" canReturnEarlyAfterIntermediateUpdate="false"/>',
-    ]
-    lines += _unit_definitions(variables, 3)
+    else:
+        lines += [
+            f'<fmiModelDescription fmiVersion="3.0"{_attrs(instantiationToken=token, **common)}>',
+            f"  <ModelExchange modelIdentifier={quoteattr(model_identifier)}"
+            ' canBeInstantiatedOnlyOncePerProcess="false" needsCompletedIntegratorStep="false"/>',
+            f"  <CoSimulation modelIdentifier={quoteattr(model_identifier)}"
+            ' canHandleVariableCommunicationStepSize="true" canBeInstantiatedOnlyOncePerProcess="false"'
+            ' providesIntermediateUpdate="false" canReturnEarlyAfterIntermediateUpdate="false"/>',
+        ]
+    lines += _unit_definitions(variables, fmi_version)
     lines += _log_categories()
-    lines.append('  <DefaultExperiment startTime="0" stopTime="1"/>')
+    lines.append(f'  <DefaultExperiment{_attrs(startTime=0, stopTime=1, stepSize=step_size)}/>')
+    # FMI 2.0 refers to a variable by its index (1-based position), FMI 3.0 by its value reference
+    ref = {v.vr: i for i, v in enumerate(variables, start=1)} if fmi_version == 2 else {v.vr: v.vr for v in variables}
+    state_ref = {v.field: ref[v.vr] for v in states}
     lines.append("  <ModelVariables>")
-    for v in variables:
-        tag = "Float64" if v.type == "Real" else "Int32"
+    for i, v in enumerate(variables, start=1):
+        start = {"state": "exact" if v.start is not None else "calculated", "der": "calculated"}
         attrs = _attrs(
             name=v.name, valueReference=v.vr, description=v.description, causality=v.causality,
-            variability=v.variability, initial=v.initial if v.kind != "input" else None,
-            unit=v.unit if v.type == "Real" else None, start=None if v.start is None else _fmt(v.start),
+            variability=v.variability, initial=start.get(v.kind, v.initial if v.kind != "input" else None),
         )  # fmt: skip
-        lines.append(f"    <{tag}{attrs}/>")
+        inner = _attrs(unit=v.unit if v.type == "Real" else None,
+                       derivative=state_ref[v.field] if v.kind == "der" else None,
+                       start=None if v.start is None else _fmt(v.start))  # fmt: skip
+        if fmi_version == 2:
+            lines.append(f"    <ScalarVariable{attrs}><{v.type}{inner}/></ScalarVariable> <!-- {i} -->")
+        else:
+            lines.append(f"    <{'Float64' if v.type == 'Real' else 'Int32'}{attrs}{inner}/>")
     lines.append("  </ModelVariables>")
-    deps = " ".join(str(v.vr) for v in inputs)
+    deps = " ".join(str(ref[v.vr]) for kind in ("input", "state") for v in variables if v.kind == kind)
+    depends = f' dependencies="{deps}"'
+    initial_depends = "" if states else depends
+    structure = {  # element (FMI 2.0: list, unknown; FMI 3.0: element) -> (variables, dependencies)
+        ("Outputs", "Output"): ([v for v in variables if v.kind == "output"], depends),
+        ("Derivatives", "ContinuousStateDerivative"): ([v for v in variables if v.kind == "der"], depends),
+        ("InitialUnknowns", "InitialUnknown"): (initial, initial_depends),
+    }
     lines.append("  <ModelStructure>")
-    lines += [f'    <Output valueReference="{v.vr}" dependencies="{deps}"/>' for v in outputs]
-    lines += [f'    <InitialUnknown valueReference="{v.vr}" dependencies="{deps}"/>' for v in outputs]
+    for (list2, element3), (unknowns, dep) in structure.items():
+        if not unknowns:
+            continue
+        if fmi_version == 2:
+            lines += [f"    <{list2}>", *(f'      <Unknown index="{ref[v.vr]}"{dep}/>' for v in unknowns),
+                      f"    </{list2}>"]  # fmt: skip
+        else:
+            lines += [f'    <{element3} valueReference="{v.vr}"{dep}/>' for v in unknowns]
     lines.append("  </ModelStructure>")
     lines.append("</fmiModelDescription>")
     return "\n".join(lines) + "\n"
