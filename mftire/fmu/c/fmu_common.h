@@ -38,7 +38,8 @@ typedef struct {
 /* The entry of value reference vr (NULL where vr is no variable). */
 FM_FN const FMVarInfo *fm_var(const FMVarTable *t, unsigned vr) { return vr < t->n ? &t->vars[vr] : NULL; }
 
-/* The double of entry v in the struct at base (inputs, outputs or MFParams, as its kind says). */
+/* The double of entry v in the struct at base (inputs, outputs or MFParams, as its kind says; written only
+ * where base is the model's own). */
 FM_FN double *fm_slot(const void *base, const FMVarInfo *v) { return (double *)((char *)base + v->offset); }
 
 /* An output or a state derivative. */
