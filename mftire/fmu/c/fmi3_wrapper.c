@@ -159,7 +159,8 @@ static fmi3Status scalars(fmi3Instance instance, const char *fn, FIAccess access
                           size_t nvr, void *values, size_t nValues)
 {
     if (!instance) return fmi3Error;
-    if (nValues != nvr) return fail(instance, "only scalar variables (nValues == nValueReferences)");
+    if (nValues != nvr)
+        return (fmi3Status)fi_fail(FI(instance), "%s: only scalar variables (nValues == nValueReferences)", fn);
     return (fmi3Status)fi_values(FI(instance), fn, access, (const unsigned *)vr, nvr, values);
 }
 
