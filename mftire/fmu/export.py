@@ -99,7 +99,7 @@ def export_fmu(
         C compiler command; default ``$CC``, then cc, gcc, clang.
     transient : bool
         Export the transient tyre instead (wheel kinematics in, relaxation-length
-        states; FMI 2.0 or 3.0): :func:`mftire.fmu.transient_export.export_transient_fmu`.
+        states; FMI 2.0 or 3.0): :func:`mftire.fmu.transient_export.write_transient_fmu`.
     thermal : bool, optional
         Transient only: the thermal block (None: when the file has ``[MFTIRE_THERMAL]``; True: required,
         an error without the section; False: left out).
@@ -118,15 +118,14 @@ def export_fmu(
     parameters, the data variables its extensions read become extra inputs, and its
     string keys (variables, generic channel) are fixed (see ``docs/fmu.md``).
     """
-    if transient:
-        from mftire.fmu.transient_export import export_transient_fmu
-
-        return export_transient_fmu(tir, output, fmi_version, model_identifier=model_identifier, use_mode=use_mode,
-                                    compiler=compiler, thermal=thermal)  # fmt: skip
-    if thermal:
+    if thermal and not transient:
         raise FMUExportError("the thermal block is part of the transient tyre: export with transient=True "
                              "(mftire export-fmu --transient)")  # fmt: skip
     cc = check_export(fmi_version, use_mode, compiler)
+    if transient:
+        from mftire.fmu.transient_export import write_transient_fmu
+
+        return write_transient_fmu(tir, output, fmi_version, cc, model_identifier, use_mode, thermal)
     flat, name, spec = _load(tir)
     ident = export_identifier(model_identifier, name, partial(_table, flat, use_mode, spec), fmi_version)
     variables, files = generate_sources(flat, ident, fmi_version, use_mode, spec)

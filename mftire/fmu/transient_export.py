@@ -37,7 +37,6 @@ from mftire.fmu.build import (
     UNITY,
     FMUExportError,
     _load,
-    check_export,
     export_identifier,
     find_compiler,
     package_fmu,
@@ -326,19 +325,13 @@ def _check_transient(tir, thermal: bool | None = None) -> tuple[dict[str, float]
     return flat, name, None
 
 
-def export_transient_fmu(
-    tir,
-    output: str | os.PathLike,
-    fmi_version: int = 2,
-    *,
-    model_identifier: str | None = None,
-    use_mode: int = vt.DEFAULT_USE_MODE,
-    compiler: str | None = None,
-    thermal: bool | None = None,
-) -> Path:
-    """Export a tyre as the transient FMU (FMI 2.0 or 3.0, Model Exchange + Co-Simulation).
+def write_transient_fmu(tir, output: str | os.PathLike, fmi_version: int, cc: list[str], model_identifier: str | None,
+                        use_mode: int, thermal: bool | None) -> Path:  # fmt: skip
+    """Write the transient FMU (FMI 2.0 or 3.0, Model Exchange + Co-Simulation) of
+    :func:`mftire.fmu.export.export_fmu` ``(..., transient=True)``, which checked the request and found the C
+    compiler ``cc`` (:func:`mftire.fmu.build.check_export`).
 
-    ``thermal``: the thermal block (module docstring); None (default) when the file has a
+    ``thermal``: the thermal block (module docstring); None: when the file has a
     ``[MFTIRE_THERMAL]`` section, True requires one (an error without), False leaves it out.
 
     Inputs ``Fz, Vx, Vy, omega, gamma, P, muRoad, yawRate``; outputs ``Fx, Fy, Mz, Mx,
@@ -347,7 +340,6 @@ def export_transient_fmu(
     (``mt_advance`` of ``mf_transient.c``).  The model identifier is, by default, the file name,
     ``_transient`` and a short hash of the parameters.  See ``docs/transient.md``.
     """
-    cc = check_export(fmi_version, use_mode, compiler)
     flat, name, th = _check_transient(tir, thermal)
     table = partial(transient_variable_table, flat, use_mode, th)
     ident = export_identifier(model_identifier, name + "_transient", table, fmi_version)
@@ -398,9 +390,9 @@ def build_probe_library(tir, directory: str | os.PathLike, compiler: str | None 
 __all__ = [
     "ThermalExport",
     "build_probe_library",
-    "export_transient_fmu",
     "generate_transient_sources",
     "transient_model_description_xml",
     "transient_model_header",
     "transient_variable_table",
+    "write_transient_fmu",
 ]
