@@ -130,6 +130,16 @@ def _need(ok: bool, reason: str) -> str | None:
     return None if ok else reason
 
 
+def _at_least(levels: str, n: int, what: str) -> Rule:
+    """The rule: at least ``n`` distinct levels ``levels`` (a :class:`DataLevels` field) in the data."""
+    return lambda lv, p: _need(getattr(lv, levels) >= n, f"needs >= {n} {what} (data: {getattr(lv, levels)})")
+
+
+def _both_signs(name: str, reason: str) -> Rule:
+    """The rule: values of ``name`` (``kappa``, ``alpha``, ``gamma``) of both signs in the data."""
+    return lambda lv, p: _need(getattr(lv, f"{name}_negative") and getattr(lv, f"{name}_positive"), reason)
+
+
 #: Least change [rad] of atan((QSX6·Fz/Fz0)²) over the data's loads for QSX5, QSX6 to count.
 MX_LOAD_SPREAD = 0.05
 
@@ -152,42 +162,22 @@ def _mx_load_factor(lv: DataLevels, p: Mapping[str, float]) -> str | None:
 #: Identifiability rules: name -> function(levels, template) giving None when the rule
 #: holds, else the reason the coefficient cannot be identified.
 RULES: dict[str, Rule] = {
-    "loads2": lambda lv, p: _need(lv.loads >= 2, f"needs >= 2 loads for a dfz term (data: {lv.loads})"),
-    "loads3": lambda lv, p: _need(
-        lv.loads >= 3, f"needs >= 3 loads for a dfz^2 / nonlinear load term (data: {lv.loads})"
-    ),
-    "gamma": lambda lv, p: _need(lv.gammas >= 2, f"needs >= 2 cambers for a gamma term (data: {lv.gammas})"),
+    "loads2": _at_least("loads", 2, "loads for a dfz term"),
+    "loads3": _at_least("loads", 3, "loads for a dfz^2 / nonlinear load term"),
+    "gamma": _at_least("gammas", 2, "cambers for a gamma term"),
     "gamma_even": lambda lv, p: _need(
         lv.abs_gammas >= 2, f"needs a non-zero camber for a gamma^2 / |gamma| term (|gamma| levels: {lv.abs_gammas})"
     ),
-    "gamma_square_vs_linear": lambda lv, p: _need(
-        lv.gammas >= 3, f"needs >= 3 cambers to separate gamma^2 from gamma (data: {lv.gammas})"
-    ),
-    "gamma_abs_vs_linear": lambda lv, p: _need(
-        lv.gamma_negative and lv.gamma_positive,
-        "needs cambers of both signs to separate |gamma| from gamma",
-    ),
-    "gamma_odd2_vs_linear": lambda lv, p: _need(
-        lv.nonzero_abs_gammas >= 2,
-        f"needs >= 2 distinct non-zero |gamma| to separate gamma*|gamma| from gamma (data: "
-        f"{lv.nonzero_abs_gammas})",
-    ),
-    "pressures2": lambda lv, p: _need(
-        lv.pressures >= 2, f"needs >= 2 pressures for a dpi term (data: {lv.pressures})"
-    ),
-    "pressures3": lambda lv, p: _need(
-        lv.pressures >= 3, f"needs >= 3 pressures for a dpi^2 term (data: {lv.pressures})"
-    ),
-    "speeds2": lambda lv, p: _need(lv.speeds >= 2, f"needs >= 2 speeds for a speed term (data: {lv.speeds})"),
-    "speeds3": lambda lv, p: _need(
-        lv.speeds >= 3, f"needs >= 3 speeds for a second speed term (data: {lv.speeds})"
-    ),
-    "kappa_both_signs": lambda lv, p: _need(
-        lv.kappa_negative and lv.kappa_positive, "needs braking and driving slip (kappa of both signs)"
-    ),
-    "alpha_both_signs": lambda lv, p: _need(
-        lv.alpha_negative and lv.alpha_positive, "needs slip angles of both signs"
-    ),
+    "gamma_square_vs_linear": _at_least("gammas", 3, "cambers to separate gamma^2 from gamma"),
+    "gamma_abs_vs_linear": _both_signs("gamma", "needs cambers of both signs to separate |gamma| from gamma"),
+    "gamma_odd2_vs_linear": _at_least("nonzero_abs_gammas", 2,
+                                      "distinct non-zero |gamma| to separate gamma*|gamma| from gamma"),  # fmt: skip
+    "pressures2": _at_least("pressures", 2, "pressures for a dpi term"),
+    "pressures3": _at_least("pressures", 3, "pressures for a dpi^2 term"),
+    "speeds2": _at_least("speeds", 2, "speeds for a speed term"),
+    "speeds3": _at_least("speeds", 3, "speeds for a second speed term"),
+    "kappa_both_signs": _both_signs("kappa", "needs braking and driving slip (kappa of both signs)"),
+    "alpha_both_signs": _both_signs("alpha", "needs slip angles of both signs"),
     "kappa_levels2": lambda lv, p: _need(lv.kappa_levels >= 2, "needs combined data at >= 2 slip ratios"),
     "alpha_levels2": lambda lv, p: _need(lv.alpha_levels >= 2, "needs combined data at >= 2 slip angles"),
     "combined": lambda lv, p: _need(lv.n_points > 0, "needs combined-slip sweeps"),

@@ -102,13 +102,22 @@ class Stage:
         return tuple(c for g in self.groups for c in g)
 
 
+def _shape_peak_curvature(axis: str) -> tuple[Coefficient, ...]:
+    """The shape factor, the peak factor and the first curvature coefficients of the pure-slip force of
+    ``axis`` ("X": PCX1, PDX1-3, PEX1-2, eqs 4.E11, 4.E13, 4.E14; "Y": PCY1, PDY1-3, PEY1-2, eqs 4.E21, 4.E23,
+    4.E24), with the same bounds for both forces."""
+    return (
+        _c(f"PC{axis}1", 0.5, 3.0, 1.0, keep_sign=True),
+        _c(f"PD{axis}1", -5.0, 5.0, 1.0, keep_sign=True),
+        _c(f"PD{axis}2", -3.0, 3.0, 0.1, "loads2"),
+        _c(f"PD{axis}3", -200.0, 200.0, 1.0, "gamma_even"),
+        _c(f"PE{axis}1", -30.0, 1.0, 0.5),
+        _c(f"PE{axis}2", -30.0, 30.0, 0.1, "loads2"),
+    )
+
+
 _FX = (
-    _c("PCX1", 0.5, 3.0, 1.0, keep_sign=True),  # eq 4.E11
-    _c("PDX1", -5.0, 5.0, 1.0, keep_sign=True),  # eq 4.E13
-    _c("PDX2", -3.0, 3.0, 0.1, "loads2"),
-    _c("PDX3", -200.0, 200.0, 1.0, "gamma_even"),
-    _c("PEX1", -30.0, 1.0, 0.5),  # eq 4.E14
-    _c("PEX2", -30.0, 30.0, 0.1, "loads2"),
+    *_shape_peak_curvature("X"),  # eqs 4.E11, 4.E13, 4.E14
     _c("PEX3", -30.0, 30.0, 0.1, "loads3"),
     _c("PEX4", -1.0, 1.0, 0.1, "kappa_both_signs"),
     _c("PKX1", -500.0, 500.0, 10.0, keep_sign=True),  # eq 4.E15
@@ -125,12 +134,7 @@ _FX = (
 )
 
 _FY = (
-    _c("PCY1", 0.5, 3.0, 1.0, keep_sign=True),  # eq 4.E21
-    _c("PDY1", -5.0, 5.0, 1.0, keep_sign=True),  # eq 4.E23
-    _c("PDY2", -3.0, 3.0, 0.1, "loads2"),
-    _c("PDY3", -200.0, 200.0, 1.0, "gamma_even"),
-    _c("PEY1", -30.0, 1.0, 0.5),  # eq 4.E24
-    _c("PEY2", -30.0, 30.0, 0.1, "loads2"),
+    *_shape_peak_curvature("Y"),  # eqs 4.E21, 4.E23, 4.E24
     _c("PEY3", -30.0, 30.0, 0.1, "alpha_both_signs"),
     _c("PEY4", -500.0, 500.0, 1.0, "gamma", "alpha_both_signs"),
     _c("PEY5", -2000.0, 2000.0, 10.0, "gamma_even"),

@@ -14,6 +14,7 @@ import sys
 import tempfile
 import warnings
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
 
 from mftire.errors import MftireError
@@ -30,7 +31,7 @@ WRAPPER_C = Path(__file__).parent / "c"
 #: The hand-written C of each model behind the one model interface (``c/fmu_model.h``): the evaluator, the
 #: model's own C, and its implementation of the interface.
 MODEL_SOURCES: dict[str, tuple[str, ...]] = {
-    "steady": ("mf_eval.c", "mf_eval.h", "mf_ext.h", "mf_model.c", "mf_model.h"),
+    "steady": ("mf_eval.c", "mf_eval.h", "mf_ext.h", "mf_model.c"),
     "transient": ("mf_eval.c", "mf_eval.h", "mf_ext.h", "mf_transient.c", "mf_transient.h", "mt_model.c"),
 }
 #: The FMI wrapper of each FMI version (thin, over fmu_model.h; the same for every model).
@@ -173,6 +174,27 @@ def model_identifier_for(name: str, guid: str | None = None) -> str:
     return ident
 
 
+def check_export(fmi_version: int, use_mode: int, compiler: str | None) -> list[str]:
+    """What every export checks before any work: the FMI version (2 or 3) and the ``useMode``.  Returns the C
+    compiler command (:func:`find_compiler`: an export without one fails early)."""
+    from mftire.mf.modes import Mode
+
+    if fmi_version not in (2, 3):
+        raise FMUExportError(f"fmi_version must be 2 or 3, not {fmi_version!r}")
+    Mode.from_code(use_mode)
+    return find_compiler(compiler)
+
+
+def export_identifier(model_identifier: str | None, name: str, table: Callable[[], list[vt.Variable]],
+                      fmi_version: int) -> str:  # fmt: skip
+    """The FMU's model identifier: ``model_identifier`` when given, else :func:`model_identifier_for` the name
+    and the GUID of the variable table ``table()``; an error when it is not a C identifier."""
+    ident = model_identifier_for(name, vt.guid(table(), fmi_version)) if model_identifier is None else model_identifier
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", ident):
+        raise FMUExportError(f"model identifier {ident!r} is not a C identifier")
+    return ident
+
+
 def _load(tir):
     """Flat parameters, a name and the extension configuration from a path, a Tyre or a mapping.
 
@@ -303,12 +325,13 @@ def _windows_dll(src: Path, dll: Path) -> Path | None:
     return dll
 
 
-def package_fmu(output, xml: str, files: dict[str, str], ident: str, platform: str, suffix: str,
-                cc: list[str], documentation: dict[str, str] | None = None) -> Path:  # fmt: skip
-    """Compile ``files`` (the ``sources/``) and write the FMU zip ``output`` atomically, with the archive
-    files ``documentation`` (path -> text: ``documentation/index.html`` and the licence)."""
+def package_fmu(output, xml: str, files: dict[str, str], ident: str, fmi_version: int, cc: list[str],
+                documentation: dict[str, str] | None = None) -> Path:  # fmt: skip
+    """Compile ``files`` (the ``sources/``) for this machine and write the FMU zip ``output`` atomically, with
+    the archive files ``documentation`` (path -> text: ``documentation/index.html`` and the licence)."""
     from mftire.iotools.atomic import atomic_path
 
+    platform, suffix = _platform(fmi_version)
     output = Path(output)
     with tempfile.TemporaryDirectory(prefix="mftire-fmu-") as tmp:
         src = Path(tmp) / "sources"

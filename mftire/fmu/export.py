@@ -15,7 +15,7 @@ the C headers, so they cannot disagree.
 from __future__ import annotations
 
 import os
-import re
+from functools import partial
 from pathlib import Path
 
 from mftire.errors import MftireError
@@ -26,7 +26,9 @@ from mftire.fmu.build import (  # noqa: F401 (re-exported)
     FMUExportError,
     _load,
     _platform,
+    check_export,
     compile_sources,
+    export_identifier,
     find_compiler,
     model_identifier_for,
     package_fmu,
@@ -35,6 +37,15 @@ from mftire.fmu.build import (  # noqa: F401 (re-exported)
 from mftire.fmu.documentation import documentation_files
 from mftire.mf.extensions import ExtensionSet
 from mftire.mf.family import PAC2002_CODE
+
+
+def _table(flat: dict[str, float], use_mode: int, extensions: ExtensionSet | None) -> list[vt.Variable]:
+    """The steady-state FMU's variable table (:func:`mftire.fmu.variables.variable_table`), an export error when
+    the model extensions cannot be exported."""
+    try:
+        return vt.variable_table(flat, use_mode, extensions)
+    except MftireError as exc:
+        raise FMUExportError(f"the model extensions cannot be exported: {exc}") from None
 
 
 def generate_sources(
@@ -48,10 +59,7 @@ def generate_sources(
 
     ``extensions`` is the model-extension configuration (:func:`mftire.fmu.variables.extension_spec`).
     """
-    try:
-        variables = vt.variable_table(flat, use_mode, extensions)
-    except MftireError as exc:
-        raise FMUExportError(f"the model extensions cannot be exported: {exc}") from None
+    variables = _table(flat, use_mode, extensions)
     files = source_files("steady", fmi_version)
     files["mf_params.h"] = vt.params_header(variables, extensions)
     files["mf_ext_gen.h"] = vt.extension_header(variables, extensions)
@@ -91,7 +99,7 @@ def export_fmu(
         C compiler command; default ``$CC``, then cc, gcc, clang.
     transient : bool
         Export the transient tyre instead (wheel kinematics in, relaxation-length
-        states; FMI 2.0 or 3.0): :func:`mftire.fmu.transient_export.export_transient_fmu`.
+        states; FMI 2.0 or 3.0): :func:`mftire.fmu.transient_export.write_transient_fmu`.
     thermal : bool, optional
         Transient only: the thermal block (None: when the file has ``[MFTIRE_THERMAL]``; True: required,
         an error without the section; False: left out).
@@ -110,33 +118,17 @@ def export_fmu(
     parameters, the data variables its extensions read become extra inputs, and its
     string keys (variables, generic channel) are fixed (see ``docs/fmu.md``).
     """
-    from mftire.mf.modes import Mode
-
-    if fmi_version not in (2, 3):
-        raise FMUExportError(f"fmi_version must be 2 or 3, not {fmi_version!r}")
-    if transient:
-        from mftire.fmu.transient_export import export_transient_fmu
-
-        return export_transient_fmu(tir, output, fmi_version, model_identifier=model_identifier, use_mode=use_mode,
-                                    compiler=compiler, thermal=thermal)  # fmt: skip
-    if thermal:
+    if thermal and not transient:
         raise FMUExportError("the thermal block is part of the transient tyre: export with transient=True "
                              "(mftire export-fmu --transient)")  # fmt: skip
-    Mode.from_code(use_mode)
-    cc = find_compiler(compiler)  # fail early, before any work
+    cc = check_export(fmi_version, use_mode, compiler)
+    if transient:
+        from mftire.fmu.transient_export import write_transient_fmu
+
+        return write_transient_fmu(tir, output, fmi_version, cc, model_identifier, use_mode, thermal)
     flat, name, spec = _load(tir)
-    if model_identifier is None:
-        try:
-            table = vt.variable_table(flat, use_mode, spec)
-        except MftireError as exc:
-            raise FMUExportError(f"the model extensions cannot be exported: {exc}") from None
-        ident = model_identifier_for(name, vt.guid(table, fmi_version))
-    else:
-        ident = model_identifier
-    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", ident):
-        raise FMUExportError(f"model identifier {ident!r} is not a C identifier")
+    ident = export_identifier(model_identifier, name, partial(_table, flat, use_mode, spec), fmi_version)
     variables, files = generate_sources(flat, ident, fmi_version, use_mode, spec)
-    platform, suffix = _platform(fmi_version)
     fmt = "PAC2002" if flat["FITTYP"] == PAC2002_CODE else f"FITTYP {int(flat['FITTYP'])}"
     description = f"Magic Formula tyre {name} ({fmt}) exported by mftire; ISO-W axes, SI units"
     if spec:
@@ -145,7 +137,7 @@ def export_fmu(
                                    sources=[UNITY])  # fmt: skip
     docs = documentation_files(model_name=name, model_identifier=ident, description=description, variables=variables,
                                flat=flat, fmi_version=fmi_version)  # fmt: skip
-    return package_fmu(output, xml, files, ident, platform, suffix, cc, docs)
+    return package_fmu(output, xml, files, ident, fmi_version, cc, docs)
 
 
 __all__ = ["FMUExportError", "export_fmu", "find_compiler", "generate_sources", "compile_sources"]

@@ -11,38 +11,7 @@ the evaluator reads (:mod:`~mftire.iotools.evaluator_keys`, generated), atomic w
 segmentation are sweep analysis: :mod:`mftire.segmentation`.
 """
 
-from mftire.iotools.tir import (
-    DuplicateKeyError,
-    EmptyFileError,
-    FittypError,
-    MalformedLineError,
-    MissingFittypError,
-    NonNumericValueError,
-    TirError,
-    TirParameters,
-    TirTable,
-    UnknownFittypError,
-    UnknownUnitError,
-    format_tir,
-    parse_tir,
-    read_tir,
-    write_tir,
-)
+from mftire.iotools import tir
+from mftire.iotools.tir import *  # noqa: F403 (the .tir reader's public names, re-exported)
 
-__all__ = [
-    "DuplicateKeyError",
-    "EmptyFileError",
-    "FittypError",
-    "MalformedLineError",
-    "MissingFittypError",
-    "NonNumericValueError",
-    "TirError",
-    "TirParameters",
-    "TirTable",
-    "UnknownFittypError",
-    "UnknownUnitError",
-    "format_tir",
-    "parse_tir",
-    "read_tir",
-    "write_tir",
-]
+__all__ = list(tir.__all__)

@@ -10,6 +10,21 @@ import sys
 from mftire.errors import MftireInputError
 
 
+def _add_command(subparsers: argparse._SubParsersAction, name: str, func, tir: tuple[str, str],
+                 output: tuple[str, str], **texts: str) -> argparse.ArgumentParser:  # fmt: skip
+    """A sub-command on a rig series: the data options, ``--tir`` and ``--output`` (each: metavar, help),
+    ``--force``; ``texts``: its help and description."""
+    from mftire.cli_options import add_force_option
+
+    p = subparsers.add_parser(name, **texts)
+    _add_data_options(p)
+    p.add_argument("--tir", required=True, metavar=tir[0], help=tir[1])
+    p.add_argument("--output", required=True, metavar=output[0], help=output[1])
+    add_force_option(p)
+    p.set_defaults(func=func)
+    return p
+
+
 def _add_data_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("data", metavar="DATA", help="raw rig file (.gz accepted) or an imported series CSV")
     p.add_argument("--format", default=None,  # checked by mftire.thermal.series.read_series (no pandas at start-up)
@@ -131,18 +146,15 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Register ``fit-thermal`` and ``replay`` on the ``mftire`` sub-command parser."""
-    from mftire.cli_options import add_force_option
-
-    p = subparsers.add_parser(
-        "fit-thermal", help="fit the thermal tyre (three nodes, gas law, temperature laws) to a rig series",
+    p = _add_command(
+        subparsers, "fit-thermal", _cmd_fit_thermal, ("FIT.tir", "the fitted (isothermal) .tir"),
+        ("THERMAL.tir", "the .tir to write"),
+        help="fit the thermal tyre (three nodes, gas law, temperature laws) to a rig series",
         description="Fit the thermal parameters of [MFTIRE_THERMAL] and the temperature laws of a fitted .tir to "
         "a continuous rig series (measured surface temperatures compared with the surface node, the pressure with "
         "the gas law); each law reads the node with the lower held-out error. Writes the .tir, a figure of "
         "measured against predicted temperature and pressure, and prints every parameter with its standard error.",
     )  # fmt: skip
-    _add_data_options(p)
-    p.add_argument("--tir", required=True, metavar="FIT.tir", help="the fitted (isothermal) .tir")
-    p.add_argument("--output", required=True, metavar="THERMAL.tir", help="the .tir to write")
     p.add_argument("--fit-until", type=float, default=None, metavar="SECONDS",
                    help="fit on the rows with ET <= SECONDS (default: all), leaving the rest to a replay")
     p.add_argument("--pressure", choices=("sealed", "regulated"), default="sealed",
@@ -150,18 +162,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    "regulated: the rig holds the pressure, P is not fitted and the replay uses the cold pressure")
     p.add_argument("--plot", metavar="FIG.png", help="figure (default: OUTPUT stem + _temperature.png)")
     p.add_argument("--report", metavar="REPORT.json", help="also write the results as JSON")
-    add_force_option(p)
-    p.set_defaults(func=_cmd_fit_thermal)
 
-    p = subparsers.add_parser(
-        "replay", help="run a .tir (thermal or not) along a measured series given only kinematics and conditions",
+    _add_command(
+        subparsers, "replay", _cmd_replay, ("THERMAL.tir", "the .tir to replay"),
+        ("REPLAY.csv", "output CSV, or - for standard output"),
+        help="run a .tir (thermal or not) along a measured series given only kinematics and conditions",
         description="Run the model along a measured series (ET, Fz, Vx, slips, inclination, ambient and road "
         "temperature; cold pressure: P_cold column, TH_COLD_PRESSURE or the first P sample) and write the node "
         "temperatures, the pressure and Fx_model, Fy_model, ... next to the measured columns, keyed by ET. A .tir "
         "without [MFTIRE_THERMAL] replays isothermally at the cold pressure.",
     )  # fmt: skip
-    _add_data_options(p)
-    p.add_argument("--tir", required=True, metavar="THERMAL.tir", help="the .tir to replay")
-    p.add_argument("--output", required=True, metavar="REPLAY.csv", help="output CSV, or - for standard output")
-    add_force_option(p)
-    p.set_defaults(func=_cmd_replay)

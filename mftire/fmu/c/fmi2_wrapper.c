@@ -55,13 +55,6 @@ static fmi2Status unsupported(fmi2Component c, const char *fn)
     return (fmi2Status)fi_fail(FI(c), "%s is not supported", fn);
 }
 
-/* Start of the value-access functions: a NULL component, or NULL arrays with n > 0, is an error. */
-#define CHECK_ARRAYS(c, n, a, b)                                                                                  \
-    do {                                                                                                          \
-        if (!(c)) return fmi2Error;                                                                               \
-        if ((n) > 0 && (!(a) || !(b))) return (fmi2Status)fi_fail(FI(c), "%s: NULL array argument", __func__); \
-    } while (0)
-
 /* ------------------------------------------------------------------ life cycle */
 
 FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
@@ -147,44 +140,26 @@ FMI2_Export fmi2Status fmi2Reset(fmi2Component c) { return (fmi2Status)fi_reset(
 
 /* ------------------------------------------------------------------ variables */
 
+/* The value types are those fmi_common.h takes (fmi2ValueReference: unsigned int; fmi2Integer: int). */
 FMI2_Export fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real value[])
 {
-    size_t i;
-    CHECK_ARRAYS(c, n, vr, value);
-    for (i = 0; i < n; i++)
-        if (fm_get_real(INS->fi.model, vr[i], &value[i]) != FM_OK) return fmi2Error;
-    return fmi2OK;
+    return (fmi2Status)fi_values(FI(c), "fmi2GetReal", FI_GET_REAL, vr, n, value);
 }
 
 FMI2_Export fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Integer value[])
 {
-    size_t i;
-    CHECK_ARRAYS(c, n, vr, value);
-    for (i = 0; i < n; i++) {
-        int v = 0;
-        if (fm_get_int(INS->fi.model, vr[i], &v) != FM_OK) return fmi2Error;
-        value[i] = v;
-    }
-    return fmi2OK;
+    return (fmi2Status)fi_values(FI(c), "fmi2GetInteger", FI_GET_INT, vr, n, value);
 }
 
 FMI2_Export fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Real value[])
 {
-    size_t i;
-    CHECK_ARRAYS(c, n, vr, value);
-    for (i = 0; i < n; i++)
-        if (fm_set_real(INS->fi.model, vr[i], value[i]) != FM_OK) return fmi2Error;
-    return fmi2OK;
+    return (fmi2Status)fi_values(FI(c), "fmi2SetReal", FI_SET_REAL, vr, n, (void *)value);
 }
 
 FMI2_Export fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n,
                                       const fmi2Integer value[])
 {
-    size_t i;
-    CHECK_ARRAYS(c, n, vr, value);
-    for (i = 0; i < n; i++)
-        if (fm_set_int(INS->fi.model, vr[i], value[i]) != FM_OK) return fmi2Error;
-    return fmi2OK;
+    return (fmi2Status)fi_values(FI(c), "fmi2SetInteger", FI_SET_INT, vr, n, (void *)value);
 }
 
 /* ------------------------------------------------------------------ no Boolean or String variables */

@@ -150,51 +150,42 @@ FMI3_Export fmi3Status fmi3Reset(fmi3Instance instance) { return (fmi3Status)fi_
 
 /* ------------------------------------------------------------------ variables */
 
+/* The Float64 and Int32 variables, scalar only (nValues == nValueReferences), through fmi_common.h, which takes
+ * value references as unsigned and Int32 values as int: the sizes are checked here (a negative array size). */
+typedef char fmi3_value_reference_is_unsigned[sizeof(fmi3ValueReference) == sizeof(unsigned) ? 1 : -1];
+typedef char fmi3_int32_is_int[sizeof(fmi3Int32) == sizeof(int) ? 1 : -1];
+
+static fmi3Status scalars(fmi3Instance instance, const char *fn, FIAccess access, const fmi3ValueReference vr[],
+                          size_t nvr, void *values, size_t nValues)
+{
+    if (!instance) return fmi3Error;
+    if (nValues != nvr)
+        return (fmi3Status)fi_fail(FI(instance), "%s: only scalar variables (nValues == nValueReferences)", fn);
+    return (fmi3Status)fi_values(FI(instance), fn, access, (const unsigned *)vr, nvr, values);
+}
+
 FMI3_Export fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                                       fmi3Float64 values[], size_t nValues)
 {
-    size_t i;
-    if (!instance) return fmi3Error;
-    if (nValues != nvr) return fail(instance, "fmi3GetFloat64: only scalar variables (nValues == nValueReferences)");
-    for (i = 0; i < nvr; i++)
-        if (fm_get_real(INS->fi.model, vr[i], &values[i]) != FM_OK) return fmi3Error;
-    return fmi3OK;
+    return scalars(instance, "fmi3GetFloat64", FI_GET_REAL, vr, nvr, values, nValues);
 }
 
 FMI3_Export fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                                       const fmi3Float64 values[], size_t nValues)
 {
-    size_t i;
-    if (!instance) return fmi3Error;
-    if (nValues != nvr) return fail(instance, "fmi3SetFloat64: only scalar variables (nValues == nValueReferences)");
-    for (i = 0; i < nvr; i++)
-        if (fm_set_real(INS->fi.model, vr[i], values[i]) != FM_OK) return fmi3Error;
-    return fmi3OK;
+    return scalars(instance, "fmi3SetFloat64", FI_SET_REAL, vr, nvr, (void *)values, nValues);
 }
 
 FMI3_Export fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                                     fmi3Int32 values[], size_t nValues)
 {
-    size_t i;
-    if (!instance) return fmi3Error;
-    if (nValues != nvr) return fail(instance, "fmi3GetInt32: only scalar variables");
-    for (i = 0; i < nvr; i++) {
-        int v = 0;
-        if (fm_get_int(INS->fi.model, vr[i], &v) != FM_OK) return fmi3Error;
-        values[i] = v;
-    }
-    return fmi3OK;
+    return scalars(instance, "fmi3GetInt32", FI_GET_INT, vr, nvr, values, nValues);
 }
 
 FMI3_Export fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                                     const fmi3Int32 values[], size_t nValues)
 {
-    size_t i;
-    if (!instance) return fmi3Error;
-    if (nValues != nvr) return fail(instance, "fmi3SetInt32: only scalar variables");
-    for (i = 0; i < nvr; i++)
-        if (fm_set_int(INS->fi.model, vr[i], values[i]) != FM_OK) return fmi3Error;
-    return fmi3OK;
+    return scalars(instance, "fmi3SetInt32", FI_SET_INT, vr, nvr, (void *)values, nValues);
 }
 
 /* Types the model does not use: any non-empty access is an error. */

@@ -157,6 +157,36 @@ FM_FN int fi_set_time(FIInstance *fi, double t)
     return FM_OK;
 }
 
+/* The calls on scalar variables (fn: the FMI function's name; vr: n value references, values: n values): each
+ * value through the model's accessor (fmu_model.h), stopping at the first refusal.  A NULL instance, or NULL
+ * arrays with n > 0, is an error.  Value references are 32-bit unsigned in both standards, Integer / Int32
+ * values are int (the wrappers check the sizes). */
+FM_FN int fi_arrays(const FIInstance *fi, const char *fn, size_t n, const void *vr, const void *values)
+{
+    if (!fi) return FM_ERROR;
+    if (n > 0 && (!vr || !values)) return fi_fail(fi, "%s: NULL array argument", fn);
+    return FM_OK;
+}
+
+/* What a call on scalar variables does with each value (fi_values). */
+typedef enum { FI_GET_REAL, FI_SET_REAL, FI_GET_INT, FI_SET_INT } FIAccess;
+
+/* values: double (Real) or int (Integer) values, read by the Set calls only. */
+FM_FN int fi_values(FIInstance *fi, const char *fn, FIAccess access, const unsigned *vr, size_t n, void *values)
+{
+    size_t i;
+    int rc;
+    if (fi_arrays(fi, fn, n, vr, values) != FM_OK) return FM_ERROR;
+    for (i = 0, rc = FM_OK; i < n && rc == FM_OK; i++)
+        switch (access) {
+        case FI_GET_REAL: rc = fm_get_real(fi->model, vr[i], (double *)values + i); break;
+        case FI_SET_REAL: rc = fm_set_real(fi->model, vr[i], ((const double *)values)[i]); break;
+        case FI_GET_INT: rc = fm_get_int(fi->model, vr[i], (int *)values + i); break;
+        default: rc = fm_set_int(fi->model, vr[i], ((const int *)values)[i]); break;
+        }
+    return rc;
+}
+
 /* A call on the continuous states (fn: its name): nx must be the model's count, the array given if nx > 0. */
 FM_FN int fi_states_call(const FIInstance *fi, const char *fn, size_t nx, const void *array)
 {

@@ -1,7 +1,8 @@
 /*
- * fmu_common.h -- what both models behind fmu_model.h (mf_model.c, mt_model.c) do alike: log through the
- * wrapper's logger, rate-limit repeated warnings, refuse non-physical parameters and modes, check everything
- * at the end of the initialisation.  Static functions of the FMU's one translation unit (fmu.c).
+ * fmu_common.h -- what both models behind fmu_model.h (mf_model.c, mt_model.c) do alike: the value-reference
+ * table and its accessors, log through the wrapper's logger, rate-limit repeated warnings, refuse
+ * non-physical parameters and modes, check everything at the end of the initialisation.  Static functions of
+ * the FMU's one translation unit (fmu.c).
  */
 #ifndef FMU_COMMON_H
 #define FMU_COMMON_H
@@ -9,9 +10,69 @@
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "fmu_model.h"
 #include "mf_eval.h"
+
+/* ------------------------------------------------------------------ the value-reference table
+ *
+ * One table type for every model: each model's generated header (mf_model_gen.h, mt_model_gen.h, written by
+ * mftire.fmu.variables.value_reference_table) fills <P>_VARS[<P>_N_VARS] and <P>_VAR_NAMES, and the model
+ * passes them to the accessors below as one FMVarTable. */
+enum { FM_K_TIME = 0, FM_K_INPUT, FM_K_OUTPUT, FM_K_MODE, FM_K_PARAM, FM_K_STATE, FM_K_DER };
+
+typedef struct {
+    unsigned char kind;    /* FM_K_* */
+    unsigned char fixed;   /* parameter with variability "fixed" */
+    unsigned char want;    /* outputs: the channel groups (MF_WANT_*) they need */
+    unsigned short offset; /* byte offset in the model's inputs / outputs / MFParams; state index */
+} FMVarInfo;
+
+typedef struct {
+    const FMVarInfo *vars;
+    const char *const *names;
+    unsigned n;
+} FMVarTable;
+
+/* The entry of value reference vr (NULL where vr is no variable). */
+FM_FN const FMVarInfo *fm_var(const FMVarTable *t, unsigned vr) { return vr < t->n ? &t->vars[vr] : NULL; }
+
+/* The double of entry v in the struct at base (inputs, outputs or MFParams, as its kind says; written only
+ * where base is the model's own). */
+FM_FN double *fm_slot(const void *base, const FMVarInfo *v) { return (double *)((char *)base + v->offset); }
+
+/* An output or a state derivative. */
+FM_FN int fm_var_is_unknown(const FMVarTable *t, unsigned vr)
+{
+    const FMVarInfo *v = fm_var(t, vr);
+    return v && (v->kind == FM_K_OUTPUT || v->kind == FM_K_DER);
+}
+
+/* What every unknown depends on: the inputs, then the states (fm_dependencies of fmu_model.h). */
+FM_FN unsigned fm_var_dependencies(const FMVarTable *t, unsigned *vrs, unsigned room)
+{
+    unsigned vr, n = 0, pass;
+    for (pass = 0; pass < 2; pass++)
+        for (vr = 0; vr < t->n; vr++)
+            if (t->vars[vr].kind == (pass ? FM_K_STATE : FM_K_INPUT)) {
+                if (vrs && n < room) vrs[n] = vr;
+                n++;
+            }
+    return n;
+}
+
+/* The value of a time, input or parameter variable, read alike by every model: 1 (*value set), else 0 (an
+ * output, a state, ...: the model's own). */
+FM_FN int fm_get_known(const FMVarInfo *v, double time, const void *inputs, const MFParams *p, double *value)
+{
+    switch (v->kind) {
+    case FM_K_TIME: *value = time; return 1;
+    case FM_K_INPUT: *value = *fm_slot(inputs, v); return 1;
+    case FM_K_PARAM: *value = *fm_slot(p, v); return 1;
+    default: return 0;
+    }
+}
 
 /* Format and log through the wrapper's logger (log may be NULL). */
 FM_FN void fm_logf(fm_log_fn log, void *host, int status, const char *category, const char *fmt, ...)
@@ -66,9 +127,50 @@ FM_FN int fm_check_parameter(const MFParams *p, const double *slot, double value
 
 /* ------------------------------------------------------------------ what every model's FMI calls do alike
  *
- * A model instance (struct FMModel of the model file) has the members log and host: logf_(m, ...) logs through
- * them.  The helpers below take the logger and the model's parameters explicitly. */
-#define logf_(m, status, category, ...) fm_logf((m)->log, (m)->host, status, category, __VA_ARGS__)
+ * A model instance (struct FMModel of the model file) starts with an FMBase (its first member, b): what every
+ * model keeps alike.  logf_(m, ...) logs through its logger.  The helpers below take the logger and the
+ * model's parameters explicitly. */
+typedef struct {
+    fm_log_fn log;
+    void *host;                  /* the wrapper's instance */
+    double time;
+    int use_mode;
+    int initialized;             /* after ExitInitializationMode */
+    unsigned long evals;         /* evaluations so far (the clock of the warning rate limit) */
+    FMWarnSlot warn[MF_W_COUNT]; /* the evaluator's warnings, per kind */
+} FMBase;
+
+#define FM_BASE(m) ((FMBase *)(m))
+#define logf_(m, status, category, ...) fm_logf((m)->b.log, (m)->b.host, status, category, __VA_ARGS__)
+
+/* The model interface's life cycle and clock, alike for every model (fmu_model.h; fm_reset is the model's). */
+FM_FN void fm_init(FMModel *m, fm_log_fn log, void *host)
+{
+    memset(m, 0, fm_size());
+    FM_BASE(m)->log = log;
+    FM_BASE(m)->host = host;
+    fm_reset(m);
+}
+
+FM_FN void fm_set_time(FMModel *m, double t) { FM_BASE(m)->time = t; }
+FM_FN double fm_time(const FMModel *m) { return ((const FMBase *)m)->time; }
+
+/* What every model's fm_reset does alike: time 0, the start value of useMode, not initialised, no evaluation
+ * and no warning yet. */
+FM_FN void fm_base_reset(FMBase *b, int use_mode)
+{
+    b->time = 0.0;
+    b->use_mode = use_mode;
+    b->initialized = 0;
+    b->evals = 0;
+    memset(b->warn, 0, sizeof b->warn);
+}
+
+/* A warning through the rate limit at the model's clock (slot: its kind, or a guard of the model). */
+FM_FN void fm_base_warn(FMBase *b, FMWarnSlot *slot, const char *message)
+{
+    fm_warn(b->log, b->host, slot, b->evals, b->time, message);
+}
 
 /* The error of an evaluation that returned rc (MF_BAD_MODE, else a FITTYP the evaluator refuses), logged: the
  * evaluator's own message.  Returns FM_ERROR. */
@@ -100,26 +202,29 @@ FM_FN int fm_parameter_ok(fm_log_fn log, void *host, const MFParams *p, const do
     return FM_OK;
 }
 
-/* A model's parameter at value reference vr: its slot in p and its name, or NULL where vr is no parameter
- * (each model reads its generated value-reference table). */
-typedef const double *(*fm_param_fn)(const MFParams *p, unsigned vr, const char **name);
+/* Whether the parameter of value reference vr (entry v of table t) may be set to `value` now (fm_parameter_ok;
+ * `initialized`: after ExitInitializationMode). */
+FM_FN int fm_set_parameter_ok(fm_log_fn log, void *host, const FMVarTable *t, const MFParams *p, unsigned vr,
+                              double value, int initialized)
+{
+    const FMVarInfo *v = &t->vars[vr];
+    return fm_parameter_ok(log, host, p, fm_slot(p, v), value, v->fixed && initialized, t->names[vr]);
+}
 
 /* The checks of ExitInitializationMode, alike for every model: the FITTYP and the mode, then each parameter of
- * the value references 0..n_vars-1 (fm_parameter_ok: the start values and those set before).  FM_OK, else the
- * first refusal is logged and FM_ERROR returned. */
-FM_FN int fm_check_initialization(fm_log_fn log, void *host, const MFParams *p, int use_mode, unsigned n_vars,
-                                  fm_param_fn param)
+ * the table (fm_parameter_ok: the start values and those set before).  FM_OK, else the first refusal is logged
+ * and FM_ERROR returned. */
+FM_FN int fm_check_initialization(fm_log_fn log, void *host, const MFParams *p, int use_mode, const FMVarTable *t)
 {
     char msg[256];
-    const char *name;
-    const double *slot;
     unsigned vr;
     if (mf_check_fittyp(p, msg, sizeof msg) != MF_OK || mf_check_mode(use_mode, msg, sizeof msg) != MF_OK) {
         fm_logf(log, host, FM_ERROR, "logStatusError", "%s", msg);
         return FM_ERROR;
     }
-    for (vr = 0; vr < n_vars; vr++)
-        if ((slot = param(p, vr, &name)) != NULL && fm_parameter_ok(log, host, p, slot, *slot, 0, name) != FM_OK)
+    for (vr = 0; vr < t->n; vr++)
+        if (t->vars[vr].kind == FM_K_PARAM && fm_set_parameter_ok(log, host, t, p, vr, *fm_slot(p, &t->vars[vr]), 0)
+            != FM_OK)
             return FM_ERROR;
     return FM_OK;
 }

@@ -2,7 +2,8 @@
  * fmu_model.h -- the one interface between the FMI wrappers and a model of mftire.
  *
  * The FMI 2.0 wrapper (fmi2_wrapper.c) and the FMI 3.0 wrapper (fmi3_wrapper.c) know nothing
- * of the tyre: they call these functions, which each model implements once:
+ * of the tyre: they call these functions, which each model implements once (those every model does alike --
+ * fm_init, fm_set_time, fm_time -- once for all in fmu_common.h):
  *   mf_model.c  the steady-state tyre (algebraic: no states), on mf_eval.c;
  *   mt_model.c  the transient tyre (two slip-deflection states), on mf_transient.c.
  * An FMU is one translation unit (fmu.c, generated at export): mf_eval.c, one model, one wrapper.

@@ -14,25 +14,21 @@
 #include <string.h>
 
 #include "fmu_common.h"
-#include "mf_model.h"
 #include "mf_model_gen.h"
+
+/* The value-reference table (fmu_common.h). */
+static const FMVarTable TABLE = {MF_VARS, MF_VAR_NAMES, MF_N_VARS};
 
 /* Counters of the input/output guards: 9 inputs, MF_MAX_DATA data inputs, the outputs. */
 #define MF_GUARD_SLOTS (9 + MF_MAX_DATA + 1)
 
 struct FMModel {
+    FMBase b; /* first: what every model keeps (fmu_common.h) */
     MFParams params;
     MFInputs inputs;
     MFOutputs outputs;
-    int use_mode;
-    double time;
-    int dirty;                /* inputs or parameters changed since the last evaluation */
-    int initialized;          /* after ExitInitializationMode */
-    unsigned long evals;      /* evaluations so far (the clock of the warning rate limit) */
-    FMWarnSlot warn[MF_W_COUNT];
+    int dirty;                        /* inputs or parameters changed since the last evaluation */
     FMWarnSlot guard[MF_GUARD_SLOTS]; /* input guards (9 inputs, data, outputs) */
-    fm_log_fn log;
-    void *host;               /* the wrapper's instance */
 };
 
 static int update(FMModel *m);
@@ -40,69 +36,31 @@ static int update(FMModel *m);
 static const char *fm_guid(void) { return MF_GUID; }
 static size_t fm_size(void) { return sizeof(FMModel); }
 static unsigned fm_n_states(void) { return 0; }
-static int fm_is_unknown(unsigned vr) { return vr < MF_N_VARS && MF_VARS[vr].kind == MF_K_OUTPUT; }
-static void fm_set_time(FMModel *m, double t) { m->time = t; }
-static double fm_time(const FMModel *m) { return m->time; }
-
-static unsigned fm_dependencies(unsigned *vrs, unsigned room)
-{
-    unsigned vr, n = 0;
-    for (vr = 0; vr < MF_N_VARS; vr++)
-        if (MF_VARS[vr].kind == MF_K_INPUT) {
-            if (vrs && n < room) vrs[n] = vr;
-            n++;
-        }
-    return n;
-}
+static int fm_is_unknown(unsigned vr) { return fm_var_is_unknown(&TABLE, vr); }
+static unsigned fm_dependencies(unsigned *vrs, unsigned room) { return fm_var_dependencies(&TABLE, vrs, room); }
 
 static void fm_reset(FMModel *m)
 {
     m->params = MF_PARAM_START;
     m->inputs = MF_INPUT_START;
     memset(&m->outputs, 0, sizeof m->outputs);
-    m->use_mode = MF_USEMODE_START;
-    m->time = 0.0;
+    fm_base_reset(&m->b, MF_USEMODE_START);
     m->dirty = 1;
-    m->initialized = 0;
-    m->evals = 0;
-    memset(m->warn, 0, sizeof m->warn);
     memset(m->guard, 0, sizeof m->guard);
-}
-
-static void fm_init(FMModel *m, fm_log_fn log, void *host)
-{
-    memset(m, 0, sizeof *m);
-    m->log = log;
-    m->host = host;
-    fm_reset(m);
-}
-
-/* A warning through the rate limit (slot: its kind or guard). */
-static void limited_warning(FMModel *m, FMWarnSlot *slot, const char *message)
-{
-    fm_warn(m->log, m->host, slot, m->evals, m->time, message);
 }
 
 static void on_warning(void *ctx, int kind, const char *message)
 {
     FMModel *m = (FMModel *)ctx;
-    if (kind >= 0 && kind < MF_W_COUNT) limited_warning(m, &m->warn[kind], message);
-}
-
-/* The parameter at value reference vr (fm_param_fn of fmu_common.h). */
-static const double *param_at(const MFParams *p, unsigned vr, const char **name)
-{
-    if (MF_VARS[vr].kind != MF_K_PARAM) return NULL;
-    *name = MF_VAR_NAMES[vr];
-    return (const double *)((const char *)p + MF_VARS[vr].offset);
+    if (kind >= 0 && kind < MF_W_COUNT) fm_base_warn(&m->b, &m->b.warn[kind], message);
 }
 
 static int fm_exit_initialization(FMModel *m)
 {
-    if (fm_check_initialization(m->log, m->host, &m->params, m->use_mode, MF_N_VARS, param_at) != FM_OK)
+    if (fm_check_initialization(m->b.log, m->b.host, &m->params, m->b.use_mode, &TABLE) != FM_OK)
         return FM_ERROR;
     if (update(m) != FM_OK) return FM_ERROR; /* outputs are valid straight after initialisation */
-    m->initialized = 1;
+    m->b.initialized = 1;
     return FM_OK;
 }
 
@@ -144,7 +102,7 @@ static void guard_log(FMModel *m, unsigned slot, const char *name, double x, dou
 {
     char text[256];
     snprintf(text, sizeof text, "input '%s' = %.17g %s %.17g.", name, x, why, to);
-    limited_warning(m, &m->guard[slot < MF_GUARD_SLOTS ? slot : MF_GUARD_SLOTS - 1], text);
+    fm_base_warn(&m->b, &m->guard[slot < MF_GUARD_SLOTS ? slot : MF_GUARD_SLOTS - 1], text);
 }
 
 /* Saturate x (NaN passes through for the evaluator to replace) to [lo, hi]; |x| < 1e-30 is 0. */
@@ -202,12 +160,12 @@ static void guard_outputs(FMModel *m)
     for (i = 0; i < n; i++) bad |= !isfinite(o[i]);
     if (!bad) return; /* the usual case: no look-up of the names */
     for (vr = 0; vr < MF_N_VARS; vr++)
-        if (MF_VARS[vr].kind == MF_K_OUTPUT) {
-            double *y = (double *)((char *)&m->outputs + MF_VARS[vr].offset);
+        if (MF_VARS[vr].kind == FM_K_OUTPUT) {
+            double *y = fm_slot(&m->outputs, &MF_VARS[vr]);
             if (!isfinite(*y)) {
                 char text[160];
                 snprintf(text, sizeof text, "output '%s' = %g is not finite; set to 0.", MF_VAR_NAMES[vr], *y);
-                limited_warning(m, &m->guard[MF_GUARD_SLOTS - 1], text);
+                fm_base_warn(&m->b, &m->guard[MF_GUARD_SLOTS - 1], text);
                 *y = 0.0;
             }
         }
@@ -221,71 +179,59 @@ static int update(FMModel *m)
     int rc;
     MFInputs in;
     if (!m->dirty) return FM_OK;
-    m->evals++;
+    m->b.evals++;
     in = m->inputs;
     guard_inputs(m, &in);
-    rc = mf_evaluate(&m->params, m->use_mode, &in, &m->outputs, on_warning, m);
+    rc = mf_evaluate(&m->params, m->b.use_mode, &in, &m->outputs, on_warning, m);
     if (rc == MF_OK) guard_outputs(m);
-    if (rc != MF_OK) return fm_eval_error(m->log, m->host, &m->params, m->use_mode, rc);
+    if (rc != MF_OK) return fm_eval_error(m->b.log, m->b.host, &m->params, m->b.use_mode, rc);
     m->dirty = 0;
     return FM_OK;
 }
 
 static int fm_get_real(FMModel *m, unsigned vr, double *value)
 {
-    const MFVarInfo *v;
-    if (vr >= MF_N_VARS) goto bad;
-    v = &MF_VARS[vr];
-    switch (v->kind) {
-    case MF_K_TIME: *value = m->time; return FM_OK;
-    case MF_K_INPUT: *value = *(const double *)((const char *)&m->inputs + v->offset); return FM_OK;
-    case MF_K_PARAM: *value = *(const double *)((const char *)&m->params + v->offset); return FM_OK;
-    case MF_K_OUTPUT:
-        if (update(m) != FM_OK) return FM_ERROR;
-        *value = *(const double *)((const char *)&m->outputs + v->offset);
-        return FM_OK;
-    default: break;
-    }
-bad:
-    return fm_not_a(m->log, m->host, vr, "Real");
+    const FMVarInfo *v = fm_var(&TABLE, vr);
+    if (!v) return fm_not_a(m->b.log, m->b.host, vr, "Real");
+    if (fm_get_known(v, m->b.time, &m->inputs, &m->params, value)) return FM_OK;
+    if (v->kind != FM_K_OUTPUT) return fm_not_a(m->b.log, m->b.host, vr, "Real");
+    if (update(m) != FM_OK) return FM_ERROR;
+    *value = *fm_slot(&m->outputs, v);
+    return FM_OK;
 }
 
 static int fm_set_real(FMModel *m, unsigned vr, double value)
 {
-    const MFVarInfo *v;
-    if (vr >= MF_N_VARS) goto bad;
-    v = &MF_VARS[vr];
-    if (v->kind == MF_K_INPUT) {
-        *(double *)((char *)&m->inputs + v->offset) = value;
+    const FMVarInfo *v = fm_var(&TABLE, vr);
+    if (!v) return fm_not_a(m->b.log, m->b.host, vr, "Real");
+    switch (v->kind) {
+    case FM_K_INPUT:
+        *fm_slot(&m->inputs, v) = value;
         m->dirty = 1;
         return FM_OK;
-    }
-    if (v->kind == MF_K_PARAM) {
-        double *slot = (double *)((char *)&m->params + v->offset);
-        if (fm_parameter_ok(m->log, m->host, &m->params, slot, value, v->fixed && m->initialized,
-                            MF_VAR_NAMES[vr]) != FM_OK)
+    case FM_K_PARAM:
+        if (fm_set_parameter_ok(m->b.log, m->b.host, &TABLE, &m->params, vr, value, m->b.initialized) != FM_OK)
             return FM_ERROR;
-        *slot = value;
+        *fm_slot(&m->params, v) = value;
         m->dirty = 1;
         return FM_OK;
-    }
-    if (v->kind == MF_K_OUTPUT || v->kind == MF_K_TIME) {
+    case FM_K_OUTPUT:
+    case FM_K_TIME:
         logf_(m, FM_ERROR, "logStatusError", "%s cannot be set (causality %s)", MF_VAR_NAMES[vr],
-              v->kind == MF_K_OUTPUT ? "output" : "independent");
+              v->kind == FM_K_OUTPUT ? "output" : "independent");
         return FM_ERROR;
+    default: return fm_not_a(m->b.log, m->b.host, vr, "Real");
     }
-bad:
-    return fm_not_a(m->log, m->host, vr, "Real");
 }
 
 static int fm_get_int(FMModel *m, unsigned vr, int *value)
 {
-    return fm_get_mode(m->log, m->host, vr, MF_VR_USEMODE, m->use_mode, value);
+    return fm_get_mode(m->b.log, m->b.host, vr, MF_VR_USEMODE, m->b.use_mode, value);
 }
 
 static int fm_set_int(FMModel *m, unsigned vr, int value)
 {
-    if (fm_set_mode(m->log, m->host, vr, MF_VR_USEMODE, value, &m->use_mode) != FM_OK) return FM_ERROR;
+    if (fm_set_mode(m->b.log, m->b.host, vr, MF_VR_USEMODE, value, &m->b.use_mode) != FM_OK) return FM_ERROR;
     m->dirty = 1;
     return FM_OK;
 }
@@ -300,7 +246,7 @@ static void fm_get_nominals(double *xn) { (void)xn; }
 /* Co-Simulation: the inputs are held over the step; the outputs at its end are those of the inputs. */
 static int fm_do_step(FMModel *m, double t, double h)
 {
-    m->time = t + h;
+    m->b.time = t + h;
     return update(m);
 }
 

@@ -17,7 +17,7 @@
  *
  * Outputs are computed lazily: the first read of an output after new inputs, states or a step
  * evaluates the Magic Formula at the transient slips for the channel groups (MF_WANT_* of mf_eval.h)
- * of every output read so far (MTVarInfo.want), and the zero-slip evaluation of the kinematics computes
+ * of every output read so far (FMVarInfo.want), and the zero-slip evaluation of the kinematics computes
  * the rolling offsets only below VXLOW and only for those groups.  Each output equals the full
  * evaluation (mt_outputs with MF_WANT_ALL) bit for bit; a group read for the first time is added
  * (one more evaluation then).  An input set to its present value (bit for bit) changes nothing.
@@ -35,6 +35,9 @@
 #include "mf_transient.h"
 #include "mt_model_gen.h"
 
+/* The value-reference table (fmu_common.h). */
+static const FMVarTable TABLE = {MT_VARS, MT_VAR_NAMES, MT_N_VARS};
+
 /* The input guard of the transient model (mt_guard_inputs of mf_transient.c: non-finite inputs hold their last
  * good value, inputs beyond their physical bounds are saturated), where the model provides it. */
 #if defined(MT_N_INPUTS)
@@ -44,6 +47,7 @@
 #endif
 
 struct FMModel {
+    FMBase b; /* first: what every model keeps (fmu_common.h); b.evals counts output and derivative evaluations */
     MFParams params;
     MTInputs inputs;
 #if MT_HAS_GUARD
@@ -62,43 +66,20 @@ struct FMModel {
     int kin_ok, out_ok;
     unsigned out_have; /* channel groups of out (valid when out_ok) */
     unsigned out_want; /* channel groups of every output read so far */
-    int use_mode;
-    double time;
-    int initialized;
-    unsigned long evals; /* output and derivative evaluations so far (the clock of the warning rate limit) */
-    FMWarnSlot warn[MF_W_COUNT];
-    fm_log_fn log;
-    void *host;
 };
 
 static const char *fm_guid(void) { return MT_GUID; }
 static size_t fm_size(void) { return sizeof(FMModel); }
 static unsigned fm_n_states(void) { return MT_N_STATES; }
-static int fm_is_unknown(unsigned vr)
-{
-    return vr < MT_N_VARS && (MT_VARS[vr].kind == MT_K_OUTPUT || MT_VARS[vr].kind == MT_K_DER);
-}
-static void fm_set_time(FMModel *m, double t) { m->time = t; }
-static double fm_time(const FMModel *m) { return m->time; }
-
-static unsigned fm_dependencies(unsigned *vrs, unsigned room)
-{
-    unsigned vr, n = 0, pass;
-    for (pass = 0; pass < 2; pass++)
-        for (vr = 0; vr < MT_N_VARS; vr++)
-            if (MT_VARS[vr].kind == (pass ? MT_K_STATE : MT_K_INPUT)) {
-                if (vrs && n < room) vrs[n] = vr;
-                n++;
-            }
-    return n;
-}
+static int fm_is_unknown(unsigned vr) { return fm_var_is_unknown(&TABLE, vr); }
+static unsigned fm_dependencies(unsigned *vrs, unsigned room) { return fm_var_dependencies(&TABLE, vrs, room); }
 
 static void on_warning(void *ctx, int kind, const char *message)
 {
     FMModel *m = (FMModel *)ctx;
     if (kind == MF_W_LOW_SPEED || kind < 0 || kind >= MF_W_COUNT) return; /* the transient model replaces
                                                                                MFeval's low-speed mode */
-    fm_warn(m->log, m->host, &m->warn[kind], m->evals, m->time, message);
+    fm_base_warn(&m->b, &m->b.warn[kind], message);
 }
 
 static void fm_reset(FMModel *m)
@@ -114,26 +95,14 @@ static void fm_reset(FMModel *m)
         unsigned i;
         for (i = 0; i < MT_N_STATES; i++) m->x[i] = MT_STATE_START[i];
     }
-    m->use_mode = MT_USEMODE_START;
-    m->time = 0.0;
+    fm_base_reset(&m->b, MT_USEMODE_START);
     m->kin_ok = m->out_ok = 0;
     m->out_have = m->out_want = 0;
-    m->initialized = 0;
-    m->evals = 0;
-    memset(m->warn, 0, sizeof m->warn);
-}
-
-static void fm_init(FMModel *m, fm_log_fn log, void *host)
-{
-    memset(m, 0, sizeof *m);
-    m->log = log;
-    m->host = host;
-    fm_reset(m);
 }
 
 static int bad_code(FMModel *m, int rc)
 {
-    return fm_eval_error(m->log, m->host, &m->params, m->use_mode, rc);
+    return fm_eval_error(m->b.log, m->b.host, &m->params, m->b.use_mode, rc);
 }
 
 /* The kinematics, with the rolling offsets of the output groups read so far. */
@@ -151,7 +120,7 @@ static int update_kin(FMModel *m)
             if (bad & (1u << i)) {
                 snprintf(text, sizeof text, "input '%s' not finite or out of range: the last good value or the "
                          "bound is used", mt_input_name(i));
-                fm_warn(m->log, m->host, &m->guard[i], m->evals, m->time, text);
+                fm_base_warn(&m->b, &m->guard[i], text);
             }
     }
 #endif
@@ -161,7 +130,7 @@ static int update_kin(FMModel *m)
     m->T_road = in.T_road;
     mt_thermal_inputs(&m->params, &m->x[2], &in, &m->P_hot); /* the hot pressure and the laws' node temperatures */
 #endif
-    rc = mt_kinematics(&m->params, m->use_mode, &in, m->out_want, &m->kin, on_warning, m);
+    rc = mt_kinematics(&m->params, m->b.use_mode, &in, m->out_want, &m->kin, on_warning, m);
     if (rc != MF_OK) return bad_code(m, rc);
     m->kin_ok = 1;
     return 0;
@@ -173,15 +142,15 @@ static int update_out(FMModel *m, unsigned want)
     int rc;
     m->out_want |= want;
     if (m->out_ok && !(m->out_want & ~m->out_have)) return 0;
-    m->evals++; /* the clock of the warning rate limit: output evaluations and derivative evaluations */
+    m->b.evals++; /* the clock of the warning rate limit: output evaluations and derivative evaluations */
     if (update_kin(m)) return 1;
-    rc = mt_outputs(&m->params, m->use_mode, &m->kin, m->x, m->out_want, &m->out, on_warning, m);
+    rc = mt_outputs(&m->params, m->b.use_mode, &m->kin, m->x, m->out_want, &m->out, on_warning, m);
     if (rc != MF_OK) return bad_code(m, rc);
 #if MT_HAS_GUARD
     if (m->out.nonfinite) {
         char text[96];
         snprintf(text, sizeof text, "%u output(s) not finite, set to 0", m->out.nonfinite);
-        fm_warn(m->log, m->host, &m->nonfinite, m->evals, m->time, text);
+        fm_base_warn(&m->b, &m->nonfinite, text);
     }
 #endif
 #if MT_THERMAL
@@ -227,7 +196,7 @@ static int thermal_param_error(FMModel *m, unsigned vr, double value)
     static const MTThermalBound bounds[] = MT_THERMAL_BOUNDS;
     unsigned k;
     for (k = 0; k < sizeof bounds / sizeof bounds[0]; k++)
-        if (bounds[k].offset == MT_VARS[vr].offset && MT_VARS[vr].kind == MT_K_PARAM && isfinite(value) &&
+        if (bounds[k].offset == MT_VARS[vr].offset && MT_VARS[vr].kind == FM_K_PARAM && isfinite(value) &&
             (bounds[k].kind == 0 ? !(value > bounds[k].bound)
                                  : bounds[k].kind == 1 ? !(value >= bounds[k].bound) : !(value == 0.0 || value == 1.0))) {
             logf_(m, FM_ERROR, "logStatusError", "%s = %g must be %s", MT_VAR_NAMES[vr], value, bounds[k].text);
@@ -239,71 +208,55 @@ static int thermal_param_error(FMModel *m, unsigned vr, double value)
     return 0;
 }
 
-/* The parameter at value reference vr (fm_param_fn of fmu_common.h; the bounds of mftire.mf.spec, VXLOW > 0,
- * TR_SAT >= 0 and TR_CS_STEP > 0 among them, are checked by fm_parameter_ok). */
-static const double *param_at(const MFParams *p, unsigned vr, const char **name)
-{
-    if (MT_VARS[vr].kind != MT_K_PARAM) return NULL;
-    *name = MT_VAR_NAMES[vr];
-    return (const double *)((const char *)p + MT_VARS[vr].offset);
-}
-
+/* The parameters are checked by fm_check_initialization (the bounds of mftire.mf.spec, VXLOW > 0, TR_SAT >= 0
+ * and TR_CS_STEP > 0 among them), then by thermal_param_error. */
 static int fm_exit_initialization(FMModel *m)
 {
-    if (fm_check_initialization(m->log, m->host, &m->params, m->use_mode, MT_N_VARS, param_at) != FM_OK)
-        return FM_ERROR;
+    if (fm_check_initialization(m->b.log, m->b.host, &m->params, m->b.use_mode, &TABLE) != FM_OK) return FM_ERROR;
     {
         unsigned vr; /* the bounds of [MFTIRE_THERMAL] (thermal block) */
         for (vr = 0; vr < MT_N_VARS; vr++)
-            if (MT_VARS[vr].kind == MT_K_PARAM &&
-                thermal_param_error(m, vr, *(const double *)((const char *)&m->params + MT_VARS[vr].offset)))
+            if (MT_VARS[vr].kind == FM_K_PARAM && thermal_param_error(m, vr, *fm_slot(&m->params, &MT_VARS[vr])))
                 return FM_ERROR;
     }
     if (update_out(m, 0)) return FM_ERROR;
-    m->initialized = 1;
+    m->b.initialized = 1;
     return FM_OK;
 }
 
 static int fm_get_real(FMModel *m, unsigned vr, double *value)
 {
-    const MTVarInfo *v;
+    const FMVarInfo *v = fm_var(&TABLE, vr);
     double dx[MT_N_STATES];
-    if (vr >= MT_N_VARS) goto bad;
-    v = &MT_VARS[vr];
+    if (!v) return fm_not_a(m->b.log, m->b.host, vr, "Real");
+    if (fm_get_known(v, m->b.time, &m->inputs, &m->params, value)) return FM_OK;
     switch (v->kind) {
-    case MT_K_TIME: *value = m->time; return FM_OK;
-    case MT_K_INPUT: *value = *(const double *)((const char *)&m->inputs + v->offset); return FM_OK;
-    case MT_K_PARAM: *value = *(const double *)((const char *)&m->params + v->offset); return FM_OK;
-    case MT_K_STATE: *value = m->x[v->offset]; return FM_OK;
-    case MT_K_DER:
+    case FM_K_STATE: *value = m->x[v->offset]; return FM_OK;
+    case FM_K_DER:
         if (derivatives(m, dx)) return FM_ERROR;
         *value = dx[v->offset];
         return FM_OK;
-    case MT_K_OUTPUT:
+    case FM_K_OUTPUT:
         if (update_out(m, v->want)) return FM_ERROR;
-        *value = *(const double *)((const char *)&m->out + v->offset);
+        *value = *fm_slot(&m->out, v);
         return FM_OK;
-    default: break;
+    default: return fm_not_a(m->b.log, m->b.host, vr, "Real");
     }
-bad:
-    return fm_not_a(m->log, m->host, vr, "Real");
 }
 
 static int fm_set_real(FMModel *m, unsigned vr, double value)
 {
-    const MTVarInfo *v;
-    if (vr >= MT_N_VARS) goto bad;
-    v = &MT_VARS[vr];
+    const FMVarInfo *v = fm_var(&TABLE, vr);
+    if (!v) return fm_not_a(m->b.log, m->b.host, vr, "Real");
     switch (v->kind) {
-    case MT_K_INPUT:
-        store(m, (double *)((char *)&m->inputs + v->offset), value);
+    case FM_K_INPUT:
+        store(m, fm_slot(&m->inputs, v), value);
         return FM_OK;
-    case MT_K_PARAM:
-        if (fm_parameter_ok(m->log, m->host, &m->params, (const double *)((const char *)&m->params + v->offset), value,
-                            v->fixed && m->initialized, MT_VAR_NAMES[vr]) != FM_OK)
+    case FM_K_PARAM:
+        if (fm_set_parameter_ok(m->b.log, m->b.host, &TABLE, &m->params, vr, value, m->b.initialized) != FM_OK)
             return FM_ERROR;
         if (thermal_param_error(m, vr, value)) return FM_ERROR;
-        store(m, (double *)((char *)&m->params + v->offset), value);
+        store(m, fm_slot(&m->params, v), value);
 #if MT_THERMAL
         { /* an initial temperature sets its state (the parameters are fixed: before initialisation only) */
             static const size_t init[3] = {offsetof(MFParams, TH_T_INIT_SURFACE), offsetof(MFParams, TH_T_INIT_BULK),
@@ -314,8 +267,8 @@ static int fm_set_real(FMModel *m, unsigned vr, double value)
         }
 #endif
         return FM_OK;
-    case MT_K_STATE:
-        if (m->initialized) {
+    case FM_K_STATE:
+        if (m->b.initialized) {
             logf_(m, FM_ERROR, "logStatusError", "%s: set states with fmi2SetContinuousStates / "
                   "fmi3SetContinuousStates", MT_VAR_NAMES[vr]);
             return FM_ERROR;
@@ -328,18 +281,16 @@ static int fm_set_real(FMModel *m, unsigned vr, double value)
         logf_(m, FM_ERROR, "logStatusError", "%s cannot be set", MT_VAR_NAMES[vr]);
         return FM_ERROR;
     }
-bad:
-    return fm_not_a(m->log, m->host, vr, "Real");
 }
 
 static int fm_get_int(FMModel *m, unsigned vr, int *value)
 {
-    return fm_get_mode(m->log, m->host, vr, MT_VR_USEMODE, m->use_mode, value);
+    return fm_get_mode(m->b.log, m->b.host, vr, MT_VR_USEMODE, m->b.use_mode, value);
 }
 
 static int fm_set_int(FMModel *m, unsigned vr, int value)
 {
-    if (fm_set_mode(m->log, m->host, vr, MT_VR_USEMODE, value, &m->use_mode) != FM_OK) return FM_ERROR;
+    if (fm_set_mode(m->b.log, m->b.host, vr, MT_VR_USEMODE, value, &m->b.use_mode) != FM_OK) return FM_ERROR;
     m->kin_ok = m->out_ok = 0;
     return FM_OK;
 }
@@ -364,7 +315,7 @@ static int fm_get_states(FMModel *m, double *x)
 
 static int fm_get_derivatives(FMModel *m, double *dx)
 {
-    m->evals++;
+    m->b.evals++;
     return derivatives(m, dx) ? FM_ERROR : FM_OK;
 }
 
@@ -384,7 +335,7 @@ static int fm_do_step(FMModel *m, double t, double h)
 #endif
     if (update_kin(m)) return FM_ERROR; /* inputs (and node temperatures) are held over the step */
     mt_advance(&m->params, &m->kin, m->x, h);
-    m->time = t + h;
+    m->b.time = t + h;
     m->out_ok = 0; /* the outputs at the new state are computed when read */
 #if MT_THERMAL
     if (h > 0.0) {
