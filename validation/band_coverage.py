@@ -48,7 +48,9 @@ from mftire.segmentation.grouping import group_sweeps
 
 TIR = Path(__file__).resolve().parents[1] / "tests" / "data" / "tir" / "mfeval" / "MagicFormula61_Paramerters.tir"
 CHANNELS = ("Fx", "Fy", "Mz", "Mx", "My")
-DESIGNS = ("synthetic", "slip_speed")
+DESIGNS = ("synthetic", "slip_speed", "slip_speed_sweeps")
+#: Sweeps of the campaign held out at random per repeat in the ``slip_speed_sweeps`` design.
+HELDOUT_SWEEPS = 3
 #: The held-out speed of the ``slip_speed`` design [km/h] (the demo's).
 HELDOUT_KMH = 80.0
 
@@ -117,6 +119,18 @@ def study(repeats: int, replicates: int = 6, level: float = 0.95, seed: int = 0,
                 sets = {"new loads": new_l[~np.isclose(new_l["Fz"].to_numpy(float), max(loads) * f0)],
                         "same conditions": new}
                 source = "rig"
+            elif design == "slip_speed_sweeps":
+                train, template = slip_speed_campaign(s, **campaign_kw)
+                new, _ = slip_speed_campaign(s + 1, **campaign_kw)
+                # sweeps drawn at random from the campaign (any speed, load, kind): what the band claims to cover
+                sid = group_sweeps(train)["sweep_id"].to_numpy()
+                pick = np.random.default_rng(20_000 + s).choice(np.unique(sid), HELDOUT_SWEEPS, replace=False)
+                held = np.isin(sid, pick)
+                fit = fit_tir(train[~held], template, progress=False)
+                bands = bootstrap_bands(None, template, n=replicates, fit=fit, level=level, seed=s,
+                                        grid=train.iloc[:0], calibrate=calibrate)
+                sets = {"random heldout sweeps": train[held], "new campaign": new}
+                source = "measured"
             else:
                 train, template = slip_speed_campaign(s, **campaign_kw)
                 new, _ = slip_speed_campaign(s + 1, **campaign_kw)
@@ -151,9 +165,12 @@ def main() -> None:
     ap.add_argument("--level", type=float, default=0.95)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--folds", type=int, default=5, help="calibration folds (bootstrap_bands' calibrate)")
+    ap.add_argument("--csv", help="also write the per-repeat table to this CSV file")
     args = ap.parse_args()
     t0 = time.perf_counter()
     table = study(args.repeats, args.replicates, args.level, args.seed, args.design, calibrate=args.folds)
+    if args.csv:
+        table.to_csv(args.csv, index=False)
     for (i, what), g in table.groupby(["repeat", "design"], sort=False):
         print(f"repeat {i} {what}: " + ", ".join(f"{r.channel} {100 * r.inside:.1f} %" for r in g.itertuples()),
               flush=True)
