@@ -425,14 +425,10 @@ class CellScale:
     us: np.ndarray  #: (S,) mean u² per sweep
     ns: np.ndarray  #: (S,) points per sweep
     n_eff: float = math.nan  #: effective number of independent calibration points (:func:`effective_sample_size`)
-    degree: int = 0  #: 1 or 2: ``v`` is the log-polynomial ``coef`` of that degree, not the kernel mean
-    coef: np.ndarray | None = None  #: coefficients of :func:`_log_poly_design` (``degree`` > 0)
 
     def factor(self, X: np.ndarray | None, exclude_own: bool = False) -> np.ndarray:
         """Local factor ``v`` at raw conditions ``X`` (rows; None: the cell's mean); ``exclude_own``:
         ``X`` are the calibration sweeps themselves and each leaves itself out."""
-        if self.degree and self.coef is not None and X is not None and not exclude_own:
-            return _log_poly_factor(self.coef, self.xs, self._norm(X), self.degree)
         return _local_factor(self.xs, self.us, self.ns, None if X is None else self._norm(X), self.h, exclude_own)
 
     def _norm(self, X: np.ndarray) -> np.ndarray:
@@ -448,35 +444,8 @@ class CellScale:
 
     def summary(self) -> dict[str, Any]:
         used = [c for c, s in zip(SCALE_CONDITIONS, self.sd, strict=True) if np.isfinite(s)]
-        return {"bandwidth": self.h if math.isfinite(self.h) and not self.degree else None,
-                "log_polynomial_degree": self.degree or None, "conditions": used,
+        return {"bandwidth": self.h if math.isfinite(self.h) else None, "conditions": used,
                 "sweeps": int(self.us.size), "effective_points": self.n_eff}
-
-
-def _log_poly_design(Z: np.ndarray, degree: int) -> np.ndarray:
-    """Columns ``1, z_j`` (and ``z_j²`` for degree 2) of normalised conditions ``Z``."""
-    cols = [np.ones(len(Z)), *Z.T]
-    if degree == 2:
-        cols += [z * z for z in Z.T]
-    return np.column_stack(cols)
-
-
-def _log_poly_coef(xs: np.ndarray, us: np.ndarray, ns: np.ndarray, degree: int) -> np.ndarray:
-    """Weighted (``ns``) least squares of ``log us`` on :func:`_log_poly_design` of the sweeps' conditions,
-    with a small ridge on the slopes (a multiplicative variance model, Harvey 1976)."""
-    A = _log_poly_design(xs, degree)
-    lu = np.log(np.maximum(us, 1e-12 * max(float(us.max()), 1e-300)))
-    w = ns / ns.mean()
-    ridge = np.full(A.shape[1], 1e-3)
-    ridge[0] = 0.0
-    return np.linalg.solve(A.T @ (w[:, None] * A) + np.diag(ridge), A.T @ (w * lu))
-
-
-def _log_poly_factor(coef: np.ndarray, xs: np.ndarray, Z: np.ndarray, degree: int) -> np.ndarray:
-    """``exp(design(Z)·coef)``, each condition clipped to the calibration sweeps' range (no extrapolation
-    of a quadratic beyond the measured conditions)."""
-    Z = np.clip(Z, xs.min(axis=0), xs.max(axis=0)) if xs.size else Z
-    return np.exp(_log_poly_design(Z, degree) @ coef)
 
 
 def _local_factor(xs: np.ndarray, us: np.ndarray, ns: np.ndarray, Z: np.ndarray | None, h: float,
@@ -523,7 +492,7 @@ def fit_cell_scale(residual: np.ndarray, f: np.ndarray, X: np.ndarray, sweep: np
     vary = np.isfinite(sd) & (sd > 1e-6 * np.maximum(np.abs(mu), 1.0))
     mu, sd = np.where(vary, mu, np.nan), np.where(vary, sd, np.nan)
     xs = (xs_raw[:, vary] - mu[vary]) / sd[vary]
-    best_h, best_v, best_deg = math.inf, None, 0
+    best_h, best_v = math.inf, None
     if ids.size >= 3:
         best = math.inf
         for h in _BANDWIDTHS:
@@ -533,26 +502,12 @@ def fit_cell_scale(residual: np.ndarray, f: np.ndarray, X: np.ndarray, sweep: np
             nll = float(ns @ (np.log(v) + us / v))  # Gaussian likelihood of each sweep's points, leave-one-sweep-out
             if not math.isfinite(best) or nll < best - 1e-9 * abs(best):  # ties: the wider kernel (listed later) loses
                 best, best_h, best_v = nll, h, v
-        for deg in (1, 2) if vary.any() else ():
-            if ids.size < 2 + deg * int(vary.sum()) + 2:  # too few sweeps for the polynomial's coefficients
-                continue
-            v = np.empty(ids.size)
-            for i in range(ids.size):  # leave one sweep out
-                keep = np.arange(ids.size) != i
-                coef = _log_poly_coef(xs[keep], us[keep], ns[keep], deg)
-                v[i] = _log_poly_factor(coef, xs[keep], xs[i:i + 1], deg)[0]
-            v = np.maximum(v, 1e-12)
-            nll = float(ns @ (np.log(v) + us / v))
-            if nll < best - 1e-9 * abs(best):
-                best, best_v, best_deg = nll, v, deg
     if best_v is None:  # fewer than three sweeps: no local factor
         best_v = np.ones(ids.size)
         us = np.ones(ids.size)
     score = np.sqrt(u2 / best_v[inv])
     n_eff = effective_sample_size(r / np.hypot(a, b * f) / np.sqrt(best_v[inv]), inv)
-    coef = _log_poly_coef(xs, us, ns, best_deg) if best_deg else None
-    return CellScale(a, b, grouped_conformal_quantile(score, level, n_eff), best_h, mu, sd, xs, us, ns, n_eff,
-                     best_deg, coef)
+    return CellScale(a, b, grouped_conformal_quantile(score, level, n_eff), best_h, mu, sd, xs, us, ns, n_eff)
 
 
 def effective_sample_size(u: np.ndarray, group: np.ndarray) -> float:
@@ -726,12 +681,20 @@ def resample_sweeps(table: pd.DataFrame, rng: np.random.Generator, strata: Seque
 
 @dataclass
 class _ReplicateFit:
-    """Warm-started refit of one replicate (a picklable callable for process pools)."""
+    """Warm-started refit of one replicate (a picklable callable for process pools).
+
+    With ``prior`` (a calibration fold's refit): a coefficient the full fit identified that the fold's data
+    cannot identify (the fold left out the only sweeps of a load, say) would stay at the full fit's value,
+    which has seen the left-out sweeps, and the fold's residuals there would not be out-of-sample.  Such
+    coefficients are set back to ``prior`` (the full fit's template) and the fold refitted from there.
+    """
 
     start: TirParameters
     stages: Any
     weights: Any
     alpha_star: bool
+    identified: tuple[str, ...] = ()
+    prior: Mapping[str, float] | None = None
 
     def __call__(self, sample: pd.DataFrame) -> TirParameters | str:
         weights = self.weights
@@ -740,8 +703,17 @@ class _ReplicateFit:
         try:
             with warnings.catch_warnings():  # degenerate resamples make scipy/numpy warn inside the fit
                 warnings.simplefilter("ignore", RuntimeWarning)
-                return fit_tir(sample, self.start, stages=self.stages, weights=weights, alpha_star=self.alpha_star,
-                               progress=False).parameters
+                res = fit_tir(sample, self.start, stages=self.stages, weights=weights, alpha_star=self.alpha_star,
+                              progress=False)
+                lost = sorted(set(self.identified) - set(res.identified))
+                if lost and self.prior is not None:
+                    start = self.start.copy()
+                    for k in lost:
+                        if k in self.prior:
+                            start.set(k, self.prior[k])
+                    res = fit_tir(sample, start, stages=self.stages, weights=weights, alpha_star=self.alpha_star,
+                                  progress=False)
+                return res.parameters
         except (MftireInputError, ValueError, np.linalg.LinAlgError) as exc:
             return str(exc)
 
@@ -897,7 +869,8 @@ def start_bootstrap_bands(
         fold = _fold_ids(table, by, k, np.random.default_rng(None if seed is None else seed + 1))
         # the fold fits run every stage the full fit ran (a channel the replicates leave at the full fit still
         # gets out-of-fold residuals)
-        fold_job = _ReplicateFit(fit.parameters, ",".join(str(s) for s in ran) or "all", weights, alpha_star)
+        fold_job = _ReplicateFit(fit.parameters, ",".join(str(s) for s in ran) or "all", weights, alpha_star,
+                                 tuple(dict.fromkeys(fit.identified)), dict(fit.template))
         samples = [*((job, x) for x in samples), *((fold_job, _strip(table[fold != i])) for i in range(k))]
     else:
         samples = [(job, x) for x in samples]
