@@ -269,3 +269,39 @@ def test_effective_sample_is_between_sweeps_and_points(sweeps, per, offset, leve
     assert sweeps <= n_eff <= sweeps * per
     # never below the plain split-conformal quantile of the points
     assert grouped_conformal_quantile(np.abs(u), level, n_eff) >= conformal_quantile(np.abs(u), level)
+
+
+def test_fold_refit_sets_coefficients_it_cannot_identify_back_to_the_template():
+    """A calibration fold that leaves out the only sweeps of two loads cannot identify the load coefficients: left at
+    the full fit's values (which saw those sweeps) the fold's residuals there would be in-sample.  The fold refit
+    sets them back to the template; a replicate (no prior) keeps the warm start."""
+    from mftire.fitting.bands import _ReplicateFit
+
+    data = _data([0.5, 1.0, 1.5], seed=4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        full = fit_tir(data, TIR, stages="1", progress=False)
+        one_load = data[np.isclose(data["Fz"], data["Fz"].min())]
+        lost = set(full.identified) - set(fit_tir(one_load, full.parameters, stages="1", progress=False).identified)
+        assert lost & {"PDX2", "PKX2"}  # the load dependence needs two loads at least
+        fold = _ReplicateFit(full.parameters, "1", None, False, tuple(full.identified), dict(full.template))(one_load)
+        kept = _ReplicateFit(full.parameters, "1", None, False)(one_load)
+    for k in lost:
+        assert fold.get(k) == pytest.approx(full.template[k]), k
+        assert kept.get(k) == pytest.approx(full.parameters.get(k)), k
+    assert any(full.parameters.get(k) != pytest.approx(full.template[k]) for k in lost)
+
+
+def test_bands_refit_with_the_fits_source_weights():
+    """bootstrap_bands(fit=...) without weights weighs the sources as the given fit did (the demo fits with
+    fe=1, measured=4); a single-source or unweighted fit gives no weights."""
+    from mftire.fitting.bands import _fit_weights
+
+    rig = _data([0.5, 1.0], seed=5)
+    both = pd.concat([rig, _data([0.5, 1.0], seed=6).assign(source="fe")], ignore_index=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        w = _fit_weights(fit_tir(both, TIR, stages="1", weights="fe=1,rig=4", progress=False))
+        assert w is not None and w["rig"] / w["fe"] == pytest.approx(4.0)
+        assert _fit_weights(fit_tir(both, TIR, stages="1", progress=False)) is None
+        assert _fit_weights(fit_tir(rig, TIR, stages="1", progress=False)) is None
