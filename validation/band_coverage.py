@@ -149,6 +149,35 @@ def study(repeats: int, replicates: int = 6, level: float = 0.95, seed: int = 0,
     return pd.DataFrame(rows)
 
 
+def sweep_offsets(repeats: int, seed: int = 0, channels: Sequence[str] = CHANNELS) -> pd.DataFrame:
+    """RMS over sweeps of each sweep's mean residual (its offset against the fit) in the ``slip_speed`` design:
+    the fitted sweeps, the campaign's own held-out 80 km/h sweeps and a new campaign (new run offsets and a new
+    drift), pooled over ``repeats`` campaigns.  A band calibrated within one campaign holds the first two; the
+    new campaign's larger offsets are a campaign-level draw that one campaign does not show."""
+    from mftire.tyre import Tyre
+
+    acc: dict[tuple[str, str], list[np.ndarray]] = {}
+    for i in range(repeats):
+        s = seed + 2 * i
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            train, template = slip_speed_campaign(s)
+            new, _ = slip_speed_campaign(s + 1)
+            held = np.isclose(train["Vx"].to_numpy(float) * 3.6, HELDOUT_KMH)
+            tyre = Tyre(fit_tir(train[~held], template, progress=False).parameters)
+            for what, df in (("fitted sweeps", train[~held]), ("held-out sweeps", train[held]),
+                             ("new campaign", new)):
+                df = df.reset_index(drop=True)
+                sid = group_sweeps(df)["sweep_id"].to_numpy()
+                ev = tyre.evaluate_frame(df.drop(columns=["phit", "omega"], errors="ignore"), mode=211)
+                for ch in channels:
+                    r = df[ch].to_numpy(float) - ev[ch].to_numpy(float)
+                    acc.setdefault((what, ch), []).append(np.bincount(sid, weights=r) / np.bincount(sid))
+    return pd.DataFrame([{"set": w, "channel": ch, "sweeps": sum(v.size for v in m),
+                          "rms_sweep_offset": float(np.sqrt(np.mean(np.concatenate(m) ** 2)))}
+                         for (w, ch), m in acc.items()])
+
+
 def summary(table: pd.DataFrame) -> pd.DataFrame:
     """Mean coverage per counted set and channel and its standard error across repeats."""
     g = table.groupby(["design", "channel"], sort=False)["inside"]
@@ -166,8 +195,16 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--folds", type=int, default=5, help="calibration folds (bootstrap_bands' calibrate)")
     ap.add_argument("--csv", help="also write the per-repeat table to this CSV file")
+    ap.add_argument("--offsets", action="store_true",
+                    help="instead: RMS of the per-sweep mean residual, fitted / held-out / new campaign (slip_speed)")
     args = ap.parse_args()
     t0 = time.perf_counter()
+    if args.offsets:
+        off = sweep_offsets(args.repeats, args.seed).pivot(index="channel", columns="set", values="rms_sweep_offset")
+        print(f"RMS of the per-sweep mean residual [N, N m], slip_speed design, {args.repeats} campaigns, "
+              f"{time.perf_counter() - t0:.0f} s")
+        print(off.to_string(float_format=lambda v: f"{v:.2f}"))
+        return
     table = study(args.repeats, args.replicates, args.level, args.seed, args.design, calibrate=args.folds)
     if args.csv:
         table.to_csv(args.csv, index=False)
