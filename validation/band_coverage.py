@@ -21,8 +21,18 @@ per channel:
     (per-run zero offsets, drift over the campaign, load wander, 0.5 % noise).  One speed (80 km/h, as in
     the demo) is held out of the fit and of the bands; the new campaign's points are counted at the
     held-out speed (``heldout``) and at the fitted speeds (``fitted``).
+``slip_speed_sweeps``
+    the same campaign with 3 sweeps drawn at random (any speed, load and kind) held out of the fit and of
+    the bands, counted (``random heldout sweeps``: what the band claims, a new sweep of the same campaign),
+    and a new campaign (``new campaign``: new offsets and a new drift, beyond the claim).
 
-    python validation/band_coverage.py [--design synthetic|slip_speed] [--repeats 20] [--replicates 6]
+    python validation/band_coverage.py [--design synthetic|slip_speed|slip_speed_sweeps] [--repeats 20]
+        [--replicates 6] [--folds 5] [--csv FILE]
+    python validation/band_coverage.py --offsets [--repeats 12]
+
+(``--offsets``: RMS of the per-sweep mean residual on the fitted sweeps, the campaign's own held-out sweeps
+and a new campaign.)  Each repeat counts 3 held-out sweeps (slip_speed designs), so the standard error across
+repeats is the sweep-cluster standard error of the pooled count.
 
 prints one line per repeat and the mean coverage per channel with its standard error across
 repeats (the numbers of validation/README.md).  ``tests/test_bands.py`` runs a reduced study.

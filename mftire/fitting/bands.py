@@ -27,8 +27,12 @@ where should a new measurement fall?":
    measured points carry all three, none of which the confidence band holds.  The data's sweeps
    are split into folds (``calibrate``, default 5; whole sweeps, because the noise is correlated
    within a sweep, or the levels of a condition, ``calibrate_by``); each fold is refitted out and
-   predicted.  Per channel, source and slip class (pure longitudinal, pure lateral, combined points;
-   a class with fewer than 5 sweeps uses the source's pooled cell) the out-of-fold residuals give
+   predicted.  A fold refit that can no longer identify a coefficient the full fit identified (it left
+   out the only sweeps of a load, say) sets that coefficient back to the template before refitting:
+   left at the full fit's value, which has seen the left-out sweeps, its residuals there would be
+   in-sample and the band too narrow for such sweeps.  Per channel, source and slip class (pure
+   longitudinal, pure lateral, combined points; a class with fewer than 5 sweeps uses the source's
+   pooled cell) the out-of-fold residuals give
    (:func:`fit_cell_scale`):
 
    * a heteroscedastic scale ``s(f̂) = sqrt(a² + (b·f̂)²)`` (noise floor plus a part proportional
@@ -44,11 +48,15 @@ where should a new measurement fall?":
      prediction quantile when fewer than ``level/(1 − level)`` draws make every order statistic
      too low (:func:`grouped_conformal_quantile`).
 
-   The band is ``f̂ ± q·s(f̂)·sqrt(v(x))`` (never narrower than the confidence band).  The level
-   holds on average over new sweeps like the calibration ones: measured by
-   ``validation/band_coverage.py`` (two campaign designs re-measured with new noise) and by the
-   nested cross-validated coverage ``Calibration.cv_coverage`` of every run.  It is not a
-   guarantee at one particular condition: where the model's error differs from condition to
+   The band is ``f̂ ± q·s(f̂)·sqrt(v(x))`` (never narrower than the confidence band).  **What it
+   claims:** a point of a new sweep *of the same campaign* (the same rig set-up, its zero offsets
+   and drift) at conditions like the calibration sweeps' falls inside with probability ``level``,
+   on average over such sweeps.  Measured by ``validation/band_coverage.py`` (sweeps drawn at random
+   and held out, ``--design slip_speed_sweeps``; campaigns re-measured with new noise) and by the
+   nested cross-validated coverage ``Calibration.cv_coverage`` of every run.  It does not claim a new
+   campaign: a new campaign brings its own offsets and drift, a campaign-level draw that one
+   campaign does not show (an offset-dominated channel such as Mx is then under-covered).  Nor is it
+   a guarantee at one particular condition: where the model's error differs from condition to
    condition (a missing speed effect) a held-out condition with a smaller error than the
    campaign's average is over-covered; re-measuring a condition the fit *has* seen gives a
    little more than the level (the fold refits lack that sweep); and a count on a few held-out
