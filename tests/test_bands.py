@@ -305,3 +305,18 @@ def test_bands_refit_with_the_fits_source_weights():
         assert w is not None and w["rig"] / w["fe"] == pytest.approx(4.0)
         assert _fit_weights(fit_tir(both, TIR, stages="1", progress=False)) is None
         assert _fit_weights(fit_tir(rig, TIR, stages="1", progress=False)) is None
+
+
+def test_refit_keeps_weights_keyed_by_file_and_drops_what_the_sample_lacks():
+    """The replicate/fold refit passes on a weight keyed by a file of the sample (bootstrap copies are ``b<k>/<file>``)
+    and leaves out a key the sample lacks (a fold that left out a whole source), instead of failing the refit."""
+    from unittest import mock
+
+    from mftire.fitting import bands as bands_mod
+
+    sample = _data([0.5, 1.0], seed=7).assign(file="b3/run_a.csv")
+    job = bands_mod._ReplicateFit(read_tir(TIR), "1", {"run_a": 4.0, "rig": 1.0, "fe": 2.0}, False)
+    with mock.patch.object(bands_mod, "fit_tir") as fake:
+        fake.return_value.identified = []
+        job(sample)
+    assert fake.call_args.kwargs["weights"] == {"run_a": 4.0, "rig": 1.0}

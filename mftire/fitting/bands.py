@@ -706,8 +706,13 @@ class _ReplicateFit:
 
     def __call__(self, sample: pd.DataFrame) -> TirParameters | str:
         weights = self.weights
-        if isinstance(weights, Mapping) and "source" in sample.columns:  # a source the sample lacks weighs nothing
-            weights = {k: v for k, v in weights.items() if k in set(sample["source"].astype(str))}
+        if isinstance(weights, Mapping):  # a source or file the sample lacks (a fold left it out) weighs nothing
+            names = set(sample["source"].astype(str)) if "source" in sample.columns else set()
+            if "file" in sample.columns:
+                files = sample["file"].astype(str).unique()
+                names |= set(files) | {os.path.basename(f) for f in files}
+                names |= {os.path.splitext(os.path.basename(f))[0] for f in files}
+            weights = {k: v for k, v in weights.items() if k in names}
         try:
             with warnings.catch_warnings():  # degenerate resamples make scipy/numpy warn inside the fit
                 warnings.simplefilter("ignore", RuntimeWarning)
