@@ -22,9 +22,19 @@ from mftire.diagnosis.effects import FAMILY_TARGETS
 
 DATA = Path(__file__).resolve().parents[1] / "validation" / "data" / "unanticipated_reduced"
 CASES = sorted(p.name for p in DATA.iterdir() if (p / "expected.json").exists())
+#: Cases whose reduced copy holds too little evidence for the ranking's corrected significance test: the
+#: fade with loads in blocks has 300 rows there, and its time, sequence and friction-work candidates explain
+#: ~30 % of the residual at an uncorrected p of 0.03-0.1, which the correction over the candidates tested does
+#: not pass.  Its full campaign is used (9 s).
+FULL = {"fade_blocked_load"}
+
+
+def _folder(case: str) -> Path:
+    return DATA.parent / "unanticipated" / case if case in FULL else DATA / case
+
 
 def _run(case: str):
-    d = DATA / case
+    d = _folder(case)
     exp = json.loads((d / "expected.json").read_text())
     h = exp["holdout"]
     with warnings.catch_warnings():
@@ -57,7 +67,7 @@ def test_unanticipated_campaign(case):
     # a held-out level beyond the range the law was fitted on: in modes 1xx the law is clamped to that range
     # (issue 21, as MF clamps its inputs), so it predicts the edge of the range there, not an extrapolation
     h = exp["holdout"]
-    train = pd.read_csv(DATA / case / "sweeps.csv")
+    train = pd.read_csv(_folder(case) / "sweeps.csv")
     train = train[~np.isin(train[h["column"]], h["values"])] if h["column"] == exp["variable"] else None
     beyond = train is not None and (min(h["values"]) > train[h["column"]].max()
                                     or max(h["values"]) < train[h["column"]].min())  # fmt: skip

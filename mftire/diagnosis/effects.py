@@ -70,6 +70,10 @@ FAMILY_TARGETS = {
     "curvature": {"Fx": ("LEX",), "Fy": ("LEY",)},
     "shape": {"Fx": ("LCX",), "Fy": ("LCY",)},
     "shift": {"Fx": ("FX_OFFSET",), "Fy": ("FY_OFFSET",)},
+    # the MF's own shifts (Pacejka 2012 eqs 4.E17-4.E18, 4.E27-4.E29): horizontal (a slip offset growing with
+    # the load) and vertical (a force offset proportional to the load)
+    "horizontal_shift": {"Fx": ("LHX",), "Fy": ("LHY",)},
+    "vertical_shift": {"Fx": ("LVX",), "Fy": ("LVY",)},
     # the aligning moment (Pacejka 2012 eqs 4.E33-4.E47): pneumatic trail and residual torque
     "trail": {"Mz": ("LTR",)},
     "residual_torque": {"Mz": ("LRES",)},
@@ -100,6 +104,10 @@ EFFECTS_FOR: dict[str, tuple[tuple[str, Law], ...]] = {
     "sign_kappa": (("sign_kappa", Law("drive_brake_asymmetry", ("LMUX",), "linear")),),
     "sweep_dir": (),
 }  # fmt: skip
+
+#: Families tried when the candidate explains the raw residual best (a shift or an offset, not a change along
+#: the characteristic: :func:`mftire.diagnosis.ranking.residual_forms`); the input laws of ``shift`` with them.
+SHIFT_FAMILIES = ("shift", "vertical_shift", "horizontal_shift")
 
 #: Candidates that are not closed variables, expressed in the nearest raw column.
 HISTORY_CANDIDATES = ("sequence", "energy")
@@ -854,6 +862,27 @@ def _full_refit(data: pd.DataFrame, tyre: Tyre) -> Tyre:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = fit_tir(data, tyre.parameters, stages=REFIT_STAGES, progress=False)
+    return Tyre(res.parameters, name=tyre.name)
+
+
+#: The fitter's stages of each channel (:mod:`mftire.fitting.stages`): pure and combined slip.
+CHANNEL_STAGES = {"Fx": ("1", "4"), "Fy": ("2", "4"), "Mz": ("3", "5")}
+
+
+def refit_channels(data: pd.DataFrame, tyre: Tyre, channels: Sequence[str]) -> Tyre:
+    """``tyre`` with the coefficients of ``channels`` refitted on ``data`` (their stages of the staged fit,
+    :data:`CHANNEL_STAGES`), every other coefficient and the extension terms as they are.  The aligning
+    moment reads both forces (Pacejka 2012 eqs 4.E31, 4.E71): after a law changes Fx, the Mz coefficients
+    that absorbed the old Fx error are refitted to the new one."""
+    import warnings
+
+    from mftire.fitting.fitter import fit_tir
+
+    stages = sorted({st for ch in channels for st in CHANNEL_STAGES.get(ch, ())})
+    cols = [c for c in data.columns if not str(c).startswith(("residual_", "_"))]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = fit_tir(data[cols], tyre.parameters, stages=",".join(stages), progress=False)
     return Tyre(res.parameters, name=tyre.name)
 
 
