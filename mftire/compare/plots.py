@@ -167,6 +167,27 @@ def _finish(fig, handles, panels_width: float, top: float) -> None:
     fig.tight_layout(rect=(0, 0, 1 - lw / w, top))
 
 
+def _label_panel(ax, title: str, held: bool, xlabel: str, ylabel: str) -> None:
+    """A panel's title (marked when it holds the held-out condition), axis labels with units, ticks and grid."""
+    if held:
+        _mark_heldout(ax, title)
+    else:
+        ax.set_title(title, fontsize=_FONT)
+    ax.set_xlabel(xlabel, fontsize=_FONT)
+    ax.set_ylabel(ylabel, fontsize=_FONT)
+    ax.tick_params(labelsize=_FONT - 1)
+    ax.grid(True, lw=0.3)
+
+
+def _hide_unused(axes, used) -> None:
+    """Hide the panels of the grid ``axes`` whose (row, column) is not in ``used``."""
+    nrow, ncol = axes.shape
+    for r in range(nrow):
+        for c in range(ncol):
+            if (r, c) not in used:
+                axes[r, c].set_visible(False)
+
+
 def _mark_heldout(ax, title: str) -> None:
     ax.set_title(title + "\nHELD OUT", fontsize=_FONT, color="tab:red")
     for sp in ax.spines.values():
@@ -245,19 +266,10 @@ def family_figures(
                 for src, sp in pts.groupby("source", sort=False):
                     ax.plot(sp[var] * xs, sp[ch], linestyle="none", marker=markers[src], ms=3.2, color=color,
                             alpha=0.75, mfc="none" if str(sp["origin"].iloc[0]) == "fe" else color)
-            title = _cond_title(pk)
-            if _panel_held(pk, d.loc[d["curve_id"].isin(pcurves["curve_id"]), "source"], heldout):
-                _mark_heldout(ax, title)
-            else:
-                ax.set_title(title, fontsize=_FONT)
-            ax.set_xlabel(xlabel, fontsize=_FONT)
-            ax.set_ylabel(f"{ch} [{_UNITS[ch]}]", fontsize=_FONT)
-            ax.tick_params(labelsize=_FONT - 1)
-            ax.grid(True, lw=0.3)
-        for r in range(nrow):
-            for c in range(ncol):
-                if (r, c) not in used_axes:
-                    axes[r, c].set_visible(False)
+            _label_panel(ax, _cond_title(pk),
+                         _panel_held(pk, d.loc[d["curve_id"].isin(pcurves["curve_id"]), "source"], heldout),
+                         xlabel, f"{ch} [{_UNITS[ch]}]")  # fmt: skip
+        _hide_unused(axes, used_axes)
         held_series = _held_mask(pd.DataFrame({skey: series_vals}), heldout) if skey == "Fz_set" else []
         handles = [Line2D([], [], color=colors[v], lw=3,
                           label=_series_label(family, v) + (" (held out)" if len(held_series) and held_series[i]
@@ -466,19 +478,9 @@ def trail_figure(trail: pd.DataFrame, grid: pd.DataFrame, grid_predictions: Mapp
                 lo, hi = np.quantile(y, [0.02, 0.98])
                 pad = 0.1 * (hi - lo) + 1e-4
                 ax.set_ylim(lo - pad, hi + pad)
-        title = _cond_title(dict(zip(pkeys, key, strict=True)))
-        if _panel_held(dict(zip(pkeys, key, strict=True)), sel(pts)["source"], heldout):
-            _mark_heldout(ax, title)
-        else:
-            ax.set_title(title, fontsize=_FONT)
-        ax.set_xlabel("α [deg]", fontsize=_FONT)
-        ax.set_ylabel("trail t [m]", fontsize=_FONT)
-        ax.tick_params(labelsize=_FONT - 1)
-        ax.grid(True, lw=0.3)
-    for r in range(nrow):
-        for c in range(ncol):
-            if (r, c) not in used:
-                axes[r, c].set_visible(False)
+        cond = dict(zip(pkeys, key, strict=True))
+        _label_panel(ax, _cond_title(cond), _panel_held(cond, sel(pts)["source"], heldout), "α [deg]", "trail t [m]")
+    _hide_unused(axes, used)
     handles = _style_legend({v: f"Fz {v:.0f} N" for v in loads}, colors, models, styles, "MF t", sources, markers,
                             "−Mz/Fy")
     if heldout is not None:
