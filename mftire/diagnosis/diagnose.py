@@ -594,9 +594,10 @@ def _diagnose(
         y = df[ch].to_numpy(float)
         scale = Fz * R0 if ch in ("Mz", "Mx", "My") else Fz
         peaks[ch] = float(np.nanmax(np.abs(y / scale)))
-        df[f"residual_{ch}"] = y - model[ch]
-        noise[ch] = channel_noise(df, y - model[ch])
-        r = (y - model[ch])[primary_rows(df, ch)]
+        res = y - model[ch]
+        df[f"residual_{ch}"] = res
+        noise[ch] = channel_noise(df, res)
+        r = res[primary_rows(df, ch)]
         r = r[np.isfinite(r)]
         rms = float(np.sqrt(np.mean(r**2))) if r.size else float("nan")
         if rms <= NOISE_FLOOR * noise[ch]:  # nothing systematic left: never outranks the others

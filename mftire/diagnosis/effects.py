@@ -851,17 +851,19 @@ REFINE_LAWS = 3
 REFIT_STAGES = "1,2,3,4,5"
 
 
-def _full_refit(data: pd.DataFrame, tyre: Tyre) -> Tyre:
-    """The staged fit (:func:`mftire.fitting.fit_tir`) of the training rows, started from ``tyre`` (its
-    extension terms included): a global refit of every coefficient of the force and aligning-moment
-    stages (:data:`REFIT_STAGES`), with the fitter's own start values; Mx and My stay as fitted."""
+def _full_refit(data: pd.DataFrame, tyre: Tyre, stages: str = REFIT_STAGES) -> Tyre:
+    """The staged fit (:func:`mftire.fitting.fit_tir`) of the rows ``data`` (without the diagnosis's own columns,
+    ``residual_*`` and ``_*``), started from ``tyre`` (its extension terms included): a global refit of every
+    coefficient of ``stages`` (default :data:`REFIT_STAGES`, the force and aligning-moment stages), with the
+    fitter's own start values; the other stages' coefficients, Mx and My, stay as they are."""
     import warnings
 
     from mftire.fitting.fitter import fit_tir
 
+    cols = [c for c in data.columns if not str(c).startswith(("residual_", "_"))]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = fit_tir(data, tyre.parameters, stages=REFIT_STAGES, progress=False)
+        res = fit_tir(data[cols], tyre.parameters, stages=stages, progress=False)
     return Tyre(res.parameters, name=tyre.name)
 
 
@@ -874,16 +876,7 @@ def refit_channels(data: pd.DataFrame, tyre: Tyre, channels: Sequence[str]) -> T
     :data:`CHANNEL_STAGES`), every other coefficient and the extension terms as they are.  The aligning
     moment reads both forces (Pacejka 2012 eqs 4.E31, 4.E71): after a law changes Fx, the Mz coefficients
     that absorbed the old Fx error are refitted to the new one."""
-    import warnings
-
-    from mftire.fitting.fitter import fit_tir
-
-    stages = sorted({st for ch in channels for st in CHANNEL_STAGES.get(ch, ())})
-    cols = [c for c in data.columns if not str(c).startswith(("residual_", "_"))]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res = fit_tir(data[cols], tyre.parameters, stages=",".join(stages), progress=False)
-    return Tyre(res.parameters, name=tyre.name)
+    return _full_refit(data, tyre, ",".join(sorted({st for ch in channels for st in CHANNEL_STAGES.get(ch, ())})))
 
 
 def refine_effect(
@@ -1030,8 +1023,7 @@ def final_fit(prob: _Problem, effect: EffectFit, values: np.ndarray | None, n_pr
     base = prob.tyre
     if effect.refit == "all" or effect.law is None:
         sub, idx = subsample(prob)
-        cols = [c for c in sub.df.columns if not str(c).startswith(("residual_", "_"))]
-        return _full_refit(sub.df[cols], _tyre_with(base, {}, effect.section))
+        return _full_refit(sub.df, _tyre_with(base, {}, effect.section))
     sub, idx = subsample(prob)
     v = None if values is None else np.asarray(values)[idx]
     fit = fit_effect(sub, effect.law, effect.variable, v, n_pressures, pressure_channels=effect_channels,
@@ -1117,9 +1109,8 @@ def refit_without(prob: _Problem, effect: EffectFit, values: np.ndarray | None, 
     base = prob.tyre
     sub, idx = subsample(take(prob, rows))
     if effect.refit == "all" or effect.law is None:
-        cols = [c for c in sub.df.columns if not str(c).startswith(("residual_", "_"))]
-        law_t = _full_refit(sub.df[cols], _tyre_with(base, {}, effect.section))
-        ctrl_t = _full_refit(sub.df[cols], base)
+        law_t = _full_refit(sub.df, _tyre_with(base, {}, effect.section))
+        ctrl_t = _full_refit(sub.df, base)
     else:
         chs = refit_channels_of(effect.law)
         v = None if values is None else np.asarray(values)[np.flatnonzero(rows)][idx]

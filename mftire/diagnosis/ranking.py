@@ -28,9 +28,8 @@ variance and an RMS of at least :data:`MIN_EFFECT` of the channel's peak.  Its p
 permutation p-value (1 + #null scores >= score)/(1 + n) and the Bonferroni-corrected normal tail of its score
 among the null scores (corrected over the effective number of candidates tested, :func:`effective_tests`: the
 first of many candidates is not held to one test's level).  It is *significant* when that p-value <= ``alpha``
-(0.05).  A significant
-candidate is only reported as an effect when a model term fitted for it also beats a control refit (see
-:mod:`mftire.diagnosis.effects`).
+(0.05).  A significant candidate is only reported as an effect when a model term fitted for it also beats a
+control refit (see :mod:`mftire.diagnosis.effects`).
 """
 
 from __future__ import annotations
@@ -77,16 +76,6 @@ class CandidateScore:
 
     def to_dict(self) -> dict:
         return asdict(self)
-
-
-def normalised_residual(channel: str, y: np.ndarray, y_model: np.ndarray, Fz: np.ndarray, R0: float) -> np.ndarray:
-    """Residual along the modelled value, per unit load [-].
-
-    (y − ŷ)·sign(ŷ) divided by Fz for forces and by Fz·R0 for moments.
-    """
-    scale = Fz * R0 if channel in MOMENTS else Fz
-    direction = np.where(y_model == 0.0, 1.0, np.sign(y_model))
-    return (y - y_model) * direction / np.maximum(scale, 1e-9)
 
 
 def baseline_features(
@@ -160,13 +149,14 @@ def residual_forms(channel: str, y: np.ndarray, y_model: np.ndarray, Fz: np.ndar
                    R0: float) -> dict[str, np.ndarray]:
     """The two forms of a channel's normalised residual that the ranking scores [-]:
 
-    * ``channel``: along the modelled value (:func:`normalised_residual`), where a change of grip, stiffness or
-      shape shows with one sign on both sides of the characteristic;
-    * ``channel:raw``: as measured, divided by the same scale, where a shift or an offset (of the force, of
-      the slip angle, of the camber; Pacejka 2012 eqs 4.E20, 4.E27-4.E29) shows with one sign on both sides.
+    * ``channel:raw``: as measured, (y − ŷ) divided by Fz for forces and by Fz·R0 for moments, where a shift or
+      an offset (of the force, of the slip angle, of the camber; Pacejka 2012 eqs 4.E20, 4.E27-4.E29) shows
+      with one sign on both sides;
+    * ``channel``: along the modelled value, the raw form times sign(ŷ), where a change of grip, stiffness or
+      shape shows with one sign on both sides of the characteristic.
     """
-    scale = np.maximum(Fz * R0 if channel in MOMENTS else Fz, 1e-9)
-    return {channel: normalised_residual(channel, y, y_model, Fz, R0), f"{channel}:{RAW}": (y - y_model) / scale}
+    raw = (y - y_model) / np.maximum(Fz * R0 if channel in MOMENTS else Fz, 1e-9)
+    return {channel: raw * np.where(y_model == 0.0, 1.0, np.sign(y_model)), f"{channel}:{RAW}": raw}
 
 
 def _null_test(c: Candidate, v: np.ndarray, ctx: tuple, score: float, n_perm: int, alpha: float,
