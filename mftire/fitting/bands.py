@@ -48,19 +48,35 @@ where should a new measurement fall?":
      prediction quantile when fewer than ``level/(1 − level)`` draws make every order statistic
      too low (:func:`grouped_conformal_quantile`).
 
-   The band is ``f̂ ± q·s(f̂)·sqrt(v(x))`` (never narrower than the confidence band).  **What it
-   claims:** a point of a new sweep *of the same campaign* (the same rig set-up, its zero offsets
+   The band is ``f̂ ± q·s(f̂)·sqrt(v(x))`` (never narrower than the confidence band).
+5. **Condition folds: a new level of a condition** (``calibrate_conditions``, default on).  Where a
+   condition has at least 4 set-point levels in a (source, sweep kind) stratum (the speeds of a braking
+   programme, say), each level's sweeps are also left out in turn and refitted (leave one level out; a
+   refit that loses a coefficient of the full fit is dropped).  A left-out level strictly between the
+   others is an *interior* fold (the refit interpolates to it), the lowest and highest are *exterior*
+   folds (it extrapolates).  A point whose condition is a level the calibration data do not have (farther
+   than 0.4 × the smallest gap between levels from each of them; :func:`new_level`) is an interpolation
+   when it lies inside the levels' range and an extrapolation otherwise, and its band uses the condition
+   folds of the same kind: their own cell (scale, local factor and the largest score as the quantile: the
+   independent units of these folds are the 2–3 levels left out, far fewer than ``level/(1 − level)``).
+   This is done only where the sweep folds' band misses the level on the condition folds' points by more
+   than twice its standard error over their sweeps (or 1 point); otherwise the sweep folds' band stands.
+   Why: where the model's error depends on the condition (MF 6.1 has no speed effect on Fx; its error is
+   largest at the ends of the speed range), the sweep folds pool every level, and an interior speed held
+   out is given the end speeds' error (it covered every point at 80 km/h).
+   **What it claims:** a point of a new sweep *of the same campaign* (the same rig set-up, its zero offsets
    and drift) at conditions like the calibration sweeps' falls inside with probability ``level``,
    on average over such sweeps.  Measured by ``validation/band_coverage.py`` (sweeps drawn at random
    and held out, ``--design slip_speed_sweeps``; campaigns re-measured with new noise) and by the
    nested cross-validated coverage ``Calibration.cv_coverage`` of every run.  It does not claim a new
    campaign: a new campaign brings its own offsets and drift, a campaign-level draw that one
    campaign does not show (an offset-dominated channel such as Mx is then under-covered).  Nor is it
-   a guarantee at one particular condition: where the model's error differs from condition to
-   condition (a missing speed effect) a held-out condition with a smaller error than the
-   campaign's average is over-covered; re-measuring a condition the fit *has* seen gives a
-   little more than the level (the fold refits lack that sweep); and a count on a few held-out
-   sweeps scatters widely (:func:`coverage_table` gives its standard error over the sweeps).
+   a guarantee at one particular condition: the condition folds make the level hold on average over
+   campaigns at a new interior level (``--design slip_speed``), but they are 2–3 levels, and at one
+   campaign's held-out level the count scatters by several points either way; re-measuring a
+   condition the fit *has* seen gives a little more than the level (the fold refits lack that
+   sweep); and a count on a few held-out sweeps scatters widely (:func:`coverage_table` gives its
+   standard error over the sweeps).
    Before the calibration, a Gaussian ``z·σ`` band held 62 % of the demo's held-out Fx points.
    With ``calibrate=0`` the band is the uncalibrated one: replicate quantiles and the full fit's
    robust residual scatter σ (1.4826 × median |residual| per channel and source) in quadrature,
@@ -95,7 +111,8 @@ from mftire.tyre import Tyre
 
 __all__ = ["Bands", "bootstrap_bands", "start_bootstrap_bands", "PendingBands", "band_coverage", "coverage_table",
            "resample_sweeps", "write_bands", "BAND_CHANNELS", "Calibration", "CellScale", "fit_cell_scale",
-           "effective_sample_size", "grouped_conformal_quantile", "SCALE_CONDITIONS"]
+           "effective_sample_size", "grouped_conformal_quantile", "SCALE_CONDITIONS", "LEVEL_COLUMNS",
+           "ConditionFold", "condition_folds", "new_level"]
 
 #: Channels given bands.
 BAND_CHANNELS: tuple[str, ...] = ("Fx", "Fy", "Mz", "Mx", "My")
@@ -305,6 +322,17 @@ class Calibration:
         ``{channel: {source: fraction}}`` cross-validated coverage: each fold's points against
         the band calibrated on the other folds only (scale and quantile), by a model that did
         not see them — an honest held-out coverage of the procedure.
+    conditions : dict
+        ``{channel: {cell: {"condition|kind": CellScale}}}`` the cells of the condition folds
+        (:func:`condition_folds`; kind ``interior`` or ``exterior``) that replace the sweep folds' band at a
+        new level of that condition (:meth:`half_width`); a cell whose sweep band held the level on the
+        condition folds' points has none.
+    levels : dict
+        ``{cell: {condition: [set-point levels]}}`` of the calibration data (what :func:`new_level` compares).
+    condition_folds : list of dict
+        Per condition fold its condition, level, kind, stratum, sweeps and status (used, dropped because the
+        refit lost a coefficient, failed), then per channel, cell and condition kind the sweep folds' band's
+        coverage of the condition folds' points, its standard error and the band chosen.
     """
 
     level: float
@@ -324,7 +352,8 @@ class Calibration:
                    slip: np.ndarray | None = None, conditions: pd.DataFrame | None = None) -> np.ndarray:
         """Half-width ``q·s(f̂, x)`` [channel unit] of the prediction band at model values ``f``, per row
         for the given source labels, slip classes (:func:`slip_class`) and operating conditions
-        (``conditions``: columns of :data:`SCALE_CONDITIONS`; None: the cell's mean local factor).  A
+        (``conditions``: columns of :data:`SCALE_CONDITIONS`; None: the cell's mean local factor; a row at a
+        new level of a condition with condition folds takes their cell, :attr:`conditions`).  A
         (source, slip class) cell without calibration points takes the source's pooled cell; an unknown
         source, or None, the widest source."""
         f = np.asarray(f, dtype=float)
@@ -758,11 +787,6 @@ def _calibrate(table: pd.DataFrame, fold: np.ndarray, results: list, mode: int, 
     return Calibration(level, by, len(results), scale, qs, ns, cells, failed, cv, conds, levels, info)
 
 
-#: How a condition cell scales the band: ``"factor"`` keeps the sweep folds' cell (its scale and quantile) and
-#: replaces its local factor by the condition folds' scatter; ``"own"`` fits the cell afresh on them.
-_CONDITION_SCALE = "own"
-
-
 #: The sweep folds' band is kept at a new level when it covers the condition folds' points within this many
 #: standard errors (over their sweeps) of the level, or within ``_CHECK_TOL``.
 _CHECK_Z = 2.0
@@ -798,6 +822,7 @@ def _condition_cells(table: pd.DataFrame, cond: Sequence[ConditionFold], results
                 levels[cell] = {c: _levels(table[col].to_numpy(float)[m]).tolist()
                                 for c, col in LEVEL_COLUMNS.items() if col in table.columns}
     out: dict = {}
+    checks: list[dict] = []
     for (cname, kind), per in fhat.items():
         for c in chans:
             y = table[c].to_numpy(float)
@@ -811,40 +836,17 @@ def _condition_cells(table: pd.DataFrame, cond: Sequence[ConditionFold], results
                 # there within twice its standard error over the sweeps (the data show no difference of kind)
                 inside = np.abs(r) <= base.half_width(f, X[m])
                 cov, se = float(inside.mean()), _cluster_se(inside, sweep[m])
-                if math.isfinite(se) and abs(cov - level) <= max(_CHECK_Z * se, _CHECK_TOL):
+                keep = math.isfinite(se) and abs(cov - level) <= max(_CHECK_Z * se, _CHECK_TOL)
+                checks.append({"channel": c, "cell": cell, "condition": cname, "kind": kind,
+                               "sweeps": int(np.unique(sweep[m]).size), "sweep_band_coverage": cov,
+                               "se": se, "band": "sweep folds" if keep else "condition folds"})
+                if keep:
                     continue
-                if _CONDITION_SCALE == "own":
-                    cs = fit_cell_scale(r, f, X[m], sweep[m], level, few="max")
-                elif _CONDITION_SCALE == "requantile":
-                    cs = _requantile_cell(base, r, f, X[m], sweep[m], level)
-                else:
-                    cs = _factor_cell(base, r, f, sweep[m])
+                # the cell of the condition folds, the largest score as its quantile: its independent units are
+                # the 2-3 levels left out (Student's quantile from such scores' RMS covered every point at 80 km/h)
+                cs = fit_cell_scale(r, f, X[m], sweep[m], level, few="max")
                 out.setdefault(c, {}).setdefault(cell, {})[f"{cname}|{kind}"] = cs
-    return levels, out, info
-
-
-def _requantile_cell(base: CellScale, r: np.ndarray, f: np.ndarray, X: np.ndarray, sweep: np.ndarray,
-                     level: float) -> CellScale:
-    """``base`` (the sweep folds' scale and local factor: the score function) with its quantile calibrated
-    afresh on the condition folds' residuals ``r`` (split conformal: scores ``|r|/(s(f̂)·sqrt(v(x)))``)."""
-    u = r / (np.hypot(base.a, base.b * f) * np.sqrt(base.factor(X)))
-    inv = np.unique(np.asarray(sweep), return_inverse=True)[1].ravel()
-    n_eff = effective_sample_size(u, inv)
-    q = grouped_conformal_quantile(np.abs(u), level, n_eff, few="max")
-    return CellScale(base.a, base.b, q, base.h, base.mu, base.sd, base.xs, base.us, base.ns, n_eff)
-
-
-def _factor_cell(base: CellScale, r: np.ndarray, f: np.ndarray, sweep: np.ndarray) -> CellScale:
-    """``base`` (scale and quantile of the sweep folds) with one local factor: the geometric mean over the
-    condition folds' sweeps of their mean ``r²/s(f̂)²`` (as the local factor's ``h = inf``)."""
-    u = r / np.hypot(base.a, base.b * f)
-    ids, inv = np.unique(np.asarray(sweep), return_inverse=True)
-    inv = inv.ravel()
-    ns = np.bincount(inv).astype(float)
-    us = np.bincount(inv, weights=u**2) / ns
-    d = len(SCALE_CONDITIONS)
-    return CellScale(base.a, base.b, base.q, math.inf, np.full(d, np.nan), np.full(d, np.nan),
-                     np.zeros((ids.size, 0)), us, ns, effective_sample_size(u, inv))
+    return levels, out, info + checks
 
 
 def _column_quantiles(mat: np.ndarray, q: tuple[float, float]) -> np.ndarray:
@@ -1159,6 +1161,16 @@ class PendingBands:
                 "sqrt(a² + (b·f̂)²)·sqrt(v(x)) per channel, source and slip class (v: local factor of load, speed, "
                 "pressure and camber), quantile over the effective number of sweeps; band f̂ ± q·s (use for a new "
                 "measured point at a condition the fit did not see)")
+            cal = bands.calibration
+            used = [f for f in cal.condition_folds if f.get("status") == "used"]
+            if used:
+                switched = sorted({f"{d['channel']} {d['condition']} {d['kind']}" for d in cal.condition_folds
+                                   if d.get("band") == "condition folds"})
+                bands.notes.append(
+                    f"condition folds: {len(used)} of {len(self.cond)} set-point levels left out and refitted "
+                    f"(interior: interpolated, exterior: extrapolated); at a new level of a condition the band of "
+                    f"the same kind's folds where the sweep folds' band misses the level on their points: "
+                    + (", ".join(switched) if switched else "none"))
         if grid is None:
             from mftire.compare.data import assign_families, curve_grid
 
