@@ -404,7 +404,8 @@ def test_condition_folds_narrow_the_band_at_an_interior_held_out_speed():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         fit = fit_tir(train[~held], template, progress=False)
-        b = bootstrap_bands(None, template, n=2, fit=fit, seed=0, grid=train.iloc[:0], calibrate=5)
+        b = bootstrap_bands(None, template, n=2, fit=fit, seed=0, grid=train.iloc[:0], calibrate=5,
+                            calibrate_conditions=True)
     cal = b.calibration
     folds = [f for f in cal.condition_folds if "status" in f]
     assert [(round(f["level"] * 3.6), f["kind"], f["status"]) for f in folds] == [
