@@ -846,8 +846,8 @@ def _condition_cells(table: pd.DataFrame, cond: Sequence[ConditionFold], results
                 if keep:
                     continue
                 # the cell of the condition folds, the largest score as its quantile: its independent units are
-                # the 2-3 levels left out (Student's quantile, or one fitted on the sweep folds' scale, covered
-                # every Fx point at 80 km/h: validation/README.md)
+                # the 2-3 levels left out (Student's quantile covered 99.9 % of the Fx points at 80 km/h over 20
+                # campaigns: validation/README.md)
                 cs = fit_cell_scale(r, f, X[m], sweep[m], level, few="max")
                 out.setdefault(c, {}).setdefault(cell, {})[f"{cname}|{kind}"] = cs
     return levels, out, info + checks
