@@ -454,12 +454,15 @@ def split_fit_rows(data: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame | Non
 def input_laws(tyre: Tyre, channels: Sequence[str], variable: str) -> list[str]:
     """The input laws (:data:`mftire.mf.extensions.INPUT_TARGETS`) worth trying for ``variable``: an effective
     pressure when the file has pressure terms (:data:`~mftire.diagnosis.effects.PRESSURE_COEFFICIENTS`) and the
-    candidate is not the pressure itself; a slip-angle and a camber offset when Fy is measured."""
+    candidate is not the pressure itself; a slip-angle and a camber offset when Fy is measured; a longitudinal-slip
+    offset when Fx is."""
     out = []
     if variable not in ("P", "dpi") and any(float(tyre.flat.get(k, 0.0)) != 0.0 for k in PRESSURE_COEFFICIENTS):
         out.append("P_FACTOR")
     if "Fy" in channels:
         out += ["ALPHA_OFFSET", "GAMMA_OFFSET"]
+    if "Fx" in channels:
+        out.append("KAPPA_OFFSET")
     return out
 
 
