@@ -192,12 +192,13 @@ static int update(FMModel *m)
 static int fm_get_real(FMModel *m, unsigned vr, double *value)
 {
     const FMVarInfo *v = fm_var(&TABLE, vr);
-    if (!v) return fm_not_a(m->b.log, m->b.host, vr, "Real");
-    if (fm_get_known(v, m->b.time, &m->inputs, &m->params, value)) return FM_OK;
-    if (v->kind != FM_K_OUTPUT) return fm_not_a(m->b.log, m->b.host, vr, "Real");
-    if (update(m) != FM_OK) return FM_ERROR;
-    *value = *fm_slot(&m->outputs, v);
-    return FM_OK;
+    if (v && v->kind == FM_K_OUTPUT) { /* the hot call first: an output, evaluated only when dirty */
+        if (m->dirty && update(m) != FM_OK) return FM_ERROR;
+        *value = *fm_slot(&m->outputs, v);
+        return FM_OK;
+    }
+    if (v && fm_get_known(v, m->b.time, &m->inputs, &m->params, value)) return FM_OK;
+    return fm_not_a(m->b.log, m->b.host, vr, "Real");
 }
 
 static int fm_set_real(FMModel *m, unsigned vr, double value)
