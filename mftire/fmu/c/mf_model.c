@@ -173,18 +173,23 @@ static void guard_outputs(FMModel *m)
         if (!isfinite(o[i])) o[i] = 0.0; /* members that are not FMU outputs (omega, Cx, Cy, Cz) */
 }
 
-/* Evaluate if the inputs, parameters or mode changed. */
+/* Evaluate if the inputs, parameters or mode changed.  Once initialised, useMode and FITTYP are checked when
+ * they are set (fm_set_mode, fm_set_parameter_ok) and at ExitInitializationMode, so the evaluation does not check
+ * them again; before, it does (a read in initialisation mode). */
 static int update(FMModel *m)
 {
-    int rc;
+    int rc = MF_OK;
     MFInputs in;
     if (!m->dirty) return FM_OK;
     m->b.evals++;
     in = m->inputs;
     guard_inputs(m, &in);
-    rc = mf_evaluate(&m->params, m->b.use_mode, &in, &m->outputs, on_warning, m);
-    if (rc == MF_OK) guard_outputs(m);
+    if (m->b.initialized)
+        mf_evaluate_checked(&m->params, m->b.use_mode, &in, MF_WANT_ALL, &m->outputs, on_warning, m);
+    else
+        rc = mf_evaluate(&m->params, m->b.use_mode, &in, &m->outputs, on_warning, m);
     if (rc != MF_OK) return fm_eval_error(m->b.log, m->b.host, &m->params, m->b.use_mode, rc);
+    guard_outputs(m);
     m->dirty = 0;
     return FM_OK;
 }

@@ -1289,6 +1289,15 @@ int mf_evaluate_want(const MFParams *p, int use_mode, const MFInputs *in, unsign
                      mf_warning_fn warn, void *ctx)
 {
     char msg[256];
+    if (mf_check_mode(use_mode, msg, sizeof msg) != MF_OK) return MF_BAD_MODE;
+    if (mf_check_fittyp(p, msg, sizeof msg) != MF_OK) return MF_BAD_FITTYP;
+    mf_evaluate_checked(p, use_mode, in, want, out, warn, ctx);
+    return MF_OK;
+}
+
+void mf_evaluate_checked(const MFParams *p, int use_mode, const MFInputs *in, unsigned want, MFOutputs *out,
+                         mf_warning_fn warn, void *ctx)
+{
     Ctx m;
     Cond c;
     double dpi, Re, Romega, omega, omega_in;
@@ -1300,8 +1309,6 @@ int mf_evaluate_want(const MFParams *p, int use_mode, const MFInputs *in, unsign
     ExtTable ext = {NULL, 0};
 #endif
 
-    if (mf_check_mode(use_mode, msg, sizeof msg) != MF_OK) return MF_BAD_MODE;
-    if (mf_check_fittyp(p, msg, sizeof msg) != MF_OK) return MF_BAD_FITTYP;
     m.warnings = 0;
     m.batch_camber = -1;
     decode_mode(&m, use_mode);
@@ -1322,5 +1329,4 @@ int mf_evaluate_want(const MFParams *p, int use_mode, const MFInputs *in, unsign
                 mf_warning_text(p, k, text, sizeof text);
                 warn(ctx, k, text);
             }
-    return MF_OK;
 }
