@@ -1291,12 +1291,12 @@ int mf_evaluate_want(const MFParams *p, int use_mode, const MFInputs *in, unsign
     char msg[256];
     if (mf_check_mode(use_mode, msg, sizeof msg) != MF_OK) return MF_BAD_MODE;
     if (mf_check_fittyp(p, msg, sizeof msg) != MF_OK) return MF_BAD_FITTYP;
-    mf_evaluate_checked(p, use_mode, in, want, out, warn, ctx);
+    mf_evaluate_unchecked(p, use_mode, in, want, out, warn, ctx);
     return MF_OK;
 }
 
-void mf_evaluate_checked(const MFParams *p, int use_mode, const MFInputs *in, unsigned want, MFOutputs *out,
-                         mf_warning_fn warn, void *ctx)
+void mf_evaluate_unchecked(const MFParams *p, int use_mode, const MFInputs *in, unsigned want, MFOutputs *out,
+                           mf_warning_fn warn, void *ctx)
 {
     Ctx m;
     Cond c;

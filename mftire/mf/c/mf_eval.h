@@ -90,8 +90,8 @@ MF_API int mf_evaluate_want(const MFParams *p, int use_mode, const MFInputs *in,
  * (mf_check_fittyp) when they are set, not at every evaluation (the FMU models): with a mode or FITTYP
  * those checks refuse, the numbers are undefined.
  */
-MF_API void mf_evaluate_checked(const MFParams *p, int use_mode, const MFInputs *in, unsigned want, MFOutputs *out,
-                                mf_warning_fn warn, void *ctx);
+MF_API void mf_evaluate_unchecked(const MFParams *p, int use_mode, const MFInputs *in, unsigned want,
+                                  MFOutputs *out, mf_warning_fn warn, void *ctx);
 
 #ifdef __cplusplus
 }
