@@ -109,32 +109,36 @@ def test_two_tyres_link_statically_into_one_executable_with_prefixes(fmus, tmp_p
     assert got[0] != got[1]
 
 
-@needs_c_compiler
-@pytest.mark.parametrize("version", [2, 3])
-def test_do_step_outside_the_running_state_is_an_error(fmus, version):
+def _cs_slave(path: Path, version: int, messages: list):
+    """An instantiated Co-Simulation slave of the FMU at ``path`` (FMI ``version``; FMI 2: experiment set up at
+    t = 0), its log appended to ``messages`` as (status, category, message)."""
     import fmpy
     from fmpy.fmi2 import FMU2Slave
     from fmpy.fmi3 import FMU3Slave
 
     from mftire.fmu.host import make_callbacks
 
-    path = fmus[("MF61", version)]
     md = fmpy.read_model_description(str(path))
-    unzip = fmpy.extract(str(path))
-    messages: list = []
+    slave = FMU2Slave if version == 2 else FMU3Slave
+    s = slave(guid=md.guid, unzipDirectory=fmpy.extract(str(path)), modelIdentifier=md.coSimulation.modelIdentifier,
+              instanceName="s")  # fmt: skip
     if version == 2:
-        s = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
-                      instanceName="s")  # fmt: skip
         s.instantiate(callbacks=make_callbacks(messages))
         s.setupExperiment(startTime=0.0)
     else:
-        s = FMU3Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
-                      instanceName="s")  # fmt: skip
+        s.instantiate(logMessage=lambda env, status, category, message: messages.append(
+            (int(status), category.decode(), message.decode())))  # fmt: skip
+    return s
 
-        def log3(env, status, category, message):
-            messages.append((int(status), category.decode(), message.decode()))
 
-        s.instantiate(logMessage=log3)
+@needs_c_compiler
+@pytest.mark.parametrize("version", [2, 3])
+def test_do_step_outside_the_running_state_is_an_error(fmus, version):
+    import fmpy
+
+
+    messages: list = []
+    s = _cs_slave(fmus[("MF61", version)], version, messages)
     with pytest.raises(fmpy.fmi1.FMICallException):  # before initialisation
         s.doStep(0.0, 1e-3)
     if version == 2:
@@ -160,22 +164,10 @@ def test_functions_the_fmu_does_not_implement_are_refused_by_name(fmus, version)
     'not terminated' and discard the other kinds; an empty access of a type without variables is fine."""
     import ctypes
 
-    import fmpy
-    from fmpy.fmi2 import FMU2Slave
-    from fmpy.fmi3 import FMU3Slave
-
-    from mftire.fmu.host import make_callbacks
-
-    path = fmus[("MF61", version)]
-    md = fmpy.read_model_description(str(path))
-    unzip = fmpy.extract(str(path))
     messages: list = []
+    s = _cs_slave(fmus[("MF61", version)], version, messages)
     ok, discard, error = 0, 2, 3
     if version == 2:
-        s = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
-                      instanceName="s")  # fmt: skip
-        s.instantiate(callbacks=make_callbacks(messages))
-        s.setupExperiment(startTime=0.0)
         s.enterInitializationMode()
         s.exitInitializationMode()
         s.doStep(0.0, 0.25)
@@ -195,13 +187,6 @@ def test_functions_the_fmu_does_not_implement_are_refused_by_name(fmus, version)
         texts = {"fmi2GetBoolean": "no Boolean variables", "fmi2GetFMUstate": "fmi2GetFMUstate is not supported",
                  "fmi2CancelStep": "fmi2CancelStep is not supported"}  # fmt: skip
     else:
-        s = FMU3Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
-                      instanceName="s")  # fmt: skip
-
-        def log3(env, status, category, message):
-            messages.append((int(status), category.decode(), message.decode()))
-
-        s.instantiate(logMessage=log3)
         c, dll = ctypes.c_void_p(s.component), ctypes.CDLL(s.dll._name)  # no argument types: the pointer as such
         state, vr = ctypes.c_void_p(), (ctypes.c_uint * 1)(0)
         values, q = (ctypes.c_double * 1)(), (ctypes.c_int * 1)()

@@ -45,6 +45,8 @@ static fmi3Status fail(fmi3Instance instance, const char *what)
     }
 #define UNSUPPORTED(NAME, PARAMS, ...) REFUSED(NAME, PARAMS, #NAME " is not supported", __VA_ARGS__)
 
+#define NO_CLOCKS_TEXT "the model has no clocks"
+
 /* Access to variables of a kind the model has none of (nvr value references): an empty call is fine, any other
  * the error WHY. */
 #define NO_VALUES(NAME, PARAMS, WHY, ...)                                                                        \
@@ -230,10 +232,10 @@ NO_VALUES(fmi3SetBinary, (fmi3Instance instance, const fmi3ValueReference vr[], 
                           const size_t valueSizes[], const fmi3Binary values[], size_t nValues),
           "the model has no Binary variables", (void)vr, (void)valueSizes, (void)values, (void)nValues)
 NO_VALUES(fmi3GetClock, (fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Clock values[]),
-          "the model has no clocks", (void)vr, (void)values)
+          NO_CLOCKS_TEXT, (void)vr, (void)values)
 NO_VALUES(fmi3SetClock, (fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                          const fmi3Clock values[]),
-          "the model has no clocks", (void)vr, (void)values)
+          NO_CLOCKS_TEXT, (void)vr, (void)values)
 
 /* Every output (and state derivative) depends on every input and state (fm_dependencies). */
 #define is_output(vr) fm_is_unknown(vr)
@@ -296,31 +298,31 @@ REFUSED(fmi3ActivateModelPartition,
         "Scheduled Execution is not supported", (void)clockReference, (void)activationTime)
 
 /* The clocks' intervals and shifts: the model has no clocks. */
-REFUSED(fmi3GetIntervalDecimal,
-        (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3Float64 intervals[],
-         fmi3IntervalQualifier q[]),
-        "the model has no clocks", (void)vr, (void)n, (void)intervals, (void)q)
-REFUSED(fmi3GetIntervalFraction,
-        (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3UInt64 c[], fmi3UInt64 r[],
-         fmi3IntervalQualifier q[]),
-        "the model has no clocks", (void)vr, (void)n, (void)c, (void)r, (void)q)
-REFUSED(fmi3GetShiftDecimal, (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3Float64 shifts[]),
-        "the model has no clocks", (void)vr, (void)n, (void)shifts)
-REFUSED(fmi3GetShiftFraction,
-        (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3UInt64 c[], fmi3UInt64 r[]),
-        "the model has no clocks", (void)vr, (void)n, (void)c, (void)r)
-REFUSED(fmi3SetIntervalDecimal,
-        (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3Float64 intervals[]),
-        "the model has no clocks", (void)vr, (void)n, (void)intervals)
-REFUSED(fmi3SetIntervalFraction,
-        (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3UInt64 c[], const fmi3UInt64 r[]),
-        "the model has no clocks", (void)vr, (void)n, (void)c, (void)r)
-REFUSED(fmi3SetShiftDecimal,
-        (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3Float64 shifts[]),
-        "the model has no clocks", (void)vr, (void)n, (void)shifts)
-REFUSED(fmi3SetShiftFraction,
-        (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3UInt64 c[], const fmi3UInt64 r[]),
-        "the model has no clocks", (void)vr, (void)n, (void)c, (void)r)
+#define NO_CLOCKS(NAME, PARAMS, ...) REFUSED(NAME, PARAMS, NO_CLOCKS_TEXT, __VA_ARGS__)
+
+NO_CLOCKS(fmi3GetIntervalDecimal, (fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
+                                   fmi3Float64 intervals[], fmi3IntervalQualifier q[]),
+          (void)vr, (void)n, (void)intervals, (void)q)
+NO_CLOCKS(fmi3GetIntervalFraction, (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3UInt64 c[],
+                                    fmi3UInt64 r[], fmi3IntervalQualifier q[]),
+          (void)vr, (void)n, (void)c, (void)r, (void)q)
+NO_CLOCKS(fmi3GetShiftDecimal, (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3Float64 shifts[]),
+          (void)vr, (void)n, (void)shifts)
+NO_CLOCKS(fmi3GetShiftFraction,
+          (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3UInt64 c[], fmi3UInt64 r[]),
+          (void)vr, (void)n, (void)c, (void)r)
+NO_CLOCKS(fmi3SetIntervalDecimal,
+          (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3Float64 intervals[]),
+          (void)vr, (void)n, (void)intervals)
+NO_CLOCKS(fmi3SetIntervalFraction, (fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
+                                    const fmi3UInt64 c[], const fmi3UInt64 r[]),
+          (void)vr, (void)n, (void)c, (void)r)
+NO_CLOCKS(fmi3SetShiftDecimal, (fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
+                                const fmi3Float64 shifts[]),
+          (void)vr, (void)n, (void)shifts)
+NO_CLOCKS(fmi3SetShiftFraction,
+          (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3UInt64 c[], const fmi3UInt64 r[]),
+          (void)vr, (void)n, (void)c, (void)r)
 
 /* ------------------------------------------------------------------ events and Model Exchange */
 
