@@ -185,7 +185,8 @@ static int update(FMModel *m)
     in = m->inputs;
     guard_inputs(m, &in);
     if (m->b.initialized)
-        mf_evaluate_unchecked(&m->params, m->b.use_mode, &in, MF_WANT_ALL, &m->outputs, on_warning, m);
+        fm_base_warn_kinds(&m->b, &m->params, mf_evaluate_unchecked(&m->params, m->b.use_mode, &in, MF_WANT_ALL,
+                                                                     &m->outputs));
     else
         rc = mf_evaluate(&m->params, m->b.use_mode, &in, &m->outputs, on_warning, m);
     if (rc != MF_OK) return fm_eval_error(m->b.log, m->b.host, &m->params, m->b.use_mode, rc);

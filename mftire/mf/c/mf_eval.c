@@ -1289,20 +1289,29 @@ int mf_evaluate_want(const MFParams *p, int use_mode, const MFInputs *in, unsign
                      mf_warning_fn warn, void *ctx)
 {
     char msg[256];
+    unsigned long warnings;
+    int k;
     if (mf_check_mode(use_mode, msg, sizeof msg) != MF_OK) return MF_BAD_MODE;
     if (mf_check_fittyp(p, msg, sizeof msg) != MF_OK) return MF_BAD_FITTYP;
-    mf_evaluate_unchecked(p, use_mode, in, want, out, warn, ctx);
+    warnings = mf_evaluate_unchecked(p, use_mode, in, want, out);
+    if (warn && warnings)
+        for (k = 0; k < MF_W_COUNT; k++)
+            if (warnings & (1UL << k)) {
+                char text[200];
+                mf_warning_text(p, k, text, sizeof text);
+                warn(ctx, k, text);
+            }
     return MF_OK;
 }
 
-void mf_evaluate_unchecked(const MFParams *p, int use_mode, const MFInputs *in, unsigned want, MFOutputs *out,
-                           mf_warning_fn warn, void *ctx)
+unsigned long mf_evaluate_unchecked(const MFParams *p, int use_mode, const MFInputs *in, unsigned want,
+                                    MFOutputs *out)
 {
     Ctx m;
     Cond c;
     double dpi, Re, Romega, omega, omega_in;
     double data[MF_MAX_DATA] = {0.0};
-    int omega_given, k, kmax = 100;
+    int omega_given, kmax = 100;
 #if MF_N_TERMS > 0
     ExtTable ext = {MF_TERMS, MF_N_TERMS};
 #else
@@ -1321,12 +1330,5 @@ void mf_evaluate_unchecked(const MFParams *p, int use_mode, const MFInputs *in, 
     c.omega = omega;
     mf_channels(p, &m, &ext, &c, dpi, Romega, data, in->muRoad, want, out);
     out->Fz = c.uFz; out->Re = Re; out->omega = c.omega;
-
-    if (warn && m.warnings)
-        for (k = 0; k < MF_W_COUNT; k++)
-            if (m.warnings & (1UL << k)) {
-                char text[200];
-                mf_warning_text(p, k, text, sizeof text);
-                warn(ctx, k, text);
-            }
+    return m.warnings;
 }
