@@ -362,16 +362,18 @@ def test_hinge_and_direction_form_values(form, numbers, u, expected):
 
 
 def test_input_laws_equal_the_corrected_inputs():
-    """P_FACTOR evaluates the tyre at P·f, ALPHA_OFFSET / GAMMA_OFFSET at alpha / gamma + (f − 1)."""
+    """P_FACTOR evaluates the tyre at P·f, ALPHA_OFFSET / GAMMA_OFFSET / KAPPA_OFFSET at alpha / gamma / kappa
+    + (f − 1)."""
     base = load(REFERENCE_TYRES["MF61"])
     P0 = base["NOMPRES"]
     ext = _extended({**_term(1, "P_FACTOR", "linear", "tread_temp", ref=20.0, scale=100.0, c1=0.1),
                      **_term(2, "ALPHA_OFFSET", "linear", "tread_temp", ref=20.0, scale=100.0, c1=0.01),
-                     **_term(3, "GAMMA_OFFSET", "linear", "tread_temp", ref=20.0, scale=100.0, c1=-0.02)})  # fmt: skip
+                     **_term(3, "GAMMA_OFFSET", "linear", "tread_temp", ref=20.0, scale=100.0, c1=-0.02),
+                     **_term(4, "KAPPA_OFFSET", "linear", "tread_temp", ref=20.0, scale=100.0, c1=0.015)})  # fmt: skip
     T = np.array([20.0, 70.0, 120.0])
     f = 1.0 + (T - 20.0) / 100.0
     got = ext.evaluate(5000.0, -0.05, 0.04, 0.01, P=P0, tread_temp=T, mode=121)
-    ref = base.evaluate(5000.0, -0.05, 0.04 + 0.01 * (f - 1), 0.01 - 0.02 * (f - 1),
+    ref = base.evaluate(5000.0, -0.05 + 0.015 * (f - 1), 0.04 + 0.01 * (f - 1), 0.01 - 0.02 * (f - 1),
                         P=P0 * (1.0 + 0.1 * (f - 1)), mode=121)  # fmt: skip
     for k in ("Fx", "Fy", "Mz", "Mx", "My"):
         np.testing.assert_allclose(got[k], ref[k], rtol=1e-10, atol=1e-9, err_msg=k)

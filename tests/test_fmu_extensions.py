@@ -69,7 +69,9 @@ CASES: dict[str, tuple[str, dict]] = {
                                          max=120.0, c1=0.08),
                                  **_term(2, "ALPHA_OFFSET", "linear", "time", ref=0.0, scale=1000.0, c1=0.01),
                                  **_term(3, "GAMMA_OFFSET", "quadratic", "temperature", ref=20.0, scale=50.0,
-                                         c1=0.005, c2=0.002)}),
+                                         c1=0.005, c2=0.002),
+                                 **_term(4, "KAPPA_OFFSET", "hinge", "temperature", ref=20.0, scale=50.0,
+                                         c1=0.01, c2=0.2)}),
     "all": ("JuliaMF62", {
         **_term(1, "LMUX LMUY", "decay", "Vs", scale=16.7, c1=0.3),
         **_term(2, "LMUX LMUY", "saturating", "time", scale=300.0, c1=-0.15, c2=1.0),

@@ -27,7 +27,7 @@ per channel:
     and a new campaign (``new campaign``: new offsets and a new drift, beyond the claim).
 
     python validation/band_coverage.py [--design synthetic|slip_speed|slip_speed_sweeps] [--repeats 20]
-        [--replicates 6] [--folds 5] [--csv FILE]
+        [--replicates 6] [--folds 5] [--conditions] [--csv FILE]
     python validation/band_coverage.py --offsets [--repeats 12]
 
 (``--offsets``: RMS of the per-sweep mean residual on the fitted sweeps, the campaign's own held-out sweeps
@@ -101,8 +101,10 @@ def _rows(i: int, what: str, cov: pd.DataFrame, bands, level: float, source: str
 
 
 def study(repeats: int, replicates: int = 6, level: float = 0.95, seed: int = 0, design: str = "synthetic",
-          channels: Sequence[str] = CHANNELS, calibrate: int = 5, **campaign_kw) -> pd.DataFrame:
-    """Coverage of the prediction band on a repeated campaign, one row per repeat, counted set and channel."""
+          channels: Sequence[str] = CHANNELS, calibrate: int = 5, conditions: bool = False,
+          **campaign_kw) -> pd.DataFrame:
+    """Coverage of the prediction band on a repeated campaign, one row per repeat, counted set and channel
+    (``conditions``: with the condition folds, ``bootstrap_bands(calibrate_conditions=True)``)."""
     if design not in DESIGNS:
         raise ValueError(f"design must be one of {DESIGNS}")
     rows = []
@@ -117,7 +119,7 @@ def study(repeats: int, replicates: int = 6, level: float = 0.95, seed: int = 0,
                                   if ch in channels)
                 fit = fit_tir(train, TIR, stages=stages, progress=False)
                 bands = bootstrap_bands(None, TIR, n=replicates, fit=fit, level=level, seed=s, grid=train.iloc[:0],
-                                        calibrate=calibrate)
+                                        calibrate=calibrate, calibrate_conditions=conditions)
                 # a new campaign at loads between the fitted ones (the conditions a band is calibrated for: a
                 # sweep the fit did not see), and the same campaign re-measured
                 loads = campaign_kw.get("loads", (0.5, 1.0, 1.5))
@@ -138,7 +140,8 @@ def study(repeats: int, replicates: int = 6, level: float = 0.95, seed: int = 0,
                 held = np.isin(sid, pick)
                 fit = fit_tir(train[~held], template, progress=False)
                 bands = bootstrap_bands(None, template, n=replicates, fit=fit, level=level, seed=s,
-                                        grid=train.iloc[:0], calibrate=calibrate)
+                                        grid=train.iloc[:0], calibrate=calibrate,
+                                        calibrate_conditions=conditions)
                 sets = {"random heldout sweeps": train[held], "new campaign": new}
                 source = "measured"
             else:
@@ -147,7 +150,8 @@ def study(repeats: int, replicates: int = 6, level: float = 0.95, seed: int = 0,
                 held = np.isclose(train["Vx"].to_numpy(float) * 3.6, HELDOUT_KMH)
                 fit = fit_tir(train[~held], template, progress=False)
                 bands = bootstrap_bands(None, template, n=replicates, fit=fit, level=level, seed=s,
-                                        grid=train.iloc[:0], calibrate=calibrate)
+                                        grid=train.iloc[:0], calibrate=calibrate,
+                                        calibrate_conditions=conditions)
                 at_held = np.isclose(new["Vx"].to_numpy(float) * 3.6, HELDOUT_KMH)
                 # the held-out sweeps of this campaign (as in the demo: sweeps of the campaign the fit and the
                 # calibration did not see), and a new campaign (new offsets and a new drift: beyond the claim)
@@ -204,6 +208,8 @@ def main() -> None:
     ap.add_argument("--level", type=float, default=0.95)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--folds", type=int, default=5, help="calibration folds (bootstrap_bands' calibrate)")
+    ap.add_argument("--conditions", action="store_true",
+                    help="also calibrate on condition folds (leave one speed/load/pressure/camber level out)")
     ap.add_argument("--csv", help="also write the per-repeat table to this CSV file")
     ap.add_argument("--offsets", action="store_true",
                     help="instead: RMS of the per-sweep mean residual, fitted / held-out / new campaign (slip_speed)")
@@ -215,14 +221,16 @@ def main() -> None:
               f"{time.perf_counter() - t0:.0f} s")
         print(off.to_string(float_format=lambda v: f"{v:.2f}"))
         return
-    table = study(args.repeats, args.replicates, args.level, args.seed, args.design, calibrate=args.folds)
+    table = study(args.repeats, args.replicates, args.level, args.seed, args.design, calibrate=args.folds,
+                  conditions=args.conditions)
     if args.csv:
         table.to_csv(args.csv, index=False)
     for (i, what), g in table.groupby(["repeat", "design"], sort=False):
         print(f"repeat {i} {what}: " + ", ".join(f"{r.channel} {100 * r.inside:.1f} %" for r in g.itertuples()),
               flush=True)
     s = summary(table)
-    print(f"\n{args.design} design, {args.folds} calibration folds, nominal {100 * args.level:g} %, "
+    extra = " and condition folds" if args.conditions else ""
+    print(f"\n{args.design} design, {args.folds} calibration folds{extra}, nominal {100 * args.level:g} %, "
           f"{args.repeats} repeats, {time.perf_counter() - t0:.0f} s")
     for r in s.itertuples(index=False):
         print(f"  {r.design:>15} {r.channel:>3}: mean {100 * r.mean:.1f} % (s.e. {100 * r.se:.1f}, range "

@@ -286,6 +286,10 @@ def order_fold(df: pd.DataFrame, kinds: np.ndarray | None, share: float = ORDER_
     return out if np.any(out == 0) else None
 
 
+#: Candidates whose laws are refitted in full and judged on the held-out condition, in order of preference, at most.
+CAUSES_TRIED = 3
+
+
 #: Operating conditions held out besides the diagnosis's own (:func:`_worse_elsewhere`), at most.
 EXTRA_CONDITIONS = 2
 
@@ -454,12 +458,15 @@ def split_fit_rows(data: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame | Non
 def input_laws(tyre: Tyre, channels: Sequence[str], variable: str) -> list[str]:
     """The input laws (:data:`mftire.mf.extensions.INPUT_TARGETS`) worth trying for ``variable``: an effective
     pressure when the file has pressure terms (:data:`~mftire.diagnosis.effects.PRESSURE_COEFFICIENTS`) and the
-    candidate is not the pressure itself; a slip-angle and a camber offset when Fy is measured."""
+    candidate is not the pressure itself; a slip-angle and a camber offset when Fy is measured; a longitudinal-slip
+    offset when Fx is."""
     out = []
     if variable not in ("P", "dpi") and any(float(tyre.flat.get(k, 0.0)) != 0.0 for k in PRESSURE_COEFFICIENTS):
         out.append("P_FACTOR")
     if "Fy" in channels:
         out += ["ALPHA_OFFSET", "GAMMA_OFFSET"]
+    if "Fx" in channels:
+        out.append("KAPPA_OFFSET")
     return out
 
 
@@ -734,58 +741,73 @@ def _diagnose(
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
                                profiles=profiles, cause=top.variable)  # fmt: skip
-    effect, cause, context = best
-    # the chosen candidate's best laws and the control, refitted with every MF coefficient
-    say(f"refitting every coefficient with the laws of {effect.variable}")
-    prob, law_fits, eff_ch, folds, in_blocks, control_cv, control_channels, local_control, forward = context
-    variants, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv, control_channels,
-                                    local_control, forward)  # fmt: skip
-    if not variants:
-        msg = ("no significant effect: the best laws did not beat the control once every coefficient was "
-               "refitted (" + "; ".join(notes) + ")")
-        return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
-                               tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
-                               profiles=profiles, cause=top.variable)  # fmt: skip
-    # the held-out condition: each variant's model and its control, both refitted without it, per channel; the
-    # first variant (in order of preference) that no channel finds worse beyond its noise and that improves the
-    # scored channels together is accepted.  A law acts on its channels only: every other coefficient stays as
-    # the model has it, the control is restricted the same way.
+    # the preferred candidate first, then the others by held-out error: when every law of one is refused (by the
+    # control refitted in full or on the held-out condition), the next candidate's laws are tried
+    order = [best] + sorted((t for t in found if t is not best), key=lambda t: t[0].heldout)
     dtest = df[test].reset_index(drop=True)
-    rejected: list[str] = []
+    refits: list[str] = []  # candidates whose laws lost to the control refitted in full
+    lost: list[str] = []  # candidates whose laws lost on the held-out condition
+    all_variants: list[EffectFit] = []
     accepted = None
-    for refined, extended in variants:
-        values_r = variable_values(prob.df, refined, cause.variable)
-        if not plausible_inputs(refined, values_r):
-            rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) moves its "
-                            "input beyond physical limits")  # fmt: skip
+    for effect, cause, context in order[:CAUSES_TRIED]:
+        # the candidate's best laws and the control, refitted with every MF coefficient
+        say(f"refitting every coefficient with the laws of {effect.variable}")
+        prob, law_fits, eff_ch, folds, in_blocks, control_cv, control_channels, local_control, forward = context
+        variants, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv, control_channels,
+                                        local_control, forward)  # fmt: skip
+        if not variants:
+            refits.append(f"{cause.variable}: " + "; ".join(notes))
             continue
-        ext_r, eff_r = restricted(tyre, extended, refined)
-        ctrl_r, _ = restricted(tyre, refined.control_tyre, refined)
-        errs = channel_errors(dtest, _model(ctrl_r, dtest), _model(ext_r, dtest), chans)
-        # the scored channels, those the laws are fitted on (Mx and My follow the forces through models of
-        # their own and are reported, not scored)
-        worse = [e.channel for e in worse_errors(errs, noise)]
-        gain = sum(e.rms_pct_before**2 - e.rms_pct_after**2 for e in errs if e.channel in FIT_CHANNELS)
-        if not worse and gain > 0.0:
-            late = _worse_elsewhere(prob, refined, ext_r, ctrl_r, values_r,
-                                    n_pressures, eff_ch, chans, noise, column)  # fmt: skip
-            if not late:
-                accepted = (eff_r, ext_r, errs)
-                break
-            rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) made "
-                            + "; ".join(late))
-            continue
-        what = ", ".join(f"{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g}" for e in errs
-                         if e.channel in worse)  # fmt: skip
-        rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) "
-                        + (f"made {what}" if worse else "did not improve"))
+        all_variants += [v[0] for v in variants]
+        # the held-out condition: each variant's model and its control, both refitted without it, per channel; the
+        # first variant (in order of preference) that no channel finds worse beyond its noise and that improves the
+        # scored channels together is accepted.  A law acts on its channels only: every other coefficient stays as
+        # the model has it, the control is restricted the same way.
+        rejected: list[str] = []
+        for refined, extended in variants:
+            values_r = variable_values(prob.df, refined, cause.variable)
+            if not plausible_inputs(refined, values_r):
+                rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) moves "
+                                "its input beyond physical limits")  # fmt: skip
+                continue
+            ext_r, eff_r = restricted(tyre, extended, refined)
+            ctrl_r, _ = restricted(tyre, refined.control_tyre, refined)
+            errs = channel_errors(dtest, _model(ctrl_r, dtest), _model(ext_r, dtest), chans)
+            # the scored channels, those the laws are fitted on (Mx and My follow the forces through models of
+            # their own and are reported, not scored)
+            worse = [e.channel for e in worse_errors(errs, noise)]
+            gain = sum(e.rms_pct_before**2 - e.rms_pct_after**2 for e in errs if e.channel in FIT_CHANNELS)
+            if not worse and gain > 0.0:
+                late = _worse_elsewhere(prob, refined, ext_r, ctrl_r, values_r,
+                                        n_pressures, eff_ch, chans, noise, column)  # fmt: skip
+                if not late:
+                    accepted = (eff_r, ext_r, errs)
+                    break
+                rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) made "
+                                + "; ".join(late))
+                continue
+            what = ", ".join(f"{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g}" for e in errs
+                             if e.channel in worse)  # fmt: skip
+            rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) "
+                            + (f"made {what}" if worse else "did not improve"))
+        if accepted is not None:
+            break
+        lost.append(f"{cause.variable}: " + "; ".join(rejected))
     if accepted is None:  # no law: the cause named is the ranking's first, the strongest evidence there is
-        msg = (f"cause named, no law found: the laws that beat the control on the held-out folds lost to the model "
-               f"refitted without them on the held-out condition {column} = {values}: " + "; ".join(rejected)
-               + "; the model is left unchanged")  # fmt: skip
+        if lost:
+            msg = (f"cause named, no law found: the laws that beat the control on the held-out folds lost to the "
+                   f"model refitted without them on the held-out condition {column} = {values} ("
+                   + " | ".join(lost) + ")" + (" or to the control refitted in full (" + " | ".join(refits) + ")"
+                                               if refits else "")
+                   + "; the model is left unchanged")  # fmt: skip
+        else:
+            msg = ("no significant effect: the best laws did not beat the control once every coefficient was "
+                   "refitted (" + " | ".join(refits) + ")")
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
-                               [], None, tried + [v[0] for v in variants], messages=[msg], data=df, train=train,
+                               [], None, tried + all_variants, messages=[msg], data=df, train=train,
                                not_measured=not_measured, profiles=profiles, cause=top.variable)  # fmt: skip
+    if refits or lost:
+        accepted[0].messages.append("tried first: " + " | ".join(refits + lost))
     effect = variants[0][0]
     # e.g. a slip-speed law chosen for Vx: the cause is Vs; a test-order effect (the position in the sequence, the
     # friction work) with its law in the elapsed time: the cause named is the physical accumulator the law reads

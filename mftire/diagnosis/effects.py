@@ -80,8 +80,9 @@ FAMILY_TARGETS = {
 }
 #: Input laws (:data:`mftire.mf.extensions.INPUT_TARGETS`) tried with a family: an effective inflation
 #: pressure with friction or stiffness (it acts through the MF's pressure terms, eqs 4.E2b, 4.E13, 4.E15,
-#: 4.E23, 4.E25), a slip-angle or camber offset with a shift (it moves the curves sideways).
-INPUT_LAWS = {"friction": ("P_FACTOR",), "stiffness": ("P_FACTOR",), "shift": ("ALPHA_OFFSET", "GAMMA_OFFSET")}
+#: 4.E23, 4.E25), a slip-angle, camber or longitudinal-slip offset with a shift (it moves the curves sideways).
+INPUT_LAWS = {"friction": ("P_FACTOR",), "stiffness": ("P_FACTOR",),
+              "shift": ("ALPHA_OFFSET", "GAMMA_OFFSET", "KAPPA_OFFSET")}
 #: Standard coefficients through which an effective pressure acts (none non-zero: no pressure input law).
 PRESSURE_COEFFICIENTS = ("PPX1", "PPX2", "PPX3", "PPX4", "PPY1", "PPY2", "PPY3", "PPY4", "PPZ1")
 
@@ -252,7 +253,7 @@ def effects_for(
             laws.append((variable, Law(f"{fam}_interaction", tg, "interaction", variable2=second)))
         for target in INPUT_LAWS.get(fam, ()):
             name = {"P_FACTOR": "effective_pressure", "ALPHA_OFFSET": "slip_angle_offset",
-                    "GAMMA_OFFSET": "camber_offset"}[target]  # fmt: skip
+                    "GAMMA_OFFSET": "camber_offset", "KAPPA_OFFSET": "slip_ratio_offset"}[target]  # fmt: skip
             if target in inputs and all(law.name != name for _, law in laws):
                 laws.append((variable, Law(name, (target,), "linear")))
     return tuple(laws)
@@ -602,6 +603,10 @@ class _EffectResiduals:
 
 #: An effect must leave at most this share of the control refit's residual ...
 MAX_RESIDUAL_VS_CONTROL = 0.9
+#: The laws judged on held-out sweeps (:func:`choose_effect`): the best by BIC among those that beat the control ...
+CV_LAWS = 4
+#: ... and the best that act only on the channels where the candidate is significant.
+CV_NARROW = 2
 
 
 def _beats(fit: EffectFit, control: EffectFit) -> bool:
@@ -717,10 +722,11 @@ def trimmed(law: Law, worse: Sequence[str]) -> Law | None:
 
 #: The largest input correction a law may make over the rows it is fitted on: an effective pressure within
 #: 0.7-1.4 × the logged one (the ideal-gas rise of a tyre from cold to hot is some 10-20 %), a slip-angle
-#: offset within 2 deg (toe and rig misalignment) and a camber offset within 6 deg.  A larger correction is not
+#: offset within 2 deg (toe and rig misalignment), a camber offset within 6 deg and a longitudinal-slip offset
+#: within 0.03 (a 3 % error of the wheel speed or of the effective rolling radius).  A larger correction is not
 #: a mis-measured input but a law standing in for something else, and extrapolates without meaning.
 INPUT_LIMITS = {"P_FACTOR": (0.7, 1.4), "ALPHA_OFFSET": (-np.radians(2.0), np.radians(2.0)),
-                "GAMMA_OFFSET": (-np.radians(6.0), np.radians(6.0))}  # fmt: skip
+                "GAMMA_OFFSET": (-np.radians(6.0), np.radians(6.0)), "KAPPA_OFFSET": (-0.03, 0.03)}  # fmt: skip
 
 
 def plausible_inputs(fit: EffectFit, values: np.ndarray | None) -> bool:
@@ -757,7 +763,8 @@ def choose_effect(
 
     Every fit is compared with a *control*: the same coefficients refitted without
     any extension.  The laws that beat the control on the training data (see
-    :func:`_beats`) are then compared, with the control, by their error on held-out
+    :func:`_beats`; the :data:`CV_LAWS` best by BIC and the :data:`CV_NARROW` best acting only on ``effect_channels``)
+    are then compared, with the control, by their error on held-out
     sweeps (:func:`heldout_error`): the law with the lowest held-out error is chosen, and
     only when it beats the control's held-out error by 10 %.  Training error alone never
     chooses a law.
@@ -796,8 +803,14 @@ def choose_effect(
         fits.append((fit_effect(prob, law, var, v, n_pressures, warm=control.standard,
                                 pressure_channels=effect_channels, refit_channels=refit_channels_of(law)),
                      v, law))  # fmt: skip
-    good = sorted((t for t in fits if t[0].n_params > 0 and _beats(t[0], control_for(refit_channels_of(t[2])))
-                   and plausible_inputs(t[0], t[1])), key=lambda t: t[0].bic)[:4]  # fmt: skip
+    beating = sorted((t for t in fits if t[0].n_params > 0 and _beats(t[0], control_for(refit_channels_of(t[2])))
+                      and plausible_inputs(t[0], t[1])), key=lambda t: t[0].bic)  # fmt: skip
+    good = beating[:CV_LAWS]
+    if effect_channels:
+        # the best laws that act only on the channels where the candidate is significant: a broader law can win on
+        # training error by fitting another channel's run-to-run scatter, which does not hold on held-out sweeps
+        good += [t for t in beating if t not in good and all(
+            set(TARGET_CHANNELS.get(x, ())) <= set(effect_channels) for x in t[2].targets)][:CV_NARROW]
     all_fits = [control] + [f for f, _, _ in fits]
     if not good:
         return None, all_fits

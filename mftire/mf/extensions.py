@@ -86,17 +86,19 @@ OFFSET_TARGETS: tuple[str, ...] = ("FX_OFFSET", "FY_OFFSET")
 #: Input laws: a measured MF input corrected by a law of a column, applied to the conditioned inputs
 #: before the force and moment equations (a mis-measured input is one of the most common rig effects):
 #: ``ALPHA_OFFSET`` alpha + (f − 1) [rad] (a slip-angle offset, e.g. a toe misalignment drifting with
-#: time), ``GAMMA_OFFSET`` gamma + (f − 1) [rad] (a camber offset), ``P_FACTOR`` P·f (an effective
+#: time), ``GAMMA_OFFSET`` gamma + (f − 1) [rad] (a camber offset), ``KAPPA_OFFSET`` kappa + (f − 1) [-] (a
+#: longitudinal-slip offset: a wheel-speed or effective-radius error; it moves Fx(kappa) sideways as the
+#: horizontal shift SHx does, eq 4.E10, whatever the file's PHX1), ``P_FACTOR`` P·f (an effective
 #: inflation pressure, e.g. P·(1 + C1·(T − T0)) when the logged pressure stays at the cold value; Gay-Lussac:
 #: at constant volume P/T is constant).  The effective pressure enters every force and moment equation
 #: through dpi (Pacejka 2012 eq 4.E2b); the loaded radius and contact patch keep the logged pressure.
-INPUT_TARGETS: tuple[str, ...] = ("ALPHA_OFFSET", "GAMMA_OFFSET", "P_FACTOR")
+INPUT_TARGETS: tuple[str, ...] = ("ALPHA_OFFSET", "GAMMA_OFFSET", "KAPPA_OFFSET", "P_FACTOR")
 TARGETS: tuple[str, ...] = SCALING_TARGETS + OFFSET_TARGETS + INPUT_TARGETS
 
 #: Codes of the targets that are not scaling factors in the C term table (``MF_TARGET_*`` of the generated
 #: ``mf_ext_gen.h``; scaling factors are indices into ``MFParams``, >= 0).
 TARGET_CODES: dict[str, int] = {"FX_OFFSET": -1, "FY_OFFSET": -2, "ALPHA_OFFSET": -3, "GAMMA_OFFSET": -4,
-                                "P_FACTOR": -5}  # fmt: skip
+                                "P_FACTOR": -5, "KAPPA_OFFSET": -6}  # fmt: skip
 
 #: Channels each target acts on (the fitter fits a term in the first stage of these).
 TARGET_CHANNELS: dict[str, tuple[str, ...]] = {
@@ -106,8 +108,10 @@ TARGET_CHANNELS: dict[str, tuple[str, ...]] = {
     "LMX": ("Mx",), "LVMX": ("Mx",), "LMY": ("My",), "LFZO": ("Fx", "Fy"),
     # an input law acts on the channels whose pure-slip equations read that input: the slip angle those of Fy
     # and Mz (Fx reads it only through the combined-slip weighting, eqs 4.E54-4.E57, no coefficient refitted
-    # here), the camber also the friction of Fx (Pacejka 2012 eq 4.E13, PDX3), the pressure all three
+    # here), the camber also the friction of Fx (Pacejka 2012 eq 4.E13, PDX3), the pressure all three, the
+    # longitudinal slip that of Fx (Fy and Mz read it only through the combined-slip weighting and Fx)
     "ALPHA_OFFSET": ("Fy", "Mz"), "GAMMA_OFFSET": ("Fy", "Mz", "Fx"), "P_FACTOR": ("Fx", "Fy", "Mz"),
+    "KAPPA_OFFSET": ("Fx",),
 }  # fmt: skip
 
 #: Variables the evaluator derives from its own (conditioned) inputs: name -> (meaning,
@@ -443,7 +447,7 @@ class ExtensionSet:
         ``limits`` (modes 2xx) the law extrapolates.
 
         ``q`` is ``p`` with each targeted scaling factor replaced by λ·Π f (arrays);
-        ``offsets`` maps ``FX_OFFSET``/``FY_OFFSET``, ``ALPHA_OFFSET``/``GAMMA_OFFSET`` to the sum
+        ``offsets`` maps ``FX_OFFSET``/``FY_OFFSET``, ``ALPHA_OFFSET``/``GAMMA_OFFSET``/``KAPPA_OFFSET`` to the sum
         Σ(f − 1) and ``P_FACTOR`` to the product Π f (:func:`apply_input_laws`).
         ``variables`` holds every variable the terms read (builtin and external).
         """
@@ -560,7 +564,7 @@ def builtin_variables(p: Mapping[str, float], c) -> dict[str, np.ndarray]:
 
 def apply_input_laws(c, offsets: Mapping[str, np.ndarray]):
     """The conditioned inputs ``c`` (:class:`mftire.mf.inputs.Conditions`) with the input laws of
-    ``offsets`` (:data:`INPUT_TARGETS`) applied: alpha + offset, gamma + offset, P·factor (``c``
+    ``offsets`` (:data:`INPUT_TARGETS`) applied: alpha + offset, gamma + offset, kappa + offset, P·factor (``c``
     itself when there is none)."""
     if not any(k in offsets for k in INPUT_TARGETS):
         return c
@@ -568,7 +572,7 @@ def apply_input_laws(c, offsets: Mapping[str, np.ndarray]):
 
     return dataclasses.replace(
         c, alpha=c.alpha + offsets.get("ALPHA_OFFSET", 0.0), gamma=c.gamma + offsets.get("GAMMA_OFFSET", 0.0),
-        P=c.P * offsets.get("P_FACTOR", 1.0))  # fmt: skip
+        kappa=c.kappa + offsets.get("KAPPA_OFFSET", 0.0), P=c.P * offsets.get("P_FACTOR", 1.0))  # fmt: skip
 
 
 def required_variables(section: Mapping[str, object] | None) -> list[str]:

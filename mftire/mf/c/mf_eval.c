@@ -1095,7 +1095,8 @@ MF_FN double mf_ext_table(double u, const double *c, int n)
 }
 
 /* q = p with the targeted scaling factors multiplied by f; off[0], off[1] the FX/FY offset sums; off[2],
- * off[3] the slip-angle and camber offsets and off[4] the pressure factor of the input laws.
+ * off[3] the slip-angle and camber offsets, off[4] the pressure factor and off[5] the longitudinal-slip
+ * offset of the input laws (extensions.py INPUT_TARGETS).
  * The term fields are read as doubles from p's storage at the indices of the table (in the
  * array kernel the storage runs on past MFParams with the numbers of the terms). */
 MF_FN void apply_extensions(const ExtTable *ext, const MFParams *p, Ctx *m, const Cond *c, const double *data,
@@ -1105,7 +1106,7 @@ MF_FN void apply_extensions(const ExtTable *ext, const MFParams *p, Ctx *m, cons
     double *Q = (double *)q;
     int i, k;
     *q = *p;
-    off[0] = off[1] = off[2] = off[3] = 0.0;
+    off[0] = off[1] = off[2] = off[3] = off[5] = 0.0;
     off[4] = 1.0;
     for (i = 0; i < ext->n; i++) {
         const MFTerm *t = &ext->terms[i];
@@ -1131,6 +1132,7 @@ MF_FN void apply_extensions(const ExtTable *ext, const MFParams *p, Ctx *m, cons
             else if (t->targets[k] == MF_TARGET_ALPHA_OFFSET) off[2] += f - 1.0;
             else if (t->targets[k] == MF_TARGET_GAMMA_OFFSET) off[3] += f - 1.0;
             else if (t->targets[k] == MF_TARGET_P_FACTOR) off[4] *= f;
+            else if (t->targets[k] == MF_TARGET_KAPPA_OFFSET) off[5] += f - 1.0;
             else Q[t->targets[k]] *= f;
         }
     }
@@ -1203,8 +1205,9 @@ MF_FN void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c, 
     PureLat lat;
     AlignTerms at;
     double z1, Fx0, mux = 0.0, Kxk = 0.0, Fy_comb, Gyk = 0.0, Fx = 0.0, Fy = 0.0;
-    /* force offsets of the model extensions (factors of Fz), input laws (alpha, gamma offsets, P factor) */
-    double off[5] = {0.0, 0.0, 0.0, 0.0, 1.0};
+    /* force offsets of the model extensions (factors of Fz), input laws (alpha, gamma offsets, P factor,
+     * kappa offset) */
+    double off[6] = {0.0, 0.0, 0.0, 0.0, 1.0, 0.0};
     double dpi_mx = dpi; /* dpi of Mx: the effective pressure of an input law (the radius keeps dpi) */
     int need_fx = (want & MF_NEEDS_FX) != 0;
     int need_fy = (want & MF_NEEDS_FY) != 0;
@@ -1214,10 +1217,11 @@ MF_FN void mf_channels(const MFParams *p, Ctx *m, const ExtTable *ext, Cond *c, 
     if (ext->n > 0) {
         apply_extensions(ext, p, m, c, data, &q, off);
         p = &q;
-        if (off[2] != 0.0 || off[3] != 0.0 || off[4] != 1.0) {
+        if (off[2] != 0.0 || off[3] != 0.0 || off[4] != 1.0 || off[5] != 0.0) {
             ce = *c;
             ce.alpha += off[2];
             ce.gamma += off[3];
+            ce.kappa += off[5];
             ce.P *= off[4];
             dpi_mx = (ce.P - p->NOMPRES) / p->NOMPRES; /* eq 4.E2b */
             c = &ce;

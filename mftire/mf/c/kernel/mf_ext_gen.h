@@ -11,11 +11,12 @@
 #define MF_TARGET_ALPHA_OFFSET (-3)
 #define MF_TARGET_GAMMA_OFFSET (-4)
 #define MF_TARGET_P_FACTOR (-5)
+#define MF_TARGET_KAPPA_OFFSET (-6)
 #define MF_PIDX(f) ((int)(offsetof(MFParams, f) / sizeof(double)))
 
 typedef struct {
     int form;      /* index in mftire.mf.extensions.FORMS */
-    int n_targets; int targets[29]; /* MFParams indices, or MF_TARGET_* */
+    int n_targets; int targets[30]; /* MFParams indices, or MF_TARGET_* */
     int var, var2; /* mf_ext_var indices; var2 < 0: one variable */
     int ref, scale, min, max, ref2, scale2, min2, max2; /* MFParams indices */
     int c0, n;     /* first level (table) or coefficient, and the number of levels (table) */
