@@ -1,11 +1,12 @@
 """Tyre FMU speed: C cost per evaluation, and the per-step overhead of fmpy.
 
-Run: ``python benchmarks/bench_fmu.py [--tir FILE ...] [--n 200000]``.
+Run: ``python benchmarks/bench_fmu.py [--tir FILE ...] [--n 200000] [--repeat R] [--c-only]``.
 
 1. **C cost per evaluation** -- a small C host (compiled here) ``dlopen``s the FMU
    binary and loops ``fmi2SetReal`` (load, slip, slip angle, camber, speed; new
    values every call, so every call re-evaluates) + ``fmi2GetReal`` (all 19 outputs).  Target: <= 1 µs.  The
-   same loop through ``ctypes`` is shown for comparison (dominated by ctypes).
+   same loop through ``ctypes`` is shown for comparison (dominated by ctypes).  ``--repeat R``: the C loop
+   R times, the fastest shown (on a shared machine; compare trees back to back).
 2. **fmpy overhead per step** -- ``fmpy.simulate_fmu`` over 5,000 communication
    steps (Co-Simulation and Model Exchange), divided by the number of steps.
 """
@@ -141,13 +142,18 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tir", nargs="*", default=[str(t) for t in DEFAULT_TIRS])
     ap.add_argument("--n", type=int, default=200_000, help="evaluations in the C loop")
+    ap.add_argument("--repeat", type=int, default=1, help="C loops per tyre, the fastest shown (default 1)")
+    ap.add_argument("--c-only", action="store_true", help="the C loop only (no ctypes loop, no fmpy)")
     args = ap.parse_args(argv)
     print(f"{'tyre':32s} {'C loop':>12s} {'ctypes loop':>12s} {'fmpy CS/step':>13s} {'fmpy ME/step':>13s}")
     with tempfile.TemporaryDirectory(prefix="mftire-bench-") as tmp:
         tmp = Path(tmp)
         for tir in args.tir:
             fmu, so, info = _export(tir, tmp)
-            t_c = c_loop(so, info, args.n, tmp)
+            t_c = min(c_loop(so, info, args.n, tmp) for _ in range(max(1, args.repeat)))
+            if args.c_only:
+                print(f"{Path(tir).name:32s} {t_c * 1e6:9.3f} µs")
+                continue
             t_ct = ctypes_loop(so, info, 20_000)
             t_cs = fmpy_per_step(fmu, "CoSimulation")
             t_me = fmpy_per_step(fmu, "ModelExchange")

@@ -7,7 +7,20 @@ from typing import Any
 
 from mftire.iotools.output import FORCE_HELP
 
-__all__ = ["add_force_option", "add_parallel_options", "add_quiet_option", "progress_of"]
+__all__ = ["SWEEP_DATA_HELP", "add_force_option", "add_parallel_options", "add_quiet_option", "add_sweep_command",
+           "progress_of"]
+
+
+#: What a sub-command reading slip sweeps takes as DATA.
+SWEEP_DATA_HELP = "sweep files: CSV in the SI sweep schema, or TYDEX .tdx"
+
+
+def add_sweep_command(subparsers: Any, name: str, **texts: str) -> argparse.ArgumentParser:
+    """A sub-command on slip sweeps: its parser (``texts``: its help and description) with the positional
+    ``DATA`` (one or more sweep files, :data:`SWEEP_DATA_HELP`)."""
+    parser = subparsers.add_parser(name, **texts)
+    parser.add_argument("data", nargs="+", metavar="DATA", help=SWEEP_DATA_HELP)
+    return parser
 
 
 def add_quiet_option(parser: argparse.ArgumentParser) -> None:

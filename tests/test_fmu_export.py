@@ -181,7 +181,7 @@ def test_guid_and_value_references_come_from_one_table(fmus):
         c_names = re.findall(r'^    "([^"]+)",$', header, flags=re.M)
         assert c_names == [v.name for v in sorted(table, key=lambda v: v.vr)]
         params_h = open(os.path.join(unzipdir, "sources", "mf_params.h")).read()
-        fields = re.findall(r"^    double (\w+);", params_h, flags=re.M)
+        fields = [f for decl in re.findall(r"^    double ([\w, ]+);", params_h, flags=re.M) for f in decl.split(", ")]
         assert fields == [v.name for v in table if v.kind == "param"]
 
 

@@ -109,32 +109,36 @@ def test_two_tyres_link_statically_into_one_executable_with_prefixes(fmus, tmp_p
     assert got[0] != got[1]
 
 
-@needs_c_compiler
-@pytest.mark.parametrize("version", [2, 3])
-def test_do_step_outside_the_running_state_is_an_error(fmus, version):
+def _cs_slave(path: Path, version: int, messages: list):
+    """An instantiated Co-Simulation slave of the FMU at ``path`` (FMI ``version``; FMI 2: experiment set up at
+    t = 0), its log appended to ``messages`` as (status, category, message)."""
     import fmpy
     from fmpy.fmi2 import FMU2Slave
     from fmpy.fmi3 import FMU3Slave
 
     from mftire.fmu.host import make_callbacks
 
-    path = fmus[("MF61", version)]
     md = fmpy.read_model_description(str(path))
-    unzip = fmpy.extract(str(path))
-    messages: list = []
+    slave = FMU2Slave if version == 2 else FMU3Slave
+    s = slave(guid=md.guid, unzipDirectory=fmpy.extract(str(path)), modelIdentifier=md.coSimulation.modelIdentifier,
+              instanceName="s")  # fmt: skip
     if version == 2:
-        s = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
-                      instanceName="s")  # fmt: skip
         s.instantiate(callbacks=make_callbacks(messages))
         s.setupExperiment(startTime=0.0)
     else:
-        s = FMU3Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
-                      instanceName="s")  # fmt: skip
+        s.instantiate(logMessage=lambda env, status, category, message: messages.append(
+            (int(status), category.decode(), message.decode())))  # fmt: skip
+    return s
 
-        def log3(env, status, category, message):
-            messages.append((int(status), category.decode(), message.decode()))
 
-        s.instantiate(logMessage=log3)
+@needs_c_compiler
+@pytest.mark.parametrize("version", [2, 3])
+def test_do_step_outside_the_running_state_is_an_error(fmus, version):
+    import fmpy
+
+
+    messages: list = []
+    s = _cs_slave(fmus[("MF61", version)], version, messages)
     with pytest.raises(fmpy.fmi1.FMICallException):  # before initialisation
         s.doStep(0.0, 1e-3)
     if version == 2:
@@ -150,6 +154,56 @@ def test_do_step_outside_the_running_state_is_an_error(fmus, version):
         s.doStep(1e-3, 1e-3)
     s.freeInstance()
     assert sum("DoStep is not allowed in state" in m for _, _, m in messages) == 3, messages
+
+
+@needs_c_compiler
+@pytest.mark.parametrize("version", [2, 3])
+def test_functions_the_fmu_does_not_implement_are_refused_by_name(fmus, version):
+    """The standard's functions the FMU does not implement (FMU states, clocks, configuration mode, types
+    without variables) return an error naming them; FMI 2's status queries answer the last successful time and
+    'not terminated' and discard the other kinds; an empty access of a type without variables is fine."""
+    import ctypes
+
+    messages: list = []
+    s = _cs_slave(fmus[("MF61", version)], version, messages)
+    ok, discard, error = 0, 2, 3
+    if version == 2:
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+        s.doStep(0.0, 0.25)
+        c, dll = ctypes.c_void_p(s.component), ctypes.CDLL(s.dll._name)  # no argument types: the pointer as such
+        real, boolean, state = ctypes.c_double(-1.0), ctypes.c_int(7), ctypes.c_void_p()
+        assert dll.fmi2GetRealStatus(c, 2, ctypes.byref(real)) == ok and real.value == 0.25  # last successful time
+        assert dll.fmi2GetRealStatus(c, 0, ctypes.byref(real)) == discard
+        assert dll.fmi2GetBooleanStatus(c, 3, ctypes.byref(boolean)) == ok and boolean.value == 0  # not terminated
+        assert dll.fmi2GetBooleanStatus(c, 2, ctypes.byref(boolean)) == discard
+        assert dll.fmi2GetIntegerStatus(c, 2, ctypes.byref(boolean)) == discard
+        assert dll.fmi2GetRealStatus(None, 2, ctypes.byref(real)) == error
+        assert dll.fmi2GetBoolean(c, None, ctypes.c_size_t(0), None) == ok
+        vr, value = (ctypes.c_uint * 1)(0), (ctypes.c_int * 1)()
+        refused = {"fmi2GetBoolean": dll.fmi2GetBoolean(c, vr, ctypes.c_size_t(1), value),
+                   "fmi2GetFMUstate": dll.fmi2GetFMUstate(c, ctypes.byref(state)),
+                   "fmi2CancelStep": dll.fmi2CancelStep(c)}  # fmt: skip
+        texts = {"fmi2GetBoolean": "no Boolean variables", "fmi2GetFMUstate": "fmi2GetFMUstate is not supported",
+                 "fmi2CancelStep": "fmi2CancelStep is not supported"}  # fmt: skip
+    else:
+        c, dll = ctypes.c_void_p(s.component), ctypes.CDLL(s.dll._name)  # no argument types: the pointer as such
+        state, vr = ctypes.c_void_p(), (ctypes.c_uint * 1)(0)
+        values, q = (ctypes.c_double * 1)(), (ctypes.c_int * 1)()
+        assert dll.fmi3GetClock(c, None, ctypes.c_size_t(0), None) == ok
+        refused = {"fmi3GetFMUState": dll.fmi3GetFMUState(c, ctypes.byref(state)),
+                   "fmi3GetFloat32": dll.fmi3GetFloat32(c, vr, ctypes.c_size_t(1), values, ctypes.c_size_t(1)),
+                   "fmi3GetClock": dll.fmi3GetClock(c, vr, ctypes.c_size_t(1), values),
+                   "fmi3GetIntervalDecimal": dll.fmi3GetIntervalDecimal(c, vr, ctypes.c_size_t(1), values, q),
+                   "fmi3EnterConfigurationMode": dll.fmi3EnterConfigurationMode(c)}  # fmt: skip
+        texts = {"fmi3GetFMUState": "fmi3GetFMUState is not supported",
+                 "fmi3GetFloat32": "fmi3GetFloat32: the model has no variables of this type",
+                 "fmi3GetClock": "the model has no clocks", "fmi3GetIntervalDecimal": "the model has no clocks",
+                 "fmi3EnterConfigurationMode": "the model has no structural parameters"}  # fmt: skip
+    assert refused == dict.fromkeys(refused, error)
+    errors = [m for st, _, m in messages if st == error]
+    assert len(errors) == len(refused) and all(any(t in m for m in errors) for t in texts.values()), errors
+    s.freeInstance()
 
 
 @needs_c_compiler

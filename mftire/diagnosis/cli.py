@@ -68,13 +68,13 @@ REPORT_FILES = ("diagnosis.md", "diagnosis.json", "extended.tir", "ranking.png",
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = subparsers.add_parser(
-        "diagnose",
-        help="trace the residual of a fitted .tir to a missing effect, add it, report before/after on held-out data",
-        description="Rank candidate causes of the residual of a fitted .tir, add the most likely missing effect, "
-        "refit and report the error before and after on a held-out operating condition.",
-    )
-    p.add_argument("data", nargs="+", metavar="DATA", help="sweep data (CSV in the sweep schema, or TYDEX .tdx)")
+    from mftire.cli_options import add_force_option, add_parallel_options, add_quiet_option, add_sweep_command
+
+    p = add_sweep_command(subparsers, "diagnose", help="trace the residual of a fitted .tir to a missing effect, "
+                          "add it, report before/after on held-out data",
+                          description="Rank candidate causes of the residual of a fitted .tir, add the most likely "
+                          "missing effect, refit and report the error before and after on a held-out operating "
+                          "condition.")  # fmt: skip
     p.add_argument("--tir", required=True, help="the fitted .tir (with --each: or a folder of <name>.tir, one per "
                    "input, as mftire fit --each writes)")
     p.add_argument("--each", action="store_true",
@@ -84,14 +84,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p.add_argument("--holdout", help="held-out condition, COLUMN=V1[,V2...] in SI (e.g. Vx=16.67); default automatic")
     p.add_argument("--permutations", type=int, default=99, help="permutations of the significance test (default 99)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the permutation test (default 0)")
-    from mftire.cli_options import add_parallel_options
-
     add_parallel_options(p, "the diagnoses of --each")
-    from mftire.cli_options import add_force_option
-
     add_force_option(p)
-    from mftire.cli_options import add_quiet_option
-
     add_quiet_option(p)
     p.set_defaults(func=_cmd_diagnose)
     return p

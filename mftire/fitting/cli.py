@@ -127,13 +127,12 @@ def _bands(args: argparse.Namespace, result) -> list[str]:
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
     """Register ``fit`` on the ``mftire`` sub-command parser."""
-    p = subparsers.add_parser(
-        "fit",
-        help="fit MF 6.1/6.2 coefficients to slip sweeps (CSV in the sweep schema or TYDEX .tdx)",
-        description="Staged Magic Formula fit: 1 longitudinal, 2 lateral, 3 aligning, 4 combined Fx/Fy, "
-        "5 combined Mz, 6 Mx, 7 My. Coefficients the data cannot identify keep their template values.",
-    )
-    p.add_argument("data", nargs="+", metavar="DATA", help="sweep files: .csv (SI sweep schema) or .tdx")
+    from mftire.cli_options import add_force_option, add_parallel_options, add_quiet_option, add_sweep_command
+
+    p = add_sweep_command(subparsers, "fit", help="fit MF 6.1/6.2 coefficients to slip sweeps",
+                          description="Staged Magic Formula fit: 1 longitudinal, 2 lateral, 3 aligning, 4 combined "
+                          "Fx/Fy, 5 combined Mz, 6 Mx, 7 My. Coefficients the data cannot identify keep their "
+                          "template values.")  # fmt: skip
     p.add_argument("--template", required=True, metavar="TIR",
                    help="start values and constants (FNOMIN, NOMPRES, UNLOADED_RADIUS, ...), FITTYP 61/62")
     p.add_argument("--output", required=True, metavar="FITTED.tir", help="fitted .tir (written atomically)")
@@ -157,16 +156,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--heldout", nargs="+", metavar="DATA",
                    help="held-out measured sweeps: report the fraction of their points inside the bands")
     p.add_argument("--seed", type=int, default=0, help="random seed of the bootstrap (default 0)")
-    from mftire.cli_options import add_parallel_options
-
     add_parallel_options(p, "the fits of --each and the bootstrap refits of --bands")
     p.add_argument("--fix", metavar="KEYS", help="coefficients held at their template values, "
                    "comma-separated (e.g. PPX1,PPX2,PPX3,PPX4 to fit without pressure terms)")
-    from mftire.cli_options import add_force_option
-
     add_force_option(p)
-    from mftire.cli_options import add_quiet_option
-
     add_quiet_option(p)
     p.set_defaults(func=_cmd_fit)
     return p

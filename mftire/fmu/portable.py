@@ -35,7 +35,7 @@ BASE_VERSION = {"x86_64": "GLIBC_2.2.5", "amd64": "GLIBC_2.2.5", "aarch64": "GLI
 
 #: Cross compiler of the Windows DLL and its flags.
 MINGW = "x86_64-w64-mingw32-gcc"
-MINGW_CFLAGS = ("-shared", "-O3", "-std=c99", "-Wall", "-static-libgcc")
+MINGW_CFLAGS = ("-shared", "-O2", "-std=c99", "-Wall", "-static-libgcc")
 
 
 def is_glibc() -> bool:

@@ -46,6 +46,7 @@ from mftire.fmu.build import (
 from mftire.fmu.documentation import documentation_files
 from mftire.mf import spec
 from mftire.mf.extensions import ExtensionSet
+from mftire.mf.thermal_section import TEXTS as TH_TEXTS
 from mftire.mf.thermal_section import ThermalParameters
 from mftire.transient import (
     CONSTANTS,
@@ -130,30 +131,11 @@ def _output_rows(thermal: bool = False) -> list[tuple[str, str, str | None, str]
     return rows
 
 
-#: Description of each thermal parameter in the FMU (fields of ThermalParameters).
-_THERMAL_DESC = {
-    "cap_surface": "heat capacity of the tread surface node", "cap_bulk": "heat capacity of the bulk/carcass node",
-    "cap_gas": "heat capacity of the inflation gas node", "g_surface_bulk": "conductance surface <-> bulk",
-    "g_bulk_gas": "conductance bulk <-> gas", "g_bulk_ambient": "conductance bulk (sidewall) -> ambient air",
-    "h_air0": "convective conductance surface -> air at standstill",
-    "h_air1": "its speed term [W/K/(m/s)^0.8]: G_air = TH_H_AIR0 + TH_H_AIR1*|Vx|^0.8",
-    "g_road": "conductance surface -> road", "slip_share": "share of the sliding friction power heating the surface",
-    "roll_loss": "rolling-loss coefficient: bulk power c*Fz*|Vx|",
-    "hysteresis": "hysteresis coefficient: bulk power c*|Vx|*(Fx^2 + Fy^2)/max(Fz, 0.1*FNOMIN)",
-    "cold_pressure": "cold set pressure of the file (the FMU's P input is the cold pressure; this is its start)",
-    "cold_temperature": "temperature at which the cold pressure is set", "atmosphere": "atmospheric pressure",
-    "pressure": "1: the gas law's hot pressure is the MF's pressure; 0: the P input is",
-    "t_init_surface": "initial surface temperature", "t_init_bulk": "initial bulk temperature",
-    "t_init_gas": "initial gas temperature",
-    "temperature": "steady-state temperature of the file (not used by the block)",
-}  # fmt: skip
-
-
 def _thermal_flat(flat: dict[str, float], th: ThermalParameters) -> dict[str, float]:
     """``flat`` with every parameter of the thermal block (``TH_*``; the initial temperatures default to the
     ``T_ambient`` start value, ``TH_COLD_TEMPERATURE``)."""
     out = dict(flat)
-    for name in _THERMAL_DESC:
+    for name in TH_TEXTS:
         value = getattr(th, name)
         if value is None and name.startswith("t_init_"):
             value = th.cold_temperature
@@ -200,8 +182,8 @@ def transient_variable_table(flat: dict[str, float], use_mode: int = vt.DEFAULT_
         if v.kind in ("mode", "param"):
             unit, desc, variability = v.unit, v.description, v.variability
             name = v.name[3:].lower() if v.name.startswith("TH_") else None
-            if thermal is not None and name in _THERMAL_DESC:
-                unit, desc = TH_UNITS[name], f"[MFTIRE_THERMAL] {_THERMAL_DESC[name]}"
+            if thermal is not None and name in TH_TEXTS:
+                unit, desc = TH_UNITS[name], f"[MFTIRE_THERMAL] {TH_TEXTS[name]}"
                 variability = "fixed" if name.startswith("t_init_") else "tunable"
             out.append(V(v.name, len(out), v.kind, v.type, v.causality, variability, v.start, unit, desc,
                          v.field))  # fmt: skip

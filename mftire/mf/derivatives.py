@@ -34,119 +34,6 @@ import numpy as np
 __all__ = ["Var", "jacobian", "seed", "sweep"]
 
 
-class Var:
-    """A value in the computation graph: ``v`` and the ``(parent, local derivative)`` edges
-    (``adj``: the adjoint during the backward sweep of :func:`jacobian`, None otherwise)."""
-
-    __slots__ = ("v", "edges", "adj")
-    __array_priority__ = 1000.0
-
-    def __init__(self, v, edges: tuple = ()):
-        self.v = v
-        self.edges = edges
-        self.adj = None
-
-    # Python operators apply the rule of the numpy ufunc directly (what np.add(self, o) would
-    # reach through __array_ufunc__, without numpy's dispatch)
-    def __add__(self, o):
-        return _add(self, o)
-
-    def __radd__(self, o):
-        return _add(o, self)
-
-    def __sub__(self, o):
-        return _sub(self, o)
-
-    def __rsub__(self, o):
-        return _sub(o, self)
-
-    def __mul__(self, o):
-        return _mul(self, o)
-
-    def __rmul__(self, o):
-        return _mul(o, self)
-
-    def __truediv__(self, o):
-        return _div(self, o)
-
-    def __rtruediv__(self, o):
-        return _div(o, self)
-
-    def __pow__(self, o):
-        return np.power(self, o)
-
-    def __rpow__(self, o):
-        return np.power(o, self)
-
-    def __neg__(self):
-        return np.negative(self)
-
-    def __pos__(self):
-        return self
-
-    def __abs__(self):
-        return np.absolute(self)
-
-    def __lt__(self, o):
-        return np.less(self, o)
-
-    def __le__(self, o):
-        return np.less_equal(self, o)
-
-    def __gt__(self, o):
-        return np.greater(self, o)
-
-    def __ge__(self, o):
-        return np.greater_equal(self, o)
-
-    def __eq__(self, o):  # type: ignore[override]
-        return np.equal(self, o)
-
-    def __ne__(self, o):  # type: ignore[override]
-        return np.not_equal(self, o)
-
-    __hash__ = None  # type: ignore[assignment]
-
-    def __array_ufunc__(self, ufunc, method, *inputs, **kwargs):
-        if method != "__call__" or kwargs:
-            return NotImplemented
-        rule = _RULES.get(ufunc)
-        if rule is not None:
-            return rule(*inputs)
-        if ufunc in _NO_DERIVATIVE:
-            return ufunc(*(_value(x) for x in inputs))
-        return NotImplemented
-
-    def __array_function__(self, func, types, args, kwargs):
-        if func is np.where and len(args) == 3 and not kwargs:
-            cond, a, b = args
-            cond = np.asarray(_value(cond), dtype=bool)
-            return _node(np.where(cond, _value(a), _value(b)), (a, cond), (b, ~cond))
-        if func is np.real:  # the values are real
-            return args[0]
-        if func in (np.any, np.all, np.ndim, np.shape, np.iscomplexobj, np.isrealobj):
-            return func(*(_value(x) for x in args), **kwargs)
-        return NotImplemented
-
-
-def _value(x):
-    return x.v if isinstance(x, Var) else x
-
-
-def _node(v, *edges) -> Var | np.ndarray:
-    """A Var with the edges to Var parents (a plain value when none depends on a coefficient)."""
-    kept = tuple((x, d) for x, d in edges if isinstance(x, Var))
-    return Var(v, kept) if kept else v
-
-
-def _unary(f: Callable, df: Callable) -> Callable:
-    def rule(a: Var):
-        v = f(a.v)
-        return Var(v, ((a, df(a.v, v)),))
-
-    return rule
-
-
 # The binary rules below are _node written out for speed: the same values, the same edges in the
 # same order (a before b, non-Var operands left out).  At least one operand is a Var.
 
@@ -189,6 +76,87 @@ def _div(a, b):
         return Var(v, ((b, -v * inv),))
     v = a.v / b
     return Var(v, ((a, 1.0 / b),))
+
+
+def _operators(rule: Callable) -> tuple[Callable, Callable]:
+    """The two methods of a binary operator of :class:`Var`: ``rule(self, o)`` and, reflected, ``rule(o, self)``."""
+    return (lambda self, o: rule(self, o)), (lambda self, o: rule(o, self))
+
+
+class Var:
+    """A value in the computation graph: ``v`` and the ``(parent, local derivative)`` edges
+    (``adj``: the adjoint during the backward sweep of :func:`jacobian`, None otherwise)."""
+
+    __slots__ = ("v", "edges", "adj")
+    __array_priority__ = 1000.0
+
+    def __init__(self, v, edges: tuple = ()):
+        self.v = v
+        self.edges = edges
+        self.adj = None
+
+    # Python operators apply the rule of the numpy ufunc directly (what np.add(self, o) would
+    # reach through __array_ufunc__, without numpy's dispatch): each binary operator and its
+    # reflected form from one rule; the comparisons and the rest through numpy
+    __add__, __radd__ = _operators(_add)
+    __sub__, __rsub__ = _operators(_sub)
+    __mul__, __rmul__ = _operators(_mul)
+    __truediv__, __rtruediv__ = _operators(_div)
+    __pow__, __rpow__ = _operators(np.power)
+    __lt__, __gt__ = _operators(np.less)  # a > b is b < a
+    __le__, __ge__ = _operators(np.less_equal)
+    __eq__ = _operators(np.equal)[0]  # type: ignore[assignment]
+    __ne__ = _operators(np.not_equal)[0]  # type: ignore[assignment]
+
+    def __neg__(self):
+        return np.negative(self)
+
+    def __pos__(self):
+        return self
+
+    def __abs__(self):
+        return np.absolute(self)
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __array_ufunc__(self, ufunc, method, *inputs, **kwargs):
+        if method != "__call__" or kwargs:
+            return NotImplemented
+        rule = _RULES.get(ufunc)
+        if rule is not None:
+            return rule(*inputs)
+        if ufunc in _NO_DERIVATIVE:
+            return ufunc(*(_value(x) for x in inputs))
+        return NotImplemented
+
+    def __array_function__(self, func, types, args, kwargs):
+        if func is np.where and len(args) == 3 and not kwargs:
+            cond, a, b = args
+            cond = np.asarray(_value(cond), dtype=bool)
+            return _node(np.where(cond, _value(a), _value(b)), (a, cond), (b, ~cond))
+        if func is np.real:  # the values are real
+            return args[0]
+        if func in (np.any, np.all, np.ndim, np.shape, np.iscomplexobj, np.isrealobj):
+            return func(*(_value(x) for x in args), **kwargs)
+        return NotImplemented
+
+
+def _value(x):
+    return x.v if isinstance(x, Var) else x
+
+
+def _node(v, *edges) -> Var | np.ndarray:
+    """A Var with the edges to Var parents (a plain value when none depends on a coefficient)."""
+    kept = tuple((x, d) for x, d in edges if isinstance(x, Var))
+    return Var(v, kept) if kept else v
+
+
+def _unary(f: Callable, df: Callable) -> Callable:
+    def rule(a: Var):
+        v = f(a.v)
+        return Var(v, ((a, df(a.v, v)),))
+
+    return rule
 
 
 def _pow(a, b):

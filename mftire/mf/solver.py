@@ -104,20 +104,10 @@ class Prepared:
         return {**self.variables, **self.builtin}
 
 
-def prepare(
-    p: Mapping[str, float],
-    Fz,
-    kappa,
-    alpha,
-    gamma=0.0,
-    phit=0.0,
-    Vx=None,
-    P=None,
-    omega=None,
-    mode: int | Mode = 111,
-    variables: Mapping[str, object] | None = None,
-) -> Prepared:
-    """Piece 1: validate, broadcast and condition the inputs (arguments as :func:`evaluate_arrays`).
+def prepare(p: Mapping[str, float], Fz, kappa, alpha, gamma, phit, Vx, P, omega, mode: int | Mode,
+            variables: Mapping[str, object] | None) -> Prepared:  # fmt: skip
+    """Piece 1: validate, broadcast and condition the inputs (arguments as :func:`evaluate_arrays`, every one
+    given: the defaults are :func:`evaluate_arrays`'s).
 
     NaN inputs are replaced by 0 (pressure: ``INFLPRES``) with an
     :class:`~mftire.mf.inputs.MFLimitWarning`; out-of-range values are clipped in modes 1xx.

@@ -57,31 +57,48 @@ NODE_VARIABLES: dict[str, str] = {"surface": "T_surface", "bulk": "T_bulk", "gas
 _NODE_KEY = re.compile(r"^EXT(\d+)_NODE$")
 
 
+#: The lowest temperature a field may hold [°C] (absolute zero, excluded).
+_ABSOLUTE_ZERO = -273.15
+
+
+def _number(default: float | None, unit: str | None, text: str, op: str | None = None, bound: float = 0.0):
+    """A number of the section: its default, its FMI unit (None: dimensionless or not expressible; the module
+    docstring gives it), its one-line meaning (ASCII: the FMU's description) and the bound :func:`parse_thermal`
+    checks, ``op`` ``">"``, ``">="`` or ``"in"`` (0 or 1) against ``bound`` (None: no bound of :func:`bounds`)."""
+    return field(default=default, metadata={"unit": unit, "text": text, "bound": (op, bound) if op else None})
+
+
 @dataclass(frozen=True)
 class ThermalParameters:
     """The numbers of ``[MFTIRE_THERMAL]`` (module docstring; °C, SI).  ``nodes`` maps an extension
-    term's index to the node it reads."""
+    term's index to the node it reads.  Each field's metadata: its unit, meaning and bound (:func:`_number`)."""
 
-    cap_surface: float = 2000.0
-    cap_bulk: float = 12000.0
-    cap_gas: float = 150.0
-    g_surface_bulk: float = 150.0
-    g_bulk_gas: float = 10.0
-    g_bulk_ambient: float = 10.0
-    h_air0: float = 10.0
-    h_air1: float = 8.0
-    g_road: float = 40.0
-    slip_share: float = 1.0
-    roll_loss: float = 0.01
-    hysteresis: float = 0.005
-    cold_pressure: float | None = None
-    cold_temperature: float = 20.0
-    atmosphere: float = 101325.0
-    pressure: int = 1
-    t_init_surface: float | None = None
-    t_init_bulk: float | None = None
-    t_init_gas: float | None = None
-    temperature: float | None = None
+    cap_surface: float = _number(2000.0, "J/K", "heat capacity of the tread surface node", ">")
+    cap_bulk: float = _number(12000.0, "J/K", "heat capacity of the bulk/carcass node", ">")
+    cap_gas: float = _number(150.0, "J/K", "heat capacity of the inflation gas node", ">")
+    g_surface_bulk: float = _number(150.0, "W/K", "conductance surface <-> bulk", ">=")
+    g_bulk_gas: float = _number(10.0, "W/K", "conductance bulk <-> gas", ">=")
+    g_bulk_ambient: float = _number(10.0, "W/K", "conductance bulk (sidewall) -> ambient air", ">=")
+    h_air0: float = _number(10.0, "W/K", "convective conductance surface -> air at standstill", ">=")
+    h_air1: float = _number(8.0, None, "its speed term [W/K/(m/s)^0.8]: G_air = TH_H_AIR0 + TH_H_AIR1*|Vx|^0.8",
+                            ">=")
+    g_road: float = _number(40.0, "W/K", "conductance surface -> road", ">=")
+    slip_share: float = _number(1.0, None, "share of the sliding friction power heating the surface", ">=")
+    roll_loss: float = _number(0.01, None, "rolling-loss coefficient: bulk power c*Fz*|Vx|", ">=")
+    hysteresis: float = _number(0.005, None, "hysteresis coefficient: bulk power "
+                                "c*|Vx|*(Fx^2 + Fy^2)/max(Fz, 0.1*FNOMIN)", ">=")  # fmt: skip
+    # a gauge pressure, above vacuum (parse_thermal)
+    cold_pressure: float | None = _number(None, "Pa", "cold set pressure of the file (the FMU's P input is the "
+                                          "cold pressure; this is its start)")  # fmt: skip
+    cold_temperature: float = _number(20.0, "degC", "temperature at which the cold pressure is set", ">",
+                                      _ABSOLUTE_ZERO)
+    atmosphere: float = _number(101325.0, "Pa", "atmospheric pressure", ">")
+    pressure: int = _number(1, None, "1: the gas law's hot pressure is the MF's pressure; 0: the P input is", "in")
+    t_init_surface: float | None = _number(None, "degC", "initial surface temperature", ">", _ABSOLUTE_ZERO)
+    t_init_bulk: float | None = _number(None, "degC", "initial bulk temperature", ">", _ABSOLUTE_ZERO)
+    t_init_gas: float | None = _number(None, "degC", "initial gas temperature", ">", _ABSOLUTE_ZERO)
+    temperature: float | None = _number(None, "degC", "steady-state temperature of the file (not used by the "
+                                        "block)", ">", _ABSOLUTE_ZERO)  # fmt: skip
     nodes: dict[int, str] = field(default_factory=dict)
 
     @property
@@ -107,31 +124,20 @@ class ThermalParameters:
         return out
 
 
+_NUMBERS = tuple(f for f in fields(ThermalParameters) if f.name != "nodes")
+_NUMBER_NAMES = tuple(f.name for f in _NUMBERS)
 #: The FMI unit of each numeric field (:data:`mftire.fmu.variables.UNITS`; None: dimensionless or not
 #: expressible, the unit is in the module docstring).
-UNITS: dict[str, str | None] = {
-    "cap_surface": "J/K", "cap_bulk": "J/K", "cap_gas": "J/K", "g_surface_bulk": "W/K", "g_bulk_gas": "W/K",
-    "g_bulk_ambient": "W/K", "h_air0": "W/K", "h_air1": None, "g_road": "W/K", "slip_share": None,
-    "roll_loss": None, "hysteresis": None, "cold_pressure": "Pa", "cold_temperature": "degC", "atmosphere": "Pa",
-    "pressure": None, "t_init_surface": "degC", "t_init_bulk": "degC", "t_init_gas": "degC", "temperature": "degC",
-}  # fmt: skip
-
-#: Keys that must be > 0 (capacities, the absolute temperature scale of the gas law).
-_POSITIVE = ("cap_surface", "cap_bulk", "cap_gas", "atmosphere")
-#: Keys that must be >= 0.
-_NONNEGATIVE = ("g_surface_bulk", "g_bulk_gas", "g_bulk_ambient", "h_air0", "h_air1", "g_road", "slip_share",
-                "roll_loss", "hysteresis")
-#: Temperatures that must be above absolute zero [°C].
-_TEMPERATURES = ("cold_temperature", "t_init_surface", "t_init_bulk", "t_init_gas", "temperature")
-_NUMBER_NAMES = tuple(f.name for f in fields(ThermalParameters) if f.name != "nodes")
+UNITS: dict[str, str | None] = {f.name: f.metadata["unit"] for f in _NUMBERS}
+#: The one-line meaning of each numeric field (ASCII).
+TEXTS: dict[str, str] = {f.name: f.metadata["text"] for f in _NUMBERS}
+_BOUNDS: dict[str, tuple[str, float]] = {f.name: f.metadata["bound"] for f in _NUMBERS if f.metadata["bound"]}
 
 
 def bounds() -> list[tuple[str, str, float]]:
     """The bound of each numeric field: ``(field, op, bound)`` with op ``">"``, ``">="`` or ``"in"`` (0 or 1):
     what :func:`parse_thermal` checks, as a table (the transient FMU's C checks its parameters with it)."""
-    out = [(n, ">", 0.0) for n in _POSITIVE] + [(n, ">=", 0.0) for n in _NONNEGATIVE]
-    out += [(n, ">", -273.15) for n in _TEMPERATURES] + [("pressure", "in", 0.0)]
-    return out
+    return [(name, op, bound) for name, (op, bound) in _BOUNDS.items()]
 
 
 def parse_thermal(section: Mapping[str, object] | None) -> ThermalParameters | None:
@@ -156,14 +162,14 @@ def parse_thermal(section: Mapping[str, object] | None) -> ThermalParameters | N
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(float(value)):
             raise MftireInputError(f"[{SECTION}] {k} = {value!r} must be a finite number")
         v = float(value)
-        if name in _POSITIVE and not v > 0.0:
-            raise MftireInputError(f"[{SECTION}] {k} = {value!r} must be > 0")
-        if name in _NONNEGATIVE and v < 0.0:
-            raise MftireInputError(f"[{SECTION}] {k} = {value!r} must be >= 0")
-        if name == "pressure" and v not in (0.0, 1.0):
+        op, bound = _BOUNDS.get(name, (None, 0.0))
+        if op == "in" and v not in (0.0, 1.0):
             raise MftireInputError(f"[{SECTION}] {k} = {value!r} must be 0 or 1")
-        if name in _TEMPERATURES and v <= -273.15:
-            raise MftireInputError(f"[{SECTION}] {k} = {value!r} °C is below absolute zero")
+        if op == ">" and not v > bound:
+            why = "°C is below absolute zero" if bound == _ABSOLUTE_ZERO else f"must be > {bound:g}"
+            raise MftireInputError(f"[{SECTION}] {k} = {value!r} {why}")
+        if op == ">=" and not v >= bound:
+            raise MftireInputError(f"[{SECTION}] {k} = {value!r} must be >= {bound:g}")
         if name == "cold_pressure" and v <= -101325.0:
             raise MftireInputError(f"[{SECTION}] {k} = {value!r} Pa: a gauge pressure below vacuum")
         values[name] = int(v) if name == "pressure" else v
@@ -181,5 +187,5 @@ def check_nodes(params: ThermalParameters, extension_indices) -> None:
             raise MftireInputError(f"[{SECTION}] EXT{n}_NODE: [MFTIRE_EXTENSIONS] has no term EXT{n}")
 
 
-__all__ = ["NODES", "NODE_VARIABLES", "SECTION", "UNITS", "ThermalParameters", "bounds", "check_nodes",
+__all__ = ["NODES", "NODE_VARIABLES", "SECTION", "TEXTS", "UNITS", "ThermalParameters", "bounds", "check_nodes",
            "parse_thermal"]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import inspect
 import json
 import os
 import sys
@@ -11,12 +12,13 @@ from mftire.errors import MftireInputError
 
 
 def _add_command(subparsers: argparse._SubParsersAction, name: str, func, tir: tuple[str, str],
-                 output: tuple[str, str], **texts: str) -> argparse.ArgumentParser:  # fmt: skip
+                 output: tuple[str, str]) -> argparse.ArgumentParser:  # fmt: skip
     """A sub-command on a rig series: the data options, ``--tir`` and ``--output`` (each: metavar, help),
-    ``--force``; ``texts``: its help and description."""
+    ``--force``.  Its help is the first line of ``func``'s docstring, its description the rest."""
     from mftire.cli_options import add_force_option
 
-    p = subparsers.add_parser(name, **texts)
+    summary, _, rest = inspect.cleandoc(func.__doc__).partition("\n\n")
+    p = subparsers.add_parser(name, help=summary, description=" ".join(rest.split()))
     _add_data_options(p)
     p.add_argument("--tir", required=True, metavar=tir[0], help=tir[1])
     p.add_argument("--output", required=True, metavar=output[0], help=output[1])
@@ -51,6 +53,13 @@ def _side_path(output: str, suffix: str) -> str:
 
 
 def _cmd_fit_thermal(args: argparse.Namespace) -> int:
+    """fit the thermal tyre (three nodes, gas law, temperature laws) to a rig series
+
+    Fit the thermal parameters of [MFTIRE_THERMAL] and the temperature laws of a fitted .tir to a continuous rig
+    series (measured surface temperatures compared with the surface node, the pressure with the gas law); each
+    law reads the node with the lower held-out error. Writes the .tir, a figure of measured against predicted
+    temperature and pressure, and prints every parameter with its standard error.
+    """
     from mftire.iotools.output import OutputPlan
 
     plot = args.plot or _side_path(args.output, "_temperature.png")
@@ -112,6 +121,13 @@ def _plot_fit(res, path: str) -> None:
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
+    """run a .tir (thermal or not) along a measured series given only kinematics and conditions
+
+    Run the model along a measured series (ET, Fz, Vx, slips, inclination, ambient and road temperature; cold
+    pressure: P_cold column, TH_COLD_PRESSURE or the first P sample) and write the node temperatures, the
+    pressure and Fx_model, Fy_model, ... next to the measured columns, keyed by ET. A .tir without
+    [MFTIRE_THERMAL] replays isothermally at the cold pressure.
+    """
     from mftire.iotools.output import OutputPlan
 
     OutputPlan([args.data, args.tir, args.columns_map], args.force).file(args.output, stdout=True)
@@ -146,15 +162,8 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Register ``fit-thermal`` and ``replay`` on the ``mftire`` sub-command parser."""
-    p = _add_command(
-        subparsers, "fit-thermal", _cmd_fit_thermal, ("FIT.tir", "the fitted (isothermal) .tir"),
-        ("THERMAL.tir", "the .tir to write"),
-        help="fit the thermal tyre (three nodes, gas law, temperature laws) to a rig series",
-        description="Fit the thermal parameters of [MFTIRE_THERMAL] and the temperature laws of a fitted .tir to "
-        "a continuous rig series (measured surface temperatures compared with the surface node, the pressure with "
-        "the gas law); each law reads the node with the lower held-out error. Writes the .tir, a figure of "
-        "measured against predicted temperature and pressure, and prints every parameter with its standard error.",
-    )  # fmt: skip
+    p = _add_command(subparsers, "fit-thermal", _cmd_fit_thermal, ("FIT.tir", "the fitted (isothermal) .tir"),
+                     ("THERMAL.tir", "the .tir to write"))
     p.add_argument("--fit-until", type=float, default=None, metavar="SECONDS",
                    help="fit on the rows with ET <= SECONDS (default: all), leaving the rest to a replay")
     p.add_argument("--pressure", choices=("sealed", "regulated"), default="sealed",
@@ -163,12 +172,5 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--plot", metavar="FIG.png", help="figure (default: OUTPUT stem + _temperature.png)")
     p.add_argument("--report", metavar="REPORT.json", help="also write the results as JSON")
 
-    _add_command(
-        subparsers, "replay", _cmd_replay, ("THERMAL.tir", "the .tir to replay"),
-        ("REPLAY.csv", "output CSV, or - for standard output"),
-        help="run a .tir (thermal or not) along a measured series given only kinematics and conditions",
-        description="Run the model along a measured series (ET, Fz, Vx, slips, inclination, ambient and road "
-        "temperature; cold pressure: P_cold column, TH_COLD_PRESSURE or the first P sample) and write the node "
-        "temperatures, the pressure and Fx_model, Fy_model, ... next to the measured columns, keyed by ET. A .tir "
-        "without [MFTIRE_THERMAL] replays isothermally at the cold pressure.",
-    )  # fmt: skip
+    _add_command(subparsers, "replay", _cmd_replay, ("THERMAL.tir", "the .tir to replay"),
+                 ("REPLAY.csv", "output CSV, or - for standard output"))

@@ -55,6 +55,15 @@ static fmi2Status unsupported(fmi2Component c, const char *fn)
     return (fmi2Status)fi_fail(FI(c), "%s is not supported", fn);
 }
 
+/* A function of the standard this FMU does not implement: NAME with the standard's parameter list PARAMS (the
+ * first is the instance c), the others named unused after it; the call is refused, naming NAME. */
+#define UNSUPPORTED(NAME, PARAMS, ...)                                                                           \
+    FMI2_Export fmi2Status NAME PARAMS                                                                           \
+    {                                                                                                            \
+        __VA_ARGS__;                                                                                             \
+        return unsupported(c, #NAME);                                                                            \
+    }
+
 /* ------------------------------------------------------------------ life cycle */
 
 FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
@@ -170,81 +179,42 @@ static fmi2Status no_vars(fmi2Component c, size_t n, const char *what)
     return n == 0 ? fmi2OK : (fmi2Status)fi_fail(FI(c), "the model has no %s variables", what);
 }
 
-FMI2_Export fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Boolean value[])
-{
-    (void)vr;
-    (void)value;
-    return no_vars(c, n, "Boolean");
-}
-FMI2_Export fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n,
-                                      const fmi2Boolean value[])
-{
-    (void)vr;
-    (void)value;
-    return no_vars(c, n, "Boolean");
-}
-FMI2_Export fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2String value[])
-{
-    (void)vr;
-    (void)value;
-    return no_vars(c, n, "String");
-}
-FMI2_Export fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2String value[])
-{
-    (void)vr;
-    (void)value;
-    return no_vars(c, n, "String");
-}
+/* Get or set (CONST: const) of a type the model has no variables of: an empty call is fine, any other an error. */
+#define NO_VARIABLES(NAME, TYPE, CONST, WHAT)                                                                   \
+    FMI2_Export fmi2Status NAME(fmi2Component c, const fmi2ValueReference vr[], size_t n, CONST TYPE value[])  \
+    {                                                                                                           \
+        (void)vr;                                                                                               \
+        (void)value;                                                                                            \
+        return no_vars(c, n, WHAT);                                                                             \
+    }
 
-/* ------------------------------------------------------------------ FMU state: not supported */
+NO_VARIABLES(fmi2GetBoolean, fmi2Boolean, , "Boolean")
+NO_VARIABLES(fmi2SetBoolean, fmi2Boolean, const, "Boolean")
+NO_VARIABLES(fmi2GetString, fmi2String, , "String")
+NO_VARIABLES(fmi2SetString, fmi2String, const, "String")
 
-FMI2_Export fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *s)
-{
-    (void)s;
-    return unsupported(c, "fmi2GetFMUstate");
-}
-FMI2_Export fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate s)
-{
-    (void)s;
-    return unsupported(c, "fmi2SetFMUstate");
-}
-FMI2_Export fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *s)
-{
-    (void)s;
-    return unsupported(c, "fmi2FreeFMUstate");
-}
-FMI2_Export fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate s, size_t *size)
-{
-    (void)s;
-    (void)size;
-    return unsupported(c, "fmi2SerializedFMUstateSize");
-}
-FMI2_Export fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate s, fmi2Byte b[], size_t size)
-{
-    (void)s;
-    (void)b;
-    (void)size;
-    return unsupported(c, "fmi2SerializeFMUstate");
-}
-FMI2_Export fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte b[], size_t size, fmi2FMUstate *s)
-{
-    (void)s;
-    (void)b;
-    (void)size;
-    return unsupported(c, "fmi2DeSerializeFMUstate");
-}
-FMI2_Export fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vU[], size_t nU,
-                                                    const fmi2ValueReference vK[], size_t nK, const fmi2Real dvK[],
-                                                    fmi2Real dvU[])
-{
-    (void)vU;
-    (void)nU;
-    (void)vK;
-    (void)nK;
-    (void)dvK;
-    (void)dvU;
-    return unsupported(c, "fmi2GetDirectionalDerivative");
-}
+/* ------------------------------------------------------------------ not supported: FMU states, derivatives */
+
+UNSUPPORTED(fmi2GetFMUstate, (fmi2Component c, fmi2FMUstate *s), (void)s)
+UNSUPPORTED(fmi2SetFMUstate, (fmi2Component c, fmi2FMUstate s), (void)s)
+UNSUPPORTED(fmi2FreeFMUstate, (fmi2Component c, fmi2FMUstate *s), (void)s)
+UNSUPPORTED(fmi2SerializedFMUstateSize, (fmi2Component c, fmi2FMUstate s, size_t *size), (void)s, (void)size)
+UNSUPPORTED(fmi2SerializeFMUstate, (fmi2Component c, fmi2FMUstate s, fmi2Byte b[], size_t size), (void)s, (void)b,
+            (void)size)
+UNSUPPORTED(fmi2DeSerializeFMUstate, (fmi2Component c, const fmi2Byte b[], size_t size, fmi2FMUstate *s), (void)s,
+            (void)b, (void)size)
+UNSUPPORTED(fmi2GetDirectionalDerivative,
+            (fmi2Component c, const fmi2ValueReference vU[], size_t nU, const fmi2ValueReference vK[], size_t nK,
+             const fmi2Real dvK[], fmi2Real dvU[]),
+            (void)vU, (void)nU, (void)vK, (void)nK, (void)dvK, (void)dvU)
+UNSUPPORTED(fmi2SetRealInputDerivatives,
+            (fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Integer order[],
+             const fmi2Real value[]),
+            (void)vr, (void)n, (void)order, (void)value)
+UNSUPPORTED(fmi2GetRealOutputDerivatives,
+            (fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Integer order[], fmi2Real value[]),
+            (void)vr, (void)n, (void)order, (void)value)
+UNSUPPORTED(fmi2CancelStep, (fmi2Component c), (void)0)
 
 /* ------------------------------------------------------------------ Model Exchange: no events */
 
@@ -309,27 +279,13 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunication
     return (fmi2Status)fi_do_step(FI(c), "fmi2DoStep", currentCommunicationPoint, communicationStepSize);
 }
 
-FMI2_Export fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,
-                                                   const fmi2Integer order[], const fmi2Real value[])
+/* The status queries: the last successful time (of DoStep) and "not terminated" are the FMU's only answers;
+ * any other kind is discarded. */
+static fmi2Status status_of(fmi2Component c, const void *value, fmi2StatusKind s, fmi2StatusKind answered)
 {
-    (void)vr;
-    (void)n;
-    (void)order;
-    (void)value;
-    return unsupported(c, "fmi2SetRealInputDerivatives");
+    if (!c || !value) return fmi2Error;
+    return s == answered ? fmi2OK : fmi2Discard;
 }
-
-FMI2_Export fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,
-                                                    const fmi2Integer order[], fmi2Real value[])
-{
-    (void)vr;
-    (void)n;
-    (void)order;
-    (void)value;
-    return unsupported(c, "fmi2GetRealOutputDerivatives");
-}
-
-FMI2_Export fmi2Status fmi2CancelStep(fmi2Component c) { return unsupported(c, "fmi2CancelStep"); }
 
 FMI2_Export fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value)
 {
@@ -341,31 +297,27 @@ FMI2_Export fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fm
 
 FMI2_Export fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value)
 {
-    if (!c || !value) return fmi2Error;
-    if (s != fmi2LastSuccessfulTime) return fmi2Discard;
-    *value = fm_time(INS->fi.model);
-    return fmi2OK;
-}
-
-FMI2_Export fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value)
-{
-    (void)s;
-    (void)value;
-    return c ? fmi2Discard : fmi2Error;
+    fmi2Status status = status_of(c, value, s, fmi2LastSuccessfulTime);
+    if (status == fmi2OK) *value = fm_time(INS->fi.model);
+    return status;
 }
 
 FMI2_Export fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value)
 {
-    if (!c || !value) return fmi2Error;
-    if (s != fmi2Terminated) return fmi2Discard;
-    *value = fmi2False;
-    return fmi2OK;
+    fmi2Status status = status_of(c, value, s, fmi2Terminated);
+    if (status == fmi2OK) *value = fmi2False;
+    return status;
+}
+
+FMI2_Export fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value)
+{
+    (void)s, (void)value;
+    return c ? fmi2Discard : fmi2Error;
 }
 
 FMI2_Export fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value)
 {
-    (void)s;
-    (void)value;
+    (void)s, (void)value;
     return c ? fmi2Discard : fmi2Error;
 }
 

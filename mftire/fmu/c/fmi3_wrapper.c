@@ -35,6 +35,28 @@ static fmi3Status fail(fmi3Instance instance, const char *what)
     return (fmi3Status)fi_fail(FI(instance), "%s", what);
 }
 
+/* A function of the standard this FMU does not implement: NAME with the standard's parameter list PARAMS (the
+ * first is the instance), the others named unused after WHY; the call is refused with the error WHY. */
+#define REFUSED(NAME, PARAMS, WHY, ...)                                                                          \
+    FMI3_Export fmi3Status NAME PARAMS                                                                           \
+    {                                                                                                            \
+        __VA_ARGS__;                                                                                             \
+        return fail(instance, WHY);                                                                              \
+    }
+#define UNSUPPORTED(NAME, PARAMS, ...) REFUSED(NAME, PARAMS, #NAME " is not supported", __VA_ARGS__)
+
+#define NO_CLOCKS_TEXT "the model has no clocks"
+
+/* Access to variables of a kind the model has none of (nvr value references): an empty call is fine, any other
+ * the error WHY. */
+#define NO_VALUES(NAME, PARAMS, WHY, ...)                                                                        \
+    FMI3_Export fmi3Status NAME PARAMS                                                                           \
+    {                                                                                                            \
+        __VA_ARGS__;                                                                                             \
+        if (!instance) return fmi3Error;                                                                         \
+        return nvr == 0 ? fmi3OK : fail(instance, WHY);                                                          \
+    }
+
 static Instance *create(fmi3String name, fmi3String token, fmi3Boolean loggingOn, fmi3InstanceEnvironment env,
                         fmi3LogMessageCallback logger, int cosim)
 {
@@ -164,41 +186,24 @@ static fmi3Status scalars(fmi3Instance instance, const char *fn, FIAccess access
     return (fmi3Status)fi_values(FI(instance), fn, access, (const unsigned *)vr, nvr, values);
 }
 
-FMI3_Export fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                      fmi3Float64 values[], size_t nValues)
-{
-    return scalars(instance, "fmi3GetFloat64", FI_GET_REAL, vr, nvr, values, nValues);
-}
-
-FMI3_Export fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                      const fmi3Float64 values[], size_t nValues)
-{
-    return scalars(instance, "fmi3SetFloat64", FI_SET_REAL, vr, nvr, (void *)values, nValues);
-}
-
-FMI3_Export fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                    fmi3Int32 values[], size_t nValues)
-{
-    return scalars(instance, "fmi3GetInt32", FI_GET_INT, vr, nvr, values, nValues);
-}
-
-FMI3_Export fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                    const fmi3Int32 values[], size_t nValues)
-{
-    return scalars(instance, "fmi3SetInt32", FI_SET_INT, vr, nvr, (void *)values, nValues);
-}
-
-/* Types the model does not use: any non-empty access is an error. */
-#define NO_VARIABLES(NAME, TYPE, CONST)                                                                     \
-    FMI3_Export fmi3Status NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,           \
-                                CONST TYPE values[], size_t nValues)                                        \
-    {                                                                                                       \
-        (void)vr;                                                                                           \
-        (void)values;                                                                                       \
-        (void)nValues;                                                                                      \
-        if (!instance) return fmi3Error;                                                                    \
-        return nvr == 0 ? fmi3OK : fail(instance, #NAME ": the model has no variables of this type");     \
+/* Get or set (CONST: const) of the variables of one type, through scalars(). */
+#define SCALARS(NAME, TYPE, CONST, ACCESS)                                                                      \
+    FMI3_Export fmi3Status NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,               \
+                                CONST TYPE values[], size_t nValues)                                            \
+    {                                                                                                           \
+        return scalars(instance, #NAME, ACCESS, vr, nvr, (void *)values, nValues);                             \
     }
+
+SCALARS(fmi3GetFloat64, fmi3Float64, , FI_GET_REAL)
+SCALARS(fmi3SetFloat64, fmi3Float64, const, FI_SET_REAL)
+SCALARS(fmi3GetInt32, fmi3Int32, , FI_GET_INT)
+SCALARS(fmi3SetInt32, fmi3Int32, const, FI_SET_INT)
+
+/* Types the model does not use. */
+#define NO_VARIABLES(NAME, TYPE, CONST)                                                                         \
+    NO_VALUES(NAME, (fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, CONST TYPE values[],      \
+                     size_t nValues),                                                                           \
+              #NAME ": the model has no variables of this type", (void)vr, (void)values, (void)nValues)
 
 NO_VARIABLES(fmi3GetFloat32, fmi3Float32, )
 NO_VARIABLES(fmi3GetInt8, fmi3Int8, )
@@ -220,42 +225,17 @@ NO_VARIABLES(fmi3SetInt64, fmi3Int64, const)
 NO_VARIABLES(fmi3SetUInt64, fmi3UInt64, const)
 NO_VARIABLES(fmi3SetBoolean, fmi3Boolean, const)
 NO_VARIABLES(fmi3SetString, fmi3String, const)
-
-FMI3_Export fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                     size_t valueSizes[], fmi3Binary values[], size_t nValues)
-{
-    (void)vr;
-    (void)valueSizes;
-    (void)values;
-    (void)nValues;
-    return nvr == 0 && instance ? fmi3OK : fail(instance, "the model has no Binary variables");
-}
-
-FMI3_Export fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                     const size_t valueSizes[], const fmi3Binary values[], size_t nValues)
-{
-    (void)vr;
-    (void)valueSizes;
-    (void)values;
-    (void)nValues;
-    return nvr == 0 && instance ? fmi3OK : fail(instance, "the model has no Binary variables");
-}
-
-FMI3_Export fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                    fmi3Clock values[])
-{
-    (void)vr;
-    (void)values;
-    return nvr == 0 && instance ? fmi3OK : fail(instance, "the model has no clocks");
-}
-
-FMI3_Export fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                    const fmi3Clock values[])
-{
-    (void)vr;
-    (void)values;
-    return nvr == 0 && instance ? fmi3OK : fail(instance, "the model has no clocks");
-}
+NO_VALUES(fmi3GetBinary, (fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, size_t valueSizes[],
+                          fmi3Binary values[], size_t nValues),
+          "the model has no Binary variables", (void)vr, (void)valueSizes, (void)values, (void)nValues)
+NO_VALUES(fmi3SetBinary, (fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                          const size_t valueSizes[], const fmi3Binary values[], size_t nValues),
+          "the model has no Binary variables", (void)vr, (void)valueSizes, (void)values, (void)nValues)
+NO_VALUES(fmi3GetClock, (fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Clock values[]),
+          NO_CLOCKS_TEXT, (void)vr, (void)values)
+NO_VALUES(fmi3SetClock, (fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
+                         const fmi3Clock values[]),
+          NO_CLOCKS_TEXT, (void)vr, (void)values)
 
 /* Every output (and state derivative) depends on every input and state (fm_dependencies). */
 #define is_output(vr) fm_is_unknown(vr)
@@ -291,118 +271,58 @@ FMI3_Export fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3Va
 
 /* ------------------------------------------------------------------ not supported */
 
-FMI3_Export fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *s)
-{
-    (void)s;
-    return fail(instance, "fmi3GetFMUState is not supported");
-}
-FMI3_Export fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState s)
-{
-    (void)s;
-    return fail(instance, "fmi3SetFMUState is not supported");
-}
-FMI3_Export fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *s)
-{
-    (void)s;
-    return fail(instance, "fmi3FreeFMUState is not supported");
-}
-FMI3_Export fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState s, size_t *size)
-{
-    (void)s;
-    (void)size;
-    return fail(instance, "fmi3SerializedFMUStateSize is not supported");
-}
-FMI3_Export fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState s, fmi3Byte b[], size_t size)
-{
-    (void)s;
-    (void)b;
-    (void)size;
-    return fail(instance, "fmi3SerializeFMUState is not supported");
-}
-FMI3_Export fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte b[], size_t size,
-                                               fmi3FMUState *s)
-{
-    (void)s;
-    (void)b;
-    (void)size;
-    return fail(instance, "fmi3DeserializeFMUState is not supported");
-}
-FMI3_Export fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference u[], size_t nu,
-                                                    const fmi3ValueReference k[], size_t nk, const fmi3Float64 seed[],
-                                                    size_t ns, fmi3Float64 sens[], size_t nsens)
-{
-    (void)u, (void)nu, (void)k, (void)nk, (void)seed, (void)ns, (void)sens, (void)nsens;
-    return fail(instance, "fmi3GetDirectionalDerivative is not supported");
-}
-FMI3_Export fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference u[], size_t nu,
-                                                const fmi3ValueReference k[], size_t nk, const fmi3Float64 seed[],
-                                                size_t ns, fmi3Float64 sens[], size_t nsens)
-{
-    (void)u, (void)nu, (void)k, (void)nk, (void)seed, (void)ns, (void)sens, (void)nsens;
-    return fail(instance, "fmi3GetAdjointDerivative is not supported");
-}
-FMI3_Export fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance)
-{
-    return fail(instance, "the model has no structural parameters");
-}
-FMI3_Export fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance)
-{
-    return fail(instance, "the model has no structural parameters");
-}
-FMI3_Export fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
-                                              fmi3Float64 intervals[], fmi3IntervalQualifier q[])
-{
-    (void)vr, (void)n, (void)intervals, (void)q;
-    return fail(instance, "the model has no clocks");
-}
-FMI3_Export fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
-                                               fmi3UInt64 c[], fmi3UInt64 r[], fmi3IntervalQualifier q[])
-{
-    (void)vr, (void)n, (void)c, (void)r, (void)q;
-    return fail(instance, "the model has no clocks");
-}
-FMI3_Export fmi3Status fmi3GetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
-                                           fmi3Float64 shifts[])
-{
-    (void)vr, (void)n, (void)shifts;
-    return fail(instance, "the model has no clocks");
-}
-FMI3_Export fmi3Status fmi3GetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
-                                            fmi3UInt64 c[], fmi3UInt64 r[])
-{
-    (void)vr, (void)n, (void)c, (void)r;
-    return fail(instance, "the model has no clocks");
-}
-FMI3_Export fmi3Status fmi3SetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
-                                              const fmi3Float64 intervals[])
-{
-    (void)vr, (void)n, (void)intervals;
-    return fail(instance, "the model has no clocks");
-}
-FMI3_Export fmi3Status fmi3SetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
-                                               const fmi3UInt64 c[], const fmi3UInt64 r[])
-{
-    (void)vr, (void)n, (void)c, (void)r;
-    return fail(instance, "the model has no clocks");
-}
-FMI3_Export fmi3Status fmi3SetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
-                                           const fmi3Float64 shifts[])
-{
-    (void)vr, (void)n, (void)shifts;
-    return fail(instance, "the model has no clocks");
-}
-FMI3_Export fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
-                                            const fmi3UInt64 c[], const fmi3UInt64 r[])
-{
-    (void)vr, (void)n, (void)c, (void)r;
-    return fail(instance, "the model has no clocks");
-}
-FMI3_Export fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference clockReference,
-                                                  fmi3Float64 activationTime)
-{
-    (void)clockReference, (void)activationTime;
-    return fail(instance, "Scheduled Execution is not supported");
-}
+UNSUPPORTED(fmi3GetFMUState, (fmi3Instance instance, fmi3FMUState *s), (void)s)
+UNSUPPORTED(fmi3SetFMUState, (fmi3Instance instance, fmi3FMUState s), (void)s)
+UNSUPPORTED(fmi3FreeFMUState, (fmi3Instance instance, fmi3FMUState *s), (void)s)
+UNSUPPORTED(fmi3SerializedFMUStateSize, (fmi3Instance instance, fmi3FMUState s, size_t *size), (void)s, (void)size)
+UNSUPPORTED(fmi3SerializeFMUState, (fmi3Instance instance, fmi3FMUState s, fmi3Byte b[], size_t size), (void)s,
+            (void)b, (void)size)
+UNSUPPORTED(fmi3DeserializeFMUState, (fmi3Instance instance, const fmi3Byte b[], size_t size, fmi3FMUState *s),
+            (void)s, (void)b, (void)size)
+UNSUPPORTED(fmi3GetDirectionalDerivative,
+            (fmi3Instance instance, const fmi3ValueReference u[], size_t nu, const fmi3ValueReference k[], size_t nk,
+             const fmi3Float64 seed[], size_t ns, fmi3Float64 sens[], size_t nsens),
+            (void)u, (void)nu, (void)k, (void)nk, (void)seed, (void)ns, (void)sens, (void)nsens)
+UNSUPPORTED(fmi3GetAdjointDerivative,
+            (fmi3Instance instance, const fmi3ValueReference u[], size_t nu, const fmi3ValueReference k[], size_t nk,
+             const fmi3Float64 seed[], size_t ns, fmi3Float64 sens[], size_t nsens),
+            (void)u, (void)nu, (void)k, (void)nk, (void)seed, (void)ns, (void)sens, (void)nsens)
+UNSUPPORTED(fmi3GetOutputDerivatives,
+            (fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Int32 orders[],
+             fmi3Float64 values[], size_t nValues),
+            (void)vr, (void)nvr, (void)orders, (void)values, (void)nValues)
+REFUSED(fmi3EnterConfigurationMode, (fmi3Instance instance), "the model has no structural parameters", (void)0)
+REFUSED(fmi3ExitConfigurationMode, (fmi3Instance instance), "the model has no structural parameters", (void)0)
+REFUSED(fmi3ActivateModelPartition,
+        (fmi3Instance instance, fmi3ValueReference clockReference, fmi3Float64 activationTime),
+        "Scheduled Execution is not supported", (void)clockReference, (void)activationTime)
+
+/* The clocks' intervals and shifts: the model has no clocks. */
+#define NO_CLOCKS(NAME, PARAMS, ...) REFUSED(NAME, PARAMS, NO_CLOCKS_TEXT, __VA_ARGS__)
+
+NO_CLOCKS(fmi3GetIntervalDecimal, (fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
+                                   fmi3Float64 intervals[], fmi3IntervalQualifier q[]),
+          (void)vr, (void)n, (void)intervals, (void)q)
+NO_CLOCKS(fmi3GetIntervalFraction, (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3UInt64 c[],
+                                    fmi3UInt64 r[], fmi3IntervalQualifier q[]),
+          (void)vr, (void)n, (void)c, (void)r, (void)q)
+NO_CLOCKS(fmi3GetShiftDecimal, (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3Float64 shifts[]),
+          (void)vr, (void)n, (void)shifts)
+NO_CLOCKS(fmi3GetShiftFraction,
+          (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, fmi3UInt64 c[], fmi3UInt64 r[]),
+          (void)vr, (void)n, (void)c, (void)r)
+NO_CLOCKS(fmi3SetIntervalDecimal,
+          (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3Float64 intervals[]),
+          (void)vr, (void)n, (void)intervals)
+NO_CLOCKS(fmi3SetIntervalFraction, (fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
+                                    const fmi3UInt64 c[], const fmi3UInt64 r[]),
+          (void)vr, (void)n, (void)c, (void)r)
+NO_CLOCKS(fmi3SetShiftDecimal, (fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
+                                const fmi3Float64 shifts[]),
+          (void)vr, (void)n, (void)shifts)
+NO_CLOCKS(fmi3SetShiftFraction,
+          (fmi3Instance instance, const fmi3ValueReference vr[], size_t n, const fmi3UInt64 c[], const fmi3UInt64 r[]),
+          (void)vr, (void)n, (void)c, (void)r)
 
 /* ------------------------------------------------------------------ events and Model Exchange */
 
@@ -479,13 +399,6 @@ FMI3_Export fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, si
 /* ------------------------------------------------------------------ Co-Simulation */
 
 FMI3_Export fmi3Status fmi3EnterStepMode(fmi3Instance instance) { return instance ? fmi3OK : fmi3Error; }
-
-FMI3_Export fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                                const fmi3Int32 orders[], fmi3Float64 values[], size_t nValues)
-{
-    (void)vr, (void)nvr, (void)orders, (void)values, (void)nValues;
-    return fail(instance, "fmi3GetOutputDerivatives is not supported");
-}
 
 FMI3_Export fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
                                   fmi3Float64 communicationStepSize, fmi3Boolean noSetFMUStatePriorToCurrentPoint,

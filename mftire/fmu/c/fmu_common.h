@@ -86,17 +86,22 @@ FM_FN void fm_logf(fm_log_fn log, void *host, int status, const char *category, 
     log(host, status, category, buf);
 }
 
-/* A warning through the rate limit of fmu_model.h: logged when its slot is due at evaluation `evals`, with the
- * number of those not logged since the last message. */
-FM_FN void fm_warn(fm_log_fn log, void *host, FMWarnSlot *slot, unsigned long evals, double time, const char *message)
+/* A warning the rate limit of fmu_model.h lets through, logged at time `time` with the number `skipped` of those
+ * not logged since the last message. */
+FM_FN void fm_log_warning(fm_log_fn log, void *host, double time, unsigned long skipped, const char *message)
 {
-    unsigned long skipped;
-    if (!fm_warn_due(slot, evals, &skipped)) return;
     if (skipped)
         fm_logf(log, host, FM_WARNING, "logStatusWarning", "t=%.17g: %s (%lu more since the last message, not "
                 "logged: one message per kind per %lu evaluations)", time, message, skipped, FM_WARN_EVERY);
     else
         fm_logf(log, host, FM_WARNING, "logStatusWarning", "t=%.17g: %s", time, message);
+}
+
+/* A warning through the rate limit: logged when its slot is due at evaluation `evals`. */
+FM_FN void fm_warn(fm_log_fn log, void *host, FMWarnSlot *slot, unsigned long evals, double time, const char *message)
+{
+    unsigned long skipped;
+    if (fm_warn_due(slot, evals, &skipped)) fm_log_warning(log, host, time, skipped, message);
 }
 
 /* Whether the model refuses the value of the parameter at `slot` in p (writing why into msg): any non-finite
@@ -170,6 +175,21 @@ FM_FN void fm_base_reset(FMBase *b, int use_mode)
 FM_FN void fm_base_warn(FMBase *b, FMWarnSlot *slot, const char *message)
 {
     fm_warn(b->log, b->host, slot, b->evals, b->time, message);
+}
+
+/* The evaluator's warnings `kinds` (bit 1UL << kind of each MF_W_* kind, as mf_evaluate_unchecked returns them)
+ * through the rate limit, in the order of the kinds: the text of a kind (mf_warning_text of p) is written only
+ * when it is logged, not at each evaluation. */
+FM_FN void fm_base_warn_kinds(FMBase *b, const MFParams *p, unsigned long kinds)
+{
+    char text[200];
+    unsigned long skipped;
+    int k;
+    for (k = 0; kinds != 0 && k < MF_W_COUNT; k++, kinds >>= 1) /* the usual case: no warning, no loop */
+        if ((kinds & 1UL) && fm_warn_due(&b->warn[k], b->evals, &skipped)) {
+            mf_warning_text(p, k, text, sizeof text);
+            fm_log_warning(b->log, b->host, b->time, skipped, text);
+        }
 }
 
 /* The error of an evaluation that returned rc (MF_BAD_MODE, else a FITTYP the evaluator refuses), logged: the

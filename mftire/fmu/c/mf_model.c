@@ -173,18 +173,24 @@ static void guard_outputs(FMModel *m)
         if (!isfinite(o[i])) o[i] = 0.0; /* members that are not FMU outputs (omega, Cx, Cy, Cz) */
 }
 
-/* Evaluate if the inputs, parameters or mode changed. */
+/* Evaluate if the inputs, parameters or mode changed.  Once initialised, useMode and FITTYP are checked when
+ * they are set (fm_set_mode, fm_set_parameter_ok) and at ExitInitializationMode, so the evaluation does not check
+ * them again; before, it does (a read in initialisation mode). */
 static int update(FMModel *m)
 {
-    int rc;
+    int rc = MF_OK;
     MFInputs in;
     if (!m->dirty) return FM_OK;
     m->b.evals++;
     in = m->inputs;
     guard_inputs(m, &in);
-    rc = mf_evaluate(&m->params, m->b.use_mode, &in, &m->outputs, on_warning, m);
-    if (rc == MF_OK) guard_outputs(m);
+    if (m->b.initialized)
+        fm_base_warn_kinds(&m->b, &m->params, mf_evaluate_unchecked(&m->params, m->b.use_mode, &in, MF_WANT_ALL,
+                                                                     &m->outputs));
+    else
+        rc = mf_evaluate(&m->params, m->b.use_mode, &in, &m->outputs, on_warning, m);
     if (rc != MF_OK) return fm_eval_error(m->b.log, m->b.host, &m->params, m->b.use_mode, rc);
+    guard_outputs(m);
     m->dirty = 0;
     return FM_OK;
 }
@@ -192,12 +198,13 @@ static int update(FMModel *m)
 static int fm_get_real(FMModel *m, unsigned vr, double *value)
 {
     const FMVarInfo *v = fm_var(&TABLE, vr);
-    if (!v) return fm_not_a(m->b.log, m->b.host, vr, "Real");
-    if (fm_get_known(v, m->b.time, &m->inputs, &m->params, value)) return FM_OK;
-    if (v->kind != FM_K_OUTPUT) return fm_not_a(m->b.log, m->b.host, vr, "Real");
-    if (update(m) != FM_OK) return FM_ERROR;
-    *value = *fm_slot(&m->outputs, v);
-    return FM_OK;
+    if (v && v->kind == FM_K_OUTPUT) { /* the hot call first: an output, evaluated only when dirty */
+        if (m->dirty && update(m) != FM_OK) return FM_ERROR;
+        *value = *fm_slot(&m->outputs, v);
+        return FM_OK;
+    }
+    if (v && fm_get_known(v, m->b.time, &m->inputs, &m->params, value)) return FM_OK;
+    return fm_not_a(m->b.log, m->b.host, vr, "Real");
 }
 
 static int fm_set_real(FMModel *m, unsigned vr, double value)

@@ -1293,19 +1293,35 @@ int mf_evaluate_want(const MFParams *p, int use_mode, const MFInputs *in, unsign
                      mf_warning_fn warn, void *ctx)
 {
     char msg[256];
+    unsigned long warnings;
+    int k;
+    if (mf_check_mode(use_mode, msg, sizeof msg) != MF_OK) return MF_BAD_MODE;
+    if (mf_check_fittyp(p, msg, sizeof msg) != MF_OK) return MF_BAD_FITTYP;
+    warnings = mf_evaluate_unchecked(p, use_mode, in, want, out);
+    if (warn && warnings)
+        for (k = 0; k < MF_W_COUNT; k++)
+            if (warnings & (1UL << k)) {
+                char text[200];
+                mf_warning_text(p, k, text, sizeof text);
+                warn(ctx, k, text);
+            }
+    return MF_OK;
+}
+
+unsigned long mf_evaluate_unchecked(const MFParams *p, int use_mode, const MFInputs *in, unsigned want,
+                                    MFOutputs *out)
+{
     Ctx m;
     Cond c;
     double dpi, Re, Romega, omega, omega_in;
     double data[MF_MAX_DATA] = {0.0};
-    int omega_given, k, kmax = 100;
+    int omega_given, kmax = 100;
 #if MF_N_TERMS > 0
     ExtTable ext = {MF_TERMS, MF_N_TERMS};
 #else
     ExtTable ext = {NULL, 0};
 #endif
 
-    if (mf_check_mode(use_mode, msg, sizeof msg) != MF_OK) return MF_BAD_MODE;
-    if (mf_check_fittyp(p, msg, sizeof msg) != MF_OK) return MF_BAD_FITTYP;
     m.warnings = 0;
     m.batch_camber = -1;
     decode_mode(&m, use_mode);
@@ -1318,13 +1334,5 @@ int mf_evaluate_want(const MFParams *p, int use_mode, const MFInputs *in, unsign
     c.omega = omega;
     mf_channels(p, &m, &ext, &c, dpi, Romega, data, in->muRoad, want, out);
     out->Fz = c.uFz; out->Re = Re; out->omega = c.omega;
-
-    if (warn && m.warnings)
-        for (k = 0; k < MF_W_COUNT; k++)
-            if (m.warnings & (1UL << k)) {
-                char text[200];
-                mf_warning_text(p, k, text, sizeof text);
-                warn(ctx, k, text);
-            }
-    return MF_OK;
+    return m.warnings;
 }

@@ -85,6 +85,15 @@ MF_API int mf_evaluate(const MFParams *p, int use_mode, const MFInputs *in, MFOu
 MF_API int mf_evaluate_want(const MFParams *p, int use_mode, const MFInputs *in, unsigned want, MFOutputs *out,
                      mf_warning_fn warn, void *ctx);
 
+/*
+ * mf_evaluate_want without its checks, for a caller that checks use_mode (mf_check_mode) and FITTYP
+ * (mf_check_fittyp) when they are set, not at every evaluation (the FMU models): with a mode or FITTYP
+ * those checks refuse, the numbers are undefined.  Returns the evaluation's warnings (bit 1UL << kind for
+ * each MF_W_* kind), for the caller to report, writing a text (mf_warning_text) only when it shows it.
+ */
+MF_API unsigned long mf_evaluate_unchecked(const MFParams *p, int use_mode, const MFInputs *in, unsigned want,
+                                           MFOutputs *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -3,289 +3,349 @@
 #define MF_PARAMS_H
 
 typedef struct {
-    double FILE_VERSION; /* [MDI_HEADER] File version */
-    double FITTYP; /* [MODEL] Magic Formula version number (5, 6, 21, 61, 62) */
-    double LONGVL; /* [MODEL] Nominal (measurement) speed */
-    double VXLOW; /* [MODEL] Lower boundary of slip calculation */
-    double ROAD_INCREMENT; /* [MODEL] Increment in road sampling */
-    double ROAD_DIRECTION; /* [MODEL] Direction of travelled distance */
-    double USER_SUB_ID; /* [MODEL] User subroutine identifier */
-    double N_TIRE_STATES; /* [MODEL] Number of tyre states */
-    double USE_MODE; /* [MODEL] Tyre use mode switch (ADAMS only) */
-    double HMAX_LOCAL; /* [MODEL] Local integration time step (ADAMS only) */
-    double TIME_SWITCH_INTEG; /* [MODEL] Time when local integrator is activated (ADAMS only) */
-    double SWITCH_INTEG; /* [MODEL] Integration method switch (MF 6.2) */
-    double UNLOADED_RADIUS; /* [DIMENSION] Free tyre radius */
-    double WIDTH; /* [DIMENSION] Nominal section width of the tyre */
-    double ASPECT_RATIO; /* [DIMENSION] Nominal aspect ratio */
-    double RIM_RADIUS; /* [DIMENSION] Nominal rim radius */
-    double RIM_WIDTH; /* [DIMENSION] Rim width */
-    double INFLPRES; /* [OPERATING_CONDITIONS] Tyre inflation pressure */
-    double NOMPRES; /* [OPERATING_CONDITIONS] Nominal tyre inflation pressure */
-    double MASS; /* [INERTIA] Tyre mass */
-    double IXX; /* [INERTIA] Tyre diametral moment of inertia */
-    double IYY; /* [INERTIA] Tyre polar moment of inertia */
-    double BELT_MASS; /* [INERTIA] Belt mass */
-    double BELT_IXX; /* [INERTIA] Belt diametral moment of inertia */
-    double BELT_IYY; /* [INERTIA] Belt polar moment of inertia */
-    double GRAVITY; /* [INERTIA] Gravity acting on belt in Z direction */
-    double FNOMIN; /* [VERTICAL] Nominal wheel load */
-    double VERTICAL_STIFFNESS; /* [VERTICAL] Tyre vertical stiffness */
-    double VERTICAL_DAMPING; /* [VERTICAL] Tyre vertical damping */
-    double MC_CONTOUR_A; /* [VERTICAL] Motorcycle contour ellipse A */
-    double MC_CONTOUR_B; /* [VERTICAL] Motorcycle contour ellipse B */
-    double BREFF; /* [VERTICAL] Low load stiffness of effective rolling radius */
-    double DREFF; /* [VERTICAL] Peak value of effective rolling radius */
-    double FREFF; /* [VERTICAL] High load stiffness of effective rolling radius */
-    double Q_RE0; /* [VERTICAL] Ratio of free tyre radius with nominal tyre radius */
-    double Q_V1; /* [VERTICAL] Tyre radius increase with speed */
-    double Q_V2; /* [VERTICAL] Vertical stiffness increase with speed */
-    double Q_FZ2; /* [VERTICAL] Quadratic term in load vs. deflection */
-    double Q_FCX; /* [VERTICAL] Longitudinal force influence on vertical stiffness */
-    double Q_FCY; /* [VERTICAL] Lateral force influence on vertical stiffness */
-    double Q_CAM; /* [VERTICAL] Stiffness reduction due to camber */
-    double PFZ1; /* [VERTICAL] Pressure effect on vertical stiffness */
-    double Q_FCY2; /* [VERTICAL] Explicit load dependency of the lateral force influence on vertical s */
-    double Q_CAM1; /* [VERTICAL] Linear load dependent camber angle influence on vertical stiffness */
-    double Q_CAM2; /* [VERTICAL] Quadratic load dependent camber angle influence on vertical stiffness */
-    double Q_CAM3; /* [VERTICAL] Linear load and camber angle dependent reduction on vertical stiffnes */
-    double Q_FYS1; /* [VERTICAL] Combined camber and side slip angle effect on vertical stiffness (con */
-    double Q_FYS2; /* [VERTICAL] Combined camber and side slip angle linear effect on vertical stiffne */
-    double Q_FYS3; /* [VERTICAL] Combined camber and side slip angle quadratic effect on vertical stif */
-    double BOTTOM_OFFST; /* [VERTICAL] Distance to rim when bottoming starts to occur */
-    double BOTTOM_STIFF; /* [VERTICAL] Vertical stiffness of bottomed tyre */
-    double LONGITUDINAL_STIFFNESS; /* [STRUCTURAL] Tyre overall longitudinal stiffness */
-    double LATERAL_STIFFNESS; /* [STRUCTURAL] Tyre overall lateral stiffness */
-    double YAW_STIFFNESS; /* [STRUCTURAL] Tyre overall yaw stiffness */
-    double FREQ_LONG; /* [STRUCTURAL] Undamped frequency fore/aft and vertical mode */
-    double FREQ_LAT; /* [STRUCTURAL] Undamped frequency lateral mode */
-    double FREQ_YAW; /* [STRUCTURAL] Undamped frequency yaw and camber mode */
-    double FREQ_WINDUP; /* [STRUCTURAL] Undamped frequency wind-up mode */
-    double DAMP_LONG; /* [STRUCTURAL] Dimensionless damping fore/aft and vertical mode */
-    double DAMP_LAT; /* [STRUCTURAL] Dimensionless damping lateral mode */
-    double DAMP_YAW; /* [STRUCTURAL] Dimensionless damping yaw and camber mode */
-    double DAMP_WINDUP; /* [STRUCTURAL] Dimensionless damping wind-up mode */
-    double DAMP_RESIDUAL; /* [STRUCTURAL] Residual damping (proportional to stiffness) */
-    double DAMP_VLOW; /* [STRUCTURAL] Additional low speed damping (proportional to stiffness) */
-    double Q_BVX; /* [STRUCTURAL] Load and speed influence on in-plane translation stiffness */
-    double Q_BVT; /* [STRUCTURAL] Load and speed influence on in-plane rotation stiffness */
-    double PCFX1; /* [STRUCTURAL] Longitudinal stiffness vertical deflection dependency, linear term */
-    double PCFX2; /* [STRUCTURAL] Longitudinal stiffness vertical deflection dependency, quadratic te */
-    double PCFX3; /* [STRUCTURAL] Longitudinal stiffness pressure dependency */
-    double PCFY1; /* [STRUCTURAL] Lateral stiffness vertical deflection dependency, linear term */
-    double PCFY2; /* [STRUCTURAL] Lateral stiffness vertical deflection dependency, quadratic term */
-    double PCFY3; /* [STRUCTURAL] Lateral stiffness pressure dependency */
-    double PCMZ1; /* [STRUCTURAL] Yaw stiffness pressure dependency */
-    double Q_RA1; /* [CONTACT_PATCH] Square root term in contact length equation */
-    double Q_RA2; /* [CONTACT_PATCH] Linear term in contact length equation */
-    double Q_RB1; /* [CONTACT_PATCH] Root term in contact width equation */
-    double Q_RB2; /* [CONTACT_PATCH] Linear term in contact width equation */
-    double ELLIPS_SHIFT; /* [CONTACT_PATCH] Scaling of distance between front and rear ellipsoid */
-    double ELLIPS_LENGTH; /* [CONTACT_PATCH] Semi major axis of ellipsoid */
-    double ELLIPS_HEIGHT; /* [CONTACT_PATCH] Semi minor axis of ellipsoid */
-    double ELLIPS_ORDER; /* [CONTACT_PATCH] Order of ellipsoid */
-    double ELLIPS_MAX_STEP; /* [CONTACT_PATCH] Maximum height of road step */
-    double ELLIPS_NWIDTH; /* [CONTACT_PATCH] Number of parallel ellipsoids */
-    double ELLIPS_NLENGTH; /* [CONTACT_PATCH] Number of ellipsoids at sides of contact patch */
-    double ENV_C1; /* [CONTACT_PATCH] Effective height attenuation */
-    double ENV_C2; /* [CONTACT_PATCH] Effective plane angle attenuation */
-    double Q_A1; /* [CONTACT_PATCH] Square root load term in contact length (MF 5.2) */
-    double Q_A2; /* [CONTACT_PATCH] Linear load term in contact length (MF 5.2) */
-    double PRESMIN; /* [INFLATION_PRESSURE_RANGE] Minimum valid tyre inflation pressure */
-    double PRESMAX; /* [INFLATION_PRESSURE_RANGE] Maximum valid tyre inflation pressure */
-    double FZMIN; /* [VERTICAL_FORCE_RANGE] Minimum allowed wheel load */
-    double FZMAX; /* [VERTICAL_FORCE_RANGE] Maximum allowed wheel load */
-    double KPUMIN; /* [LONG_SLIP_RANGE] Minimum valid wheel slip */
-    double KPUMAX; /* [LONG_SLIP_RANGE] Maximum valid wheel slip */
-    double ALPMIN; /* [SLIP_ANGLE_RANGE] Minimum valid slip angle */
-    double ALPMAX; /* [SLIP_ANGLE_RANGE] Maximum valid slip angle */
-    double CAMMIN; /* [INCLINATION_ANGLE_RANGE] Minimum valid camber angle */
-    double CAMMAX; /* [INCLINATION_ANGLE_RANGE] Maximum valid camber angle */
-    double LFZO; /* [SCALING_COEFFICIENTS] Scale factor of nominal (rated) load */
-    double LCX; /* [SCALING_COEFFICIENTS] Scale factor of Fx shape factor */
-    double LMUX; /* [SCALING_COEFFICIENTS] Scale factor of Fx peak friction coefficient */
-    double LEX; /* [SCALING_COEFFICIENTS] Scale factor of Fx curvature factor */
-    double LKX; /* [SCALING_COEFFICIENTS] Scale factor of Fx slip stiffness */
-    double LHX; /* [SCALING_COEFFICIENTS] Scale factor of Fx horizontal shift */
-    double LVX; /* [SCALING_COEFFICIENTS] Scale factor of Fx vertical shift */
-    double LCY; /* [SCALING_COEFFICIENTS] Scale factor of Fy shape factor */
-    double LMUY; /* [SCALING_COEFFICIENTS] Scale factor of Fy peak friction coefficient */
-    double LEY; /* [SCALING_COEFFICIENTS] Scale factor of Fy curvature factor */
-    double LKY; /* [SCALING_COEFFICIENTS] Scale factor of Fy cornering stiffness */
-    double LHY; /* [SCALING_COEFFICIENTS] Scale factor of Fy horizontal shift */
-    double LVY; /* [SCALING_COEFFICIENTS] Scale factor of Fy vertical shift */
-    double LTR; /* [SCALING_COEFFICIENTS] Scale factor of peak of pneumatic trail */
-    double LRES; /* [SCALING_COEFFICIENTS] Scale factor for offset of residual torque */
-    double LXAL; /* [SCALING_COEFFICIENTS] Scale factor of alpha influence on Fx */
-    double LYKA; /* [SCALING_COEFFICIENTS] Scale factor of kappa influence on Fy */
-    double LVYKA; /* [SCALING_COEFFICIENTS] Scale factor of kappa induced Fy */
-    double LS; /* [SCALING_COEFFICIENTS] Scale factor of moment arm of Fx */
-    double LKYC; /* [SCALING_COEFFICIENTS] Scale factor of camber force stiffness */
-    double LKZC; /* [SCALING_COEFFICIENTS] Scale factor of camber torque stiffness */
-    double LVMX; /* [SCALING_COEFFICIENTS] Scale factor of Mx vertical shift */
-    double LMX; /* [SCALING_COEFFICIENTS] Scale factor of overturning couple */
-    double LMY; /* [SCALING_COEFFICIENTS] Scale factor of rolling resistance torque */
-    double LMP; /* [SCALING_COEFFICIENTS] Scale factor of parking moment */
-    double LSGKP; /* [SCALING_COEFFICIENTS] Scale factor of relaxation length of Fx (MF 5.2) */
-    double LSGAL; /* [SCALING_COEFFICIENTS] Scale factor of relaxation length of Fy (MF 5.2) */
-    double LKXC; /* [SCALING_COEFFICIENTS] Scale factor of camber influence on Fx slip stiffness */
-    double LGAX; /* [SCALING_COEFFICIENTS] Scale factor of camber for Fx (MF 5.2) */
-    double LGAY; /* [SCALING_COEFFICIENTS] Scale factor of camber for Fy (MF 5.2) */
-    double LGAZ; /* [SCALING_COEFFICIENTS] Scale factor of camber for Mz (MF 5.2) */
-    double LGYR; /* [SCALING_COEFFICIENTS] Scale factor of gyroscopic torque */
-    double LMUV; /* [SCALING_COEFFICIENTS] Scale factor of friction decay with slip speed (MF 5.2 /  */
-    double PCX1; /* [LONGITUDINAL_COEFFICIENTS] Shape factor Cfx for longitudinal force */
-    double PDX1; /* [LONGITUDINAL_COEFFICIENTS] Longitudinal friction Mux at Fznom */
-    double PDX2; /* [LONGITUDINAL_COEFFICIENTS] Variation of friction Mux with load */
-    double PDX3; /* [LONGITUDINAL_COEFFICIENTS] Variation of friction Mux with camber squared */
-    double PEX1; /* [LONGITUDINAL_COEFFICIENTS] Longitudinal curvature Efx at Fznom */
-    double PEX2; /* [LONGITUDINAL_COEFFICIENTS] Variation of curvature Efx with load */
-    double PEX3; /* [LONGITUDINAL_COEFFICIENTS] Variation of curvature Efx with load squared */
-    double PEX4; /* [LONGITUDINAL_COEFFICIENTS] Factor in curvature Efx while driving */
-    double PKX1; /* [LONGITUDINAL_COEFFICIENTS] Longitudinal slip stiffness Kfx/Fz at Fznom */
-    double PKX2; /* [LONGITUDINAL_COEFFICIENTS] Variation of slip stiffness Kfx/Fz with load */
-    double PKX3; /* [LONGITUDINAL_COEFFICIENTS] Exponent in slip stiffness Kfx/Fz with load */
-    double PHX1; /* [LONGITUDINAL_COEFFICIENTS] Horizontal shift Shx at Fznom */
-    double PHX2; /* [LONGITUDINAL_COEFFICIENTS] Variation of shift Shx with load */
-    double PVX1; /* [LONGITUDINAL_COEFFICIENTS] Vertical shift Svx/Fz at Fznom */
-    double PVX2; /* [LONGITUDINAL_COEFFICIENTS] Variation of shift Svx/Fz with load */
-    double PPX1; /* [LONGITUDINAL_COEFFICIENTS] Linear influence of inflation pressure on longitudin */
-    double PPX2; /* [LONGITUDINAL_COEFFICIENTS] Quadratic influence of inflation pressure on longitu */
-    double PPX3; /* [LONGITUDINAL_COEFFICIENTS] Linear influence of inflation pressure on peak longi */
-    double PPX4; /* [LONGITUDINAL_COEFFICIENTS] Quadratic influence of inflation pressure on peak lo */
-    double RBX1; /* [LONGITUDINAL_COEFFICIENTS] Slope factor for combined slip Fx reduction */
-    double RBX2; /* [LONGITUDINAL_COEFFICIENTS] Variation of slope Fx reduction with kappa */
-    double RBX3; /* [LONGITUDINAL_COEFFICIENTS] Influence of camber on stiffness for Fx combined */
-    double RCX1; /* [LONGITUDINAL_COEFFICIENTS] Shape factor for combined slip Fx reduction */
-    double REX1; /* [LONGITUDINAL_COEFFICIENTS] Curvature factor of combined Fx */
-    double REX2; /* [LONGITUDINAL_COEFFICIENTS] Curvature factor of combined Fx with load */
-    double RHX1; /* [LONGITUDINAL_COEFFICIENTS] Shift factor for combined slip Fx reduction */
-    double PTX1; /* [LONGITUDINAL_COEFFICIENTS] Relaxation length SigKap0/Fz at Fznom (MF 5.2) */
-    double PTX2; /* [LONGITUDINAL_COEFFICIENTS] Variation of SigKap0/Fz with load (MF 5.2) */
-    double PTX3; /* [LONGITUDINAL_COEFFICIENTS] Variation of SigKap0/Fz with exponent of load (MF 5. */
-    double QSX1; /* [OVERTURNING_COEFFICIENTS] Vertical shift of overturning moment */
-    double QSX2; /* [OVERTURNING_COEFFICIENTS] Camber induced overturning couple */
-    double QSX3; /* [OVERTURNING_COEFFICIENTS] Fy induced overturning couple */
-    double QSX4; /* [OVERTURNING_COEFFICIENTS] Mixed load, lateral force and camber on Mx */
-    double QSX5; /* [OVERTURNING_COEFFICIENTS] Load effect on Mx with lateral force and camber */
-    double QSX6; /* [OVERTURNING_COEFFICIENTS] B-factor of load with Mx */
-    double QSX7; /* [OVERTURNING_COEFFICIENTS] Camber with load on Mx */
-    double QSX8; /* [OVERTURNING_COEFFICIENTS] Lateral force with load on Mx */
-    double QSX9; /* [OVERTURNING_COEFFICIENTS] B-factor of lateral force with load on Mx */
-    double QSX10; /* [OVERTURNING_COEFFICIENTS] Vertical force with camber on Mx */
-    double QSX11; /* [OVERTURNING_COEFFICIENTS] B-factor of vertical force with camber on Mx */
-    double QSX12; /* [OVERTURNING_COEFFICIENTS] Camber squared induced overturning moment */
-    double QSX13; /* [OVERTURNING_COEFFICIENTS] Lateral force induced overturning moment */
-    double QSX14; /* [OVERTURNING_COEFFICIENTS] Lateral force induced overturning moment with camber */
-    double PPMX1; /* [OVERTURNING_COEFFICIENTS] Influence of inflation pressure on overturning moment */
-    double PCY1; /* [LATERAL_COEFFICIENTS] Shape factor Cfy for lateral forces */
-    double PDY1; /* [LATERAL_COEFFICIENTS] Lateral friction Muy */
-    double PDY2; /* [LATERAL_COEFFICIENTS] Variation of friction Muy with load */
-    double PDY3; /* [LATERAL_COEFFICIENTS] Variation of friction Muy with squared camber */
-    double PEY1; /* [LATERAL_COEFFICIENTS] Lateral curvature Efy at Fznom */
-    double PEY2; /* [LATERAL_COEFFICIENTS] Variation of curvature Efy with load */
-    double PEY3; /* [LATERAL_COEFFICIENTS] Zero order camber dependency of curvature Efy */
-    double PEY4; /* [LATERAL_COEFFICIENTS] Variation of curvature Efy with camber */
-    double PEY5; /* [LATERAL_COEFFICIENTS] Variation of curvature Efy with camber squared */
-    double PKY1; /* [LATERAL_COEFFICIENTS] Maximum value of stiffness Kfy/Fznom */
-    double PKY2; /* [LATERAL_COEFFICIENTS] Load at which Kfy reaches maximum value */
-    double PKY3; /* [LATERAL_COEFFICIENTS] Variation of Kfy/Fznom with camber */
-    double PKY4; /* [LATERAL_COEFFICIENTS] Curvature of stiffness Kfy */
-    double PKY5; /* [LATERAL_COEFFICIENTS] Peak stiffness variation with camber squared */
-    double PKY6; /* [LATERAL_COEFFICIENTS] Fy camber stiffness factor */
-    double PKY7; /* [LATERAL_COEFFICIENTS] Vertical load dependency of camber stiffness */
-    double PHY1; /* [LATERAL_COEFFICIENTS] Horizontal shift Shy at Fznom */
-    double PHY2; /* [LATERAL_COEFFICIENTS] Variation of shift Shy with load */
-    double PHY3; /* [LATERAL_COEFFICIENTS] Variation of shift Shy with camber (MF 5.2) */
-    double PVY1; /* [LATERAL_COEFFICIENTS] Vertical shift in Svy/Fz at Fznom */
-    double PVY2; /* [LATERAL_COEFFICIENTS] Variation of shift Svy/Fz with load */
-    double PVY3; /* [LATERAL_COEFFICIENTS] Variation of shift Svy/Fz with camber */
-    double PVY4; /* [LATERAL_COEFFICIENTS] Variation of shift Svy/Fz with camber and load */
-    double PPY1; /* [LATERAL_COEFFICIENTS] Influence of inflation pressure on cornering stiffness */
-    double PPY2; /* [LATERAL_COEFFICIENTS] Influence of inflation pressure on load dependency of cor */
-    double PPY3; /* [LATERAL_COEFFICIENTS] Linear influence of inflation pressure on lateral peak fr */
-    double PPY4; /* [LATERAL_COEFFICIENTS] Quadratic influence of inflation pressure on lateral peak */
-    double PPY5; /* [LATERAL_COEFFICIENTS] Influence of inflation pressure on camber stiffness (MF 6 */
-    double RBY1; /* [LATERAL_COEFFICIENTS] Slope factor for combined Fy reduction */
-    double RBY2; /* [LATERAL_COEFFICIENTS] Variation of slope Fy reduction with alpha */
-    double RBY3; /* [LATERAL_COEFFICIENTS] Shift term for alpha in slope Fy reduction */
-    double RBY4; /* [LATERAL_COEFFICIENTS] Influence of camber on stiffness of Fy combined */
-    double RCY1; /* [LATERAL_COEFFICIENTS] Shape factor for combined Fy reduction */
-    double REY1; /* [LATERAL_COEFFICIENTS] Curvature factor of combined Fy */
-    double REY2; /* [LATERAL_COEFFICIENTS] Curvature factor of combined Fy with load */
-    double RHY1; /* [LATERAL_COEFFICIENTS] Shift factor for combined Fy reduction */
-    double RHY2; /* [LATERAL_COEFFICIENTS] Shift factor for combined Fy reduction with load */
-    double RVY1; /* [LATERAL_COEFFICIENTS] Kappa induced side force Svyk/Muy*Fz at Fznom */
-    double RVY2; /* [LATERAL_COEFFICIENTS] Variation of Svyk/Muy*Fz with load */
-    double RVY3; /* [LATERAL_COEFFICIENTS] Variation of Svyk/Muy*Fz with camber */
-    double RVY4; /* [LATERAL_COEFFICIENTS] Variation of Svyk/Muy*Fz with alpha */
-    double RVY5; /* [LATERAL_COEFFICIENTS] Variation of Svyk/Muy*Fz with kappa */
-    double RVY6; /* [LATERAL_COEFFICIENTS] Variation of Svyk/Muy*Fz with atan(kappa) */
-    double PTY1; /* [LATERAL_COEFFICIENTS] Peak value of relaxation length SigAlp0/R0 (MF 5.2) */
-    double PTY2; /* [LATERAL_COEFFICIENTS] Value of Fz/Fznom where SigAlp0 is extreme (MF 5.2) */
-    double QSY1; /* [ROLLING_COEFFICIENTS] Rolling resistance torque coefficient */
-    double QSY2; /* [ROLLING_COEFFICIENTS] Rolling resistance torque depending on Fx */
-    double QSY3; /* [ROLLING_COEFFICIENTS] Rolling resistance torque depending on speed */
-    double QSY4; /* [ROLLING_COEFFICIENTS] Rolling resistance torque depending on speed ^4 */
-    double QSY5; /* [ROLLING_COEFFICIENTS] Rolling resistance torque depending on camber squared */
-    double QSY6; /* [ROLLING_COEFFICIENTS] Rolling resistance torque depending on load and camber sq */
-    double QSY7; /* [ROLLING_COEFFICIENTS] Rolling resistance torque coefficient load dependency */
-    double QSY8; /* [ROLLING_COEFFICIENTS] Rolling resistance torque coefficient pressure dependency */
-    double QBZ1; /* [ALIGNING_COEFFICIENTS] Trail slope factor for trail Bpt at Fznom */
-    double QBZ2; /* [ALIGNING_COEFFICIENTS] Variation of slope Bpt with load */
-    double QBZ3; /* [ALIGNING_COEFFICIENTS] Variation of slope Bpt with load squared */
-    double QBZ4; /* [ALIGNING_COEFFICIENTS] Variation of slope Bpt with camber */
-    double QBZ5; /* [ALIGNING_COEFFICIENTS] Variation of slope Bpt with absolute camber */
-    double QBZ9; /* [ALIGNING_COEFFICIENTS] Factor for scaling factors of slope factor Br of Mzr */
-    double QBZ10; /* [ALIGNING_COEFFICIENTS] Factor for dimensionless cornering stiffness of Br of Mz */
-    double QCZ1; /* [ALIGNING_COEFFICIENTS] Shape factor Cpt for pneumatic trail */
-    double QDZ1; /* [ALIGNING_COEFFICIENTS] Peak trail Dpt = Dpt*(Fz/Fznom*R0) */
-    double QDZ2; /* [ALIGNING_COEFFICIENTS] Variation of peak Dpt with load */
-    double QDZ3; /* [ALIGNING_COEFFICIENTS] Variation of peak Dpt with camber */
-    double QDZ4; /* [ALIGNING_COEFFICIENTS] Variation of peak Dpt with camber squared */
-    double QDZ6; /* [ALIGNING_COEFFICIENTS] Peak residual torque Dmr = Dmr/(Fz*R0) */
-    double QDZ7; /* [ALIGNING_COEFFICIENTS] Variation of peak factor Dmr with load */
-    double QDZ8; /* [ALIGNING_COEFFICIENTS] Variation of peak factor Dmr with camber */
-    double QDZ9; /* [ALIGNING_COEFFICIENTS] Variation of peak factor Dmr with camber and load */
-    double QDZ10; /* [ALIGNING_COEFFICIENTS] Variation of peak factor Dmr with camber squared */
-    double QDZ11; /* [ALIGNING_COEFFICIENTS] Variation of Dmr with camber squared and load */
-    double QEZ1; /* [ALIGNING_COEFFICIENTS] Trail curvature Ept at Fznom */
-    double QEZ2; /* [ALIGNING_COEFFICIENTS] Variation of curvature Ept with load */
-    double QEZ3; /* [ALIGNING_COEFFICIENTS] Variation of curvature Ept with load squared */
-    double QEZ4; /* [ALIGNING_COEFFICIENTS] Variation of curvature Ept with sign of Alpha-t */
-    double QEZ5; /* [ALIGNING_COEFFICIENTS] Variation of Ept with camber and sign Alpha-t */
-    double QHZ1; /* [ALIGNING_COEFFICIENTS] Trail horizontal shift Sht at Fznom */
-    double QHZ2; /* [ALIGNING_COEFFICIENTS] Variation of shift Sht with load */
-    double QHZ3; /* [ALIGNING_COEFFICIENTS] Variation of shift Sht with camber */
-    double QHZ4; /* [ALIGNING_COEFFICIENTS] Variation of shift Sht with camber and load */
-    double PPZ1; /* [ALIGNING_COEFFICIENTS] Effect of inflation pressure on length of pneumatic trai */
-    double PPZ2; /* [ALIGNING_COEFFICIENTS] Influence of inflation pressure on residual aligning tor */
-    double SSZ1; /* [ALIGNING_COEFFICIENTS] Nominal value of s/R0: effect of Fx on Mz */
-    double SSZ2; /* [ALIGNING_COEFFICIENTS] Variation of distance s/R0 with Fy/Fznom */
-    double SSZ3; /* [ALIGNING_COEFFICIENTS] Variation of distance s/R0 with camber */
-    double SSZ4; /* [ALIGNING_COEFFICIENTS] Variation of distance s/R0 with load and camber */
-    double QTZ1; /* [ALIGNING_COEFFICIENTS] Gyration torque constant (MF 5.2) */
-    double MBELT; /* [ALIGNING_COEFFICIENTS] Belt mass of the wheel (MF 5.2) */
-    double PDXP1; /* [TURNSLIP_COEFFICIENTS] Peak Fx reduction due to spin parameter */
-    double PDXP2; /* [TURNSLIP_COEFFICIENTS] Peak Fx reduction due to spin with varying load paramete */
-    double PDXP3; /* [TURNSLIP_COEFFICIENTS] Peak Fx reduction due to spin with kappa parameter */
-    double PKYP1; /* [TURNSLIP_COEFFICIENTS] Cornering stiffness reduction due to spin */
-    double PDYP1; /* [TURNSLIP_COEFFICIENTS] Peak Fy reduction due to spin parameter */
-    double PDYP2; /* [TURNSLIP_COEFFICIENTS] Peak Fy reduction due to spin with varying load paramete */
-    double PDYP3; /* [TURNSLIP_COEFFICIENTS] Peak Fy reduction due to spin with alpha parameter */
-    double PDYP4; /* [TURNSLIP_COEFFICIENTS] Peak Fy reduction due to square root of spin parameter */
-    double PHYP1; /* [TURNSLIP_COEFFICIENTS] Fy-alpha curve lateral shift limitation */
-    double PHYP2; /* [TURNSLIP_COEFFICIENTS] Fy-alpha curve maximum lateral shift parameter */
-    double PHYP3; /* [TURNSLIP_COEFFICIENTS] Fy-alpha curve maximum lateral shift varying with load p */
-    double PHYP4; /* [TURNSLIP_COEFFICIENTS] Fy-alpha curve maximum lateral shift parameter */
-    double PECP1; /* [TURNSLIP_COEFFICIENTS] Camber w.r.t. spin reduction factor parameter in camber  */
-    double PECP2; /* [TURNSLIP_COEFFICIENTS] Camber w.r.t. spin reduction factor varying with load pa */
-    double QDTP1; /* [TURNSLIP_COEFFICIENTS] Pneumatic trail reduction factor due to turn slip parame */
-    double QCRP1; /* [TURNSLIP_COEFFICIENTS] Turning moment at constant turning and zero forward spee */
-    double QCRP2; /* [TURNSLIP_COEFFICIENTS] Turn slip moment (at alpha=90deg) parameter for increase */
-    double QBRP1; /* [TURNSLIP_COEFFICIENTS] Residual (spin) torque reduction factor parameter due to */
-    double QDRP1; /* [TURNSLIP_COEFFICIENTS] Turn slip moment peak magnitude parameter */
-    double QDRP2; /* [TURNSLIP_COEFFICIENTS] Turn slip moment curvature parameter */
+    /* [MDI_HEADER]
+     *   FILE_VERSION            File version
+     */
+    double FILE_VERSION;
+    /* [MODEL]
+     *   FITTYP                  Magic Formula version number (5, 6, 21, 61, 62)
+     *   LONGVL                  Nominal (measurement) speed
+     *   VXLOW                   Lower boundary of slip calculation
+     *   ROAD_INCREMENT          Increment in road sampling
+     *   ROAD_DIRECTION          Direction of travelled distance
+     *   USER_SUB_ID             User subroutine identifier
+     *   N_TIRE_STATES           Number of tyre states
+     *   USE_MODE                Tyre use mode switch (ADAMS only)
+     *   HMAX_LOCAL              Local integration time step (ADAMS only)
+     *   TIME_SWITCH_INTEG       Time when local integrator is activated (ADAMS only)
+     *   SWITCH_INTEG            Integration method switch (MF 6.2)
+     */
+    double FITTYP, LONGVL, VXLOW, ROAD_INCREMENT, ROAD_DIRECTION, USER_SUB_ID, N_TIRE_STATES, USE_MODE, HMAX_LOCAL, TIME_SWITCH_INTEG, SWITCH_INTEG;
+    /* [DIMENSION]
+     *   UNLOADED_RADIUS         Free tyre radius
+     *   WIDTH                   Nominal section width of the tyre
+     *   ASPECT_RATIO            Nominal aspect ratio
+     *   RIM_RADIUS              Nominal rim radius
+     *   RIM_WIDTH               Rim width
+     */
+    double UNLOADED_RADIUS, WIDTH, ASPECT_RATIO, RIM_RADIUS, RIM_WIDTH;
+    /* [OPERATING_CONDITIONS]
+     *   INFLPRES                Tyre inflation pressure
+     *   NOMPRES                 Nominal tyre inflation pressure
+     */
+    double INFLPRES, NOMPRES;
+    /* [INERTIA]
+     *   MASS                    Tyre mass
+     *   IXX                     Tyre diametral moment of inertia
+     *   IYY                     Tyre polar moment of inertia
+     *   BELT_MASS               Belt mass
+     *   BELT_IXX                Belt diametral moment of inertia
+     *   BELT_IYY                Belt polar moment of inertia
+     *   GRAVITY                 Gravity acting on belt in Z direction
+     */
+    double MASS, IXX, IYY, BELT_MASS, BELT_IXX, BELT_IYY, GRAVITY;
+    /* [VERTICAL]
+     *   FNOMIN                  Nominal wheel load
+     *   VERTICAL_STIFFNESS      Tyre vertical stiffness
+     *   VERTICAL_DAMPING        Tyre vertical damping
+     *   MC_CONTOUR_A            Motorcycle contour ellipse A
+     *   MC_CONTOUR_B            Motorcycle contour ellipse B
+     *   BREFF                   Low load stiffness of effective rolling radius
+     *   DREFF                   Peak value of effective rolling radius
+     *   FREFF                   High load stiffness of effective rolling radius
+     *   Q_RE0                   Ratio of free tyre radius with nominal tyre radius
+     *   Q_V1                    Tyre radius increase with speed
+     *   Q_V2                    Vertical stiffness increase with speed
+     *   Q_FZ2                   Quadratic term in load vs. deflection
+     *   Q_FCX                   Longitudinal force influence on vertical stiffness
+     *   Q_FCY                   Lateral force influence on vertical stiffness
+     *   Q_CAM                   Stiffness reduction due to camber
+     *   PFZ1                    Pressure effect on vertical stiffness
+     *   Q_FCY2                  Explicit load dependency of the lateral force influence on vertical stiffness
+     *   Q_CAM1                  Linear load dependent camber angle influence on vertical stiffness
+     *   Q_CAM2                  Quadratic load dependent camber angle influence on vertical stiffness
+     *   Q_CAM3                  Linear load and camber angle dependent reduction on vertical stiffness
+     *   Q_FYS1                  Combined camber and side slip angle effect on vertical stiffness (constant)
+     *   Q_FYS2                  Combined camber and side slip angle linear effect on vertical stiffness
+     *   Q_FYS3                  Combined camber and side slip angle quadratic effect on vertical stiffness
+     *   BOTTOM_OFFST            Distance to rim when bottoming starts to occur
+     *   BOTTOM_STIFF            Vertical stiffness of bottomed tyre
+     */
+    double FNOMIN, VERTICAL_STIFFNESS, VERTICAL_DAMPING, MC_CONTOUR_A, MC_CONTOUR_B, BREFF, DREFF, FREFF, Q_RE0, Q_V1, Q_V2, Q_FZ2, Q_FCX, Q_FCY, Q_CAM, PFZ1, Q_FCY2, Q_CAM1, Q_CAM2, Q_CAM3, Q_FYS1, Q_FYS2, Q_FYS3, BOTTOM_OFFST, BOTTOM_STIFF;
+    /* [STRUCTURAL]
+     *   LONGITUDINAL_STIFFNESS  Tyre overall longitudinal stiffness
+     *   LATERAL_STIFFNESS       Tyre overall lateral stiffness
+     *   YAW_STIFFNESS           Tyre overall yaw stiffness
+     *   FREQ_LONG               Undamped frequency fore/aft and vertical mode
+     *   FREQ_LAT                Undamped frequency lateral mode
+     *   FREQ_YAW                Undamped frequency yaw and camber mode
+     *   FREQ_WINDUP             Undamped frequency wind-up mode
+     *   DAMP_LONG               Dimensionless damping fore/aft and vertical mode
+     *   DAMP_LAT                Dimensionless damping lateral mode
+     *   DAMP_YAW                Dimensionless damping yaw and camber mode
+     *   DAMP_WINDUP             Dimensionless damping wind-up mode
+     *   DAMP_RESIDUAL           Residual damping (proportional to stiffness)
+     *   DAMP_VLOW               Additional low speed damping (proportional to stiffness)
+     *   Q_BVX                   Load and speed influence on in-plane translation stiffness
+     *   Q_BVT                   Load and speed influence on in-plane rotation stiffness
+     *   PCFX1                   Longitudinal stiffness vertical deflection dependency, linear term
+     *   PCFX2                   Longitudinal stiffness vertical deflection dependency, quadratic term
+     *   PCFX3                   Longitudinal stiffness pressure dependency
+     *   PCFY1                   Lateral stiffness vertical deflection dependency, linear term
+     *   PCFY2                   Lateral stiffness vertical deflection dependency, quadratic term
+     *   PCFY3                   Lateral stiffness pressure dependency
+     *   PCMZ1                   Yaw stiffness pressure dependency
+     */
+    double LONGITUDINAL_STIFFNESS, LATERAL_STIFFNESS, YAW_STIFFNESS, FREQ_LONG, FREQ_LAT, FREQ_YAW, FREQ_WINDUP, DAMP_LONG, DAMP_LAT, DAMP_YAW, DAMP_WINDUP, DAMP_RESIDUAL, DAMP_VLOW, Q_BVX, Q_BVT, PCFX1, PCFX2, PCFX3, PCFY1, PCFY2, PCFY3, PCMZ1;
+    /* [CONTACT_PATCH]
+     *   Q_RA1                   Square root term in contact length equation
+     *   Q_RA2                   Linear term in contact length equation
+     *   Q_RB1                   Root term in contact width equation
+     *   Q_RB2                   Linear term in contact width equation
+     *   ELLIPS_SHIFT            Scaling of distance between front and rear ellipsoid
+     *   ELLIPS_LENGTH           Semi major axis of ellipsoid
+     *   ELLIPS_HEIGHT           Semi minor axis of ellipsoid
+     *   ELLIPS_ORDER            Order of ellipsoid
+     *   ELLIPS_MAX_STEP         Maximum height of road step
+     *   ELLIPS_NWIDTH           Number of parallel ellipsoids
+     *   ELLIPS_NLENGTH          Number of ellipsoids at sides of contact patch
+     *   ENV_C1                  Effective height attenuation
+     *   ENV_C2                  Effective plane angle attenuation
+     *   Q_A1                    Square root load term in contact length (MF 5.2)
+     *   Q_A2                    Linear load term in contact length (MF 5.2)
+     */
+    double Q_RA1, Q_RA2, Q_RB1, Q_RB2, ELLIPS_SHIFT, ELLIPS_LENGTH, ELLIPS_HEIGHT, ELLIPS_ORDER, ELLIPS_MAX_STEP, ELLIPS_NWIDTH, ELLIPS_NLENGTH, ENV_C1, ENV_C2, Q_A1, Q_A2;
+    /* [INFLATION_PRESSURE_RANGE]
+     *   PRESMIN                 Minimum valid tyre inflation pressure
+     *   PRESMAX                 Maximum valid tyre inflation pressure
+     */
+    double PRESMIN, PRESMAX;
+    /* [VERTICAL_FORCE_RANGE]
+     *   FZMIN                   Minimum allowed wheel load
+     *   FZMAX                   Maximum allowed wheel load
+     */
+    double FZMIN, FZMAX;
+    /* [LONG_SLIP_RANGE]
+     *   KPUMIN                  Minimum valid wheel slip
+     *   KPUMAX                  Maximum valid wheel slip
+     */
+    double KPUMIN, KPUMAX;
+    /* [SLIP_ANGLE_RANGE]
+     *   ALPMIN                  Minimum valid slip angle
+     *   ALPMAX                  Maximum valid slip angle
+     */
+    double ALPMIN, ALPMAX;
+    /* [INCLINATION_ANGLE_RANGE]
+     *   CAMMIN                  Minimum valid camber angle
+     *   CAMMAX                  Maximum valid camber angle
+     */
+    double CAMMIN, CAMMAX;
+    /* [SCALING_COEFFICIENTS]
+     *   LFZO                    Scale factor of nominal (rated) load
+     *   LCX                     Scale factor of Fx shape factor
+     *   LMUX                    Scale factor of Fx peak friction coefficient
+     *   LEX                     Scale factor of Fx curvature factor
+     *   LKX                     Scale factor of Fx slip stiffness
+     *   LHX                     Scale factor of Fx horizontal shift
+     *   LVX                     Scale factor of Fx vertical shift
+     *   LCY                     Scale factor of Fy shape factor
+     *   LMUY                    Scale factor of Fy peak friction coefficient
+     *   LEY                     Scale factor of Fy curvature factor
+     *   LKY                     Scale factor of Fy cornering stiffness
+     *   LHY                     Scale factor of Fy horizontal shift
+     *   LVY                     Scale factor of Fy vertical shift
+     *   LTR                     Scale factor of peak of pneumatic trail
+     *   LRES                    Scale factor for offset of residual torque
+     *   LXAL                    Scale factor of alpha influence on Fx
+     *   LYKA                    Scale factor of kappa influence on Fy
+     *   LVYKA                   Scale factor of kappa induced Fy
+     *   LS                      Scale factor of moment arm of Fx
+     *   LKYC                    Scale factor of camber force stiffness
+     *   LKZC                    Scale factor of camber torque stiffness
+     *   LVMX                    Scale factor of Mx vertical shift
+     *   LMX                     Scale factor of overturning couple
+     *   LMY                     Scale factor of rolling resistance torque
+     *   LMP                     Scale factor of parking moment
+     *   LSGKP                   Scale factor of relaxation length of Fx (MF 5.2)
+     *   LSGAL                   Scale factor of relaxation length of Fy (MF 5.2)
+     *   LKXC                    Scale factor of camber influence on Fx slip stiffness
+     *   LGAX                    Scale factor of camber for Fx (MF 5.2)
+     *   LGAY                    Scale factor of camber for Fy (MF 5.2)
+     *   LGAZ                    Scale factor of camber for Mz (MF 5.2)
+     *   LGYR                    Scale factor of gyroscopic torque
+     *   LMUV                    Scale factor of friction decay with slip speed (MF 5.2 / PAC2002, eq 4.E7)
+     */
+    double LFZO, LCX, LMUX, LEX, LKX, LHX, LVX, LCY, LMUY, LEY, LKY, LHY, LVY, LTR, LRES, LXAL, LYKA, LVYKA, LS, LKYC, LKZC, LVMX, LMX, LMY, LMP, LSGKP, LSGAL, LKXC, LGAX, LGAY, LGAZ, LGYR, LMUV;
+    /* [LONGITUDINAL_COEFFICIENTS]
+     *   PCX1                    Shape factor Cfx for longitudinal force
+     *   PDX1                    Longitudinal friction Mux at Fznom
+     *   PDX2                    Variation of friction Mux with load
+     *   PDX3                    Variation of friction Mux with camber squared
+     *   PEX1                    Longitudinal curvature Efx at Fznom
+     *   PEX2                    Variation of curvature Efx with load
+     *   PEX3                    Variation of curvature Efx with load squared
+     *   PEX4                    Factor in curvature Efx while driving
+     *   PKX1                    Longitudinal slip stiffness Kfx/Fz at Fznom
+     *   PKX2                    Variation of slip stiffness Kfx/Fz with load
+     *   PKX3                    Exponent in slip stiffness Kfx/Fz with load
+     *   PHX1                    Horizontal shift Shx at Fznom
+     *   PHX2                    Variation of shift Shx with load
+     *   PVX1                    Vertical shift Svx/Fz at Fznom
+     *   PVX2                    Variation of shift Svx/Fz with load
+     *   PPX1                    Linear influence of inflation pressure on longitudinal slip stiffness
+     *   PPX2                    Quadratic influence of inflation pressure on longitudinal slip stiffness
+     *   PPX3                    Linear influence of inflation pressure on peak longitudinal friction
+     *   PPX4                    Quadratic influence of inflation pressure on peak longitudinal friction
+     *   RBX1                    Slope factor for combined slip Fx reduction
+     *   RBX2                    Variation of slope Fx reduction with kappa
+     *   RBX3                    Influence of camber on stiffness for Fx combined
+     *   RCX1                    Shape factor for combined slip Fx reduction
+     *   REX1                    Curvature factor of combined Fx
+     *   REX2                    Curvature factor of combined Fx with load
+     *   RHX1                    Shift factor for combined slip Fx reduction
+     *   PTX1                    Relaxation length SigKap0/Fz at Fznom (MF 5.2)
+     *   PTX2                    Variation of SigKap0/Fz with load (MF 5.2)
+     *   PTX3                    Variation of SigKap0/Fz with exponent of load (MF 5.2)
+     */
+    double PCX1, PDX1, PDX2, PDX3, PEX1, PEX2, PEX3, PEX4, PKX1, PKX2, PKX3, PHX1, PHX2, PVX1, PVX2, PPX1, PPX2, PPX3, PPX4, RBX1, RBX2, RBX3, RCX1, REX1, REX2, RHX1, PTX1, PTX2, PTX3;
+    /* [OVERTURNING_COEFFICIENTS]
+     *   QSX1                    Vertical shift of overturning moment
+     *   QSX2                    Camber induced overturning couple
+     *   QSX3                    Fy induced overturning couple
+     *   QSX4                    Mixed load, lateral force and camber on Mx
+     *   QSX5                    Load effect on Mx with lateral force and camber
+     *   QSX6                    B-factor of load with Mx
+     *   QSX7                    Camber with load on Mx
+     *   QSX8                    Lateral force with load on Mx
+     *   QSX9                    B-factor of lateral force with load on Mx
+     *   QSX10                   Vertical force with camber on Mx
+     *   QSX11                   B-factor of vertical force with camber on Mx
+     *   QSX12                   Camber squared induced overturning moment
+     *   QSX13                   Lateral force induced overturning moment
+     *   QSX14                   Lateral force induced overturning moment with camber
+     *   PPMX1                   Influence of inflation pressure on overturning moment
+     */
+    double QSX1, QSX2, QSX3, QSX4, QSX5, QSX6, QSX7, QSX8, QSX9, QSX10, QSX11, QSX12, QSX13, QSX14, PPMX1;
+    /* [LATERAL_COEFFICIENTS]
+     *   PCY1                    Shape factor Cfy for lateral forces
+     *   PDY1                    Lateral friction Muy
+     *   PDY2                    Variation of friction Muy with load
+     *   PDY3                    Variation of friction Muy with squared camber
+     *   PEY1                    Lateral curvature Efy at Fznom
+     *   PEY2                    Variation of curvature Efy with load
+     *   PEY3                    Zero order camber dependency of curvature Efy
+     *   PEY4                    Variation of curvature Efy with camber
+     *   PEY5                    Variation of curvature Efy with camber squared
+     *   PKY1                    Maximum value of stiffness Kfy/Fznom
+     *   PKY2                    Load at which Kfy reaches maximum value
+     *   PKY3                    Variation of Kfy/Fznom with camber
+     *   PKY4                    Curvature of stiffness Kfy
+     *   PKY5                    Peak stiffness variation with camber squared
+     *   PKY6                    Fy camber stiffness factor
+     *   PKY7                    Vertical load dependency of camber stiffness
+     *   PHY1                    Horizontal shift Shy at Fznom
+     *   PHY2                    Variation of shift Shy with load
+     *   PHY3                    Variation of shift Shy with camber (MF 5.2)
+     *   PVY1                    Vertical shift in Svy/Fz at Fznom
+     *   PVY2                    Variation of shift Svy/Fz with load
+     *   PVY3                    Variation of shift Svy/Fz with camber
+     *   PVY4                    Variation of shift Svy/Fz with camber and load
+     *   PPY1                    Influence of inflation pressure on cornering stiffness
+     *   PPY2                    Influence of inflation pressure on load dependency of cornering stiffness
+     *   PPY3                    Linear influence of inflation pressure on lateral peak friction
+     *   PPY4                    Quadratic influence of inflation pressure on lateral peak friction
+     *   PPY5                    Influence of inflation pressure on camber stiffness (MF 6.2)
+     *   RBY1                    Slope factor for combined Fy reduction
+     *   RBY2                    Variation of slope Fy reduction with alpha
+     *   RBY3                    Shift term for alpha in slope Fy reduction
+     *   RBY4                    Influence of camber on stiffness of Fy combined
+     *   RCY1                    Shape factor for combined Fy reduction
+     *   REY1                    Curvature factor of combined Fy
+     *   REY2                    Curvature factor of combined Fy with load
+     *   RHY1                    Shift factor for combined Fy reduction
+     *   RHY2                    Shift factor for combined Fy reduction with load
+     *   RVY1                    Kappa induced side force Svyk/Muy*Fz at Fznom
+     *   RVY2                    Variation of Svyk/Muy*Fz with load
+     *   RVY3                    Variation of Svyk/Muy*Fz with camber
+     *   RVY4                    Variation of Svyk/Muy*Fz with alpha
+     *   RVY5                    Variation of Svyk/Muy*Fz with kappa
+     *   RVY6                    Variation of Svyk/Muy*Fz with atan(kappa)
+     *   PTY1                    Peak value of relaxation length SigAlp0/R0 (MF 5.2)
+     *   PTY2                    Value of Fz/Fznom where SigAlp0 is extreme (MF 5.2)
+     */
+    double PCY1, PDY1, PDY2, PDY3, PEY1, PEY2, PEY3, PEY4, PEY5, PKY1, PKY2, PKY3, PKY4, PKY5, PKY6, PKY7, PHY1, PHY2, PHY3, PVY1, PVY2, PVY3, PVY4, PPY1, PPY2, PPY3, PPY4, PPY5, RBY1, RBY2, RBY3, RBY4, RCY1, REY1, REY2, RHY1, RHY2, RVY1, RVY2, RVY3, RVY4, RVY5, RVY6, PTY1, PTY2;
+    /* [ROLLING_COEFFICIENTS]
+     *   QSY1                    Rolling resistance torque coefficient
+     *   QSY2                    Rolling resistance torque depending on Fx
+     *   QSY3                    Rolling resistance torque depending on speed
+     *   QSY4                    Rolling resistance torque depending on speed ^4
+     *   QSY5                    Rolling resistance torque depending on camber squared
+     *   QSY6                    Rolling resistance torque depending on load and camber squared
+     *   QSY7                    Rolling resistance torque coefficient load dependency
+     *   QSY8                    Rolling resistance torque coefficient pressure dependency
+     */
+    double QSY1, QSY2, QSY3, QSY4, QSY5, QSY6, QSY7, QSY8;
+    /* [ALIGNING_COEFFICIENTS]
+     *   QBZ1                    Trail slope factor for trail Bpt at Fznom
+     *   QBZ2                    Variation of slope Bpt with load
+     *   QBZ3                    Variation of slope Bpt with load squared
+     *   QBZ4                    Variation of slope Bpt with camber
+     *   QBZ5                    Variation of slope Bpt with absolute camber
+     *   QBZ9                    Factor for scaling factors of slope factor Br of Mzr
+     *   QBZ10                   Factor for dimensionless cornering stiffness of Br of Mzr
+     *   QCZ1                    Shape factor Cpt for pneumatic trail
+     *   QDZ1                    Peak trail Dpt = Dpt*(Fz/Fznom*R0)
+     *   QDZ2                    Variation of peak Dpt with load
+     *   QDZ3                    Variation of peak Dpt with camber
+     *   QDZ4                    Variation of peak Dpt with camber squared
+     *   QDZ6                    Peak residual torque Dmr = Dmr/(Fz*R0)
+     *   QDZ7                    Variation of peak factor Dmr with load
+     *   QDZ8                    Variation of peak factor Dmr with camber
+     *   QDZ9                    Variation of peak factor Dmr with camber and load
+     *   QDZ10                   Variation of peak factor Dmr with camber squared
+     *   QDZ11                   Variation of Dmr with camber squared and load
+     *   QEZ1                    Trail curvature Ept at Fznom
+     *   QEZ2                    Variation of curvature Ept with load
+     *   QEZ3                    Variation of curvature Ept with load squared
+     *   QEZ4                    Variation of curvature Ept with sign of Alpha-t
+     *   QEZ5                    Variation of Ept with camber and sign Alpha-t
+     *   QHZ1                    Trail horizontal shift Sht at Fznom
+     *   QHZ2                    Variation of shift Sht with load
+     *   QHZ3                    Variation of shift Sht with camber
+     *   QHZ4                    Variation of shift Sht with camber and load
+     *   PPZ1                    Effect of inflation pressure on length of pneumatic trail
+     *   PPZ2                    Influence of inflation pressure on residual aligning torque
+     *   SSZ1                    Nominal value of s/R0: effect of Fx on Mz
+     *   SSZ2                    Variation of distance s/R0 with Fy/Fznom
+     *   SSZ3                    Variation of distance s/R0 with camber
+     *   SSZ4                    Variation of distance s/R0 with load and camber
+     *   QTZ1                    Gyration torque constant (MF 5.2)
+     *   MBELT                   Belt mass of the wheel (MF 5.2)
+     */
+    double QBZ1, QBZ2, QBZ3, QBZ4, QBZ5, QBZ9, QBZ10, QCZ1, QDZ1, QDZ2, QDZ3, QDZ4, QDZ6, QDZ7, QDZ8, QDZ9, QDZ10, QDZ11, QEZ1, QEZ2, QEZ3, QEZ4, QEZ5, QHZ1, QHZ2, QHZ3, QHZ4, PPZ1, PPZ2, SSZ1, SSZ2, SSZ3, SSZ4, QTZ1, MBELT;
+    /* [TURNSLIP_COEFFICIENTS]
+     *   PDXP1                   Peak Fx reduction due to spin parameter
+     *   PDXP2                   Peak Fx reduction due to spin with varying load parameter
+     *   PDXP3                   Peak Fx reduction due to spin with kappa parameter
+     *   PKYP1                   Cornering stiffness reduction due to spin
+     *   PDYP1                   Peak Fy reduction due to spin parameter
+     *   PDYP2                   Peak Fy reduction due to spin with varying load parameter
+     *   PDYP3                   Peak Fy reduction due to spin with alpha parameter
+     *   PDYP4                   Peak Fy reduction due to square root of spin parameter
+     *   PHYP1                   Fy-alpha curve lateral shift limitation
+     *   PHYP2                   Fy-alpha curve maximum lateral shift parameter
+     *   PHYP3                   Fy-alpha curve maximum lateral shift varying with load parameter
+     *   PHYP4                   Fy-alpha curve maximum lateral shift parameter
+     *   PECP1                   Camber w.r.t. spin reduction factor parameter in camber stiffness
+     *   PECP2                   Camber w.r.t. spin reduction factor varying with load parameter
+     *   QDTP1                   Pneumatic trail reduction factor due to turn slip parameter
+     *   QCRP1                   Turning moment at constant turning and zero forward speed parameter
+     *   QCRP2                   Turn slip moment (at alpha=90deg) parameter for increase with spin
+     *   QBRP1                   Residual (spin) torque reduction factor parameter due to side slip
+     *   QDRP1                   Turn slip moment peak magnitude parameter
+     *   QDRP2                   Turn slip moment curvature parameter
+     */
+    double PDXP1, PDXP2, PDXP3, PKYP1, PDYP1, PDYP2, PDYP3, PDYP4, PHYP1, PHYP2, PHYP3, PHYP4, PECP1, PECP2, QDTP1, QCRP1, QCRP2, QBRP1, QDRP1, QDRP2;
 } MFParams;
 
 #define MF_N_DATA 4
