@@ -712,8 +712,6 @@ def worse_channels(fit: Mapping[str, tuple[float, int]], control: Mapping[str, t
 def trimmed(law: Law, worse: Sequence[str]) -> Law | None:
     """``law`` without the targets that act on the channels ``worse`` (None when nothing is left): a law
     acts only on the channels it helps (a friction law in temperature that helps Fy is not applied to Fx)."""
-    from mftire.mf.extensions import TARGET_CHANNELS
-
     keep = tuple(t for t in law.targets if not set(TARGET_CHANNELS.get(t, ())) & set(worse))
     if not keep or keep == law.targets or law.name in ("pressure", "none"):
         return None
@@ -880,16 +878,13 @@ def _full_refit(data: pd.DataFrame, tyre: Tyre, stages: str = REFIT_STAGES) -> T
     return Tyre(res.parameters, name=tyre.name)
 
 
-#: The fitter's stages of each channel (:mod:`mftire.fitting.stages`): pure and combined slip.
-CHANNEL_STAGES = {"Fx": ("1", "4"), "Fy": ("2", "4"), "Mz": ("3", "5")}
-
-
 def refit_channels(data: pd.DataFrame, tyre: Tyre, channels: Sequence[str]) -> Tyre:
-    """``tyre`` with the coefficients of ``channels`` refitted on ``data`` (their stages of the staged fit,
-    :data:`CHANNEL_STAGES`), every other coefficient and the extension terms as they are.  The aligning
-    moment reads both forces (Pacejka 2012 eqs 4.E31, 4.E71): after a law changes Fx, the Mz coefficients
-    that absorbed the old Fx error are refitted to the new one."""
-    return _full_refit(data, tyre, ",".join(sorted({st for ch in channels for st in CHANNEL_STAGES.get(ch, ())})))
+    """``tyre`` with the coefficients of ``channels`` refitted on ``data`` (the stages of the staged fit whose
+    residuals are those channels', :data:`mftire.fitting.stages.STAGES`: pure and combined slip), every other
+    coefficient and the extension terms as they are.  The aligning moment reads both forces (Pacejka 2012 eqs
+    4.E31, 4.E71): after a law changes Fx, the Mz coefficients that absorbed the old Fx error are refitted to the
+    new one."""
+    return _full_refit(data, tyre, ",".join(str(st.number) for st in STAGES if set(st.channels) & set(channels)))
 
 
 def refine_effect(
