@@ -28,6 +28,7 @@ import pandas as pd
 from matplotlib import colormaps
 
 from mftire.compare.data import CURVE_KEYS, FAMILY_CHANNELS
+from mftire.iotools.columns import SET_POINT_COLUMNS
 from mftire.iotools.units import PLOT_UNITS
 from mftire.plotting import subplots
 
@@ -48,8 +49,6 @@ _TITLES = {
 MAX_COLUMNS = 5
 _PANEL_W, _PANEL_H, _LEGEND_W = 2.9, 2.5, 2.4  # inches
 _FONT = 10.0
-_SET_COLUMN = {"Fz": "Fz_set", "Vx": "Vx_set", "P": "P_set", "gamma": "gamma_set"}
-
 
 
 #: A held-out condition: ``(column, values)`` or ``(column, values, source)``, e.g. ``("Vx", [22.22],
@@ -70,7 +69,7 @@ def _held_mask(df: pd.DataFrame, heldout: Heldout | None) -> np.ndarray:
     if heldout is None or len(df) == 0:
         return np.zeros(len(df), bool)
     col, values = heldout[0], heldout[1]
-    col = _SET_COLUMN.get(col, col)
+    col = SET_POINT_COLUMNS.get(col, col)
     if col not in df.columns:
         return np.zeros(len(df), bool)
     x = df[col].to_numpy(float)

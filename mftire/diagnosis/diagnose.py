@@ -73,7 +73,7 @@ from mftire.diagnosis.effects import (
     restricted,
     with_given_channels,
 )
-from mftire.diagnosis.holdout import SET_COLUMNS, default_holdout, holdout_mask, levels
+from mftire.diagnosis.holdout import default_holdout, holdout_mask, levels
 from mftire.diagnosis.profile import CONFOUND_R, Profiles, profile_factors
 from mftire.diagnosis.ranking import (
     CandidateScore,
@@ -83,6 +83,7 @@ from mftire.diagnosis.ranking import (
 )
 from mftire.errors import MftireInputError
 from mftire.fitting.weights import noise_std
+from mftire.iotools.columns import SET_POINT_COLUMNS
 from mftire.iotools.sweeps import FIT_ROW, MEASURED_COLUMNS, fit_rows
 from mftire.mf.extensions import BUILTIN_VARIABLES, MAX_LEVELS, TARGET_CHANNELS
 from mftire.progress import reporter
@@ -184,7 +185,7 @@ def channel_noise(df: pd.DataFrame, residual: np.ndarray) -> float:
 
 
 #: Operating-condition set points of the MF inputs (the blocks of a confounded candidate).
-SET_POINTS = ("Fz_set", "Vx_set", "P_set", "gamma_set")
+SET_POINTS = tuple(SET_POINT_COLUMNS.values())
 
 
 def confounding_blocks(df: pd.DataFrame, v: np.ndarray, threshold: float = CONFOUND_R,
@@ -251,7 +252,7 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
 
 
 #: The MF's own operating inputs (a law in them is interpolated between tested levels like the MF's terms).
-MF_INPUTS = tuple(SET_COLUMNS)
+MF_INPUTS = tuple(SET_POINT_COLUMNS)
 #: Share of the sweeps, the last in test order, held out by :func:`order_fold`.
 ORDER_SHARE = 0.25
 
@@ -324,7 +325,7 @@ def extra_conditions(df: pd.DataFrame, law: Tyre, control: Tyre, channels: Seque
             change += np.where(np.isfinite(d) & primary_rows(df, ch), d**2, 0.0)
     scored = []
     for sp in SET_POINTS:
-        if sp not in df.columns or sp == SET_COLUMNS.get(skip, skip):
+        if sp not in df.columns or sp == SET_POINT_COLUMNS.get(skip, skip):
             continue
         x = df[sp].to_numpy(float)
         lv = np.unique(np.round(x[np.isfinite(x)], 6))

@@ -8,9 +8,7 @@ import numpy as np
 import pandas as pd
 
 from mftire.errors import MftireInputError
-
-#: Condition columns and the set-point column that identifies their levels.
-SET_COLUMNS = {"Fz": "Fz_set", "Vx": "Vx_set", "P": "P_set", "gamma": "gamma_set"}
+from mftire.iotools.columns import SET_POINT_COLUMNS
 
 
 def parse_holdout(spec: str) -> tuple[str, list[float]]:
@@ -33,7 +31,7 @@ def holdout_mask(df: pd.DataFrame, column: str, values: Sequence[float], rel_tol
     Fz, Vx, P and gamma are matched on their sweep set points within ``rel_tol``
     (absolute 1e-3 for gamma), other columns within ``rel_tol`` of the value.
     """
-    col = SET_COLUMNS.get(column, column)
+    col = SET_POINT_COLUMNS.get(column, column)
     if col not in df.columns:
         raise MftireInputError(f"--holdout: no column '{column}' in the data (have: {', '.join(map(str, df.columns))})")
     x = df[col].to_numpy(float)
@@ -56,7 +54,7 @@ def holdout_mask(df: pd.DataFrame, column: str, values: Sequence[float], rel_tol
 
 def levels(df: pd.DataFrame, column: str) -> np.ndarray:
     """Sorted distinct levels of a condition (its set points for Fz, Vx, P, gamma)."""
-    col = SET_COLUMNS.get(column, column)
+    col = SET_POINT_COLUMNS.get(column, column)
     return np.unique(df[col].to_numpy(float))
 
 
@@ -90,7 +88,7 @@ def default_holdout(
     pressure beyond the one the model was fitted at).  Without ``misfit``, the interior
     level nearest the middle."""
     for column in [*preferred, "Fz", "Vx", "P", "gamma"]:
-        col = SET_COLUMNS.get(column, column)
+        col = SET_POINT_COLUMNS.get(column, column)
         if col not in df.columns or not pd.api.types.is_numeric_dtype(df[col]):
             continue
         lv = levels(df, column)

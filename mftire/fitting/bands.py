@@ -107,6 +107,7 @@ from scipy import stats
 
 from mftire.errors import MftireInputError
 from mftire.fitting.fitter import FitResult, fit_tir
+from mftire.iotools.columns import SET_POINT_COLUMNS
 from mftire.iotools.jsonutil import jsonable
 from mftire.iotools.tir import TirParameters
 from mftire.parallel import Executor, Pending
@@ -115,7 +116,7 @@ from mftire.tyre import Tyre
 
 __all__ = ["Bands", "bootstrap_bands", "start_bootstrap_bands", "PendingBands", "band_coverage", "coverage_table",
            "resample_sweeps", "write_bands", "BAND_CHANNELS", "Calibration", "CellScale", "fit_cell_scale",
-           "effective_sample_size", "grouped_conformal_quantile", "SCALE_CONDITIONS", "LEVEL_COLUMNS",
+           "effective_sample_size", "grouped_conformal_quantile", "SCALE_CONDITIONS",
            "ConditionFold", "condition_folds", "new_level"]
 
 #: Channels given bands.
@@ -667,8 +668,6 @@ def _fold_ids(table: pd.DataFrame, by: Sequence[str], folds: int, rng: np.random
     return key.map(fold_of).to_numpy(int)
 
 
-#: Set-point column of each condition of :data:`SCALE_CONDITIONS` (the levels the condition folds leave out).
-LEVEL_COLUMNS: dict[str, str] = {"Fz": "Fz_set", "Vx": "Vx_set", "P": "P_set", "gamma": "gamma_set"}
 #: Fewest levels of a condition in a (source, sweep kind) stratum for its condition folds: a fold leaving one
 #: level out keeps 3, which still identify a quadratic in the condition (fewer: the fold's refit loses the
 #: full fit's coefficients of that condition and measures another model's error).
@@ -708,7 +707,7 @@ def condition_folds(table: pd.DataFrame, conditions: Sequence[str] = SCALE_CONDI
     for st in sorted(set(stratum)):
         m = stratum == st
         for cond in conditions:
-            col = LEVEL_COLUMNS[cond]
+            col = SET_POINT_COLUMNS[cond]
             if col not in table.columns:
                 continue
             x = np.round(table[col].to_numpy(float), 6)
@@ -824,7 +823,7 @@ def _condition_cells(table: pd.DataFrame, cond: Sequence[ConditionFold], results
                 s, k = cell.split("|")
                 m = (src == s) & ((cls == k) if k != "*" else True)
                 levels[cell] = {c: _levels(table[col].to_numpy(float)[m]).tolist()
-                                for c, col in LEVEL_COLUMNS.items() if col in table.columns}
+                                for c, col in SET_POINT_COLUMNS.items() if col in table.columns}
     out: dict = {}
     checks: list[dict] = []
     for (cname, kind), per in fhat.items():

@@ -8,11 +8,13 @@ from __future__ import annotations
 
 from mftire.iotools.sweeps import MEASURED_COLUMNS, OPTIONAL_INPUT_COLUMNS, REQUIRED_COLUMNS
 
-__all__ = ["GROUPING_COLUMNS", "CURVE_COLUMNS", "LABEL_COLUMNS", "NOT_VARIABLES"]
+__all__ = ["GROUPING_COLUMNS", "SET_POINT_COLUMNS", "CURVE_COLUMNS", "LABEL_COLUMNS", "NOT_VARIABLES"]
 
 #: Columns :func:`mftire.segmentation.grouping.group_sweeps` adds: set points and sweep labels.
 GROUPING_COLUMNS: tuple[str, ...] = ("Fz_set", "gamma_set", "P_set", "Vx_set", "sweep_id", "kind", "sweep_var",
                                      "kappa_set", "alpha_set", "sweep_dir", "direction")  # fmt: skip
+#: The set-point column of each operating condition (the set points among :data:`GROUPING_COLUMNS`).
+SET_POINT_COLUMNS: dict[str, str] = {"Fz": "Fz_set", "Vx": "Vx_set", "P": "P_set", "gamma": "gamma_set"}
 #: Columns the comparison adds on top (see :mod:`mftire.compare.data`).
 CURVE_COLUMNS: tuple[str, ...] = ("family", "var", "held", "curve_id")
 #: Bookkeeping columns of loaders, campaigns and fits.

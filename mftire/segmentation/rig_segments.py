@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from mftire.errors import MftireInputError
+from mftire.iotools.columns import SET_POINT_COLUMNS
 from mftire.iotools.rig import ColumnSpec, PathLike, read_raw, write_sweeps
 from mftire.iotools.sweeps import REQUIRED_COLUMNS
 from mftire.segmentation.grouping import cluster_1d, set_point, sweep_kind
@@ -26,7 +27,6 @@ from mftire.segmentation.grouping import cluster_1d, set_point, sweep_kind
 __all__ = ["RigReport", "segment", "import_rig"]
 
 _CONDITIONS = ("Fz", "P", "gamma", "Vx")
-_SET_NAMES = {"Fz": "Fz_set", "P": "P_set", "gamma": "gamma_set", "Vx": "Vx_set"}
 _REASON_NAMES = {"Fz": "load ramp", "P": "pressure change", "gamma": "inclination change", "Vx": "speed change"}
 
 
@@ -361,7 +361,7 @@ def segment(
     segs = base["_seg"].to_numpy()
     for c in _CONDITIONS:
         lv = np.array([rep.segments[s][c] for s in range(len(rep.segments))])
-        base[_SET_NAMES[c]] = lv[segs]
+        base[SET_POINT_COLUMNS[c]] = lv[segs]
     for key in ("kind", "sweep_var", "kappa_set", "alpha_set"):
         m = {s: info[key] for s, info in seg_info.items()}
         base[key] = pd.Series(segs).map(m).to_numpy()
@@ -420,7 +420,7 @@ def _left_out_rows(df: pd.DataFrame, keep: np.ndarray, reason: np.ndarray, seg_a
     segs = part["_seg"].to_numpy()
     for c in _CONDITIONS:
         lv = np.array([np.nan] + [entry[c] for entry in rep.segments], dtype=float)
-        part[_SET_NAMES[c]] = lv[segs + 1]
+        part[SET_POINT_COLUMNS[c]] = lv[segs + 1]
     part["sweep_id"] = -1
     part["sweep_dir"] = 0
     part["kind"] = part["sweep_var"] = part["direction"] = "none"
