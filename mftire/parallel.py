@@ -190,7 +190,7 @@ class Executor:
                 if progress is not None:
                     progress(i + 1, len(items))
             return
-        with _pool_cm(_process_pool(n)) as pool:  # Ctrl-C, SIGTERM, an error, the consumer gone: workers stopped
+        with _pool_cm(n) as pool:  # Ctrl-C, SIGTERM, an error, the consumer gone: workers stopped
             yield from _collect(self, pool, _submit_all(pool, fn, items, progress), items, labels)
 
     def start_map(self, fn: Callable[[T], R], items: Iterable[T], *, labels: Sequence[str] | Callable | None = None,
@@ -220,7 +220,7 @@ class Executor:
         if self.scheduler:
             cm: Any = _dask_client(str(self.scheduler), self.quiet, self.tune_workers)
         else:
-            cm = _pool_cm(_process_pool(self.workers))
+            cm = _pool_cm(self.workers)
         with cm as pool:
             ex = Executor(jobs=self.jobs, scheduler=self.scheduler, worker_timeout=self.worker_timeout,
                           quiet=self.quiet, tune_workers=self.tune_workers)
@@ -265,15 +265,25 @@ class Executor:
 
 
 @contextmanager
-def _pool_cm(pool: Any) -> Iterator[Any]:
-    """A local process pool for a session: shut down at the end, its workers stopped at once on an error or
-    an interrupt (:func:`_stop`)."""
-    interrupted = True
+def _pool_cm(n: int) -> Iterator[Any]:
+    """A local pool of ``n`` worker processes for a session: shut down at the end, its workers stopped at once
+    on an error or an interrupt (:func:`_stop`).  The workers' temporary files go into one scratch folder of
+    this process, removed after the workers are gone: a worker killed before its own clean-up ran (stuck in a
+    C call past :data:`STOP_SECONDS`, or stopped while removing a folder) leaves nothing behind."""
+    import shutil
+    import tempfile
+
+    scratch = tempfile.mkdtemp(prefix="mftire-pool-")
     try:
-        yield pool
-        interrupted = False
+        pool = _process_pool(n, scratch)
+        interrupted = True
+        try:
+            yield pool
+            interrupted = False
+        finally:
+            _stop(pool, interrupted)
     finally:
-        _stop(pool, interrupted)
+        shutil.rmtree(scratch, ignore_errors=True)
 
 
 class Pending(Generic[R]):
@@ -322,8 +332,14 @@ class _Stopped(BaseException):
     """SIGTERM in a worker process: unwinds the task (its ``finally`` blocks run), then the worker exits."""
 
 
-def _worker_init() -> None:
+def _worker_init(scratch: str | None = None) -> None:
     import signal
+
+    if scratch is not None:  # this worker's temporaries (its own and its compiler's) in the pool's scratch folder
+        import tempfile
+
+        os.environ["TMPDIR"] = scratch
+        tempfile.tempdir = scratch
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C and stops the workers
 
@@ -353,10 +369,10 @@ class _Task(Generic[T, R]):
             _IN_TASK = False
 
 
-def _process_pool(n: int) -> Any:
+def _process_pool(n: int, scratch: str | None = None) -> Any:
     from concurrent.futures import ProcessPoolExecutor
 
-    return ProcessPoolExecutor(max_workers=n, initializer=_worker_init)
+    return ProcessPoolExecutor(max_workers=n, initializer=_worker_init, initargs=(scratch,))
 
 
 def _stop(pool: Any, interrupted: bool) -> None:

@@ -1190,14 +1190,16 @@ def test_fmu_and_demo_signal_to_the_parent_stops_everything_within_3_s(tmp_path,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))  # fmt: skip
     try:
         wanted = ("python",) if cmd == "demo" else ("cc", "gcc", "clang", "cc1", "as", "collect2", "ld")
-        start = time.monotonic()
+        start, running = time.monotonic(), []
         while time.monotonic() - start < 120 and proc.poll() is None:
-            if any(name.startswith(wanted) for _, name in _descendants(proc.pid)):
+            running = _descendants(proc.pid)  # the snapshot that saw them: a compiler may end before a second look
+            if any(name.startswith(wanted) for _, name in running):
                 break
             time.sleep(0.01)
         assert proc.poll() is None, "the command ended before the signal"
-        time.sleep(0.3 if cmd == "demo" else 0.0)
-        running = _descendants(proc.pid)
+        if cmd == "demo":
+            time.sleep(0.3)
+            running = sorted(set(running) | set(_descendants(proc.pid)))
         assert running
         t0 = time.monotonic()
         os.kill(proc.pid, getattr(signal, sig))

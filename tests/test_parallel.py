@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -190,3 +191,47 @@ def test_a_server_that_is_not_a_dask_scheduler_is_refused_at_once():
             with pytest.raises(MftireInputError, match=match):
                 _probe(f"tcp://127.0.0.1:{port}", "127.0.0.1", port, timeout=timeout)
             t.join(5)
+
+
+def _stuck_or_waiting(item: tuple[int, str]) -> int:
+    """Task 1 ignores the stop request, makes a temporary folder, says so and hangs; task 0 returns once it has."""
+    import os
+    import signal
+    import tempfile
+    import time
+
+    i, marks = item
+    if i == 1:
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)  # as a task stuck in a C call: the stop never reaches it
+        folder = tempfile.mkdtemp(prefix="stuck-")
+        with open(os.path.join(marks, "made"), "w") as fh:
+            fh.write(folder)
+        time.sleep(60)
+    deadline = time.monotonic() + 60
+    while not os.path.exists(os.path.join(marks, "made")) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return i
+
+
+def test_a_worker_killed_before_its_clean_up_leaves_no_temporary(tmp_path, monkeypatch):
+    # the pool's workers make their temporaries in one scratch folder of the parent, removed once they are gone:
+    # a worker killed after STOP_SECONDS (its own clean-up never ran) leaves nothing in the temporary folder
+    import os
+    import tempfile
+    import time
+
+    from mftire.parallel import STOP_SECONDS
+
+    tmp, marks = tmp_path / "tmp", tmp_path / "marks"
+    tmp.mkdir()
+    marks.mkdir()
+    monkeypatch.setenv("TMPDIR", str(tmp))
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp))
+    results = Executor(jobs=2).imap(_stuck_or_waiting, [(0, str(marks)), (1, str(marks))])
+    assert next(results) == 0
+    made = (marks / "made").read_text()
+    assert os.path.isdir(made) and Path(made).resolve().is_relative_to(tmp.resolve())
+    t0 = time.monotonic()
+    results.close()  # the consumer gone: the workers are stopped, the stuck one killed
+    assert STOP_SECONDS <= time.monotonic() - t0 < STOP_SECONDS + 2.0
+    assert list(tmp.iterdir()) == []
