@@ -642,7 +642,15 @@ def _diagnose(
     train = ~test
     say(f"holding out {column} = {values} ({int(test.sum())} rows)")
 
-    group = [e for e in significant if e.score >= 0.6 * top.score][:3]
+    # the strongest candidates, each read variable once: the test-order candidates (the sequence, the friction work)
+    # are fitted in the elapsed time, so one of them and the time itself take one place, not three
+    tcol = time_column(df)
+    group, reads = [], set()
+    for e in significant:
+        read = tcol if e.variable in HISTORY_CANDIDATES and tcol is not None else e.variable
+        if e.score >= 0.6 * top.score and read not in reads and len(group) < 3:
+            group.append(e)
+            reads.add(read)
     group += [e for e in significant if e.channel in PROFILE_CHANNELS and e not in group][:2]
     n_pressures = len(levels(df[train], "P"))
     #: (chosen law, candidate, what refine_effect needs for that candidate)
@@ -667,7 +675,8 @@ def _diagnose(
             c = by_name.get(variable) or Candidate(variable, df[variable].to_numpy(float), False, False)
         v = c.values[train]
         monotone = bool(np.all(np.diff(v) >= 0)) or variable == time_column(df)
-        families = profiles.families_for(variable) or ["friction"]
+        # no factor linked to it: friction, and the shifts (their profiles are not fitted per sweep)
+        families = profiles.families_for(variable) or ["friction", *SHIFT_FAMILIES]
         if e.raw:  # the candidate explains the residual as measured best: a shift or an offset
             families = list(dict.fromkeys([*SHIFT_FAMILIES, *profiles.families_for(variable)]))
         # a second variable of an interaction: another column or an MF input (dfz, gamma, Vx, P)
