@@ -216,7 +216,8 @@ def effects_for(
     """Laws to try for a candidate, as ``(variable read, law)``.
 
     Derived candidates: their documented laws (:data:`EFFECTS_FOR`); the sweep direction: hysteresis,
-    a ``direction`` law on the force offsets and the friction of ``channels``.  Data columns, for
+    a ``direction`` law in each of ``families`` and in the slip stiffness, the shape and the force offsets of
+    ``channels``.  Data columns, for
     each family of scaling factors the per-sweep profiles link to the variable (friction
     when none): a saturating law when the variable never decreases along the sequence
     (fade or warm-up with time), linear and quadratic laws, a hinge (a change above a threshold) for a
@@ -226,7 +227,8 @@ def effects_for(
     """
     laws: list[tuple[str, Law]] = list(EFFECTS_FOR.get(variable, ())) if derived else []
     if variable == "sweep_dir":  # hysteresis between up and down sweeps, in the families of the channels
-        fams = list(families) + (["shift"] if {"Fx", "Fy"} & set(channels) else [])
+        # and in the slip stiffness and the shape (one coefficient each: the rubber's loading and unloading differ)
+        fams = list(families) + (["stiffness", "shape", "shift"] if {"Fx", "Fy"} & set(channels) else [])
         for fam in dict.fromkeys(fams):
             tg = tuple(t for t in family_targets(fam, channels)
                        if set(TARGET_CHANNELS.get(t, ())) & set(channels))  # fmt: skip
