@@ -138,11 +138,11 @@ def test_no_scored_channel_worse_than_5_percent_held_out(judged):
     assert bad.empty, bad[["seed", "family", "law", "worst_change"]].to_string()
 
 
-#: What the diagnosis reaches on the 16 CI draws (2026-11-26, eaa762b: 9 of 12 causes named first, 4 of the 8
+#: What the diagnosis reaches on the 16 CI draws (2026-11-27, b2dde38: 11 of 12 causes named first, 4 of the 8
 #: draws with a ceiling >= 70 % cut by >= 50 %); one draw of slack each, so that a regression fails here.
 def test_cause_and_cut_rates_do_not_regress(judged):
     eff = judged[~judged.is_null]
-    assert eff.cause_named.sum() >= 8, eff[["seed", "family", "variable", "cause"]].to_string()
+    assert eff.cause_named.sum() >= 10, eff[["seed", "family", "variable", "cause"]].to_string()
     ceil = eff[eff.ceiling_cut >= zoo.CEILING_MIN]
     assert (ceil.cut >= zoo.CUT_MIN).sum() >= 3, ceil[["seed", "family", "law", "cut", "ceiling_cut"]].to_string()
 
