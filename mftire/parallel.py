@@ -332,14 +332,13 @@ class _Stopped(BaseException):
     """SIGTERM in a worker process: unwinds the task (its ``finally`` blocks run), then the worker exits."""
 
 
-def _worker_init(scratch: str | None = None) -> None:
+def _worker_init(scratch: str) -> None:
     import signal
+    import tempfile
 
-    if scratch is not None:  # this worker's temporaries (its own and its compiler's) in the pool's scratch folder
-        import tempfile
-
-        os.environ["TMPDIR"] = scratch
-        tempfile.tempdir = scratch
+    # this worker's temporaries (its own and its compiler's) in the pool's scratch folder
+    os.environ["TMPDIR"] = scratch
+    tempfile.tempdir = scratch
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C and stops the workers
 
@@ -369,7 +368,7 @@ class _Task(Generic[T, R]):
             _IN_TASK = False
 
 
-def _process_pool(n: int, scratch: str | None = None) -> Any:
+def _process_pool(n: int, scratch: str) -> Any:
     from concurrent.futures import ProcessPoolExecutor
 
     return ProcessPoolExecutor(max_workers=n, initializer=_worker_init, initargs=(scratch,))
