@@ -664,7 +664,7 @@ def _diagnose(
         variable, derived, note = e.variable, c.derived, None
         if e.variable in HISTORY_CANDIDATES:
             # not a closed variable: use the nearest raw column, the elapsed time
-            variable, derived = time_column(df), False
+            variable, derived = tcol, False
             if variable is None:
                 continue
             note = (f"a test-order effect: the candidate '{e.variable}' ("
@@ -674,7 +674,7 @@ def _diagnose(
                     "(fade or warm-up) among the forms tried")  # fmt: skip
             c = by_name.get(variable) or Candidate(variable, df[variable].to_numpy(float), False, False)
         v = c.values[train]
-        monotone = bool(np.all(np.diff(v) >= 0)) or variable == time_column(df)
+        monotone = bool(np.all(np.diff(v) >= 0)) or variable == tcol
         # no factor linked to it: friction, and the shifts (their profiles are not fitted per sweep)
         families = profiles.families_for(variable) or ["friction", *SHIFT_FAMILIES]
         if e.raw:  # the candidate explains the residual as measured best: a shift or an offset
