@@ -27,8 +27,13 @@ _spec.loader.exec_module(zoo)
 N_EFFECT, N_NULL = 12, 4
 
 
-#: the draws CI judges: the first 16 seeds (12 effect draws and 4 nulls: one null in every four seeds)
-CI_SEEDS = range(16)
+#: the draws CI judges: the first 16 seeds (12 effect draws and 4 nulls: one null in every four seeds), the
+#: slowest first (as measured at commit time), so that the two processes finish together
+CI_SEEDS = (4, 10, 15, 2, 7, 14, 0, 8, 6, 3, 13, 12, 11, 1, 9, 5)
+
+
+def test_ci_judges_the_first_16_seeds():
+    assert sorted(CI_SEEDS) == list(range(16))
 
 
 @pytest.fixture(scope="module")

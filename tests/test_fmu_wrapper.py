@@ -266,3 +266,36 @@ def test_one_mode_variable_and_identifiers_that_never_collide(fmus, tmp_path):
     # the user's name is kept
     out = export_fmu(tyre, tmp_path / "named.fmu", model_identifier="front_left")
     assert fmpy.read_model_description(str(out)).coSimulation.modelIdentifier == "front_left"
+
+
+@needs_c_compiler
+@pytest.mark.parametrize("version", [2, 3])
+def test_mode_and_fittyp_are_checked_when_set_in_initialisation_mode(fmus, version):
+    """An output's evaluation does not check useMode and FITTYP (mf_evaluate_unchecked): the FMU refuses a bad
+    value when it is set, also in initialisation mode, and keeps the last good one, so a read before
+    ExitInitializationMode evaluates the valid model."""
+    import fmpy
+
+    md = fmpy.read_model_description(str(fmus[("MF61", version)]))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    messages: list = []
+    s = _cs_slave(fmus[("MF61", version)], version, messages)
+    if version == 2:
+        s.enterInitializationMode()
+        set_real, get_real, set_int = s.setReal, s.getReal, s.setInteger
+    else:
+        s.enterInitializationMode(startTime=0.0)
+        set_real, get_real, set_int = s.setFloat64, s.getFloat64, s.setInt32
+    set_real([vr["Fz"]], [4000.0])
+    set_real([vr["kappa"]], [0.05])
+    fx = get_real([vr["Fx"]])[0]
+    with pytest.raises(fmpy.fmi1.FMICallException):
+        set_real([vr["FITTYP"]], [7.0])
+    with pytest.raises(fmpy.fmi1.FMICallException):
+        set_int([vr["useMode"]], [311])
+    assert any(s == 3 and "FITTYP" in m for s, _, m in messages), messages
+    assert any(s == 3 and "hundreds digit" in m for s, _, m in messages), messages
+    set_real([vr["Fz"]], [4000.0])  # marks the outputs for a new evaluation
+    assert get_real([vr["Fx"]])[0] == fx and 1000.0 < fx < 8000.0
+    s.terminate()
+    s.freeInstance()

@@ -253,6 +253,13 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
 
 #: The MF's own operating inputs (a law in them is interpolated between tested levels like the MF's terms).
 MF_INPUTS = tuple(SET_POINT_COLUMNS)
+#: Derived candidates that are MF inputs, and the variable an interaction law reads for each
+#: (:data:`mftire.mf.extensions.BUILTIN_VARIABLES`).
+INTERACTION_INPUTS = {"Vx": "Vx", "Vs": "Vs", "Fz_dev": "dfz", "P": "P", "sign_alpha": "sign_alpha",
+                      "sign_kappa": "sign_kappa"}  # fmt: skip
+#: A law tried after one the held-out condition refused must explain at least this share of what the refused one
+#: explained on the held-out folds (its error ratio to the control at most refused + (1 − share)·(1 − refused)).
+FALLBACK_SHARE = 0.5
 #: Share of the sweeps, the last in test order, held out by :func:`order_fold`.
 ORDER_SHARE = 0.25
 
@@ -681,6 +688,11 @@ def _diagnose(
             families = list(dict.fromkeys([*SHIFT_FAMILIES, *profiles.families_for(variable)]))
         # a second variable of an interaction: another column or an MF input (dfz, gamma, Vx, P)
         second = profiles.second_variable(variable, {k: x for k, x in cand_values.items() if k != variable})
+        if second is None and not derived:
+            # an MF input that explains the residual itself: an effect of the column whose size follows the input
+            # (a grip change with wear that grows with speed shows in the speed first)
+            second = next((INTERACTION_INPUTS[s.variable] for s in significant
+                           if s.variable in INTERACTION_INPUTS and s.variable != variable), None)  # fmt: skip
         dtr = dtrain.assign(_cand=v)
         prob = make_problem(tyre, dtr, chans)
         prob.noise = {ch: noise[ch] / prob.scale[ch] for ch in prob.channels if np.isfinite(noise.get(ch, np.nan))}
@@ -713,8 +725,8 @@ def _diagnose(
             families = ["trail", "residual_torque"] if law_ch == ["Mz"] else [*families, "trail"]
             law_ch = list(dict.fromkeys([*law_ch, "Mz"]))
         inputs = input_laws(tyre, chans, variable)
-        # the laws act on every force channel measured, and also (linear and saturating forms) on the channels
-        # where the candidate is significant alone; a law that hurts a channel is trimmed of it when judged
+        # the laws act on every force channel measured, and also (linear, saturating and interaction forms) on the
+        # channels where the candidate is significant alone; a law that hurts a channel is trimmed of it when judged
         forces = [ch for ch in chans if ch in ("Fx", "Fy")]
         broad = list(dict.fromkeys([*forces, *law_ch])) if set(law_ch) & set(forces) else law_ch
         laws = [(var, law, v if var == variable else None)
@@ -722,8 +734,8 @@ def _diagnose(
         if broad != law_ch:
             keep = {t for fam in families for t in family_targets(fam, law_ch)}
             laws += [(var, dataclasses.replace(law, targets=tuple(t for t in law.targets if t in keep)), val)
-                     for var, law, val in list(laws) if law.form in ("linear", "saturating") and law.targets
-                     and set(law.targets) - keep and set(law.targets) & keep]  # fmt: skip
+                     for var, law, val in list(laws) if law.form in ("linear", "saturating", "interaction")
+                     and law.targets and set(law.targets) - keep and set(law.targets) & keep]  # fmt: skip
         chosen, fits = choose_effect(prob, laws, n_pressures, control, eff_ch, folds)
         control = fits[0]
         tried += fits[1:] if len(tried) else fits
@@ -759,6 +771,7 @@ def _diagnose(
     lost: list[str] = []  # candidates whose laws lost on the held-out condition
     all_variants: list[EffectFit] = []
     accepted = None
+    refused_best = np.inf  # the lowest held-out-fold error of a law refused on the held-out condition
     for effect, cause, context in order[:CAUSES_TRIED]:
         # the candidate's best laws and the control, refitted with every MF coefficient
         say(f"refitting every coefficient with the laws of {effect.variable}")
@@ -780,6 +793,13 @@ def _diagnose(
                 rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) moves "
                                 "its input beyond physical limits")  # fmt: skip
                 continue
+            if refined.heldout > refused_best + (1.0 - FALLBACK_SHARE) * (1.0 - refused_best):
+                # a law that explains much less of the held-out folds than one the held-out condition refused
+                # captures something else than the effect: accepting it would trade a refused law for a weak one
+                rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) "
+                                f"explains less than {FALLBACK_SHARE:.0%} of what a refused law did on the "
+                                "held-out folds")  # fmt: skip
+                continue
             ext_r, eff_r = restricted(tyre, extended, refined)
             ctrl_r, _ = restricted(tyre, refined.control_tyre, refined)
             errs = channel_errors(dtest, _model(ctrl_r, dtest), _model(ext_r, dtest), chans)
@@ -795,11 +815,13 @@ def _diagnose(
                     break
                 rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) made "
                                 + "; ".join(late))
+                refused_best = min(refused_best, refined.heldout)
                 continue
             what = ", ".join(f"{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g}" for e in errs
                              if e.channel in worse)  # fmt: skip
             rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) "
                             + (f"made {what}" if worse else "did not improve"))
+            refused_best = min(refused_best, refined.heldout)
         if accepted is not None:
             break
         lost.append(f"{cause.variable}: " + "; ".join(rejected))

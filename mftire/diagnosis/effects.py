@@ -83,6 +83,9 @@ FAMILY_TARGETS = {
 #: 4.E23, 4.E25), a slip-angle, camber or longitudinal-slip offset with a shift (it moves the curves sideways).
 INPUT_LAWS = {"friction": ("P_FACTOR",), "stiffness": ("P_FACTOR",),
               "shift": ("ALPHA_OFFSET", "GAMMA_OFFSET", "KAPPA_OFFSET")}
+#: The name of the law on each input target (a quadratic form adds ``_quadratic``).
+INPUT_LAW_NAMES = {"P_FACTOR": "effective_pressure", "ALPHA_OFFSET": "slip_angle_offset",
+                   "GAMMA_OFFSET": "camber_offset", "KAPPA_OFFSET": "slip_ratio_offset"}
 #: Standard coefficients through which an effective pressure acts (none non-zero: no pressure input law).
 PRESSURE_COEFFICIENTS = ("PPX1", "PPX2", "PPX3", "PPX4", "PPY1", "PPY2", "PPY3", "PPY4", "PPZ1")
 
@@ -238,6 +241,9 @@ def effects_for(
     for fam in families:
         tg = family_targets(fam, channels)
         if derived and fam == "friction" and laws:
+            if second is not None and laws[0][0] in BUILTIN_VARIABLES:
+                # the input's effect whose size follows a column (the column's law times the input)
+                laws.append((laws[0][0], Law(f"{fam}_interaction", tg, "interaction", variable2=second)))
             continue
         if variable in ("sequence", "energy", "P"):  # P: the MF's own pressure terms (Pacejka 2012 eq 4.E2b)
             continue
@@ -254,8 +260,7 @@ def effects_for(
         if second is not None:
             laws.append((variable, Law(f"{fam}_interaction", tg, "interaction", variable2=second)))
         for target in INPUT_LAWS.get(fam, ()):
-            name = {"P_FACTOR": "effective_pressure", "ALPHA_OFFSET": "slip_angle_offset",
-                    "GAMMA_OFFSET": "camber_offset", "KAPPA_OFFSET": "slip_ratio_offset"}[target]  # fmt: skip
+            name = INPUT_LAW_NAMES[target]
             if target in inputs and all(law.name != name for _, law in laws):
                 laws.append((variable, Law(name, (target,), "linear")))
                 if n_levels >= 4:  # a curved error of the input (an offset growing faster at one end)

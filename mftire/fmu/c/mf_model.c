@@ -49,12 +49,6 @@ static void fm_reset(FMModel *m)
     memset(m->guard, 0, sizeof m->guard);
 }
 
-static void on_warning(void *ctx, int kind, const char *message)
-{
-    FMModel *m = (FMModel *)ctx;
-    if (kind >= 0 && kind < MF_W_COUNT) fm_base_warn(&m->b, &m->b.warn[kind], message);
-}
-
 static int fm_exit_initialization(FMModel *m)
 {
     if (fm_check_initialization(m->b.log, m->b.host, &m->params, m->b.use_mode, &TABLE) != FM_OK)
@@ -173,23 +167,18 @@ static void guard_outputs(FMModel *m)
         if (!isfinite(o[i])) o[i] = 0.0; /* members that are not FMU outputs (omega, Cx, Cy, Cz) */
 }
 
-/* Evaluate if the inputs, parameters or mode changed.  Once initialised, useMode and FITTYP are checked when
- * they are set (fm_set_mode, fm_set_parameter_ok) and at ExitInitializationMode, so the evaluation does not check
- * them again; before, it does (a read in initialisation mode). */
+/* Evaluate if the inputs, parameters or mode changed.  useMode and FITTYP are checked when they are set, in every
+ * state (fm_set_mode, fm_set_parameter_ok), and their start values are checked at export, so the evaluation does
+ * not check them again.  The evaluator's warnings take one path, the rate limit of fm_base_warn_kinds. */
 static int update(FMModel *m)
 {
-    int rc = MF_OK;
     MFInputs in;
     if (!m->dirty) return FM_OK;
     m->b.evals++;
     in = m->inputs;
     guard_inputs(m, &in);
-    if (m->b.initialized)
-        fm_base_warn_kinds(&m->b, &m->params, mf_evaluate_unchecked(&m->params, m->b.use_mode, &in, MF_WANT_ALL,
-                                                                     &m->outputs));
-    else
-        rc = mf_evaluate(&m->params, m->b.use_mode, &in, &m->outputs, on_warning, m);
-    if (rc != MF_OK) return fm_eval_error(m->b.log, m->b.host, &m->params, m->b.use_mode, rc);
+    fm_base_warn_kinds(&m->b, &m->params, mf_evaluate_unchecked(&m->params, m->b.use_mode, &in, MF_WANT_ALL,
+                                                                 &m->outputs));
     guard_outputs(m);
     m->dirty = 0;
     return FM_OK;
