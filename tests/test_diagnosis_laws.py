@@ -178,3 +178,30 @@ def test_hysteresis_laws_cover_stiffness_and_shape_whatever_the_profiles_link():
     assert laws["hysteresis_stiffness"].targets == ("LKX", "LKY") and laws["hysteresis_shape"].form == "direction"
     lateral = {law.name: law for _, law in effects_for("sweep_dir", True, False, 99, ("friction",), ("Fy",))}
     assert lateral["hysteresis_stiffness"].targets == ("LKY",)
+
+
+def test_an_input_candidate_gets_its_interaction_with_a_second_variable():
+    """A speed effect whose size follows a column (grip changing with wear, more at speed) shows in Vx first: Vx
+    gets its interaction law with the second variable (read as the builtin Vx, times the column), besides its
+    documented speed law; with no second variable it gets the documented laws only (zoo seed 129)."""
+    from mftire.diagnosis.effects import effects_for
+
+    laws = effects_for("Vx", True, False, 2, ("friction",), ("Fy",), second="time")
+    inter = [(var, law) for var, law in laws if law.form == "interaction"]
+    assert inter == [("Vx", Law("friction_interaction", ("LMUY",), "interaction", variable2="time"))]
+    assert {law.name for _, law in laws} >= {"speed_friction", "friction_interaction"}
+    assert all(law.form != "interaction" for _, law in effects_for("Vx", True, False, 2, ("friction",), ("Fy",)))
+
+
+def test_a_trimmed_fit_keeps_the_law_on_the_channels_it_did_not_make_worse():
+    from mftire.diagnosis.effects import trimmed_fit
+
+    law = Law("vertical_shift_threshold", ("LVX", "LVY"), "hinge")
+    fit = EffectFit("vertical_shift_threshold", "tread_temp", True, {"EXT1_C1": 0.5},
+                    {"EXT1_TARGET": "LVX LVY", "EXT1_FORM": "hinge", "EXT1_C1": 0.5}, {}, 1.0, 0.5, 0.0, 2, law=law,
+                    targets=("LVX", "LVY"), refit="all")  # fmt: skip
+    narrow = trimmed_fit(fit, ["Fy"])
+    assert narrow is not None and narrow.targets == ("LVX",) and narrow.law.targets == ("LVX",)
+    assert narrow.section["EXT1_TARGET"] == "LVX" and narrow.section["EXT1_C1"] == 0.5 and narrow.refit == "all"
+    assert fit.targets == ("LVX", "LVY")  # the original is not changed
+    assert trimmed_fit(fit, ["Fx", "Fy"]) is None and trimmed_fit(fit, ["Mz"]) is None

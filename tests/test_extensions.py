@@ -378,3 +378,22 @@ def test_input_laws_equal_the_corrected_inputs():
     for k in ("Fx", "Fy", "Mz", "Mx", "My"):
         np.testing.assert_allclose(got[k], ref[k], rtol=1e-10, atol=1e-9, err_msg=k)
     assert not np.allclose(got["Fy"], base.evaluate(5000.0, -0.05, 0.04, 0.01, P=P0, mode=121)["Fy"])
+
+
+def test_shift_factor_laws_take_wider_bounds_on_their_size_only():
+    """A file's shift is often near zero (PHX1 ~ 1e-3), so a law on LHX/LHY/LVX/LVY may move it by many times:
+    its size coefficients take WIDE_TARGETS x the form's bounds, of either sign; a threshold, a rate or another
+    target's law keeps the form's bounds."""
+    from mftire.mf.extensions import FORMS, WIDE_TARGETS, make_extension
+
+    w = WIDE_TARGETS["LHX"]
+    lin = make_extension(1, ("LHX",), "linear", "T", REF=0.0, SCALE=1.0)
+    assert lin.bounds("EXT1_C1") == (-2.0 * w, 2.0 * w)
+    sat = make_extension(1, ("LVY",), "saturating", "T", REF=0.0, SCALE=1.0)
+    assert sat.bounds("EXT1_C1") == (-2.0 * w, 2.0 * w)  # the form's (-0.9, 2) keeps a factor positive
+    assert sat.bounds("EXT1_C2") == FORMS["saturating"].bounds[1]  # a rate
+    hinge = make_extension(1, ("LVX",), "hinge", "T", REF=0.0, SCALE=1.0)
+    assert hinge.bounds("EXT1_C2") == FORMS["hinge"].bounds[1]  # a threshold
+    assert make_extension(1, ("LMUX",), "linear", "T", REF=0.0, SCALE=1.0).bounds("EXT1_C1") == (-2.0, 2.0)
+    # a term on a shift and a friction factor together keeps the narrow bounds
+    assert make_extension(1, ("LHX", "LMUX"), "linear", "T", REF=0.0, SCALE=1.0).bounds("EXT1_C1") == (-2.0, 2.0)

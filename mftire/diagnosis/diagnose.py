@@ -71,6 +71,7 @@ from mftire.diagnosis.effects import (
     refit_channels,
     refit_without,
     restricted,
+    trimmed_fit,
     with_given_channels,
 )
 from mftire.diagnosis.holdout import default_holdout, holdout_mask, levels
@@ -257,6 +258,8 @@ MF_INPUTS = tuple(SET_POINT_COLUMNS)
 #: (:data:`mftire.mf.extensions.BUILTIN_VARIABLES`).
 INTERACTION_INPUTS = {"Vx": "Vx", "Vs": "Vs", "Fz_dev": "dfz", "P": "P", "sign_alpha": "sign_alpha",
                       "sign_kappa": "sign_kappa"}  # fmt: skip
+#: Forms whose laws are also tried on the channels where the candidate is significant alone (not on every force).
+TRIMMED_FORMS = ("linear", "saturating", "interaction", "hinge", "quadratic")
 #: A law tried after one the held-out condition refused must explain at least this share of what the refused one
 #: explained on the held-out folds (its error ratio to the control at most refused + (1 − share)·(1 − refused)).
 FALLBACK_SHARE = 0.5
@@ -725,8 +728,8 @@ def _diagnose(
             families = ["trail", "residual_torque"] if law_ch == ["Mz"] else [*families, "trail"]
             law_ch = list(dict.fromkeys([*law_ch, "Mz"]))
         inputs = input_laws(tyre, chans, variable)
-        # the laws act on every force channel measured, and also (linear, saturating and interaction forms) on the
-        # channels where the candidate is significant alone; a law that hurts a channel is trimmed of it when judged
+        # the laws act on every force channel measured, and also (the forms of TRIMMED_FORMS) on the channels where
+        # the candidate is significant alone; a law that hurts a channel is trimmed of it when judged
         forces = [ch for ch in chans if ch in ("Fx", "Fy")]
         broad = list(dict.fromkeys([*forces, *law_ch])) if set(law_ch) & set(forces) else law_ch
         laws = [(var, law, v if var == variable else None)
@@ -734,7 +737,7 @@ def _diagnose(
         if broad != law_ch:
             keep = {t for fam in families for t in family_targets(fam, law_ch)}
             laws += [(var, dataclasses.replace(law, targets=tuple(t for t in law.targets if t in keep)), val)
-                     for var, law, val in list(laws) if law.form in ("linear", "saturating", "interaction")
+                     for var, law, val in list(laws) if law.form in TRIMMED_FORMS
                      and law.targets and set(law.targets) - keep and set(law.targets) & keep]  # fmt: skip
         chosen, fits = choose_effect(prob, laws, n_pressures, control, eff_ch, folds)
         control = fits[0]
@@ -787,7 +790,9 @@ def _diagnose(
         # scored channels together is accepted.  A law acts on its channels only: every other coefficient stays as
         # the model has it, the control is restricted the same way.
         rejected: list[str] = []
-        for refined, extended in variants:
+        queue = list(variants)
+        while queue:
+            refined, extended = queue.pop(0)
             values_r = variable_values(prob.df, refined, cause.variable)
             if not plausible_inputs(refined, values_r):
                 rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) moves "
@@ -822,6 +827,10 @@ def _diagnose(
             rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) "
                             + (f"made {what}" if worse else "did not improve"))
             refused_best = min(refused_best, refined.heldout)
+            trim = trimmed_fit(refined, worse)
+            if trim is not None:
+                # the law without its targets on the channels it made worse, refitted the same way, judged next
+                queue.insert(0, (trim, final_fit(prob, trim, values_r, n_pressures, eff_ch)))
         if accepted is not None:
             break
         lost.append(f"{cause.variable}: " + "; ".join(rejected))

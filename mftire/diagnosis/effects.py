@@ -1021,6 +1021,17 @@ def refine_effect(
     return out, messages
 
 
+def trimmed_fit(fit: EffectFit, worse: Sequence[str]) -> EffectFit | None:
+    """``fit`` with its law :func:`trimmed` of the targets that act on the channels ``worse`` (a law on LVX and LVY
+    that made Fy worse: the law on LVX), to be refitted the way ``fit`` was (:func:`final_fit`); None when
+    :func:`trimmed` leaves nothing or everything."""
+    law = trimmed(fit.law, worse) if fit.law is not None else None
+    if law is None:
+        return None
+    section = {k: (" ".join(law.targets) if k.endswith("_TARGET") else v) for k, v in fit.section.items()}
+    return dataclasses.replace(fit, targets=law.targets, section=section, law=law, messages=list(fit.messages))
+
+
 def _ranked(options: Sequence[tuple]) -> list[tuple]:
     """``options`` in the order of preference of :func:`_parsimonious` (the preferred first, then the
     preferred of the rest ...)."""

@@ -94,6 +94,10 @@ OFFSET_TARGETS: tuple[str, ...] = ("FX_OFFSET", "FY_OFFSET")
 #: through dpi (Pacejka 2012 eq 4.E2b); the loaded radius and contact patch keep the logged pressure.
 INPUT_TARGETS: tuple[str, ...] = ("ALPHA_OFFSET", "GAMMA_OFFSET", "KAPPA_OFFSET", "P_FACTOR")
 TARGETS: tuple[str, ...] = SCALING_TARGETS + OFFSET_TARGETS + INPUT_TARGETS
+#: Targets whose law's size coefficients take wider fitting bounds (x this factor, and either sign): the factors
+#: of the horizontal and vertical shifts (Pacejka 2012 eqs 4.E17-4.E18, 4.E27-4.E29).  A file's shift is often
+#: near zero (PHX1, PVX1 ~ 1e-3), so that a shift changing with a condition needs a factor of many times 1.
+WIDE_TARGETS: dict[str, float] = {"LHX": 8.0, "LHY": 8.0, "LVX": 8.0, "LVY": 8.0}
 
 #: Codes of the targets that are not scaling factors in the C term table (``MF_TARGET_*`` of the generated
 #: ``mf_ext_gen.h``; scaling factors are indices into ``MFParams``, >= 0).
@@ -221,6 +225,9 @@ class Form:
     fn: Callable = field(repr=False)
     two_variables: bool = False
     equation: str = ""
+    #: indices of the coefficients that set the size of the effect (not a threshold, rate or exponent): their
+    #: bounds widen for the targets of :data:`WIDE_TARGETS`
+    amplitudes: tuple[int, ...] = (0,)
 
 
 FORMS: dict[str, Form] = {
@@ -228,17 +235,17 @@ FORMS: dict[str, Form] = {
     for f in (
         Form("linear", "1 + C1·z", 1, ((-2.0, 2.0),), (0.0,), "1.0 + c[0] * z", _linear),
         Form("quadratic", "1 + C1·z + C2·z²", 2, ((-2.0, 2.0), (-2.0, 2.0)), (0.0, 0.0),
-             "1.0 + c[0] * z + c[1] * z * z", _quadratic),
+             "1.0 + c[0] * z + c[1] * z * z", _quadratic, amplitudes=(0, 1)),
         Form("saturating", "1 + C1·(1 − exp(−C2·max(z, 0)))", 2, ((-0.9, 2.0), (1e-3, 100.0)), (0.0, 1.0),
              "1.0 + c[0] * (1.0 - exp(-c[1] * fmax(z, 0.0)))", _saturating),
         Form("power", "(max(u, 1e-12)/REF)^C1", 1, ((-3.0, 3.0),), (0.0,),
-             "pow(fmax(u, 1e-12) / ref, c[0])", _power),
+             "pow(fmax(u, 1e-12) / ref, c[0])", _power, amplitudes=()),
         Form("decay", "1/(1 + C1·max(z, 0))", 1, ((0.0, 20.0),), (0.0,),
-             "1.0 / (1.0 + c[0] * fmax(z, 0.0))", _decay, equation="Pacejka 2012 eq 4.E7"),
+             "1.0 / (1.0 + c[0] * fmax(z, 0.0))", _decay, equation="Pacejka 2012 eq 4.E7", amplitudes=()),
         Form("table", "1 + C_k, k: level L_k nearest to u", 0, ((-0.9, 2.0),), (0.0,),
              "1.0 + mf_ext_table(u, c, n)", _table),
         Form("interaction", "1 + C1·z + C2·z·z2", 2, ((-2.0, 2.0), (-2.0, 2.0)), (0.0, 0.0),
-             "1.0 + c[0] * z + c[1] * z * z2", _interaction, two_variables=True),
+             "1.0 + c[0] * z + c[1] * z * z2", _interaction, two_variables=True, amplitudes=(0, 1)),
         Form("hinge", "1 + C1·max(z − C2, 0)", 2, ((-2.0, 2.0), (-3.0, 3.0)), (0.0, 0.0),
              "1.0 + c[0] * fmax(z - c[1], 0.0)", _hinge),
         Form("direction", "1 + C1·sgn(z)", 1, ((-0.5, 0.5),), (0.0,),
@@ -305,10 +312,16 @@ class Extension:
         return tuple(out)
 
     def bounds(self, key: str) -> tuple[float, float]:
-        """Fitting bounds of coefficient ``key``."""
+        """Fitting bounds of coefficient ``key``: the form's, widened for a size coefficient of a term on the
+        targets of :data:`WIDE_TARGETS` only."""
         i = self.coefficient_keys.index(key)
         b = self.form.bounds
-        return b[min(i, len(b) - 1)]
+        lo, hi = b[min(i, len(b) - 1)]
+        j = min(i, self.form.n_coeffs - 1) if self.form.n_coeffs else 0
+        wide = min((WIDE_TARGETS.get(t, 1.0) for t in self.targets), default=1.0)
+        if wide > 1.0 and j in self.form.amplitudes:
+            lo, hi = wide * min(lo, -abs(hi)), wide * hi
+        return lo, hi
 
     def start(self, key: str) -> float:
         """Fitting start value of coefficient ``key``."""
