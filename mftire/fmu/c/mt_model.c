@@ -74,14 +74,6 @@ static unsigned fm_n_states(void) { return MT_N_STATES; }
 static int fm_is_unknown(unsigned vr) { return fm_var_is_unknown(&TABLE, vr); }
 static unsigned fm_dependencies(unsigned *vrs, unsigned room) { return fm_var_dependencies(&TABLE, vrs, room); }
 
-static void on_warning(void *ctx, int kind, const char *message)
-{
-    FMModel *m = (FMModel *)ctx;
-    if (kind == MF_W_LOW_SPEED || kind < 0 || kind >= MF_W_COUNT) return; /* the transient model replaces
-                                                                               MFeval's low-speed mode */
-    fm_base_warn(&m->b, &m->b.warn[kind], message);
-}
-
 static void fm_reset(FMModel *m)
 {
     m->params = MT_PARAM_START;
@@ -100,17 +92,21 @@ static void fm_reset(FMModel *m)
     m->out_have = m->out_want = 0;
 }
 
-static int bad_code(FMModel *m, int rc)
+/* The evaluator's warnings `kinds` (MF_W_* bits) through the rate limit, but MFeval's low-speed mode: the
+ * transient model replaces it. */
+static void warn_kinds(FMModel *m, unsigned long kinds)
 {
-    return fm_eval_error(m->b.log, m->b.host, &m->params, m->b.use_mode, rc);
+    fm_base_warn_kinds(&m->b, &m->params, kinds & ~(1UL << MF_W_LOW_SPEED));
 }
 
-/* The kinematics, with the rolling offsets of the output groups read so far. */
-static int update_kin(FMModel *m)
+/* The kinematics, with the rolling offsets of the output groups read so far.  useMode and FITTYP are checked when
+ * they are set (fm_set_mode, fm_set_parameter_ok) and their start values at export, so the evaluations do not
+ * check them (mt_kinematics, mt_outputs). */
+static void update_kin(FMModel *m)
 {
-    int rc;
+    unsigned long kinds = 0;
     MTInputs in;
-    if (m->kin_ok && !(m->out_want & MT_OFFSETS & ~m->kin.offsets)) return 0;
+    if (m->kin_ok && !(m->out_want & MT_OFFSETS & ~m->kin.offsets)) return;
     in = m->inputs;
 #if MT_HAS_GUARD
     {
@@ -130,22 +126,21 @@ static int update_kin(FMModel *m)
     m->T_road = in.T_road;
     mt_thermal_inputs(&m->params, &m->x[2], &in, &m->P_hot); /* the hot pressure and the laws' node temperatures */
 #endif
-    rc = mt_kinematics(&m->params, m->b.use_mode, &in, m->out_want, &m->kin, on_warning, m);
-    if (rc != MF_OK) return bad_code(m, rc);
+    mt_kinematics(&m->params, m->b.use_mode, &in, m->out_want, &m->kin, &kinds);
+    warn_kinds(m, kinds);
     m->kin_ok = 1;
-    return 0;
 }
 
 /* The outputs of the channel groups `want` (and of all groups read before). */
-static int update_out(FMModel *m, unsigned want)
+static void update_out(FMModel *m, unsigned want)
 {
-    int rc;
+    unsigned long kinds = 0;
     m->out_want |= want;
-    if (m->out_ok && !(m->out_want & ~m->out_have)) return 0;
+    if (m->out_ok && !(m->out_want & ~m->out_have)) return;
     m->b.evals++; /* the clock of the warning rate limit: output evaluations and derivative evaluations */
-    if (update_kin(m)) return 1;
-    rc = mt_outputs(&m->params, m->b.use_mode, &m->kin, m->x, m->out_want, &m->out, on_warning, m);
-    if (rc != MF_OK) return bad_code(m, rc);
+    update_kin(m);
+    mt_outputs(&m->params, m->b.use_mode, &m->kin, m->x, m->out_want, &m->out, &kinds);
+    warn_kinds(m, kinds);
 #if MT_HAS_GUARD
     if (m->out.nonfinite) {
         char text[96];
@@ -161,23 +156,21 @@ static int update_out(FMModel *m, unsigned want)
 #endif
     m->out_have = m->out_want;
     m->out_ok = 1;
-    return 0;
 }
 
 /* Every state derivative at the present inputs and states (dx: MT_N_STATES values). */
-static int derivatives(FMModel *m, double *dx)
+static void derivatives(FMModel *m, double *dx)
 {
-    if (update_kin(m)) return 1;
+    update_kin(m);
     mt_rates(&m->params, &m->kin, m->x, dx);
 #if MT_THERMAL
     {
         double q[3];
-        if (update_out(m, MF_WANT_FX | MF_WANT_FY)) return 1; /* the heat of the forces at the transient slips */
+        update_out(m, MF_WANT_FX | MF_WANT_FY); /* the heat of the forces at the transient slips */
         mt_thermal_heat(&m->params, &m->kin, &m->out, q);
         mt_thermal_rates(&m->params, q, m->T_amb, m->T_road, &m->x[2], &dx[2]);
     }
 #endif
-    return 0;
 }
 
 /* Store an input or parameter; the kinematics and outputs are out of date unless the value is the same. */
@@ -219,7 +212,7 @@ static int fm_exit_initialization(FMModel *m)
             if (MT_VARS[vr].kind == FM_K_PARAM && thermal_param_error(m, vr, *fm_slot(&m->params, &MT_VARS[vr])))
                 return FM_ERROR;
     }
-    if (update_out(m, 0)) return FM_ERROR;
+    update_out(m, 0);
     m->b.initialized = 1;
     return FM_OK;
 }
@@ -233,11 +226,11 @@ static int fm_get_real(FMModel *m, unsigned vr, double *value)
     switch (v->kind) {
     case FM_K_STATE: *value = m->x[v->offset]; return FM_OK;
     case FM_K_DER:
-        if (derivatives(m, dx)) return FM_ERROR;
+        derivatives(m, dx);
         *value = dx[v->offset];
         return FM_OK;
     case FM_K_OUTPUT:
-        if (update_out(m, v->want)) return FM_ERROR;
+        update_out(m, v->want);
         *value = *fm_slot(&m->out, v);
         return FM_OK;
     default: return fm_not_a(m->b.log, m->b.host, vr, "Real");
@@ -316,7 +309,8 @@ static int fm_get_states(FMModel *m, double *x)
 static int fm_get_derivatives(FMModel *m, double *dx)
 {
     m->b.evals++;
-    return derivatives(m, dx) ? FM_ERROR : FM_OK;
+    derivatives(m, dx);
+    return FM_OK;
 }
 
 static void fm_get_nominals(double *xn)
@@ -333,14 +327,14 @@ static int fm_do_step(FMModel *m, double t, double h)
 #if MT_THERMAL
     if (m->T_moved) m->kin_ok = 0; /* the kinematics of the present temperatures */
 #endif
-    if (update_kin(m)) return FM_ERROR; /* inputs (and node temperatures) are held over the step */
+    update_kin(m); /* inputs (and node temperatures) are held over the step */
     mt_advance(&m->params, &m->kin, m->x, h);
     m->b.time = t + h;
     m->out_ok = 0; /* the outputs at the new state are computed when read */
 #if MT_THERMAL
     if (h > 0.0) {
         double q[3];
-        if (update_out(m, MF_WANT_FX | MF_WANT_FY)) return FM_ERROR; /* the forces at the end of the slip step */
+        update_out(m, MF_WANT_FX | MF_WANT_FY); /* the forces at the end of the slip step */
         mt_thermal_heat(&m->params, &m->kin, &m->out, q);
         mt_thermal_step(&m->params, q, m->T_amb, m->T_road, &m->x[2], h);
         m->out.T_surface = m->x[2]; /* the new states; the other outputs read the temperatures held */

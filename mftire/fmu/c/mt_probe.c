@@ -16,11 +16,22 @@ static void load_inputs(MTInputs *in, const double *inputs)
     in->gamma = inputs[4]; in->P = inputs[5]; in->muRoad = inputs[6]; in->yawRate = inputs[7];
 }
 
+/* MF_OK, or the code of a use_mode or FITTYP the evaluator refuses (the evaluations do not check them). */
+static int checked(int use_mode)
+{
+    char msg[8];
+    if (mf_check_mode(use_mode, msg, sizeof msg) != MF_OK) return MF_BAD_MODE;
+    return mf_check_fittyp(&MT_PARAM_START, msg, sizeof msg) != MF_OK ? MF_BAD_FITTYP : MF_OK;
+}
+
 /* The kinematics and every output (all channel groups) at the inputs in and the state x. */
 static int evaluate_all(int use_mode, const MTInputs *in, const double *x, MTKin *k, MTOutputs *o)
 {
-    int rc = mt_kinematics(&MT_PARAM_START, use_mode, in, MF_WANT_ALL, k, NULL, NULL);
-    return rc ? rc : mt_outputs(&MT_PARAM_START, use_mode, k, x, MF_WANT_ALL, o, NULL, NULL);
+    int rc = checked(use_mode);
+    if (rc) return rc;
+    mt_kinematics(&MT_PARAM_START, use_mode, in, MF_WANT_ALL, k, NULL);
+    mt_outputs(&MT_PARAM_START, use_mode, k, x, MF_WANT_ALL, o, NULL);
+    return 0;
 }
 
 /* The outputs Fx, Fy, Mz, Mx, My, kappa_t, alpha_t into y. */
@@ -46,8 +57,8 @@ __attribute__((visibility("default"))) int mt_probe_rates(int use_mode, const do
     MTKin k;
     int rc;
     load_inputs(&in, inputs);
-    rc = mt_kinematics(&MT_PARAM_START, use_mode, &in, 0u, &k, NULL, NULL);
-    if (rc) return rc;
+    if ((rc = checked(use_mode)) != 0) return rc;
+    mt_kinematics(&MT_PARAM_START, use_mode, &in, 0u, &k, NULL);
     mt_rates(&MT_PARAM_START, &k, x, dx);
     if (kin) { kin[0] = k.Vsx; kin[1] = k.Vsy; kin[2] = k.sigx; kin[3] = k.sigy; kin[4] = k.w; }
     return 0;
@@ -93,11 +104,12 @@ __attribute__((visibility("default"))) double mt_probe_bench(int use_mode, const
     double x[2] = {1e-3, -2e-3}, dx[2], acc = 0.0;
     struct timespec t0;
     long i;
+    if (checked(use_mode)) return -1.0;
     load_inputs(&in, inputs);
     clock_gettime(CLOCK_MONOTONIC, &t0);
     for (i = 0; i < n; i++) {
         in.Vy = inputs[2] + 1e-9 * (double)(i & 1023);
-        mt_kinematics(&MT_PARAM_START, use_mode, &in, 0u, &k, NULL, NULL);
+        mt_kinematics(&MT_PARAM_START, use_mode, &in, 0u, &k, NULL);
         mt_rates(&MT_PARAM_START, &k, x, dx);
         acc += dx[0] + dx[1];
     }
@@ -144,6 +156,7 @@ __attribute__((visibility("default"))) double mt_probe_bench_thermal(int use_mod
     double x[5] = {1e-3, -2e-3, 60.0, 50.0, 40.0}, dx[5], q[3], P_hot, acc = 0.0;
     struct timespec t0;
     long i;
+    if (checked(use_mode)) return -1.0;
     load_inputs(&in0, inputs);
     in0.T_ambient = 20.0;
     in0.T_road = 30.0;
@@ -152,9 +165,9 @@ __attribute__((visibility("default"))) double mt_probe_bench_thermal(int use_mod
         in = in0;
         in.Vy = inputs[2] + 1e-9 * (double)(i & 1023);
         mt_thermal_inputs(&MT_PARAM_START, &x[2], &in, &P_hot);
-        mt_kinematics(&MT_PARAM_START, use_mode, &in, 0u, &k, NULL, NULL);
+        mt_kinematics(&MT_PARAM_START, use_mode, &in, 0u, &k, NULL);
         mt_rates(&MT_PARAM_START, &k, x, dx);
-        mt_outputs(&MT_PARAM_START, use_mode, &k, x, MF_WANT_FX | MF_WANT_FY, &o, NULL, NULL);
+        mt_outputs(&MT_PARAM_START, use_mode, &k, x, MF_WANT_FX | MF_WANT_FY, &o, NULL);
         mt_thermal_heat(&MT_PARAM_START, &k, &o, q);
         mt_thermal_rates(&MT_PARAM_START, q, in.T_ambient, in.T_road, &x[2], &dx[2]);
         acc += dx[0] + dx[1] + dx[2];

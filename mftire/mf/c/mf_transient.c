@@ -37,15 +37,16 @@ static double slope_factor(double q, double qs, double smin)
     return 1.0 / (s > smin ? s : smin);
 }
 
-int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned offsets, MTKin *k,
-                  mf_warning_fn warn, void *ctx)
+void mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned offsets, MTKin *k,
+                   unsigned long *warnings)
 {
     const double PI = 3.14159265358979323846;
     double Fz = nan_to(in->Fz, 0.0), Vx = nan_to(in->Vx, 0.0), Vy = nan_to(in->Vy, 0.0);
     double omega = nan_to(in->omega, 0.0), yaw = nan_to(in->yawRate, 0.0);
     double vxlow = p->VXLOW, absVx = fabs(Vx), vfloor, Vev, r, q;
     unsigned want = MF_WANT_RELAX; /* sigma; mu and K for the saturation slips */
-    int rc, i;
+    unsigned long w;
+    int i;
     r = absVx / vxlow < 1.0 ? absVx / vxlow : 1.0;
     /* low-speed weight (cosine, as MFeval's VXLOW reduction); from VXLOW on exactly 0.5 * (1 + cos(PI)) = 0 */
     k->w = r < 1.0 ? 0.5 * (1.0 + cos(PI * r)) : 0.0;
@@ -67,8 +68,8 @@ int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned 
     k->ev.muRoad = nan_to(in->muRoad, 1.0);
     for (i = 0; i < MF_MAX_DATA; i++) k->ev.data[i] = in->data[i];
     k->zero.Fx = k->zero.Fy = k->zero.Mz = 0.0; /* offsets not evaluated: 0 (w = 0, or not used) */
-    rc = mf_evaluate_want(p, use_mode, &k->ev, want, &k->zero, warn, ctx);
-    if (rc != MF_OK) return rc;
+    w = mf_evaluate_unchecked(p, use_mode, &k->ev, want, &k->zero);
+    if (warnings) *warnings |= w;
     k->Vx = Vx;
     k->Vsx = Vx - omega * k->zero.Re; /* longitudinal slip velocity (Pacejka 2012 eq 2.5 / 4.E5) */
     k->Vsy = Vy;
@@ -82,7 +83,6 @@ int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned 
     q = q > 1.0 ? 1.0 : (q < -1.0 ? -1.0 : q);
     /* smooth sign of the rolling direction; sin(+-PI/2) is exactly +-1 in double */
     k->My_sign = q == 1.0 ? 1.0 : (q == -1.0 ? -1.0 : sin(0.5 * PI * q));
-    return MF_OK;
 }
 
 /* Carcass deflection rates dc = (du_c/dt, dv_c/dt) (the linear lag with the deflection limiter), the rates
@@ -109,19 +109,19 @@ void mt_rates(const MFParams *p, const MTKin *k, const double x[2], double dx[2]
     dx[1] = r[1] * dc[1];
 }
 
-int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2], unsigned want,
-               MTOutputs *out, mf_warning_fn warn, void *ctx)
+void mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2], unsigned want,
+                MTOutputs *out, unsigned long *warnings)
 {
     double dx[2], A[2], r[2];
     MFInputs ev = k->ev;
-    int rc;
+    unsigned long w;
     lag(p, k, x, dx, A, r); /* damping on the carcass deflection rate */
     out->kappa_t = (x[0] + k->w * p->TR_TAU_X * dx[0]) / k->sigx;    /* low-speed damping (§7.3) */
     out->alpha_t = atan((x[1] + k->w * p->TR_TAU_Y * dx[1]) / k->sigy); /* tan alpha' = v/sigma_alpha */
     ev.kappa = out->kappa_t;
     ev.alpha = out->alpha_t;
-    rc = mf_evaluate_want(p, use_mode, &ev, want, &out->ss, warn, ctx);
-    if (rc != MF_OK) return rc;
+    w = mf_evaluate_unchecked(p, use_mode, &ev, want, &out->ss);
+    if (warnings) *warnings |= w;
     /* rolling offsets fade out below VXLOW (an output is valid only when its group is wanted) */
     if (want & MF_WANT_FX) out->ss.Fx -= k->w * k->zero.Fx;
     if (want & MF_WANT_FY) out->ss.Fy -= k->w * k->zero.Fy;
@@ -140,7 +140,6 @@ int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2
         if (!isfinite(out->kappa_t)) { out->kappa_t = 0.0; out->nonfinite++; }
         if (!isfinite(out->alpha_t)) { out->alpha_t = 0.0; out->nonfinite++; }
     }
-    return MF_OK;
 }
 
 /*

@@ -57,13 +57,15 @@ typedef struct {
 } MTOutputs;
 
 /*
- * Kinematics: one steady-state evaluation at zero slip, of the groups it needs (mf_evaluate_want): the
+ * Kinematics: one steady-state evaluation at zero slip, of the groups it needs (mf_evaluate_unchecked): the
  * slip stiffnesses for the relaxation lengths (MF_WANT_RELAX; Re always) and, below VXLOW only (w > 0),
  * the rolling offsets of the groups `offsets` & MT_OFFSETS.  Offsets not computed are set to 0 (they are
- * multiplied by w = 0, or not used).  Returns MF_OK or an mf_evaluate code.
+ * multiplied by w = 0, or not used).  The evaluation does not check use_mode and FITTYP (mf_evaluate_unchecked):
+ * the caller checks them when they are set (mf_check_mode, mf_check_fittyp).  The evaluator's warnings are
+ * or-ed into *warnings (bit 1UL << kind of each MF_W_* kind; NULL: not reported).
  */
-MF_API int mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned offsets, MTKin *k,
-                  mf_warning_fn warn, void *ctx);
+MF_API void mt_kinematics(const MFParams *p, int use_mode, const MTInputs *in, unsigned offsets, MTKin *k,
+                          unsigned long *warnings);
 
 /* State derivatives dx = (du/dt, dv/dt) at the state x = (u, v). */
 MF_API void mt_rates(const MFParams *p, const MTKin *k, const double x[2], double dx[2]);
@@ -84,10 +86,11 @@ MF_API const char *mt_input_name(unsigned i);
  * Outputs at the state x: one steady-state evaluation at the transient slips, of the channel groups want
  * (MF_WANT_*; MF_WANT_ALL: every output).  The fields of groups not wanted are left untouched; kappa_t,
  * alpha_t, Fz and Re are always set.  A field that is not finite (known case: Mz, Mzr at Fz = 0 with turn
- * slip, where the Python evaluator gives NaN too) is set to 0 and counted in out->nonfinite.  k must hold the offsets of want & MT_OFFSETS (mt_kinematics).
+ * slip, where the Python evaluator gives NaN too) is set to 0 and counted in out->nonfinite.  k must hold the
+ * offsets of want & MT_OFFSETS (mt_kinematics).  use_mode, FITTYP and *warnings as for mt_kinematics.
  */
-MF_API int mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2], unsigned want,
-               MTOutputs *out, mf_warning_fn warn, void *ctx);
+MF_API void mt_outputs(const MFParams *p, int use_mode, const MTKin *k, const double x[2], unsigned want,
+                       MTOutputs *out, unsigned long *warnings);
 
 /* One exponential-Euler step of length h (rates and slope factors frozen at the start of the step):
  * stable for any h. */
