@@ -539,6 +539,70 @@ def worse_in_sample(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Seq
     return [e.channel for e in worse_errors(errs, noise, GUARD_ALLOWANCE)]
 
 
+@dataclass
+class _HeldOutJudge:
+    """Judges a candidate's refined laws on the diagnosis's held-out condition (``test``: its rows); keeps the
+    lowest held-out-fold error of a law it refused (:data:`FALLBACK_SHARE`) across the candidates judged."""
+
+    tyre: Tyre
+    test: pd.DataFrame
+    channels: Sequence[str]
+    noise: Mapping[str, float]
+    n_pressures: int
+    column: str
+    refused_best: float = np.inf
+
+    def _refused(self, fit: EffectFit, why: str, rejected: list[str]) -> None:
+        rejected.append(f"{fit.name} in {fit.variable} ({fit.refit} coefficients refitted) {why}")
+        self.refused_best = min(self.refused_best, fit.heldout)
+
+    def first_accepted(self, prob, variants: Sequence[tuple[EffectFit, Tyre]], candidate: str,
+                       effect_channels: Sequence[str]) -> tuple[tuple | None, list[str]]:
+        """The first of ``variants`` (in order of preference) whose model and control, both refitted without the
+        held-out condition, make no scored channel worse beyond its noise and improve them together there, and hold on
+        the extra conditions (:func:`_worse_elsewhere`): ``((effect, extended tyre, channel errors), rejections)``, or
+        ``(None, rejections)``.  A law acts on its channels only: every other coefficient stays as the model has it,
+        the control is restricted the same way.  A law refused for some channels is retried next without its
+        targets on them (:func:`~mftire.diagnosis.effects.trimmed_fit`, refitted the same way)."""
+        rejected: list[str] = []
+        queue = list(variants)
+        while queue:
+            refined, extended = queue.pop(0)
+            values = variable_values(prob.df, refined, candidate)
+            if not plausible_inputs(refined, values):
+                rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) moves "
+                                "its input beyond physical limits")  # fmt: skip
+                continue
+            if refined.heldout > self.refused_best + (1.0 - FALLBACK_SHARE) * (1.0 - self.refused_best):
+                # a law that explains much less of the held-out folds than one the held-out condition refused
+                # captures something else than the effect: accepting it would trade a refused law for a weak one
+                rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) "
+                                f"explains less than {FALLBACK_SHARE:.0%} of what a refused law did on the "
+                                "held-out folds")  # fmt: skip
+                continue
+            ext_r, eff_r = restricted(self.tyre, extended, refined)
+            ctrl_r, _ = restricted(self.tyre, refined.control_tyre, refined)
+            errs = channel_errors(self.test, _model(ctrl_r, self.test), _model(ext_r, self.test), self.channels)
+            # the scored channels, those the laws are fitted on (Mx and My follow the forces through models of
+            # their own and are reported, not scored)
+            worse = [e.channel for e in worse_errors(errs, self.noise)]
+            gain = sum(e.rms_pct_before**2 - e.rms_pct_after**2 for e in errs if e.channel in FIT_CHANNELS)
+            if not worse and gain > 0.0:
+                late = _worse_elsewhere(prob, refined, ext_r, ctrl_r, values, self.n_pressures, effect_channels,
+                                        self.channels, self.noise, self.column)  # fmt: skip
+                if not late:
+                    return (eff_r, ext_r, errs), rejected
+                self._refused(refined, "made " + "; ".join(late), rejected)
+                continue
+            what = ", ".join(f"{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g}" for e in errs
+                             if e.channel in worse)  # fmt: skip
+            self._refused(refined, f"made {what}" if worse else "did not improve", rejected)
+            trim = trimmed_fit(refined, worse)
+            if trim is not None:
+                queue.insert(0, (trim, final_fit(prob, trim, values, self.n_pressures, effect_channels)))
+        return None, rejected
+
+
 def diagnose(
     data: pd.DataFrame,
     tyre: TyreLike,
@@ -774,7 +838,7 @@ def _diagnose(
     lost: list[str] = []  # candidates whose laws lost on the held-out condition
     all_variants: list[EffectFit] = []
     accepted = None
-    refused_best = np.inf  # the lowest held-out-fold error of a law refused on the held-out condition
+    judge = _HeldOutJudge(tyre, dtest, chans, noise, n_pressures, column)
     for effect, cause, context in order[:CAUSES_TRIED]:
         # the candidate's best laws and the control, refitted with every MF coefficient
         say(f"refitting every coefficient with the laws of {effect.variable}")
@@ -785,52 +849,7 @@ def _diagnose(
             refits.append(f"{cause.variable}: " + "; ".join(notes))
             continue
         all_variants += [v[0] for v in variants]
-        # the held-out condition: each variant's model and its control, both refitted without it, per channel; the
-        # first variant (in order of preference) that no channel finds worse beyond its noise and that improves the
-        # scored channels together is accepted.  A law acts on its channels only: every other coefficient stays as
-        # the model has it, the control is restricted the same way.
-        rejected: list[str] = []
-        queue = list(variants)
-        while queue:
-            refined, extended = queue.pop(0)
-            values_r = variable_values(prob.df, refined, cause.variable)
-            if not plausible_inputs(refined, values_r):
-                rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) moves "
-                                "its input beyond physical limits")  # fmt: skip
-                continue
-            if refined.heldout > refused_best + (1.0 - FALLBACK_SHARE) * (1.0 - refused_best):
-                # a law that explains much less of the held-out folds than one the held-out condition refused
-                # captures something else than the effect: accepting it would trade a refused law for a weak one
-                rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) "
-                                f"explains less than {FALLBACK_SHARE:.0%} of what a refused law did on the "
-                                "held-out folds")  # fmt: skip
-                continue
-            ext_r, eff_r = restricted(tyre, extended, refined)
-            ctrl_r, _ = restricted(tyre, refined.control_tyre, refined)
-            errs = channel_errors(dtest, _model(ctrl_r, dtest), _model(ext_r, dtest), chans)
-            # the scored channels, those the laws are fitted on (Mx and My follow the forces through models of
-            # their own and are reported, not scored)
-            worse = [e.channel for e in worse_errors(errs, noise)]
-            gain = sum(e.rms_pct_before**2 - e.rms_pct_after**2 for e in errs if e.channel in FIT_CHANNELS)
-            if not worse and gain > 0.0:
-                late = _worse_elsewhere(prob, refined, ext_r, ctrl_r, values_r,
-                                        n_pressures, eff_ch, chans, noise, column)  # fmt: skip
-                if not late:
-                    accepted = (eff_r, ext_r, errs)
-                    break
-                rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) made "
-                                + "; ".join(late))
-                refused_best = min(refused_best, refined.heldout)
-                continue
-            what = ", ".join(f"{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g}" for e in errs
-                             if e.channel in worse)  # fmt: skip
-            rejected.append(f"{refined.name} in {refined.variable} ({refined.refit} coefficients refitted) "
-                            + (f"made {what}" if worse else "did not improve"))
-            refused_best = min(refused_best, refined.heldout)
-            trim = trimmed_fit(refined, worse)
-            if trim is not None:
-                # the law without its targets on the channels it made worse, refitted the same way, judged next
-                queue.insert(0, (trim, final_fit(prob, trim, values_r, n_pressures, eff_ch)))
+        accepted, rejected = judge.first_accepted(prob, variants, cause.variable, eff_ch)
         if accepted is not None:
             break
         lost.append(f"{cause.variable}: " + "; ".join(rejected))
