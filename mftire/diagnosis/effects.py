@@ -220,10 +220,11 @@ def effects_for(
 
     Derived candidates: their documented laws (:data:`EFFECTS_FOR`); the sweep direction: hysteresis,
     a ``direction`` law in each of ``families`` and in the slip stiffness, the shape and the force offsets of
-    ``channels``.  Data columns, for each family of scaling factors the per-sweep profiles link to the variable
-    (friction when none): a saturating law when the variable never decreases along the sequence (fade or warm-up
-    with time) or is continuous (8 levels or more), linear and quadratic laws, a hinge (a change above a threshold)
-    for a continuous variable, a per-level table when it has at most 5 levels, the interaction with a second
+    ``channels``.  Data columns, for
+    each family of scaling factors the per-sweep profiles link to the variable (friction
+    when none): a saturating law when the variable never decreases along the sequence
+    (fade or warm-up with time), linear and quadratic laws, a hinge (a change above a threshold) for a
+    continuous variable, a per-level table when it has at most 5 levels, the interaction with a second
     variable ``second`` (a data column or an MF input: dfz, gamma, Vx, P), and the input laws ``inputs``
     of the family (:data:`INPUT_LAWS`; linear, and quadratic from 4 levels).
     """
@@ -246,10 +247,7 @@ def effects_for(
             continue
         if variable in ("sequence", "energy", "P"):  # P: the MF's own pressure terms (Pacejka 2012 eq 4.E2b)
             continue
-        if (monotone or n_levels >= 8) and not derived:
-            # a first-order response: fade or warm-up along a clock, or a change that levels off along a quantity
-            # (grip rising with temperature to a plateau); a quantity that is not monotone in the test order gets
-            # it as well, or its proxy, the elapsed time, would have a form it has not
+        if monotone and not derived:
             laws.append((variable, Law(f"{fam}_fade" if fam == "friction" else f"{fam}_saturating", tg,
                                        "saturating")))  # fmt: skip
         laws.append((variable, Law(f"{fam}_variable", tg, "linear")))
