@@ -29,7 +29,8 @@ key                    meaning
 =====================  =========================================================================
 
 The forms (each :class:`Form` holds its formula, neutral value, bounds and start values
-for fitting, and its C expression, from which the FMU's C is generated):
+for fitting, and its C expression, from which the FMU's C is generated; the size coefficients of a
+term on a shift factor take wider bounds, :data:`WIDE_TARGETS`):
 
 ===============  ==============================================  ====================================
 form             f                                               use
