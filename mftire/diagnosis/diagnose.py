@@ -54,6 +54,7 @@ from mftire.diagnosis.candidates import Candidate, candidates, time_column, with
 from mftire.diagnosis.effects import (
     FIT_CHANNELS,
     HISTORY_CANDIDATES,
+    INPUT_VARIABLE_OF,
     MAX_RESIDUAL_VS_CONTROL,
     PRESSURE_COEFFICIENTS,
     SHIFT_FAMILIES,
@@ -254,10 +255,6 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
 
 #: The MF's own operating inputs (a law in them is interpolated between tested levels like the MF's terms).
 MF_INPUTS = tuple(SET_POINT_COLUMNS)
-#: Derived candidates that are MF inputs, and the variable an interaction law reads for each
-#: (:data:`mftire.mf.extensions.BUILTIN_VARIABLES`).
-INTERACTION_INPUTS = {"Vx": "Vx", "Vs": "Vs", "Fz_dev": "dfz", "P": "P", "sign_alpha": "sign_alpha",
-                      "sign_kappa": "sign_kappa"}  # fmt: skip
 #: Forms whose laws are also tried on the channels where the candidate is significant alone (not on every force).
 TRIMMED_FORMS = ("linear", "saturating", "interaction", "hinge", "quadratic")
 #: A law tried after one the held-out condition refused must explain at least this share of what the refused one
@@ -758,8 +755,8 @@ def _diagnose(
         if second is None and not derived:
             # an MF input that explains the residual itself: an effect of the column whose size follows the input
             # (a grip change with wear that grows with speed shows in the speed first)
-            second = next((INTERACTION_INPUTS[s.variable] for s in significant
-                           if s.variable in INTERACTION_INPUTS and s.variable != variable), None)  # fmt: skip
+            second = next((INPUT_VARIABLE_OF[s.variable] for s in significant
+                           if s.variable in INPUT_VARIABLE_OF and s.variable != variable), None)  # fmt: skip
         dtr = dtrain.assign(_cand=v)
         prob = make_problem(tyre, dtr, chans)
         prob.noise = {ch: noise[ch] / prob.scale[ch] for ch in prob.channels if np.isfinite(noise.get(ch, np.nan))}

@@ -108,6 +108,11 @@ EFFECTS_FOR: dict[str, tuple[tuple[str, Law], ...]] = {
     "sign_kappa": (("sign_kappa", Law("drive_brake_asymmetry", ("LMUX",), "linear")),),
     "sweep_dir": (),
 }  # fmt: skip
+#: Derived candidates that are MF inputs, and the builtin variable their laws read (the first of
+#: :data:`EFFECTS_FOR`: Fz_dev is read as dfz): the variable of their interaction laws, and the second variable
+#: of a column's interaction with them.
+INPUT_VARIABLE_OF: dict[str, str] = {name: laws[0][0] for name, laws in EFFECTS_FOR.items()
+                                     if laws and laws[0][0] in BUILTIN_VARIABLES}  # fmt: skip
 
 #: Families tried when the candidate explains the raw residual best (a shift or an offset, not a change along
 #: the characteristic: :func:`mftire.diagnosis.ranking.residual_forms`); the input laws of ``shift`` with them.
@@ -241,9 +246,10 @@ def effects_for(
     for fam in families:
         tg = family_targets(fam, channels)
         if derived and fam == "friction" and laws:
-            if second is not None and laws[0][0] in BUILTIN_VARIABLES:
+            if second is not None and variable in INPUT_VARIABLE_OF:
                 # the input's effect whose size follows a column (the column's law times the input)
-                laws.append((laws[0][0], Law(f"{fam}_interaction", tg, "interaction", variable2=second)))
+                laws.append((INPUT_VARIABLE_OF[variable], Law(f"{fam}_interaction", tg, "interaction",
+                                                              variable2=second)))  # fmt: skip
             continue
         if variable in ("sequence", "energy", "P"):  # P: the MF's own pressure terms (Pacejka 2012 eq 4.E2b)
             continue
@@ -1029,7 +1035,9 @@ def trimmed_fit(fit: EffectFit, worse: Sequence[str]) -> EffectFit | None:
     if law is None:
         return None
     section = {k: (" ".join(law.targets) if k.endswith("_TARGET") else v) for k, v in fit.section.items()}
-    return dataclasses.replace(fit, targets=law.targets, section=section, law=law, messages=list(fit.messages))
+    note = (f"trimmed of its targets on {', '.join(worse)} after the held-out condition; its held-out-fold error is "
+            "that of the law before the trim")  # fmt: skip
+    return dataclasses.replace(fit, targets=law.targets, section=section, law=law, messages=[*fit.messages, note])
 
 
 def _ranked(options: Sequence[tuple]) -> list[tuple]:

@@ -318,7 +318,7 @@ class Extension:
         i = self.coefficient_keys.index(key)
         b = self.form.bounds
         lo, hi = b[min(i, len(b) - 1)]
-        j = min(i, self.form.n_coeffs - 1) if self.form.n_coeffs else 0
+        j = i if self.form.n_coeffs else 0  # a table's values share one bound
         wide = min((WIDE_TARGETS.get(t, 1.0) for t in self.targets), default=1.0)
         if wide > 1.0 and j in self.form.amplitudes:
             lo, hi = wide * min(lo, -abs(hi)), wide * hi

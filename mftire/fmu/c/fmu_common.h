@@ -192,17 +192,6 @@ FM_FN void fm_base_warn_kinds(FMBase *b, const MFParams *p, unsigned long kinds)
         }
 }
 
-/* The error of an evaluation that returned rc (MF_BAD_MODE, else a FITTYP the evaluator refuses), logged: the
- * evaluator's own message.  Returns FM_ERROR. */
-FM_FN int fm_eval_error(fm_log_fn log, void *host, const MFParams *p, int use_mode, int rc)
-{
-    char msg[256];
-    if (rc == MF_BAD_MODE) mf_check_mode(use_mode, msg, sizeof msg);
-    else mf_check_fittyp(p, msg, sizeof msg);
-    fm_logf(log, host, FM_ERROR, "logStatusError", "%s", msg);
-    return FM_ERROR;
-}
-
 /* Whether the parameter `name` at `slot` of p may take `value` now: a fixed parameter is not set after the
  * initialisation (fixed_now), and fm_check_parameter refuses non-physical values.  FM_OK, else the refusal is
  * logged and FM_ERROR returned (the parameter keeps its value). */
