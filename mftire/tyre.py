@@ -65,6 +65,9 @@ class Tyre:
     """
 
     def __init__(self, params: TirParameters | Mapping[str, Any], name: str | None = None) -> None:
+        if isinstance(params, (str, os.PathLike)):
+            raise TypeError(f"Tyre() takes parameters, not a file name: read {os.fspath(params)!r} with "
+                            "mftire.load(path) or Tyre.from_file(path)")
         #: The parameters as a :class:`TirParameters` (a mapping is converted; its
         #: non-standard keys outside sections are kept in :attr:`flat` only).
         self.parameters: TirParameters = as_parameters(params, unknown="drop")

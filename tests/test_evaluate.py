@@ -58,6 +58,13 @@ def test_unsupported_fittyp_says_so():
         Tyre(flat).evaluate(4000.0, 0.0, 0.0)
 
 
+def test_a_file_name_given_to_tyre_points_to_load():
+    path = REFERENCE_TYRES["MF61"]
+    for given in (str(path), path):
+        with pytest.raises(TypeError, match=r"not a file name.*mftire\.load\(path\)"):
+            Tyre(given)
+
+
 def test_pac2002_file_evaluates_without_an_invented_fittyp():
     params = read_tir(TIR / "chrono_HMMWV_Pac02Tire.tir")
     tyre = Tyre(params)
