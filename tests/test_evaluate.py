@@ -60,9 +60,9 @@ def test_unsupported_fittyp_says_so():
 
 def test_a_file_name_given_to_tyre_points_to_load():
     path = REFERENCE_TYRES["MF61"]
-    for given in (str(path), path):
+    for name in (str(path), path):
         with pytest.raises(TypeError, match=r"not a file name.*mftire\.load\(path\)"):
-            Tyre(given)
+            Tyre(name)
 
 
 def test_pac2002_file_evaluates_without_an_invented_fittyp():
