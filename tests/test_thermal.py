@@ -258,7 +258,7 @@ def test_fit_thermal_bad_input_is_a_clear_error(tmp_path, capsys):
         assert not out.exists() and not (tmp_path / (name + "_temperature.png")).exists()
 
 
-from hypothesis import given, settings  # noqa: E402
+from hypothesis import example, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 _pos = st.floats(1.0, 1e5)
@@ -269,6 +269,10 @@ _temp = st.floats(-30.0, 150.0)
 @settings(max_examples=200, deadline=None)
 @given(caps=st.tuples(_pos, _pos, _pos), g=st.tuples(_cond, _cond, _cond, _cond, _cond), dt=st.floats(1e-3, 1e5),
        T=st.tuples(_temp, _temp, _temp), Ta=_temp, Tr=_temp, q=st.tuples(st.floats(0.0, 1e4), st.floats(0.0, 1e4)))
+# a capacity tiny against a conductance (a long step): the pivot formed as a difference cancelled, and the gas and
+# bulk nodes left [0, 1] by 1.3e-9 (found by hypothesis)
+@example(caps=(1.0, 1.0, 1.0), g=(0.0, 512.0, 0.0, 0.0, 0.0), dt=52675.0, T=(0.0, 1.0, 1.0), Ta=0.0, Tr=0.0,
+         q=(0.0, 0.0))
 def test_implicit_step_keeps_energy_and_the_maximum_principle(caps, g, dt, T, Ta, Tr, q):
     g_sb, g_bg, g_ba, g_road, g_air = g
     new = heat.implicit_step(T, dt, q[0], q[1], g_air, Ta, Tr, caps, g_sb, g_bg, g_ba, g_road)

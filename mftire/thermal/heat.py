@@ -120,19 +120,6 @@ def gas_heat_capacity(unloaded_radius: float, rim_radius: float, width: float, p
     return mass * 718.0
 
 
-def _solve_tridiagonal(a1, b1, c1, a2, b2, c2, a3, b3, r1, r2, r3):
-    """Solve [[b1, c1, 0], [a2, b2, c2], [0, a3, b3]]·x = r (Thomas algorithm)."""
-    w2 = a2 / b1
-    b2p = b2 - w2 * c1
-    r2p = r2 - w2 * r1
-    w3 = a3 / b2p
-    b3p = b3 - w3 * c2
-    x3 = (r3 - w3 * r2p) / b3p
-    x2 = (r2p - c2 * x3) / b2p
-    x1 = (r1 - c1 * x2) / b1
-    return x1, x2, x3
-
-
 def implicit_step(T: tuple[float, float, float], dt: float, q_s: float, q_b: float, g_air: float, T_amb: float,
                   T_road: float, caps: tuple[float, float, float], g_sb: float, g_bg: float, g_ba: float,
                   g_road: float) -> tuple[float, float, float]:
@@ -142,16 +129,25 @@ def implicit_step(T: tuple[float, float, float], dt: float, q_s: float, q_b: flo
     tridiagonal and diagonally dominant, so the step is stable and positive for any ``dt`` [s] and
     reaches :func:`steady_state` exactly for constant inputs.  ``caps`` = (C_s, C_b, C_g) [J/K],
     powers [W], conductances [W/K], temperatures [°C].
+
+    The elimination (Thomas algorithm) carries each row's excess of the diagonal over its off-diagonal
+    conductances, a sum of positive terms, instead of forming the pivot as a difference (the GTH variant of
+    Grassmann, Taksar & Heyman 1985): with a capacity tiny against a conductance (a long step) the pivot
+    would otherwise cancel, and a node could leave the range of its neighbours by round-off.
     """
     cs, cb, cg = caps[0] / dt, caps[1] / dt, caps[2] / dt
-    return _solve_tridiagonal(
-        0.0, cs + g_sb + g_air + g_road, -g_sb,
-        -g_sb, cb + g_sb + g_bg + g_ba, -g_bg,
-        -g_bg, cg + g_bg,
-        cs * T[0] + q_s + g_air * T_amb + g_road * T_road,
-        cb * T[1] + q_b + g_ba * T_amb,
-        cg * T[2],
-    )  # fmt: skip
+    s1 = cs + g_air + g_road  # row excess of the surface node
+    d1 = s1 + g_sb
+    r1 = cs * T[0] + q_s + g_air * T_amb + g_road * T_road
+    s2 = cb + g_ba + g_sb * s1 / d1  # bulk node, the surface eliminated
+    d2 = s2 + g_bg
+    r2 = cb * T[1] + q_b + g_ba * T_amb + g_sb / d1 * r1
+    s3 = cg + g_bg * s2 / d2  # gas node, the bulk eliminated: its whole pivot
+    r3 = cg * T[2] + g_bg / d2 * r2
+    x3 = r3 / s3
+    x2 = (r2 + g_bg * x3) / d2
+    x1 = (r1 + g_sb * x2) / d1
+    return x1, x2, x3
 
 
 def node_rates(T: tuple[float, float, float], q_s, q_b, g_air, T_amb, T_road, caps: tuple[float, float, float],

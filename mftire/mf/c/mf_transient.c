@@ -332,22 +332,29 @@ void mt_thermal_rates(const MFParams *p, const double q[3], double T_amb, double
 
 void mt_thermal_step(const MFParams *p, const double q[3], double T_amb, double T_road, double T[3], double h)
 {
-    /* (C/h + K) T+ = C/h T + q + sinks, tridiagonal (Thomas algorithm): heat.implicit_step */
-    double cs = p->TH_CAP_SURFACE / h, cb = p->TH_CAP_BULK / h, cg = p->TH_CAP_GAS / h;
-    double g_sb = p->TH_G_SURFACE_BULK, g_bg = p->TH_G_BULK_GAS, g_ba = p->TH_G_BULK_AMBIENT, g_road = p->TH_G_ROAD;
-    double b1 = cs + g_sb + q[2] + g_road, c1 = -g_sb, a2 = -g_sb, b2 = cb + g_sb + g_bg + g_ba, c2 = -g_bg;
-    double a3 = -g_bg, b3 = cg + g_bg;
-    double r1 = cs * T[0] + q[0] + q[2] * T_amb + g_road * T_road, r2 = cb * T[1] + q[1] + g_ba * T_amb, r3 = cg * T[2];
-    double w2, b2p, r2p, w3, b3p, x1, x2, x3;
+    /* (C/h + K) T+ = C/h T + q + sinks, tridiagonal; each row's excess of the diagonal over its off-diagonal
+       conductances is carried as a sum of positive terms, never a difference (GTH variant of the Thomas
+       algorithm): heat.implicit_step */
+    double cs, cb, cg, g_sb, g_bg, g_ba, g_road, s1, d1, r1, s2, d2, r2, s3, r3, x1, x2, x3;
     if (!(h > 0.0)) return;
-    w2 = a2 / b1;
-    b2p = b2 - w2 * c1;
-    r2p = r2 - w2 * r1;
-    w3 = a3 / b2p;
-    b3p = b3 - w3 * c2;
-    x3 = (r3 - w3 * r2p) / b3p;
-    x2 = (r2p - c2 * x3) / b2p;
-    x1 = (r1 - c1 * x2) / b1;
+    cs = p->TH_CAP_SURFACE / h;
+    cb = p->TH_CAP_BULK / h;
+    cg = p->TH_CAP_GAS / h;
+    g_sb = p->TH_G_SURFACE_BULK;
+    g_bg = p->TH_G_BULK_GAS;
+    g_ba = p->TH_G_BULK_AMBIENT;
+    g_road = p->TH_G_ROAD;
+    s1 = cs + q[2] + g_road;
+    d1 = s1 + g_sb;
+    r1 = cs * T[0] + q[0] + q[2] * T_amb + g_road * T_road;
+    s2 = cb + g_ba + g_sb * s1 / d1;
+    d2 = s2 + g_bg;
+    r2 = cb * T[1] + q[1] + g_ba * T_amb + g_sb / d1 * r1;
+    s3 = cg + g_bg * s2 / d2;
+    r3 = cg * T[2] + g_bg / d2 * r2;
+    x3 = r3 / s3;
+    x2 = (r2 + g_bg * x3) / d2;
+    x1 = (r1 + g_sb * x2) / d1;
     if (isfinite(x1) && isfinite(x2) && isfinite(x3)) {
         T[0] = x1;
         T[1] = x2;
