@@ -15,7 +15,7 @@ import pytest
 from test_diagnosis import TYRE, _campaign, _measure
 
 from mftire.diagnosis.candidates import with_sweeps
-from mftire.diagnosis.diagnose import diagnose, extra_conditions, order_fold, worse_in_sample
+from mftire.diagnosis.diagnose import diagnose, extra_conditions, order_fold, preferred_cause, worse_in_sample
 from mftire.diagnosis.effects import CHANNEL_COEFFICIENTS, EffectFit, plausible_inputs, with_given_channels
 from mftire.mf.extensions import identifier_name
 from mftire.tyre import Tyre
@@ -73,6 +73,25 @@ def _input_fit(target: str, c1: float) -> EffectFit:
     section = {"EXT1_TARGET": target, "EXT1_FORM": "linear", "EXT1_VARIABLE": "tread_temp", "EXT1_REF": 30.0,
                "EXT1_SCALE": 10.0, "EXT1_MIN": 10.0, "EXT1_MAX": 50.0, "EXT1_C1": c1}  # fmt: skip
     return EffectFit("input", "tread_temp", True, {}, section, {}, 1.0, 1.0, 0.0, 1)
+
+
+def test_a_measured_column_is_judged_before_an_equally_good_test_order_candidate():
+    from types import SimpleNamespace as NS
+
+    def found(*cands):  # (variable, held-out ratio of its law) in ranking order
+        return [(NS(heldout=h), NS(variable=v)) for v, h in cands]
+
+    order = {"time", "sequence", "energy"}
+    # zoo seed 183: the time ranked first (0.479), the track temperature's law predicted better (0.449)
+    assert preferred_cause(found(("energy", 0.479), ("track_temp", 0.449)), order)[1].variable == "track_temp"
+    # within 10 % of the lowest, the measured column even when the test order's law is the better one
+    assert preferred_cause(found(("time", 0.50), ("tread_temp", 0.54)), order)[1].variable == "tread_temp"
+    # beyond 10 %, the lowest ratio wins
+    assert preferred_cause(found(("time", 0.50), ("tread_temp", 0.56)), order)[1].variable == "time"
+    # between measured columns (or test-order ones), the better-ranked within 10 %
+    assert preferred_cause(found(("hub_temp", 0.52), ("tread_temp", 0.50)), order)[1].variable == "hub_temp"
+    assert preferred_cause(found(("sequence", 0.52), ("time", 0.50)), order)[1].variable == "sequence"
+    assert preferred_cause([], order) is None
 
 
 def test_input_laws_stay_within_physical_limits():

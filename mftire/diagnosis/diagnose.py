@@ -44,7 +44,7 @@ importer's ``fit_row`` column, the accumulated candidates run through the flagge
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -296,6 +296,19 @@ def order_fold(df: pd.DataFrame, kinds: np.ndarray | None, share: float = ORDER_
 
 #: Candidates whose laws are refitted in full and judged on the held-out condition, in order of preference, at most.
 CAUSES_TRIED = 3
+#: Candidates' held-out ratios within this share of the lowest count as equally good (:func:`preferred_cause`).
+SAME_HELDOUT = 0.1
+
+
+def preferred_cause(found: Sequence[tuple], test_order: Collection[str | None]) -> tuple | None:
+    """The candidate whose laws are judged first, of ``found`` (``(chosen law, CandidateScore, ...)`` in ranking
+    order): the lowest held-out ratio (``law.heldout``) wins, and among the candidates within :data:`SAME_HELDOUT` of
+    it a measured column comes before a test-order candidate (``test_order``: the elapsed time, the position in the
+    sequence, the friction work), else the better-ranked one.  When both predict as well, the measured quantity is
+    the mechanism, and the test order only carries it.  None when nothing was found."""
+    lowest = min((t[0].heldout for t in found), default=np.inf)
+    near = [t for t in found if t[0].heldout <= (1.0 + SAME_HELDOUT) * lowest]
+    return next((t for t in near if t[1].variable not in test_order), near[0] if near else None)
 
 
 #: Operating conditions held out besides the diagnosis's own (:func:`_worse_elsewhere`), at most.
@@ -814,9 +827,7 @@ def _diagnose(
         found.append((chosen, e, (prob, [(f, f.law, by_var.get(f.variable)) for f in ranked], eff_ch, folds,
                                   blocks is not None, control.cv, dict(control.cv_channels), control,
                                   order_fold(prob.df, kinds, levels=v))))  # fmt: skip
-    # the lowest held-out error wins; a better-ranked candidate within 10 % of it is preferred
-    lowest = min((f.heldout for f, _, _ in found), default=np.inf)
-    best = next((t for t in found if t[0].heldout <= 1.1 * lowest), None)
+    best = preferred_cause(found, {*HISTORY_CANDIDATES, tcol})
     if best is None:
         msg = ("no significant effect: candidates were flagged, but no model term explains the residual better "
                "than refitting the model without it")
