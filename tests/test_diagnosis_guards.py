@@ -15,14 +15,7 @@ import pytest
 from test_diagnosis import TYRE, _campaign, _measure
 
 from mftire.diagnosis.candidates import with_sweeps
-from mftire.diagnosis.diagnose import (
-    cause_without_law,
-    diagnose,
-    extra_conditions,
-    order_fold,
-    preferred_cause,
-    worse_in_sample,
-)
+from mftire.diagnosis.diagnose import diagnose, extra_conditions, order_fold, preferred_cause, worse_in_sample
 from mftire.diagnosis.effects import CHANNEL_COEFFICIENTS, EffectFit, plausible_inputs, with_given_channels
 from mftire.mf.extensions import identifier_name
 from mftire.tyre import Tyre
@@ -99,21 +92,6 @@ def test_a_measured_column_is_judged_before_an_equally_good_test_order_candidate
     assert preferred_cause(found(("hub_temp", 0.52), ("tread_temp", 0.50)), order)[1].variable == "hub_temp"
     assert preferred_cause(found(("sequence", 0.52), ("time", 0.50)), order)[1].variable == "sequence"
     assert preferred_cause([], order) is None
-
-
-def test_without_a_law_a_measured_column_is_named_before_an_equally_strong_test_order_candidate():
-    from types import SimpleNamespace as NS
-
-    order = {"time", "sequence", "energy"}
-
-    def named(*cands):  # (variable, ranking score), best first
-        return cause_without_law([NS(variable=v, score=x) for v, x in cands], order).variable
-
-    # zoo seed 194: the position in the sequence first (0.405), the track temperature within 10 % (0.379)
-    assert named(("sequence", 0.405), ("energy", 0.389), ("track_temp", 0.379)) == "track_temp"
-    assert named(("time", 0.149), ("energy", 0.136), ("wet", 0.131)) == "time"  # 12 % below: the time stays
-    assert named(("hub_temp", 0.30), ("tread_temp", 0.29)) == "hub_temp"  # no test order first: the first
-    assert named(("energy", 0.5),) == "energy"
 
 
 def test_input_laws_stay_within_physical_limits():

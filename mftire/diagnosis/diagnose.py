@@ -300,17 +300,6 @@ CAUSES_TRIED = 3
 SAME_HELDOUT = 0.1
 
 
-def cause_without_law(significant: Sequence[CandidateScore], test_order: Collection[str | None]) -> CandidateScore:
-    """The cause named when no law is written ("cause named, no law found"): the first of the ``significant``
-    candidates (best first), except that, as for the laws (:func:`preferred_cause`), a measured column whose score is
-    within :data:`SAME_HELDOUT` of a test-order candidate's (``test_order``) is named before it."""
-    top = significant[0]
-    if top.variable not in test_order:
-        return top
-    return next((e for e in significant if e.variable not in test_order
-                 and e.score >= (1.0 - SAME_HELDOUT) * top.score), top)  # fmt: skip
-
-
 def preferred_cause(found: Sequence[tuple], test_order: Collection[str | None]) -> tuple | None:
     """The candidate whose laws are judged first, of ``found`` (``(chosen law, CandidateScore, ...)`` in ranking
     order): the lowest held-out ratio (``law.heldout``) wins, and among the candidates within :data:`SAME_HELDOUT` of
@@ -840,7 +829,12 @@ def _diagnose(
                                   order_fold(prob.df, kinds, levels=v))))  # fmt: skip
     order_names = {*HISTORY_CANDIDATES, tcol}
     best = preferred_cause(found, order_names)
-    no_law_cause = cause_without_law(significant, order_names)
+    # the cause named when no law is written: the strongest candidate, and (as for the laws, preferred_cause) a
+    # measured column whose score is within SAME_HELDOUT of a test-order candidate's before it
+    no_law_cause = top
+    if top.variable in order_names:
+        no_law_cause = next((e for e in significant if e.variable not in order_names
+                             and e.score >= (1.0 - SAME_HELDOUT) * top.score), top)  # fmt: skip
     if best is None:
         msg = ("no significant effect: candidates were flagged, but no model term explains the residual better "
                "than refitting the model without it")
