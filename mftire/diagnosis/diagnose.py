@@ -827,14 +827,7 @@ def _diagnose(
         found.append((chosen, e, (prob, [(f, f.law, by_var.get(f.variable)) for f in ranked], eff_ch, folds,
                                   blocks is not None, control.cv, dict(control.cv_channels), control,
                                   order_fold(prob.df, kinds, levels=v))))  # fmt: skip
-    order_names = {*HISTORY_CANDIDATES, tcol}
-    best = preferred_cause(found, order_names)
-    # the cause named when no law is written: the strongest candidate, and (as for the laws, preferred_cause) a
-    # measured column whose score is within SAME_HELDOUT of a test-order candidate's before it
-    no_law_cause = top
-    if top.variable in order_names:
-        no_law_cause = next((e for e in significant if e.variable not in order_names
-                             and e.score >= (1.0 - SAME_HELDOUT) * top.score), top)  # fmt: skip
+    best = preferred_cause(found, {*HISTORY_CANDIDATES, tcol})
     if best is None:
         msg = ("no significant effect: candidates were flagged, but no model term explains the residual better "
                "than refitting the model without it")
@@ -844,7 +837,7 @@ def _diagnose(
                    "level to fit one)")  # fmt: skip
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
-                               profiles=profiles, cause=no_law_cause.variable)  # fmt: skip
+                               profiles=profiles, cause=top.variable)  # fmt: skip
     # the preferred candidate first, then the others by held-out error: when every law of one is refused (by the
     # control refitted in full or on the held-out condition), the next candidate's laws are tried
     order = [best] + sorted((t for t in found if t is not best), key=lambda t: t[0].heldout)
@@ -880,7 +873,7 @@ def _diagnose(
                    "refitted (" + " | ".join(refits) + ")")
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                [], None, tried + all_variants, messages=[msg], data=df, train=train,
-                               not_measured=not_measured, profiles=profiles, cause=no_law_cause.variable)  # fmt: skip
+                               not_measured=not_measured, profiles=profiles, cause=top.variable)  # fmt: skip
     if refits or lost:
         accepted[0].messages.append("tried first: " + " | ".join(refits + lost))
     effect = variants[0][0]
@@ -934,7 +927,7 @@ def _diagnose(
                f"{', '.join(worse)} worse than the given model on those same rows; the model is left unchanged")
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                [], None, tried + [effect], messages=[msg], data=df, train=train,
-                               not_measured=not_measured, profiles=profiles, cause=no_law_cause.variable)  # fmt: skip
+                               not_measured=not_measured, profiles=profiles, cause=top.variable)  # fmt: skip
     effect.standard = {k: float(v) for k, v in extended.flat.items() if k in tyre.flat and v != tyre.flat[k]}
     effect.section = {k: v for k, v in (extended.extensions or {}).items() if k not in (tyre.extensions or {})}
     effect.parameters = {k: float(v) for k, v in effect.section.items() if isinstance(v, float) and "_C" in k}
