@@ -14,7 +14,7 @@ from mftire.fitting.model import Inputs, fitting_mode, predict
 from mftire.fitting.stages import FITTED_KEYS, STAGES
 from mftire.fitting.synthetic import synthetic_sweeps
 from mftire.iotools.tir import read_tir
-from mftire.mf.extensions import ExtensionSet
+from mftire.mf.extensions import FORMS, SECTION, ExtensionSet, make_extension
 from mftire.parameters import with_defaults
 from mftire.segmentation.grouping import group_sweeps
 
@@ -72,7 +72,6 @@ def test_residual_jacobian_with_free_rolling_penalty(case):
     margin = -np.median(fx) * np.ones_like(fx)  # about half of the conditions active
     prob = fitter._Problem(fitter._Evaluator("Fx", p, Inputs.from_frame(rows), mode, ext, keys),
                          rows["Fx"].to_numpy(float), np.full(len(rows), 0.01), fitter._Penalty(free, 3.0, margin))
-    assert prob.exact
     jac = prob.jacobian(p, keys)
     pen = jac[len(rows):]
     assert 0 < np.count_nonzero(np.any(pen != 0, axis=1)) < len(fx)
@@ -116,3 +115,79 @@ def test_model_reuses_the_basic_quantities_only_while_their_parameters_hold(case
         for ch in CHANNELS:
             assert np.asarray(getattr(got, ch)).tobytes() == np.asarray(getattr(fresh, ch)).tobytes(), ch
     assert model.channels(dict(p, LFZO=1.2), ("Fx",)).Fx.tobytes() != model.channels(p, ("Fx",)).Fx.tobytes()
+
+
+#: one target of each kind an extension term acts through: a friction factor, a slip stiffness, a shift
+#: factor, the trail, a force offset, and the input laws (an effective pressure, slip-angle and camber offsets)
+EXT_TARGETS = ("LMUY", "LKX", "LHY", "LTR", "FY_OFFSET", "P_FACTOR", "ALPHA_OFFSET", "GAMMA_OFFSET")
+
+
+@pytest.mark.parametrize("form", sorted(FORMS))
+def test_jacobian_through_every_extension_form_matches_finite_differences(case, form):
+    """The fitter differentiates every extension form exactly (a stage that fits a law's coefficients no
+    longer falls back to finite differences): the columns of the law's coefficients, and of a Magic Formula
+    coefficient beside them, agree with central differences on every target kind and channel."""
+    data, template = case
+    rows = fitter._classify_rows(group_sweeps(data)).iloc[::7].copy()
+    rng = np.random.default_rng(3)
+    rows["temp"] = rng.uniform(20.0, 80.0, len(rows))  # continuous: no point sits on the hinge's kink
+    rows["level"] = rng.integers(0, 3, len(rows)).astype(float)
+    numbers = {"table": dict(L1=0.0, L2=1.0, L3=2.0), "power": dict(REF=15.0, SCALE=1.0),
+               "interaction": dict(REF=20.0, SCALE=20.0, REF2=3000.0, SCALE2=2000.0)}.get(form, dict(REF=20.0,
+                                                                                                  SCALE=20.0))
+    variable = {"table": "level", "power": "Vx"}.get(form, "temp")
+    checked = 0
+    for target in EXT_TARGETS:
+        term = make_extension(1, target, form, variable, variable2="Fz" if form == "interaction" else None,
+                              **numbers)  # fmt: skip
+        size = 0.002 if target.endswith("_OFFSET") and target != "FY_OFFSET" else 0.02
+        c = {k: size * (i + 1) for i, k in enumerate(term.coefficient_keys)}
+        if form == "saturating":
+            c[term.key("C2")] = 3.0
+        if form == "hinge":
+            c[term.key("C2")] = 0.5
+        ext = ExtensionSet((term,))
+        p = {**with_defaults(template), **c}
+        keys = [*term.coefficient_keys, "PDY1", "PKX1"]
+        for channel in ("Fx", "Fy", "Mz"):
+            ev = fitter._Evaluator(channel, p, fitter._condition_inputs(rows, ext), fitting_mode(), ext, keys)
+            value, jac = ev.jacobian(p, keys)
+            np.testing.assert_allclose(value, ev(p), rtol=1e-13, atol=1e-9)
+            for j, key in enumerate(keys):
+                h = (1e-4 if key.startswith("EXT") else 1e-6) * max(abs(p[key]), 1e-2)
+                up, down = dict(p), dict(p)
+                up[key] += h
+                down[key] -= h
+                fd = (ev(up) - ev(down)) / (2 * h)
+                if max(np.linalg.norm(fd), np.linalg.norm(jac[:, j])) < 1e-6:
+                    continue  # the channel does not read this coefficient (Fx and a lateral law)
+                checked += 1
+                assert np.linalg.norm(jac[:, j] - fd) / np.linalg.norm(fd) < 1e-4, (target, channel, key)
+    assert checked >= 3 * len(EXT_TARGETS)
+
+
+def test_fit_of_a_law_with_exact_derivatives_matches_the_finite_difference_fit(case):
+    """A law's coefficient fitted with the exact Jacobian (the default) and with finite differences lands on
+    the same value, the generating one: grip falling linearly with a tread temperature that varies from sweep
+    to sweep, fitted with the pure-slip stages."""
+    data, template = case
+    rng = np.random.default_rng(11)
+    sweeps = group_sweeps(data)
+    temp = rng.uniform(20.0, 80.0, int(sweeps["sweep_id"].max()) + 1)[sweeps["sweep_id"].to_numpy()]
+    true = with_defaults(read_tir(REFERENCE_TYRES["MF61"]))
+    factor = 1.0 - 0.1 * (temp - 50.0) / 20.0
+    x = Inputs.from_frame(sweeps)
+    measured = sweeps.drop(columns=["sweep_id"]).assign(temp=temp)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for ch in ("Fx", "Fy"):
+            clean = predict({**true, "LMUX": factor, "LMUY": factor}, x, ch, fitting_mode())
+            measured[ch] = clean + 0.005 * np.std(clean) * rng.standard_normal(len(clean))
+        start = template.copy()
+        law = make_extension(1, "LMUX LMUY", "linear", "temp", REF=50.0, SCALE=20.0, MIN=20.0, MAX=80.0)
+        for k, v in law.section().items():
+            start.set(k, v, section=SECTION)
+        fits = {j: fit_tir(measured, start, stages="1,2", progress=False, jacobian=j) for j in ("exact", "2-point")}
+    c1 = {j: float(f.parameters[law.key("C1")]) for j, f in fits.items()}
+    assert c1["exact"] == pytest.approx(-0.1, abs=0.01), c1  # the generating law
+    assert c1["exact"] == pytest.approx(c1["2-point"], abs=2e-3), c1

@@ -12,8 +12,8 @@ problem solved with :func:`scipy.optimize.least_squares` (trust-region reflectiv
 * bounds from :mod:`mftire.fitting.stages` (widened to hold the template value) and
   parameter scales ``x_scale = max(|start|, typical magnitude)``;
 * exact Jacobians: algorithmic (reverse-mode) derivatives through the model pipeline
-  (:mod:`mftire.mf.derivatives`), finite differences only for a stage that fits
-  an extension coefficient; BLAS held to one thread inside the solver (threadpoolctl);
+  (:mod:`mftire.mf.derivatives`), the extension terms' coefficients included; BLAS held to
+  one thread inside the solver (threadpoolctl);
 * two passes: first the nominal and load coefficients, then every identified
   coefficient;
 * the start values are the template's, replaced by data estimates
@@ -206,8 +206,8 @@ class _Evaluator:
     Piece 1 (conditioning, eqs 4.E1–4.E8 inputs) runs once.  For the moments, the forces
     and the zero-camber lateral force of eq 4.E74 are computed once when no coefficient
     of ``fitted`` changes them (aligning, overturning and rolling coefficients only).
-    :meth:`jacobian` differentiates algorithmically (:mod:`mftire.mf.derivatives`);
-    not :attr:`exact` (finite differences instead) when an extension coefficient is fitted.
+    :meth:`jacobian` differentiates algorithmically (:mod:`mftire.mf.derivatives`), through the
+    extension terms' forms too.
     """
 
     def __init__(self, channel: str, p: dict, x: Inputs, mode: Mode, ext: ExtensionSet, fitted: Sequence[str] = ()):
@@ -216,7 +216,6 @@ class _Evaluator:
         self.n = len(x)
         force_free = channel not in ("Fx", "Fy") and all(k.startswith(("Q", "SSZ", "PPZ", "PPMX")) for k in fitted)
         self.given = self.model.channels(p, (channel,)) if force_free else None
-        self.exact = not set(fitted) & set(ext.coefficient_keys)
 
     def value(self, q: Mapping) -> np.ndarray:
         """The channel (a :class:`~mftire.mf.derivatives.Var` when ``q`` holds some)."""
@@ -292,13 +291,8 @@ class _Problem:
             r = np.concatenate([r, self.penalty(q)])
         return r
 
-    @property
-    def exact(self) -> bool:
-        """The Jacobian is computed (not finite differences)."""
-        return self.evaluate.exact and (self.penalty is None or self.penalty.evaluate.exact)
-
     def jacobian(self, q: dict, keys: Sequence[str]) -> np.ndarray:
-        """d residuals / d q[keys] (rows of non-finite residuals: 0); only when :attr:`exact`."""
+        """d residuals / d q[keys] (rows of non-finite residuals: 0)."""
         value, d = self.evaluate.jacobian(q, keys)
         finite = np.isfinite((value - self.y) * self.sw)
         jac = np.where(finite, self.sw, 0.0)[:, None] * d
@@ -322,11 +316,11 @@ def _solve(prob: _Problem, p: dict, coeffs: Sequence[Coefficient], max_nfev: int
         q.update(zip(keys, x, strict=True))
         return prob.jacobian(q, keys)
 
-    exact = jacobian == "exact" and prob.exact
     # one BLAS thread: least_squares' SVDs are small, and threads fight over the cores
     with np.errstate(all="ignore"), threadpool_limits(limits=1, user_api="blas"):
-        res = least_squares(fun, x0, jac=jac if exact else "2-point", bounds=(lb, ub), x_scale=xs, loss=LOSS,
-                            f_scale=F_SCALE, method="trf", max_nfev=max_nfev, ftol=1e-9, xtol=1e-9, gtol=1e-9)
+        res = least_squares(fun, x0, jac=jac if jacobian == "exact" else "2-point", bounds=(lb, ub), x_scale=xs,
+                            loss=LOSS, f_scale=F_SCALE, method="trf", max_nfev=max_nfev, ftol=1e-9, xtol=1e-9,
+                            gtol=1e-9)
     out = dict(p)
     out.update(zip(keys, (float(v) for v in res.x), strict=True))
     return out, res
@@ -633,9 +627,8 @@ def fit_tir(
         model without them); reported as not identified, "fixed by the user".
     jacobian : {"exact", "2-point"}
         ``"exact"`` (default): algorithmic (reverse-mode) derivatives through the model
-        (:mod:`mftire.mf.derivatives`; finite differences for a stage that fits an
-        extension coefficient); ``"2-point"``: forward finite differences everywhere
-        (slower; the reference the exact derivatives are tested against).
+        (:mod:`mftire.mf.derivatives`, the extension terms' coefficients included); ``"2-point"``: forward
+        finite differences (slower; the reference the exact derivatives are tested against).
 
     Returns
     -------

@@ -17,9 +17,8 @@ coefficient for finite differences.  There is no second copy of the equations.
 Not differentiable operations (``sign``, comparisons, ``isfinite``) act on the values
 and carry no derivative, as the piecewise-constant functions they are; ``abs`` has
 derivative ``sign``; ``maximum``/``minimum``/``where`` pass the derivative of the
-branch taken.  The extension forms are not all differentiable (table lookups), so
-stages that fit an extension coefficient use finite differences
-(see :mod:`mftire.fitting.fitter`).
+branch taken.  The extension terms' forms (:data:`mftire.mf.extensions.FORMS`) are written in these
+operations too, so that their coefficients are differentiated like the Magic Formula's.
 
 It lives beside the equations (layer 4 of docs/architecture.md), not in the fitting: the equations' own
 arithmetic calls into :class:`Var`, so a call path from :mod:`mftire.mf` into it stays in its layer.

@@ -191,7 +191,12 @@ def _table(u, z, z2, ref, c):
     n = len(c) // 2
     levels, values = np.asarray(c[:n], float), c[n:]
     k = np.argmin(np.abs(np.asarray(u, float)[..., None] - levels), axis=-1)
-    return 1.0 + np.asarray(values, float)[k]
+    # the value of the nearest level as a sum of selected terms (1 + 0 + ... + C_k: the same number as an
+    # index), so that the coefficients carry their derivatives (mftire.mf.derivatives)
+    out = 1.0
+    for i, v in enumerate(values):
+        out = out + v * (k == i)
+    return out
 
 
 def _interaction(u, z, z2, ref, c):
