@@ -18,7 +18,7 @@ import pandas as pd
 from mftire.errors import MftireInputError
 from mftire.iotools.sweeps import REQUIRED_COLUMNS
 
-__all__ = ["cluster_1d", "sweep_kind", "group_sweeps", "summarize_sweeps"]
+__all__ = ["CONDITIONS", "cluster_1d", "condition_tolerances", "sweep_kind", "group_sweeps", "summarize_sweeps"]
 
 
 def cluster_1d(values: Any, rel_tol: float = 0.0, abs_tol: float = 0.0) -> np.ndarray:
@@ -342,12 +342,23 @@ def _direction_labels(x: np.ndarray, tol: float) -> tuple[np.ndarray, str]:
     return dirs, "mixed"
 
 
-_CONDITION_SPECS: tuple[tuple[str, str, str], ...] = (
+#: The operating conditions that set a sweep's set points: (column, set-point column, how a set point is formed
+#: from its rows, :func:`set_point`: ``"angle"`` for camber, ``"rel"`` otherwise).  One table for the sweep tables
+#: (:func:`group_sweeps`) and the rig time series (:func:`mftire.segmentation.rig_segments.segment`).
+CONDITIONS: tuple[tuple[str, str, str], ...] = (
     ("Fz", "Fz_set", "rel"),
     ("gamma", "gamma_set", "angle"),
     ("P", "P_set", "rel"),
     ("Vx", "Vx_set", "rel"),
 )
+
+
+def condition_tolerances(fz_tol: float, gamma_tol: float, p_tol: float, vx_tol: float,
+                         vx_abs_tol: float) -> dict[str, tuple[float, float]]:
+    """The (relative [-], absolute [SI]) gap tolerance of each of :data:`CONDITIONS` (:func:`cluster_1d`): load
+    and pressure relative, camber absolute [rad], speed relative plus an absolute part [m/s] (a set point near
+    standstill)."""
+    return {"Fz": (fz_tol, 0.0), "gamma": (0.0, gamma_tol), "P": (p_tol, 0.0), "Vx": (vx_tol, vx_abs_tol)}
 
 
 def group_sweeps(
@@ -422,16 +433,11 @@ def group_sweeps(
     out = df.copy()
     n = len(out)
     keys = np.zeros((n, 0), dtype=int)
-    for col, set_col, kind in _CONDITION_SPECS:
+    tols = condition_tolerances(fz_tol, gamma_tol, p_tol, vx_tol, vx_abs_tol)
+    for col, set_col, kind in CONDITIONS:
         x = out[col].to_numpy(dtype=float)
-        if col == "Fz":
-            labels = cluster_1d(x, rel_tol=fz_tol)
-        elif col == "gamma":
-            labels = cluster_1d(x, abs_tol=gamma_tol)
-        elif col == "P":
-            labels = cluster_1d(x, rel_tol=p_tol)
-        else:
-            labels = cluster_1d(x, rel_tol=vx_tol, abs_tol=vx_abs_tol)
+        rel, ab = tols[col]
+        labels = cluster_1d(x, rel_tol=rel, abs_tol=ab)
         centres = {lab: set_point(x[labels == lab], kind) for lab in np.unique(labels)}
         out[set_col] = np.array([centres[lab] for lab in labels], dtype=float)
         keys = np.column_stack([keys, labels])

@@ -22,11 +22,14 @@ from mftire.errors import MftireInputError
 from mftire.iotools.columns import SET_POINT_COLUMNS
 from mftire.iotools.rig import ColumnSpec, PathLike, read_raw, write_sweeps
 from mftire.iotools.sweeps import REQUIRED_COLUMNS
-from mftire.segmentation.grouping import cluster_1d, set_point, sweep_kind
+from mftire.segmentation.grouping import CONDITIONS, cluster_1d, condition_tolerances, set_point, sweep_kind
 
 __all__ = ["RigReport", "segment", "import_rig"]
 
+#: The conditions of :data:`~mftire.segmentation.grouping.CONDITIONS` in the order their changes name a left-out
+#: row's reason (a load ramp first)
 _CONDITIONS = ("Fz", "P", "gamma", "Vx")
+_SET_POINT_KIND = {col: kind for col, _, kind in CONDITIONS}
 _REASON_NAMES = {"Fz": "load ramp", "P": "pressure change", "gamma": "inclination change", "Vx": "speed change"}
 
 
@@ -164,7 +167,7 @@ def segment(
     fs = 1.0 / dt
     w_smooth = max(3, int(round(smooth_s * fs)) | 1)
     w_hold = max(3, int(round(hold_s * fs)) | 1)
-    tols = {"Fz": (fz_tol, 0.0), "P": (p_tol, 0.0), "gamma": (0.0, gamma_tol), "Vx": (vx_tol, vx_abs_tol)}
+    tols = condition_tolerances(fz_tol, gamma_tol, p_tol, vx_tol, vx_abs_tol)
     rep = RigReport(file=name or str(df.attrs.get("file", "")), n_rows=n, duration_s=float(t[-1] - t[0]),
                     sample_rate_hz=fs, convention=str(df.attrs.get("convention", "")),
                     units_read=dict(df.attrs.get("units_read", {})),
@@ -188,7 +191,7 @@ def segment(
             cl = cluster_1d(s[steady], rel_tol=rel, abs_tol=ab)
             ids, counts = np.unique(cl, return_counts=True)
             big = ids[counts >= max(1, int(min_segment_s * fs * 0.5))]
-            kind = "angle" if c == "gamma" else "rel"
+            kind = _SET_POINT_KIND[c]
             centres = np.array([set_point(s[steady][cl == i], kind) for i in big])
             if centres.size:
                 order = np.argsort(centres)
