@@ -409,19 +409,12 @@ def _residuals(prob: _Problem, model: Model, q: Mapping[str, float]) -> np.ndarr
     return _residual_vector(prob, out)
 
 
-def _scaled_residual(prob: _Problem, channel: str, value: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The peak-scaled residual of ``channel`` at the model values ``value``, and the rows it counts on (the
-    channel's primary rows with a finite residual; the others are 0 in the residual vector and its Jacobian)."""
-    y, masks, _ = prob.targets()
-    r = (y[channel] - value) / prob.scale[channel]
-    return r, masks[channel] & np.isfinite(r)
-
-
 def _residual_vector(prob: _Problem, out: Channels) -> np.ndarray:
-    sw = prob.targets()[2]
     parts = []
+    y, masks, sw = prob.targets()
     for c in prob.channels:
-        r, use = _scaled_residual(prob, c, np.real(getattr(out, c)))
+        r = (y[c] - np.real(getattr(out, c))) / prob.scale[c]
+        use = masks[c] & np.isfinite(r)
         parts.append(np.where(use, r, 0.0) * sw)
     return np.concatenate(parts)
 
@@ -595,11 +588,11 @@ class _EffectResiduals:
         qv, leaves = derivatives.seed(self.q_of(np.asarray(x, dtype=float)), self.names)
         with np.errstate(all="ignore"):
             out = self.model.channels(qv, self.prob.channels)
-        sw = self.prob.targets()[2]
+        y, masks, sw = self.prob.targets()
         parts = []
         for c in self.prob.channels:
             value, d = derivatives.sweep(getattr(out, c), leaves, len(sw))
-            use = _scaled_residual(self.prob, c, value)[1]
+            use = masks[c] & np.isfinite((y[c] - value) / self.prob.scale[c])
             parts.append(np.where(use, -sw / self.prob.scale[c], 0.0)[:, None] * d)
         return np.concatenate(parts)
 
