@@ -144,9 +144,8 @@ def test_no_scored_channel_worse_than_5_percent_held_out(judged):
 
 
 #: What the diagnosis reaches on the 16 CI draws: at b2dde38 11 of 12 causes named first and 4 of the 8 draws with a
-#: ceiling >= 70 % cut by >= 50 %; since the exact Jacobians of the effect fits (2026-11-27) 10 of 12 (seed 10's
-#: tread-depth law fails the per-fold Mz check, a borderline draw) and 3 of 8.  The bounds are the numbers of
-#: b2dde38 less one draw each: any further loss fails here.
+#: ceiling >= 70 % cut by >= 50 %; since d1a8189 (2026-11-27) 11 of 12 and 3 of 8.  The bounds are the numbers of
+#: b2dde38 less one draw each, so that a regression fails here.
 def test_cause_and_cut_rates_do_not_regress(judged):
     eff = judged[~judged.is_null]
     assert eff.cause_named.sum() >= 10, eff[["seed", "family", "variable", "cause"]].to_string()
