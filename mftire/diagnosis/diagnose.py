@@ -52,6 +52,7 @@ import pandas as pd
 
 from mftire.diagnosis.candidates import Candidate, candidates, time_column, with_sweeps
 from mftire.diagnosis.effects import (
+    CV_FOLDS,
     FIT_CHANNELS,
     HISTORY_CANDIDATES,
     INPUT_VARIABLE_OF,
@@ -64,14 +65,17 @@ from mftire.diagnosis.effects import (
     effects_for,
     family_targets,
     final_fit,
+    heldout_error,
     is_worse,
     make_problem,
     plausible_inputs,
     primary_rows,
     refine_effect,
     refit_channels,
+    refit_channels_of,
     refit_without,
     restricted,
+    subsample,
     trimmed_fit,
     with_given_channels,
 )
@@ -80,6 +84,7 @@ from mftire.diagnosis.profile import CONFOUND_R, Profiles, profile_factors
 from mftire.diagnosis.ranking import (
     CandidateScore,
     baseline_features,
+    fold_of_groups,
     rank_candidates,
     residual_forms,
 )
@@ -300,15 +305,44 @@ CAUSES_TRIED = 3
 SAME_HELDOUT = 0.1
 
 
-def preferred_cause(found: Sequence[tuple], test_order: Collection[str | None]) -> tuple | None:
+def preferred_cause(found: Sequence[tuple], test_order: Collection[str | None],
+                    errors: Sequence[float] | None = None) -> tuple | None:
     """The candidate whose laws are judged first, of ``found`` (``(chosen law, CandidateScore, ...)`` in ranking
-    order): the lowest held-out ratio (``law.heldout``) wins, and among the candidates within :data:`SAME_HELDOUT` of
-    it a measured column comes before a test-order candidate (``test_order``: the elapsed time, the position in the
+    order): the lowest held-out error wins (``errors``, one per entry, from :func:`common_heldout`; else each law's
+    held-out ratio on its own folds, ``law.heldout``), and among the candidates within :data:`SAME_HELDOUT` of it a
+    measured column comes before a test-order candidate (``test_order``: the elapsed time, the position in the
     sequence, the friction work), else the better-ranked one.  When both predict as well, the measured quantity is
     the mechanism, and the test order only carries it.  None when nothing was found."""
-    lowest = min((t[0].heldout for t in found), default=np.inf)
-    near = [t for t in found if t[0].heldout <= (1.0 + SAME_HELDOUT) * lowest]
+    err = [t[0].heldout for t in found] if errors is None else list(errors)
+    lowest = min(err, default=np.inf)
+    near = [t for t, e in zip(found, err, strict=True) if e <= (1.0 + SAME_HELDOUT) * lowest]
     return next((t for t in near if t[1].variable not in test_order), near[0] if near else None)
+
+
+def common_heldout(found: Sequence[tuple], n_pressures: int) -> list[float] | None:
+    """The held-out error of each candidate's chosen law (``found``: ``(law, CandidateScore, context)``) on one
+    set of folds for all (whole sweeps of every kind dealt in test order to :data:`~effects.CV_FOLDS` folds), the
+    model refitted without each fold.  Each candidate chose its law on folds of its own variable's ranges (a
+    staircase's unseen level, a block of a drift): those ratios answer "does the law extrapolate in this
+    variable", not "which variable explains the data", and are not comparable between candidates.  None with
+    fewer than two candidates or different training rows."""
+    if len(found) < 2:
+        return None
+    probs = [subsample(t[2][0]) for t in found]
+    if len({len(p.df) for p, _ in probs}) != 1:
+        return None
+    sub = probs[0][0]
+    kinds = sub.df["sweep_var"].to_numpy() if "sweep_var" in sub.df.columns else None
+    folds = kind_folds(sub.df["sweep_id"].to_numpy(), kinds, k=CV_FOLDS)
+    if folds is None:
+        folds = fold_of_groups(sub.df["sweep_id"].to_numpy(), CV_FOLDS, seed=1)
+    out = []
+    for (fit, _, context), (p, idx) in zip(found, probs, strict=True):
+        law_fits, eff_ch, control = context[1], context[2], context[7]
+        v = law_fits[0][2]
+        out.append(heldout_error(p, fit.law, fit.variable, None if v is None else np.asarray(v)[idx], n_pressures,
+                                 control.standard, eff_ch, folds, refit_channels=refit_channels_of(fit.law)))
+    return out
 
 
 #: Operating conditions held out besides the diagnosis's own (:func:`_worse_elsewhere`), at most.
@@ -827,7 +861,9 @@ def _diagnose(
         found.append((chosen, e, (prob, [(f, f.law, by_var.get(f.variable)) for f in ranked], eff_ch, folds,
                                   blocks is not None, control.cv, dict(control.cv_channels), control,
                                   order_fold(prob.df, kinds, levels=v))))  # fmt: skip
-    best = preferred_cause(found, {*HISTORY_CANDIDATES, tcol})
+    say("comparing the candidates' laws on the same held-out sweeps")
+    common = common_heldout(found, n_pressures)
+    best = preferred_cause(found, {*HISTORY_CANDIDATES, tcol}, common)
     if best is None:
         msg = ("no significant effect: candidates were flagged, but no model term explains the residual better "
                "than refitting the model without it")
@@ -840,7 +876,8 @@ def _diagnose(
                                profiles=profiles, cause=top.variable)  # fmt: skip
     # the preferred candidate first, then the others by held-out error: when every law of one is refused (by the
     # control refitted in full or on the held-out condition), the next candidate's laws are tried
-    order = [best] + sorted((t for t in found if t is not best), key=lambda t: t[0].heldout)
+    err_of = {id(t): (t[0].heldout if common is None else common[i]) for i, t in enumerate(found)}
+    order = [best] + sorted((t for t in found if t is not best), key=lambda t: err_of[id(t)])
     dtest = df[test].reset_index(drop=True)
     refits: list[str] = []  # candidates whose laws lost to the control refitted in full
     lost: list[str] = []  # candidates whose laws lost on the held-out condition
@@ -861,7 +898,16 @@ def _diagnose(
         if accepted is not None:
             break
         lost.append(f"{cause.variable}: " + "; ".join(rejected))
-    if accepted is None:  # no law: the cause named is the ranking's first, the strongest evidence there is
+    if accepted is None:
+        # no law: the cause named is the ranking's first, unless the laws say otherwise: none of its laws beat the
+        # control on its held-out folds, or another candidate's law predicted the same held-out sweeps clearly
+        # better (beyond SAME_HELDOUT); that candidate then leads the ranking reported
+        first = next((t for t in found if t[1].variable == top.variable), None)
+        lead = top
+        if best[1] in ranking and (first is None or err_of[id(best)] * (1.0 + SAME_HELDOUT) < err_of[id(first)]):
+            lead = best[1]
+            ranking.remove(lead)
+            ranking.insert(0, lead)
         if lost:
             msg = (f"cause named, no law found: the laws that beat the control on the held-out folds lost to the "
                    f"model refitted without them on the held-out condition {column} = {values} ("
@@ -873,7 +919,7 @@ def _diagnose(
                    "refitted (" + " | ".join(refits) + ")")
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                [], None, tried + all_variants, messages=[msg], data=df, train=train,
-                               not_measured=not_measured, profiles=profiles, cause=top.variable)  # fmt: skip
+                               not_measured=not_measured, profiles=profiles, cause=lead.variable)  # fmt: skip
     if refits or lost:
         accepted[0].messages.append("tried first: " + " | ".join(refits + lost))
     effect = variants[0][0]
