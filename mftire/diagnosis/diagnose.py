@@ -19,14 +19,17 @@ Procedure (:func:`diagnose`)
    channels it acts on, and compared on held-out folds (contiguous ranges or levels of the
    candidate, every sweep kind kept) with the control refitted the same way without a law; a law
    that makes any scored channel (Fx, Fy, Mz) worse than the control beyond its noise, over the folds
-   or in one of them, is never chosen (:func:`~mftire.diagnosis.effects.worse_channels`).
+   or in one of them, is never chosen (:func:`~mftire.diagnosis.effects.worse_channels`).  The candidates are
+   then compared with each other by their chosen laws on the same held-out sweeps (:func:`common_heldout`), and
+   judged in that order (:func:`preferred_cause`).
 5. The held-out condition: each surviving law's model and its control, both fitted without it, per
    channel; the first law (in order of preference) that makes no scored channel worse and improves
    them together, and that also holds on the extra conditions (:func:`extra_conditions`: the last
    tests at conditions tested before, and the interior set-point levels where the law changes the
    model most, each refitted without them), is refitted on every row and written.  Its model changes
    only the coefficients of the channels the law acts on.  When none holds: "cause named, no law
-   found", the model unchanged.
+   found", the model unchanged; the cause named is the ranking's first unless another candidate's law
+   predicted the common held-out sweeps clearly better (or the first's laws never beat the control).
 6. Never worse than no effect (issue 21): the law refitted on every row must fit those rows on every
    scored channel at least as well as the given model (:func:`worse_in_sample`; a channel the law does
    not act on keeps its given coefficients, or has them refitted when it reads a channel the law changes,
