@@ -15,7 +15,14 @@ import pytest
 from test_diagnosis import TYRE, _campaign, _measure
 
 from mftire.diagnosis.candidates import with_sweeps
-from mftire.diagnosis.diagnose import diagnose, extra_conditions, order_fold, preferred_cause, worse_in_sample
+from mftire.diagnosis.diagnose import (
+    cause_without_law,
+    diagnose,
+    extra_conditions,
+    order_fold,
+    preferred_cause,
+    worse_in_sample,
+)
 from mftire.diagnosis.effects import CHANNEL_COEFFICIENTS, EffectFit, plausible_inputs, with_given_channels
 from mftire.mf.extensions import identifier_name
 from mftire.tyre import Tyre
@@ -99,6 +106,23 @@ def test_a_measured_column_is_judged_before_an_equally_good_test_order_candidate
     assert preferred_cause(pair, order, [2.68, 2.44])[1].variable == "compound_batch"
     assert preferred_cause(found(("ambient_temp", 0.5), ("track_temp", 0.5)), order, [0.17, 0.13])[1].variable \
         == "track_temp"
+
+
+def test_the_cause_named_without_a_law():
+    """No law written: the ranking's first is named unless the laws say otherwise (zoo seed 194: the sequence first,
+    none of its laws beating the control, the track temperature's law beating it on its folds)."""
+    from types import SimpleNamespace as NS
+
+    seq, track, amb = NS(variable="sequence"), NS(variable="track_temp"), NS(variable="ambient_temp")
+    found = [(NS(), track)]
+    assert cause_without_law(seq, found, found[0], [0.85]) is track  # the first's laws never beat the control
+    both = [(NS(), seq), (NS(), track)]
+    # the preferred candidate's law predicted the common held-out sweeps clearly better than the first's
+    assert cause_without_law(seq, both, both[1], [0.20, 0.15]) is track
+    # within SAME_HELDOUT (10 %) of each other: the ranking's first stays
+    assert cause_without_law(seq, both, both[1], [0.16, 0.15]) is seq
+    alone = [(NS(), amb)]
+    assert cause_without_law(amb, alone, alone[0], [0.5]) is amb  # the first is the preferred one
 
 
 def test_input_laws_stay_within_physical_limits():

@@ -348,6 +348,19 @@ def common_heldout(found: Sequence[tuple], n_pressures: int) -> list[float] | No
     return out
 
 
+def cause_without_law(top: CandidateScore, found: Sequence[tuple], best: tuple, errors: Sequence[float]
+                      ) -> CandidateScore:
+    """The cause named when no law is written: the ranking's first (``top``), unless the laws say otherwise: none
+    of its laws beat the control on its held-out folds (it is not in ``found``), or the preferred candidate's law
+    (``best``, of ``found``; ``errors`` one per entry of ``found``) predicted the same held-out sweeps clearly better
+    than the first's, beyond :data:`SAME_HELDOUT`; then the preferred candidate."""
+    err = {id(t): e for t, e in zip(found, errors, strict=True)}
+    first = next((t for t in found if t[1].variable == top.variable), None)
+    if first is None or err[id(best)] * (1.0 + SAME_HELDOUT) < err[id(first)]:
+        return best[1]
+    return top
+
+
 #: Operating conditions held out besides the diagnosis's own (:func:`_worse_elsewhere`), at most.
 EXTRA_CONDITIONS = 2
 
@@ -902,13 +915,9 @@ def _diagnose(
             break
         lost.append(f"{cause.variable}: " + "; ".join(rejected))
     if accepted is None:
-        # no law: the cause named is the ranking's first, unless the laws say otherwise: none of its laws beat the
-        # control on its held-out folds, or another candidate's law predicted the same held-out sweeps clearly
-        # better (beyond SAME_HELDOUT); that candidate then leads the ranking reported
-        first = next((t for t in found if t[1].variable == top.variable), None)
-        lead = top
-        if best[1] in ranking and (first is None or err_of[id(best)] * (1.0 + SAME_HELDOUT) < err_of[id(first)]):
-            lead = best[1]
+        lead = cause_without_law(top, found, best, [err_of[id(t)] for t in found])
+        lead = lead if lead in ranking else top
+        if lead is not top:  # it leads the ranking reported
             ranking.remove(lead)
             ranking.insert(0, lead)
         if lost:
