@@ -87,7 +87,6 @@ from mftire.diagnosis.profile import CONFOUND_R, Profiles, profile_factors
 from mftire.diagnosis.ranking import (
     CandidateScore,
     baseline_features,
-    fold_of_groups,
     rank_candidates,
     residual_forms,
 )
@@ -336,9 +335,8 @@ def common_heldout(found: Sequence[tuple], n_pressures: int) -> list[float] | No
         return None
     sub = probs[0][0]
     kinds = sub.df["sweep_var"].to_numpy() if "sweep_var" in sub.df.columns else None
+    # None (a single sweep kind): heldout_error's own default, CV_FOLDS groups of whole sweeps
     folds = kind_folds(sub.df["sweep_id"].to_numpy(), kinds, k=CV_FOLDS)
-    if folds is None:
-        folds = fold_of_groups(sub.df["sweep_id"].to_numpy(), CV_FOLDS, seed=1)
     out = []
     for (fit, _, context), (p, idx) in zip(found, probs, strict=True):
         law_fits, eff_ch, control = context[1], context[2], context[7]
@@ -878,8 +876,10 @@ def _diagnose(
                                   blocks is not None, control.cv, dict(control.cv_channels), control,
                                   order_fold(prob.df, kinds, levels=v))))  # fmt: skip
     say("comparing the candidates' laws on the same held-out sweeps")
-    common = common_heldout(found, n_pressures)
-    best = preferred_cause(found, {*HISTORY_CANDIDATES, tcol}, common)
+    errors = common_heldout(found, n_pressures)
+    if errors is None:  # one candidate (or different rows): its law's ratio on its own folds
+        errors = [t[0].heldout for t in found]
+    best = preferred_cause(found, {*HISTORY_CANDIDATES, tcol}, errors)
     if best is None:
         msg = ("no significant effect: candidates were flagged, but no model term explains the residual better "
                "than refitting the model without it")
@@ -892,8 +892,7 @@ def _diagnose(
                                profiles=profiles, cause=top.variable)  # fmt: skip
     # the preferred candidate first, then the others by held-out error: when every law of one is refused (by the
     # control refitted in full or on the held-out condition), the next candidate's laws are tried
-    err_of = {id(t): (t[0].heldout if common is None else common[i]) for i, t in enumerate(found)}
-    order = [best] + sorted((t for t in found if t is not best), key=lambda t: err_of[id(t)])
+    order = [best] + [found[i] for i in sorted(range(len(found)), key=errors.__getitem__) if found[i] is not best]
     dtest = df[test].reset_index(drop=True)
     refits: list[str] = []  # candidates whose laws lost to the control refitted in full
     lost: list[str] = []  # candidates whose laws lost on the held-out condition
@@ -915,7 +914,7 @@ def _diagnose(
             break
         lost.append(f"{cause.variable}: " + "; ".join(rejected))
     if accepted is None:
-        lead = cause_without_law(top, found, best, [err_of[id(t)] for t in found])
+        lead = cause_without_law(top, found, best, errors)
         lead = lead if lead in ranking else top
         if lead is not top:  # it leads the ranking reported
             ranking.remove(lead)
