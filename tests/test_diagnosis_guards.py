@@ -3,8 +3,9 @@
 The guards, each with numbers: the last tests as a held-out fold (:func:`order_fold`), the conditions a law
 must also hold on (:func:`extra_conditions`), input laws within physical limits (:func:`plausible_inputs`),
 the final model never fitting its own rows worse than the given one (:func:`worse_in_sample`, a channel the
-law does not act on keeps its given coefficients: :func:`with_given_channels`), and no law in two levels of
-a quantity.  Campaigns as in tests/test_diagnosis.py (a known MF tyre, one injected effect).
+law does not act on keeps its given coefficients: :func:`with_given_channels`), no law in two levels of
+a quantity, and none in an MF input tested in the programme's order beside a drift (:func:`drift_behind_input`).
+Campaigns as in tests/test_diagnosis.py (a known MF tyre, one injected effect).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from mftire.diagnosis.candidates import with_sweeps
 from mftire.diagnosis.diagnose import (
     cause_without_law,
     diagnose,
+    drift_behind_input,
     extra_conditions,
     order_fold,
     preferred_cause,
@@ -123,6 +125,27 @@ def test_the_cause_named_without_a_law():
     assert cause_without_law(seq, both, both[1], [0.16, 0.15]) is seq
     alone = [(NS(), amb)]
     assert cause_without_law(amb, alone, alone[0], [0.5]) is amb  # the first is the preferred one
+
+
+def test_a_law_in_an_input_tested_in_the_programme_order_is_not_written_beside_a_drift():
+    """Speeds tested mostly early (r = -0.6 with the test order) while the tread wears along the programme: a speed
+    law would carry the wear its levels were tested under into every later run (zoo seed 129: +31 % on Mz).
+    Interleaved speeds, a candidate that is not an input, or a drift that is not significant: no objection."""
+    n_sweeps, rows = 24, 10
+    sweep = np.repeat(np.arange(n_sweeps), rows)
+    time = np.arange(n_sweeps * rows, dtype=float)
+    early = np.where(np.arange(n_sweeps) < 12, np.where(np.arange(n_sweeps) % 4 == 3, 16.7, 28.0),
+                     np.where(np.arange(n_sweeps) % 4 == 3, 28.0, 16.7))[sweep]  # fmt: skip
+    interleaved = np.where(np.arange(n_sweeps) % 2 == 0, 28.0, 16.7)[sweep]
+    tread = 8.0 - 3.0 * time / time.max()
+    df = pd.DataFrame({"sweep_id": sweep, "time": time})
+    values = {"Vx": early, "tread_depth": tread, "humidity": np.cos(sweep * 2.1)}
+    name, r = drift_behind_input(df, "Vx", values, ["Vx", "tread_depth", "humidity"])
+    assert name == "tread_depth" and r == pytest.approx(np.corrcoef(early[::rows], time[::rows])[0, 1])
+    assert r < -0.3
+    assert drift_behind_input(df, "Vx", {**values, "Vx": interleaved}, ["Vx", "tread_depth"]) is None
+    assert drift_behind_input(df, "Vx", values, ["Vx", "humidity"]) is None  # the drift is not significant
+    assert drift_behind_input(df, "tread_depth", values, ["Vx", "tread_depth"]) is None  # not an MF input
 
 
 def test_input_laws_stay_within_physical_limits():

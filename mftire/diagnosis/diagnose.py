@@ -35,7 +35,9 @@ Procedure (:func:`diagnose`)
    not act on keeps its given coefficients, or has them refitted when it reads a channel the law changes,
    as Mz reads Fx); an input law stays within physical limits
    (:func:`~mftire.diagnosis.effects.plausible_inputs`); a candidate with two levels of a quantity (not a
-   flag, not an MF input) gets no law, since nothing can check its form between the levels.
+   flag, not an MF input) gets no law, since nothing can check its form between the levels; nor does an MF
+   operating input whose levels were tested in an order that follows the programme while a measured column
+   drifts along it (:func:`drift_behind_input`): its law would carry the drift into every later run.
 7. Before/after errors on the held-out condition per channel (before: the control): RMS, RMS in % of
    the channel's peak, and the share of residual variance removed.
 
@@ -83,7 +85,7 @@ from mftire.diagnosis.effects import (
     with_given_channels,
 )
 from mftire.diagnosis.holdout import default_holdout, holdout_mask, levels
-from mftire.diagnosis.profile import CONFOUND_R, Profiles, profile_factors
+from mftire.diagnosis.profile import CONFOUND_R, SECOND_INPUTS, Profiles, profile_factors
 from mftire.diagnosis.ranking import (
     CandidateScore,
     baseline_features,
@@ -357,6 +359,45 @@ def cause_without_law(top: CandidateScore, found: Sequence[tuple], best: tuple, 
     if first is None or err[id(best)] * (1.0 + SAME_HELDOUT) < err[id(first)]:
         return best[1]
     return top
+
+
+#: |r| across sweeps between an MF operating input's sweep means and the test order beyond which the input's levels
+#: were tested in an order that follows the programme (:func:`drift_behind_input`).
+ORDER_CONFOUND_R = 0.3
+
+
+def drift_behind_input(df: pd.DataFrame, variable: str, values: Mapping[str, np.ndarray],
+                       significant: Collection[str]) -> tuple[str, float] | None:
+    """For a candidate that is an MF operating input (``variable``: the speed, the load, the pressure, the
+    camber, the slip speed), a significant candidate of ``significant`` that drifts along the programme (a measured
+    column whose sweep means follow the test order, |r| > :data:`CONFOUND_R`) when the input's own levels were
+    tested in an order that follows it too (|r| > :data:`ORDER_CONFOUND_R`): ``(drift, r of the input)``, else None.
+    A law in the input then carries the drift its levels were tested under into every later run at that level
+    (wear, temperature, conditioning), and no held-out fold of these data can show it: the later runs at the early
+    levels were never made.  ``values``: each candidate's values on the rows of ``df``."""
+    if variable not in BUILTIN_VARIABLES and variable not in SECOND_INPUTS.values():
+        return None
+    sweeps = df["sweep_id"].to_numpy()
+    tcol = time_column(df)
+    order = df[tcol].to_numpy(float) if tcol is not None else np.arange(len(df), dtype=float)
+    start = pd.Series(order).groupby(sweeps).min()
+
+    def r_order(v: np.ndarray) -> float:
+        m = pd.Series(np.asarray(v, float)).groupby(sweeps).mean().reindex(start.index)
+        ok = np.isfinite(m.to_numpy())
+        if ok.sum() < 4 or np.std(m.to_numpy()[ok]) == 0:
+            return 0.0
+        return float(np.corrcoef(m.to_numpy()[ok], start.to_numpy()[ok])[0, 1])
+
+    r = r_order(values[variable])
+    if abs(r) <= ORDER_CONFOUND_R:
+        return None
+    for name in significant:
+        if name == variable or name not in values or name in BUILTIN_VARIABLES or name in SECOND_INPUTS.values():
+            continue
+        if abs(r_order(values[name])) > CONFOUND_R:
+            return name, r
+    return None
 
 
 #: Operating conditions held out besides the diagnosis's own (:func:`_worse_elsewhere`), at most.
@@ -899,7 +940,15 @@ def _diagnose(
     all_variants: list[EffectFit] = []
     accepted = None
     judge = _HeldOutJudge(tyre, dtest, chans, noise, n_pressures, column)
+    dvals = {e.variable: by_name[e.variable].values[train] for e in ranking if e.variable in by_name}
+    drifting = [e.variable for e in significant]
     for effect, cause, context in order[:CAUSES_TRIED]:
+        behind = drift_behind_input(dtrain, cause.variable, dvals, drifting)
+        if behind is not None:
+            lost.append(f"{cause.variable}: its levels were tested in an order that follows the programme "
+                        f"(r = {behind[1]:+.2f} with the test order) while {behind[0]} drifts along it; a law in "
+                        f"{cause.variable} would carry that drift into every later run at its levels")  # fmt: skip
+            continue
         # the candidate's best laws and the control, refitted with every MF coefficient
         say(f"refitting every coefficient with the laws of {effect.variable}")
         prob, law_fits, eff_ch, folds, in_blocks, control_cv, control_channels, local_control, forward = context
