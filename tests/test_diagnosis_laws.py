@@ -193,6 +193,20 @@ def test_an_input_candidate_gets_its_interaction_with_a_second_variable():
     assert all(law.form != "interaction" for _, law in effects_for("Vx", True, False, 2, ("friction",), ("Fy",)))
 
 
+def test_an_input_offset_curved_in_three_levels_gets_a_quadratic_law():
+    """A slip-angle offset with an optimum in road temperature tested at three levels: a straight line cannot
+    follow it and a per-level table cannot predict a fourth level; the quadratic through three levels is offered
+    (zoo seed 122: held-out cut 0 -> 78 %, ceiling 81 %).  With two levels, the linear law only."""
+    from mftire.diagnosis.effects import effects_for
+
+    def names(n_levels: int) -> set[str]:
+        return {law.name for _, law in effects_for("road_temp", False, False, n_levels, ("shift",), ("Fy",),
+                                                    inputs=("ALPHA_OFFSET",))}  # fmt: skip
+
+    assert {"slip_angle_offset", "slip_angle_offset_quadratic"} <= names(3)
+    assert "slip_angle_offset" in names(2) and "slip_angle_offset_quadratic" not in names(2)
+
+
 def test_a_trimmed_fit_keeps_the_law_on_the_channels_it_did_not_make_worse():
     from mftire.diagnosis.effects import trimmed_fit
 

@@ -231,7 +231,7 @@ def effects_for(
     (fade or warm-up with time), linear and quadratic laws, a hinge (a change above a threshold) for a
     continuous variable, a per-level table when it has at most 5 levels, the interaction with a second
     variable ``second`` (a data column or an MF input: dfz, gamma, Vx, P), and the input laws ``inputs``
-    of the family (:data:`INPUT_LAWS`; linear, and quadratic from 4 levels).
+    of the family (:data:`INPUT_LAWS`; linear, and quadratic from 3 levels).
     """
     laws: list[tuple[str, Law]] = list(EFFECTS_FOR.get(variable, ())) if derived else []
     if variable == "sweep_dir":  # hysteresis between up and down sweeps, in the families of the channels
@@ -269,7 +269,7 @@ def effects_for(
             name = INPUT_LAW_NAMES[target]
             if target in inputs and all(law.name != name for _, law in laws):
                 laws.append((variable, Law(name, (target,), "linear")))
-                if n_levels >= 4:  # a curved error of the input (an offset growing faster at one end)
+                if n_levels >= 3:  # a curved error of the input (an offset growing faster at one end)
                     laws.append((variable, Law(f"{name}_quadratic", (target,), "quadratic")))
     return tuple(laws)
 
