@@ -273,6 +273,13 @@ FALLBACK_SHARE = 0.5
 ORDER_SHARE = 0.25
 
 
+def sweep_starts(df: pd.DataFrame) -> pd.Series:
+    """Each sweep's (``sweep_id``) place in the test order: its first time (the time column), else its first row."""
+    tcol = time_column(df)
+    order = df[tcol].to_numpy(float) if tcol is not None else np.arange(len(df), dtype=float)
+    return pd.Series(order).groupby(df["sweep_id"].to_numpy()).min()
+
+
 def order_fold(df: pd.DataFrame, kinds: np.ndarray | None, share: float = ORDER_SHARE,
                levels: np.ndarray | None = None) -> np.ndarray | None:
     """The last ``share`` of the sweeps in test order (the time column, else the row order) as one held-out fold
@@ -282,9 +289,7 @@ def order_fold(df: pd.DataFrame, kinds: np.ndarray | None, share: float = ORDER_
     level of ``levels``: a candidate with few levels) that no earlier sweep has.  None with fewer than 4 sweeps
     or nothing to hold out."""
     sweeps = df["sweep_id"].to_numpy()
-    tcol = time_column(df)
-    order = df[tcol].to_numpy(float) if tcol is not None else np.arange(len(df), dtype=float)
-    start = pd.Series(order).groupby(sweeps).min().sort_values(kind="stable")
+    start = sweep_starts(df).sort_values(kind="stable")
     if len(start) < 4:
         return None
     last = start.index[-max(1, int(round(share * len(start)))):]
@@ -368,19 +373,17 @@ ORDER_CONFOUND_R = 0.3
 
 def drift_behind_input(df: pd.DataFrame, variable: str, values: Mapping[str, np.ndarray],
                        significant: Collection[str]) -> tuple[str, float] | None:
-    """For a candidate that is an MF operating input (``variable``: the speed, the load, the pressure, the
-    camber, the slip speed), a significant candidate of ``significant`` that drifts along the programme (a measured
+    """For a candidate that is an MF operating input (``variable``: Vx, Vs, P, gamma, dfz; not yet the load's
+    candidate ``Fz_dev``), a significant candidate of ``significant`` that drifts along the programme (a measured
     column whose sweep means follow the test order, |r| > :data:`CONFOUND_R`) when the input's own levels were
     tested in an order that follows it too (|r| > :data:`ORDER_CONFOUND_R`): ``(drift, r of the input)``, else None.
     A law in the input then carries the drift its levels were tested under into every later run at that level
     (wear, temperature, conditioning), and no held-out fold of these data can show it: the later runs at the early
     levels were never made.  ``values``: each candidate's values on the rows of ``df``."""
-    if variable not in BUILTIN_VARIABLES and variable not in SECOND_INPUTS.values():
+    if variable not in values or (variable not in BUILTIN_VARIABLES and variable not in SECOND_INPUTS.values()):
         return None
     sweeps = df["sweep_id"].to_numpy()
-    tcol = time_column(df)
-    order = df[tcol].to_numpy(float) if tcol is not None else np.arange(len(df), dtype=float)
-    start = pd.Series(order).groupby(sweeps).min()
+    start = sweep_starts(df)
 
     def r_order(v: np.ndarray) -> float:
         m = pd.Series(np.asarray(v, float)).groupby(sweeps).mean().reindex(start.index)
@@ -940,8 +943,8 @@ def _diagnose(
     all_variants: list[EffectFit] = []
     accepted = None
     judge = _HeldOutJudge(tyre, dtest, chans, noise, n_pressures, column)
-    dvals = {e.variable: by_name[e.variable].values[train] for e in ranking if e.variable in by_name}
-    drifting = [e.variable for e in significant]
+    drifting = [e.variable for e in significant]  # the judged causes are among them
+    dvals = {name: by_name[name].values[train] for name in drifting if name in by_name}
     for effect, cause, context in order[:CAUSES_TRIED]:
         behind = drift_behind_input(dtrain, cause.variable, dvals, drifting)
         if behind is not None:
