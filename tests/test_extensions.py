@@ -395,5 +395,10 @@ def test_shift_factor_laws_take_wider_bounds_on_their_size_only():
     hinge = make_extension(1, ("LVX",), "hinge", "T", REF=0.0, SCALE=1.0)
     assert hinge.bounds("EXT1_C2") == FORMS["hinge"].bounds[1]  # a threshold
     assert make_extension(1, ("LMUX",), "linear", "T", REF=0.0, SCALE=1.0).bounds("EXT1_C1") == (-2.0, 2.0)
+    # the residual torque is an additive torque of a few N·m (Dr, eq 4.E47): a hysteresis torque that changes sign
+    # between up and down sweeps (LRES x (1 ± 3)) must be inside the bounds, which the form's ±0.5 is not
+    hyst = make_extension(1, ("LRES",), "direction", "sweep_dir", REF=0.0, SCALE=1.0)
+    assert hyst.bounds("EXT1_C1") == (-0.5 * WIDE_TARGETS["LRES"], 0.5 * WIDE_TARGETS["LRES"])
+    assert hyst.bounds("EXT1_C1")[1] >= 3.0 and FORMS["direction"].bounds[0][1] < 1.0
     # a term on a shift and a friction factor together keeps the narrow bounds
     assert make_extension(1, ("LHX", "LMUX"), "linear", "T", REF=0.0, SCALE=1.0).bounds("EXT1_C1") == (-2.0, 2.0)

@@ -168,10 +168,16 @@ class ZooDraw:
 
 
 def _sweep_slips(kind: str, points: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(kappa, alpha, direction) of a sweep: braking 0 -> KAPPA_END, cornering -A -> +A -> -A."""
+    """(kappa, alpha, direction) of a sweep: braking 0 -> KAPPA_END, cornering -A -> +A -> -A.
+
+    The direction is the sign of the rate of the swept slip, as the diagnosis's ``sweep_dir`` and the sweep
+    analysis define it: a braking sweep to KAPPA_END < 0 is a decreasing sweep (−1), like the down half of a
+    cornering sweep.  (Until 9dc3c2b it was +1, "|slip| increases", while cornering used the signed rate: one
+    generator with two conventions, so a direction effect put the up-sweep offset on every braking sweep.)
+    """
     if kind == "braking":
         k = KAPPA_END * np.linspace(0.0, 1.0, points[0]) ** 1.5
-        return k, np.zeros(len(k)), np.ones(len(k))  # |slip| increases
+        return k, np.zeros(len(k)), np.full(len(k), float(np.sign(KAPPA_END)))  # the sign of dkappa/dt
     one = np.deg2rad(np.linspace(-ALPHA_MAX_DEG, ALPHA_MAX_DEG, points[1]))
     a = np.concatenate([one, one[-2::-1]])
     d = np.concatenate([np.ones(len(one)), -np.ones(len(one) - 1)])  # up, then down

@@ -30,7 +30,7 @@ key                    meaning
 
 The forms (each :class:`Form` holds its formula, neutral value, bounds and start values
 for fitting, and its C expression, from which the FMU's C is generated; the size coefficients of a
-term on a shift factor take wider bounds, :data:`WIDE_TARGETS`):
+term on a shift factor or the residual torque take wider bounds, :data:`WIDE_TARGETS`):
 
 ===============  ==============================================  ====================================
 form             f                                               use
@@ -96,9 +96,11 @@ OFFSET_TARGETS: tuple[str, ...] = ("FX_OFFSET", "FY_OFFSET")
 INPUT_TARGETS: tuple[str, ...] = ("ALPHA_OFFSET", "GAMMA_OFFSET", "KAPPA_OFFSET", "P_FACTOR")
 TARGETS: tuple[str, ...] = SCALING_TARGETS + OFFSET_TARGETS + INPUT_TARGETS
 #: Targets whose law's size coefficients take wider fitting bounds (x this factor, and either sign): the factors
-#: of the horizontal and vertical shifts (Pacejka 2012 eqs 4.E17-4.E18, 4.E27-4.E29).  A file's shift is often
-#: near zero (PHX1, PVX1 ~ 1e-3), so that a shift changing with a condition needs a factor of many times 1.
-WIDE_TARGETS: dict[str, float] = {"LHX": 8.0, "LHY": 8.0, "LVX": 8.0, "LVY": 8.0}
+#: of the horizontal and vertical shifts (Pacejka 2012 eqs 4.E17-4.E18, 4.E27-4.E29) and of the residual torque
+#: (eq 4.E47: Dr, an additive torque of either sign).  A file's shift is often near zero (PHX1, PVX1 ~ 1e-3) and its
+#: residual torque a few N·m, so that a shift or a residual torque changing with a condition (a hysteresis torque
+#: that changes sign with the sweep direction) needs a factor of many times 1.
+WIDE_TARGETS: dict[str, float] = {"LHX": 8.0, "LHY": 8.0, "LVX": 8.0, "LVY": 8.0, "LRES": 8.0}
 
 #: Codes of the targets that are not scaling factors in the C term table (``MF_TARGET_*`` of the generated
 #: ``mf_ext_gen.h``; scaling factors are indices into ``MFParams``, >= 0).
