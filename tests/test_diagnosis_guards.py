@@ -146,6 +146,14 @@ def test_a_law_in_an_input_tested_in_the_programme_order_is_not_written_beside_a
     assert drift_behind_input(df, "Vx", {**values, "Vx": interleaved}, ["Vx", "tread_depth"]) is None
     assert drift_behind_input(df, "Vx", values, ["Vx", "humidity"]) is None  # the drift is not significant
     assert drift_behind_input(df, "tread_depth", values, ["Vx", "tread_depth"]) is None  # not an MF input
+    # the load's candidate (the deviation from the set point, its laws in dfz): the order of the load set points,
+    # loads tested in rising blocks along the wear; interleaved loads are no objection
+    blocks = df.assign(Fz_set=np.repeat([3000.0, 4000.0, 5000.0, 6000.0], 6)[sweep])
+    dev = {**values, "Fz_dev": 20.0 * np.sin(np.arange(len(df)))}
+    got = drift_behind_input(blocks, "Fz_dev", dev, ["Fz_dev", "tread_depth"])
+    assert got is not None and got[0] == "tread_depth" and got[1] > 0.9
+    mixed = df.assign(Fz_set=np.tile([3000.0, 6000.0, 4000.0, 5000.0], 6)[sweep])
+    assert drift_behind_input(mixed, "Fz_dev", dev, ["Fz_dev", "tread_depth"]) is None
 
 
 def test_input_laws_stay_within_physical_limits():

@@ -373,14 +373,19 @@ ORDER_CONFOUND_R = 0.3
 
 def drift_behind_input(df: pd.DataFrame, variable: str, values: Mapping[str, np.ndarray],
                        significant: Collection[str]) -> tuple[str, float] | None:
-    """For a candidate that is an MF operating input (``variable``: Vx, Vs, P, gamma, dfz; not yet the load's
-    candidate ``Fz_dev``), a significant candidate of ``significant`` that drifts along the programme (a measured
-    column whose sweep means follow the test order, |r| > :data:`CONFOUND_R`) when the input's own levels were
-    tested in an order that follows it too (|r| > :data:`ORDER_CONFOUND_R`): ``(drift, r of the input)``, else None.
+    """For a candidate that is an MF operating input (``variable``: Vx, Vs, P, gamma, dfz, or ``Fz_dev``, whose
+    laws read the load dfz: its levels are the load set points ``Fz_set``), a significant candidate of
+    ``significant`` that drifts along the programme (a measured column whose sweep means follow the test order,
+    |r| > :data:`CONFOUND_R`) when the input's own levels were tested in an order that follows it too
+    (|r| > :data:`ORDER_CONFOUND_R`): ``(drift, r of the input)``, else None.
     A law in the input then carries the drift its levels were tested under into every later run at that level
     (wear, temperature, conditioning), and no held-out fold of these data can show it: the later runs at the early
     levels were never made.  ``values``: each candidate's values on the rows of ``df``."""
-    if variable not in values or (variable not in BUILTIN_VARIABLES and variable not in SECOND_INPUTS.values()):
+    if variable == "Fz_dev" and "Fz_set" in df.columns:  # its laws are in dfz: the order of the load levels
+        levels_of = df["Fz_set"].to_numpy(float)
+    elif variable in values and (variable in BUILTIN_VARIABLES or variable in SECOND_INPUTS.values()):
+        levels_of = values[variable]
+    else:
         return None
     sweeps = df["sweep_id"].to_numpy()
     start = sweep_starts(df)
@@ -392,11 +397,12 @@ def drift_behind_input(df: pd.DataFrame, variable: str, values: Mapping[str, np.
             return 0.0
         return float(np.corrcoef(m.to_numpy()[ok], start.to_numpy()[ok])[0, 1])
 
-    r = r_order(values[variable])
+    r = r_order(levels_of)
     if abs(r) <= ORDER_CONFOUND_R:
         return None
     for name in significant:
-        if name == variable or name not in values or name in BUILTIN_VARIABLES or name in SECOND_INPUTS.values():
+        if name in (variable, "Fz_dev") or name not in values or name in BUILTIN_VARIABLES or \
+                name in SECOND_INPUTS.values():
             continue
         if abs(r_order(values[name])) > CONFOUND_R:
             return name, r
