@@ -381,10 +381,16 @@ def drift_behind_input(df: pd.DataFrame, variable: str, values: Mapping[str, np.
     A law in the input then carries the drift its levels were tested under into every later run at that level
     (wear, temperature, conditioning), and no held-out fold of these data can show it: the later runs at the early
     levels were never made.  ``values``: each candidate's values on the rows of ``df``."""
-    if variable == "Fz_dev" and "Fz_set" in df.columns:  # its laws are in dfz: the order of the load levels
-        levels_of = df["Fz_set"].to_numpy(float)
-    elif variable in values and (variable in BUILTIN_VARIABLES or variable in SECOND_INPUTS.values()):
+    read = INPUT_VARIABLE_OF.get(variable, variable)  # the input its laws read (Fz_dev: dfz)
+    set_point = next((col for col, inp in SECOND_INPUTS.items() if inp == read), None)
+    if read not in BUILTIN_VARIABLES and read not in SECOND_INPUTS.values():
+        return None
+    if read == variable:
+        if variable not in values:
+            return None
         levels_of = values[variable]
+    elif set_point in df.columns:  # a candidate whose laws read another input: the order of its set points
+        levels_of = df[set_point].to_numpy(float)
     else:
         return None
     sweeps = df["sweep_id"].to_numpy()
@@ -401,8 +407,8 @@ def drift_behind_input(df: pd.DataFrame, variable: str, values: Mapping[str, np.
     if abs(r) <= ORDER_CONFOUND_R:
         return None
     for name in significant:
-        if name in (variable, "Fz_dev") or name not in values or name in BUILTIN_VARIABLES or \
-                name in SECOND_INPUTS.values():
+        if name == variable or name not in values or name in BUILTIN_VARIABLES or name in SECOND_INPUTS.values() \
+                or name in INPUT_VARIABLE_OF:
             continue
         if abs(r_order(values[name])) > CONFOUND_R:
             return name, r
