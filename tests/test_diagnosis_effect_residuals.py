@@ -37,7 +37,7 @@ def test_finite_difference_columns_equal_full_evaluations_bit_for_bit(problem):
     model = effects._model(prob, ext, {})
     keys = list(term.coefficient_keys)
     refit = [k for ch in ("Fx", "Fy", "Mz") for k in effects.REFIT_KEYS[ch]]
-    names = keys + refit
+    names = keys + refit + list(effects.SHIFT_COEFFICIENTS.values())  # the shifts refitted with a law on their factor
     base_q = {**tyre.flat, **{k: term.start(k) for k in keys}}
 
     def q_of(x):

@@ -74,8 +74,12 @@ def test_extra_conditions_hold_out_where_the_law_matters_most(two_passes, groupe
     assert labels == ["the last tests", f"Fz = {np.median(two_passes['Fz_set'].unique()):g}"], labels
     for _, rows in conds:
         assert 0 < rows.sum() < 0.5 * len(two_passes)
-    # one pass has no last tests at a condition tested before; the diagnosis's own column is never held out again
-    assert extra_conditions(grouped, law, TYRE, ["Fy"], {"Fy": 30.0}, skip="Fz") == []
+    # one pass has no last tests at a condition tested before: its loads come in blocks, and the last sweeps are held
+    # out as a load block (test_diagnosis_laws); the diagnosis's own column (Fz) is never held out again
+    conds = extra_conditions(grouped, law, TYRE, ["Fy"], {"Fy": 30.0}, skip="Fz")
+    assert [lab for lab, _ in conds] == ["the last tests (a load block)"]
+    last = grouped["Fz_set"].to_numpy()[conds[0][1]]
+    assert np.all(last == grouped["Fz_set"].iloc[-1])
 
 
 def _input_fit(target: str, c1: float) -> EffectFit:

@@ -197,6 +197,7 @@ def channel_noise(df: pd.DataFrame, residual: np.ndarray) -> float:
 
 #: Operating-condition set points of the MF inputs (the blocks of a confounded candidate).
 SET_POINTS = tuple(SET_POINT_COLUMNS.values())
+LOAD_FREE_SET_POINTS = tuple(c for c in SET_POINTS if c != SET_POINT_COLUMNS["Fz"])
 
 
 def confounding_blocks(df: pd.DataFrame, v: np.ndarray, threshold: float = CONFOUND_R,
@@ -281,13 +282,13 @@ def sweep_starts(df: pd.DataFrame) -> pd.Series:
 
 
 def order_fold(df: pd.DataFrame, kinds: np.ndarray | None, share: float = ORDER_SHARE,
-               levels: np.ndarray | None = None) -> np.ndarray | None:
+               levels: np.ndarray | None = None, set_points: Sequence[str] = SET_POINTS) -> np.ndarray | None:
     """The last ``share`` of the sweeps in test order (the time column, else the row order) as one held-out fold
     (label 0; every other row -1, never held out), so that a law is also judged on the tests that followed the
     ones it was fitted on, as new runs of a user's campaign are.  Sweeps of a kind (``kinds``) that would leave no
     sweep of it in training are not held out, nor is a sweep at an operating condition (set points, kind, and the
-    level of ``levels``: a candidate with few levels) that no earlier sweep has.  None with fewer than 4 sweeps
-    or nothing to hold out."""
+    level of ``levels``: a candidate with few levels) that no earlier sweep has (``set_points``: the set-point
+    columns that define the condition).  None with fewer than 4 sweeps or nothing to hold out."""
     sweeps = df["sweep_id"].to_numpy()
     start = sweep_starts(df).sort_values(kind="stable")
     if len(start) < 4:
@@ -296,7 +297,7 @@ def order_fold(df: pd.DataFrame, kinds: np.ndarray | None, share: float = ORDER_
     out = np.where(np.isin(sweeps, last), 0, -1)
     # a last sweep at an operating condition (set points and kind) that no earlier sweep has is not held out:
     # that would judge the extrapolation to a new load or speed, which is not the question
-    keys = [c for c in SET_POINTS if c in df.columns]
+    keys = [c for c in set_points if c in df.columns]
     cond = df[keys].astype(float).round(6).apply(tuple, axis=1) if keys else pd.Series([()] * len(df))
     if kinds is not None:
         cond = pd.Series(list(zip(cond, np.asarray(kinds), strict=True)))
@@ -438,9 +439,15 @@ def extra_conditions(df: pd.DataFrame, law: Tyre, control: Tyre, channels: Seque
     take every sweep of a kind out of training, or half the rows, is not held out.  ``[(label, row mask), ...]``."""
     kinds = df["sweep_var"].to_numpy() if "sweep_var" in df.columns else None
     out: list[tuple[str, np.ndarray]] = []
-    fwd = order_fold(df, kinds, levels=df["_cand"].to_numpy(float) if "_cand" in df.columns else None)
+    levels = df["_cand"].to_numpy(float) if "_cand" in df.columns else None
+    fwd = order_fold(df, kinds, levels=levels)
     if fwd is not None:
         out.append(("the last tests", fwd == 0))
+    elif (fwd := order_fold(df, kinds, levels=levels, set_points=LOAD_FREE_SET_POINTS)) is not None:
+        # loads tested in blocks: the last tests are at a load no earlier test had.  Held out all the same (the law
+        # and its control extrapolate in load alike): a law fitted to an effect that drifts along the programme,
+        # in a column that does not carry the drift, holds on the earlier blocks only
+        out.append(("the last tests (a load block)", fwd == 0))
     ml, mc = _model(law, df), _model(control, df)
     change = np.zeros(len(df))
     for ch in channels:

@@ -38,6 +38,7 @@ from mftire.fitting.stages import STAGES
 from mftire.mf.extensions import (
     BUILTIN_VARIABLES,
     MAX_LEVELS,
+    OFFSET_TARGETS,
     SECTION,
     TARGET_CHANNELS,
     Extension,
@@ -146,6 +147,14 @@ REFIT_KEYS = {
     "Fy": ("PCY1", "PDY1", "PDY2", "PEY1", "PEY2", "PKY1", "PKY2"),
     "Mz": ("QDZ1", "QDZ2", "QEZ1"),
 }
+
+#: The coefficient a horizontal shift factor scales, refitted with a law on that factor (and with it only):
+#: SHx = PHX1·LHX, SHy = PHY1·LHY at nominal load and zero camber (Pacejka 2012 eqs 4.E17, 4.E27).  A base fit
+#: often leaves the shift near zero, and a factor on a shift of zero expresses nothing: with the coefficient free,
+#: LHX·(1 + C1·g) holds any shift PHX1 + PHX1·C1·g.  The vertical shifts keep theirs: with PVX1 or PVY1 free a
+#: vertical-shift law is a free force offset at every load (the intercept of an offset law, :func:`intercept_term`),
+#: and PVY1 moves Mz through the trail as well (eq 4.E71).
+SHIFT_COEFFICIENTS: dict[str, str] = {"LHX": "PHX1", "LHY": "PHY1"}
 
 
 def refit_bounds(key: str, value: float) -> tuple[float, float]:
@@ -450,6 +459,23 @@ def law_term(law: Law, variable: str, v: np.ndarray | None, tyre: Tyre, index: i
     return make_extension(index, law.targets, law.form, variable, **numbers)
 
 
+#: Targets of a law that adds a force, Fz·(f − 1), rather than scaling a coefficient: the force offsets.  (An input
+#: offset's constant part is the MF's own: a constant slip-angle offset is the horizontal shift PHY1, a constant
+#: camber offset moves every camber term of the fit.)
+ADDITIVE_TARGETS = frozenset(OFFSET_TARGETS)
+
+
+def intercept_term(law: Law, variable: str, v: np.ndarray | None, index: int) -> Extension:
+    """The constant part of a law on a force offset (:data:`ADDITIVE_TARGETS`), numbered ``index``: a ``table`` of
+    one level, f = 1 + C1 everywhere, so that the offset is Fz·(C1' + C1·z).  A factor law's constant part is the
+    refitted main coefficient it multiplies (the peak factor under LMUX); an offset has none among the refitted
+    coefficients, and a law that is zero at the median of its variable cannot hold an offset of one sign (a force
+    offset that grows from zero with temperature)."""
+    vv = np.asarray(v, float)[np.isfinite(v)] if v is not None else np.zeros(0)
+    level = float(np.median(vv)) if vv.size else 0.0
+    return make_extension(index, law.targets, "table", variable, L1=level)
+
+
 def _pressure_keys(n_pressures: int, channels: Sequence[str]) -> list[str]:
     keys: list[str] = []
     for ch in channels:
@@ -486,6 +512,7 @@ def fit_effect(
     base = tyre.extension_set
     base_section = dict(tyre.extensions or {})
     term = None
+    terms: list[Extension] = []
     if law.name == "pressure":
         keys = _pressure_keys(n_pressures, pressure_channels if pressure_channels is not None else prob.channels)
         x0, bounds = [float(tyre[k]) for k in keys], [(-3.0, 3.0)] * len(keys)
@@ -501,10 +528,13 @@ def fit_effect(
             elif v2 is None and law.variable2 == "dfz":
                 fz0 = float(tyre["LFZO"]) * float(tyre["FNOMIN"])
                 v2 = (prob.df["Fz"].to_numpy(float) - fz0) / fz0  # eq 4.E2a
-        term = law_term(law, variable, values, tyre, index, v2)
-        keys = list(term.coefficient_keys)
-        x0 = [term.start(k) for k in keys]
-        bounds = [term.bounds(k) for k in keys]
+        terms = [law_term(law, variable, values, tyre, index, v2)]
+        if set(law.targets) <= ADDITIVE_TARGETS and law.form != "table":
+            terms.append(intercept_term(law, variable, values, index + 1))
+        keys = [k for t in terms for k in t.coefficient_keys]
+        x0 = [t.start(k) for t in terms for k in t.coefficient_keys]
+        bounds = [t.bounds(k) for t in terms for k in t.coefficient_keys]
+        term = terms[0]
     variables = dict(prob.variables)
     if term is not None and variable not in BUILTIN_VARIABLES and values is not None:
         variables[variable] = values
@@ -512,10 +542,13 @@ def fit_effect(
         variables[law.variable2] = prob.df[law.variable2].to_numpy(float)
     base_r = _residuals(prob, _model(prob, base, variables), tyre.flat)
     ss0 = float(base_r @ base_r)
-    ext = parse_section({**base_section, **term.section()}) if term is not None else base
+    term_section = {k: v for t in terms for k, v in t.section().items()}
+    ext = parse_section({**base_section, **term_section}) if term is not None else base
     model = _model(prob, ext, variables)
     refit = [k for ch in covered_channels(prob) if refit_channels is None or ch in refit_channels
              for k in REFIT_KEYS.get(ch, ()) if k not in keys]  # fmt: skip
+    if term is not None and refit_base:  # the shift a shift factor scales (a law on the factor only)
+        refit += [SHIFT_COEFFICIENTS[t] for t in law.targets if t in SHIFT_COEFFICIENTS]
     refit = list(dict.fromkeys(refit)) if refit_base else []
     own = {k: t for t in base.terms for k in t.coefficient_keys}
     refit += [k for k in extra_keys if k in own and k not in refit]
@@ -529,8 +562,7 @@ def fit_effect(
     def build(x):
         standard: dict[str, float] = {k: float(v) for k, v in zip(refit, x[len(keys):], strict=True)}
         section: dict[str, object] = dict(base_section)
-        if term is not None:
-            section.update(term.section())
+        section.update(term_section)
         for k, val in zip(keys, x[: len(keys)], strict=True):
             if term is None:
                 standard[k] = float(val)
@@ -565,8 +597,8 @@ def fit_effect(
     params = {kk: float(vv) for kk, vv in zip(keys, res.x[: len(keys)], strict=True)}
     fit = EffectFit(law.name, variable, True, params, section, standard, ss0, ss1, float(bic), k, messages,
                     targets=law.targets, law=law)
-    if term is not None:
-        fit.messages.append(f"term: {term.describe()}")
+    for t in terms:
+        fit.messages.append(f"term: {t.describe()}")
     return fit
 
 
@@ -581,7 +613,8 @@ _STALE = {
     "Fy": ("lat", "Fy", "Gyk", "lat0", "Mz", "t", "Mzr", "Mx", "My"),
     "Mz": ("Mz", "t", "Mzr"),
 }
-_GROUP_OF = {k: ch for ch, ks in REFIT_KEYS.items() for k in ks}
+_GROUP_OF = {k: ch for ch, ks in REFIT_KEYS.items() for k in ks} | {
+    k: TARGET_CHANNELS[t][0] for t, k in SHIFT_COEFFICIENTS.items()}
 
 
 class _EffectResiduals:
