@@ -234,7 +234,7 @@ def _offset_problem(section: dict, column: np.ndarray | None = None):
     return make_problem(TYRE, with_sweeps(m), ("Fx", "Fy", "Mz")), m["rim_temp"].to_numpy()
 
 
-def test_a_force_offset_law_holds_its_constant_part():
+def test_an_offset_law_holds_its_constant_part():
     """A lateral force offset of one sign that grows with rim temperature, Fz·0.02·(T − 20)/10 (never zero in the
     data): the offset law carries its own constant (a one-level table term, f = 1 + C1), since no refitted
     coefficient offsets a force, and a law zero at the median temperature could not hold it (zoo seed 45: held-out
@@ -253,6 +253,11 @@ def test_a_force_offset_law_holds_its_constant_part():
     # Fz·(C1' + C1·(T − REF)/SCALE) = Fz·0.002·(T − 20): slope and value at REF as generated
     assert fit.section[lin + "_C1"] / scale == pytest.approx(0.002, rel=0.1)
     assert fit.section[tab + "_C1"] == pytest.approx(0.002 * (ref - 20.0), rel=0.05)
+    # a slip-angle offset carries its constant too (zoo seed 107: on one road surface); a camber offset does not
+    for target, name, constant in (("ALPHA_OFFSET", "slip_angle_offset", True),
+                                   ("GAMMA_OFFSET", "camber_offset", False), ("LMUY", "friction_variable", False)):
+        f = fit_effect(prob, Law(name, (target,), "linear"), "rim_temp", temp, refit_base=False)
+        assert ("table" in f.section.values()) == constant, (target, f.section)
 
 
 def test_a_horizontal_shift_law_refits_the_shift_it_scales():

@@ -459,18 +459,20 @@ def law_term(law: Law, variable: str, v: np.ndarray | None, tyre: Tyre, index: i
     return make_extension(index, law.targets, law.form, variable, **numbers)
 
 
-#: Targets of a law that adds a force, Fz·(f − 1), rather than scaling a coefficient: the force offsets.  (An input
-#: offset's constant part is the MF's own: a constant slip-angle offset is the horizontal shift PHY1, a constant
-#: camber offset moves every camber term of the fit.)
-ADDITIVE_TARGETS = frozenset(OFFSET_TARGETS)
+#: Targets of a law that adds to a quantity rather than scaling a coefficient, whose law carries its own constant
+#: part (:func:`intercept_term`): the force offsets Fz·(f − 1) and the slip offsets (f − 1).  No refitted main
+#: coefficient holds their constant part (a constant slip offset is the horizontal shift PHX1 or PHY1, which only a
+#: law on LHX or LHY refits).  A camber offset gets none: a constant camber offset moves every camber term of the fit
+#: at once, and with one the full refit traded Fx for Fy (zoo seed 58: a law cutting 87 % was lost).
+ADDITIVE_TARGETS = frozenset(OFFSET_TARGETS) | {"ALPHA_OFFSET", "KAPPA_OFFSET"}
 
 
 def intercept_term(law: Law, variable: str, v: np.ndarray | None, index: int) -> Extension:
-    """The constant part of a law on a force offset (:data:`ADDITIVE_TARGETS`), numbered ``index``: a ``table`` of
-    one level, f = 1 + C1 everywhere, so that the offset is Fz·(C1' + C1·z).  A factor law's constant part is the
-    refitted main coefficient it multiplies (the peak factor under LMUX); an offset has none among the refitted
-    coefficients, and a law that is zero at the median of its variable cannot hold an offset of one sign (a force
-    offset that grows from zero with temperature)."""
+    """The constant part of a law on an offset (:data:`ADDITIVE_TARGETS`), numbered ``index``: a ``table`` of one
+    level, f = 1 + C1 everywhere, so that a force offset is Fz·(C1' + C1·z) and a slip offset C1' + C1·z.  A factor
+    law's constant part is the refitted main coefficient it multiplies (the peak factor under LMUX); an offset has
+    none among the refitted coefficients, and a law that is zero at the median of its variable cannot hold an offset
+    of one sign (a force offset that grows from zero with temperature, a slip-angle offset on one road surface)."""
     vv = np.asarray(v, float)[np.isfinite(v)] if v is not None else np.zeros(0)
     level = float(np.median(vv)) if vv.size else 0.0
     return make_extension(index, law.targets, "table", variable, L1=level)
