@@ -308,3 +308,18 @@ def test_loads_tested_in_blocks_still_hold_out_the_last_tests():
     e["time"] = np.arange(len(e)) * 0.5
     conds = dict(extra_conditions(e, TYRE, TYRE, ("Fx", "Fy", "Mz"), noise, "rim_temp"))
     assert "the last tests" in conds and "the last tests (a load block)" not in conds
+
+
+def test_an_aligning_moment_effect_is_offered_an_effective_pressure():
+    """A pressure that rises with tread temperature while the logged P stays cold acts on the trail too (PPZ1,
+    Besselink et al. 2010 eq A60); when a base fit over blocked loads has absorbed its force part, Mz alone shows it
+    and only the aligning moment's families are tried: the trail's family offers the effective pressure (zoo seed
+    97: held-out cut 36 -> 55 %).  The residual torque's does not (no pressure term in Dr at zero camber)."""
+    from mftire.diagnosis.effects import effects_for
+
+    def names(family: str) -> set[str]:
+        return {law.name for _, law in effects_for("tread_depth", False, False, 6, (family,), ("Mz",),
+                                                    inputs=("P_FACTOR",))}  # fmt: skip
+
+    assert {"effective_pressure", "effective_pressure_quadratic"} <= names("trail")
+    assert not any(n.startswith("effective_pressure") for n in names("residual_torque"))

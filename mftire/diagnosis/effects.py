@@ -80,9 +80,11 @@ FAMILY_TARGETS = {
     "residual_torque": {"Mz": ("LRES",)},
 }
 #: Input laws (:data:`mftire.mf.extensions.INPUT_TARGETS`) tried with a family: an effective inflation
-#: pressure with friction or stiffness (it acts through the MF's pressure terms, eqs 4.E2b, 4.E13, 4.E15,
-#: 4.E23, 4.E25), a slip-angle, camber or longitudinal-slip offset with a shift (it moves the curves sideways).
-INPUT_LAWS = {"friction": ("P_FACTOR",), "stiffness": ("P_FACTOR",),
+#: pressure with friction, stiffness or the trail (it acts through the MF's pressure terms, eqs 4.E2b, 4.E13,
+#: 4.E15, 4.E23, 4.E25, and the trail's PPZ1, Besselink et al. 2010 eq A60: a base fit made on loads tested in
+#: blocks can absorb its force part and leave the aligning moment alone to show it), a slip-angle, camber or
+#: longitudinal-slip offset with a shift (it moves the curves sideways).
+INPUT_LAWS = {"friction": ("P_FACTOR",), "stiffness": ("P_FACTOR",), "trail": ("P_FACTOR",),
               "shift": ("ALPHA_OFFSET", "GAMMA_OFFSET", "KAPPA_OFFSET")}
 #: The name of the law on each input target (a quadratic form adds ``_quadratic``).
 INPUT_LAW_NAMES = {"P_FACTOR": "effective_pressure", "ALPHA_OFFSET": "slip_angle_offset",
