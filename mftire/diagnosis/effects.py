@@ -155,7 +155,7 @@ REFIT_KEYS = {
 #: often leaves the shift near zero, and a factor on a shift of zero expresses nothing: with the coefficient free,
 #: LHX·(1 + C1·g) holds any shift PHX1 + PHX1·C1·g.  The vertical shifts keep theirs: with PVX1 or PVY1 free a
 #: vertical-shift law is a free force offset at every load (the intercept of an offset law, :func:`intercept_term`),
-#: and PVY1 moves Mz through the trail as well (eq 4.E71).
+#: and PVY1 moves Mz through the trail as well (F'y of eq 4.E74).
 SHIFT_COEFFICIENTS: dict[str, str] = {"LHX": "PHX1", "LHY": "PHY1"}
 
 
