@@ -433,9 +433,10 @@ def variable_values(df: pd.DataFrame, effect: EffectFit, candidate: str) -> np.n
 def extra_conditions(df: pd.DataFrame, law: Tyre, control: Tyre, channels: Sequence[str], noise: Mapping[str, float],
                      skip: str, k: int = EXTRA_CONDITIONS) -> list[tuple[str, np.ndarray]]:
     """Conditions of the training rows ``df`` to hold out besides the diagnosis's own (column ``skip``): the
-    last tests (:func:`order_fold`), and the levels of the MF set points where the law's model and its control
-    differ most (their difference per row over each channel's noise, averaged over the level's rows; interior
-    levels only): where the law matters, it must hold on a condition it was not fitted on.  A level that would
+    last tests (:func:`order_fold`; with loads tested in blocks, the last load block), and the levels of the MF set
+    points where the law's model and its control differ most (their difference per row over each channel's noise,
+    averaged over the level's rows; interior levels only): where the law matters, it must hold on a condition it
+    was not fitted on.  A level that would
     take every sweep of a kind out of training, or half the rows, is not held out.  ``[(label, row mask), ...]``."""
     kinds = df["sweep_var"].to_numpy() if "sweep_var" in df.columns else None
     out: list[tuple[str, np.ndarray]] = []
