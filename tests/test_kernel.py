@@ -282,6 +282,9 @@ EXTENDED = {
     "EXT5_L3": 0.5, "EXT5_C1": 0.1, "EXT5_C2": 0.0, "EXT5_C3": -0.1,
     "EXT6_TARGET": "LRES", "EXT6_FORM": "saturating", "EXT6_VARIABLE": "P", "EXT6_REF": 2.2e5, "EXT6_SCALE": 5e4,
     "EXT6_C1": 0.3, "EXT6_C2": 2.0,
+    # the constant part of an offset law (mftire.diagnosis.effects.intercept_term): a one-level table, summed with
+    # EXT4's FY_OFFSET
+    "EXT7_TARGET": "FY_OFFSET", "EXT7_FORM": "table", "EXT7_VARIABLE": "wear", "EXT7_L1": 0.5, "EXT7_C1": 0.01,
 }  # fmt: skip
 
 
