@@ -283,8 +283,10 @@ EXTENDED = {
     "EXT6_TARGET": "LRES", "EXT6_FORM": "saturating", "EXT6_VARIABLE": "P", "EXT6_REF": 2.2e5, "EXT6_SCALE": 5e4,
     "EXT6_C1": 0.3, "EXT6_C2": 2.0,
     # the constant part of an offset law (mftire.diagnosis.effects.intercept_term): a one-level table, summed with
-    # EXT4's FY_OFFSET
+    # EXT4's FY_OFFSET; a slip-angle offset growing with temperature (instKya: along the slip angle as given)
     "EXT7_TARGET": "FY_OFFSET", "EXT7_FORM": "table", "EXT7_VARIABLE": "wear", "EXT7_L1": 0.5, "EXT7_C1": 0.01,
+    "EXT8_TARGET": "ALPHA_OFFSET", "EXT8_FORM": "linear", "EXT8_VARIABLE": "temperature", "EXT8_REF": 50.0,
+    "EXT8_SCALE": 50.0, "EXT8_C1": 0.004,
 }  # fmt: skip
 
 

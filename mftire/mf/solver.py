@@ -294,7 +294,8 @@ def outputs(
         if want & _GROUP_OUTPUTS["RELAX"]:
             Cx, Cy, sigmax, sigmay = relaxation(q, c, ch.Kxk, ch.lat.Kya)
         if "instKya" in want:
-            fy_flat, al_flat = np.broadcast_to(ch.Fy, shape).ravel(), c.alpha.ravel()
+            # along the slip angle as given (conditioned, before an input law's offset), as the C kernel stores it
+            fy_flat, al_flat = np.broadcast_to(ch.Fy, shape).ravel(), np.broadcast_to(pre.c.alpha, shape).ravel()
             if fy_flat.size > 1:
                 d = np.diff(fy_flat) / np.diff(al_flat)
                 instKya = np.append(d, d[-1]).reshape(shape)
