@@ -436,8 +436,8 @@ def extra_conditions(df: pd.DataFrame, law: Tyre, control: Tyre, channels: Seque
     last tests (:func:`order_fold`; with loads tested in blocks, the last load block), and the levels of the MF set
     points where the law's model and its control differ most (their difference per row over each channel's noise,
     averaged over the level's rows; interior levels only): where the law matters, it must hold on a condition it
-    was not fitted on.  A level that would
-    take every sweep of a kind out of training, or half the rows, is not held out.  ``[(label, row mask), ...]``."""
+    was not fitted on.  A level that would take every sweep of a kind out of training, or half the rows, is not held
+    out.  ``[(label, row mask), ...]``."""
     kinds = df["sweep_var"].to_numpy() if "sweep_var" in df.columns else None
     out: list[tuple[str, np.ndarray]] = []
     levels = df["_cand"].to_numpy(float) if "_cand" in df.columns else None

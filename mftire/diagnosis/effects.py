@@ -515,8 +515,7 @@ def fit_effect(
     tyre = prob.tyre
     base = tyre.extension_set
     base_section = dict(tyre.extensions or {})
-    term = None
-    terms: list[Extension] = []
+    terms: list[Extension] = []  #: the law's extension terms (none: the control or the pressure terms)
     if law.name == "pressure":
         keys = _pressure_keys(n_pressures, pressure_channels if pressure_channels is not None else prob.channels)
         x0, bounds = [float(tyre[k]) for k in keys], [(-3.0, 3.0)] * len(keys)
@@ -538,20 +537,19 @@ def fit_effect(
         keys = [k for t in terms for k in t.coefficient_keys]
         x0 = [t.start(k) for t in terms for k in t.coefficient_keys]
         bounds = [t.bounds(k) for t in terms for k in t.coefficient_keys]
-        term = terms[0]
     variables = dict(prob.variables)
-    if term is not None and variable not in BUILTIN_VARIABLES and values is not None:
+    if terms and variable not in BUILTIN_VARIABLES and values is not None:
         variables[variable] = values
-    if term is not None and law.variable2 is not None and law.variable2 not in BUILTIN_VARIABLES:
+    if terms and law.variable2 is not None and law.variable2 not in BUILTIN_VARIABLES:
         variables[law.variable2] = prob.df[law.variable2].to_numpy(float)
     base_r = _residuals(prob, _model(prob, base, variables), tyre.flat)
     ss0 = float(base_r @ base_r)
     term_section = {k: v for t in terms for k, v in t.section().items()}
-    ext = parse_section({**base_section, **term_section}) if term is not None else base
+    ext = parse_section({**base_section, **term_section}) if terms else base
     model = _model(prob, ext, variables)
     refit = [k for ch in covered_channels(prob) if refit_channels is None or ch in refit_channels
              for k in REFIT_KEYS.get(ch, ()) if k not in keys]  # fmt: skip
-    if term is not None and refit_base:  # the shift a shift factor scales (a law on the factor only)
+    if terms and refit_base:  # the shift a shift factor scales (a law on the factor only)
         refit += [SHIFT_COEFFICIENTS[t] for t in law.targets if t in SHIFT_COEFFICIENTS]
     refit = list(dict.fromkeys(refit)) if refit_base else []
     own = {k: t for t in base.terms for k in t.coefficient_keys}
@@ -568,7 +566,7 @@ def fit_effect(
         section: dict[str, object] = dict(base_section)
         section.update(term_section)
         for k, val in zip(keys, x[: len(keys)], strict=True):
-            if term is None:
+            if not terms:
                 standard[k] = float(val)
             else:
                 section[k] = float(val)
