@@ -17,12 +17,14 @@ from test_diagnosis import TYRE, _campaign, _measure
 
 from mftire.diagnosis.candidates import with_sweeps
 from mftire.diagnosis.diagnose import (
+    SAME_HELDOUT,
     cause_without_law,
     diagnose,
     drift_behind_input,
     extra_conditions,
     order_fold,
     preferred_cause,
+    rival_notes,
     worse_in_sample,
 )
 from mftire.diagnosis.effects import CHANNEL_COEFFICIENTS, EffectFit, plausible_inputs, with_given_channels
@@ -208,3 +210,20 @@ def test_identifier_names_run_together_are_identifiers(name):
                                   "compound_batch", "tread_depth"])
 def test_physical_names_are_not_identifiers(name):
     assert not identifier_name(name)
+
+
+def test_rival_notes_name_the_columns_the_data_do_not_separate():
+    # 12 sweeps of 5 rows; the law's variable drifts along the programme
+    sweeps = np.repeat(np.arange(12), 5)
+    df = pd.DataFrame({"sweep_id": sweeps})
+    track = 20.0 + 0.8 * sweeps + 0.01 * np.arange(60) % 5
+    ambient = 18.0 + 0.5 * sweeps  # drifts with it (r ~ 1)
+    humidity = np.where(sweeps % 2, 40.0, 60.0)  # does not
+    rivals = [("ambient_temp", ambient, 1.05), ("humidity", humidity, 1.0), ("hub_temp", ambient + 1.0, 1.3)]
+    notes = rival_notes(df, "track_temp", track, 1.0, rivals)
+    assert len(notes) == 1, notes
+    assert notes[0].startswith("ambient_temp correlates with track_temp across sweeps (r = +1.00)")
+    assert "1.05 × the error" in notes[0] and "law is written in track_temp" in notes[0]
+    # a rival whose law held out worse than SAME_HELDOUT is not an equal explanation
+    assert rival_notes(df, "track_temp", track, 1.0, [("ambient_temp", ambient, 1.0 + SAME_HELDOUT + 0.01)]) == []
+    assert rival_notes(df, "track_temp", track, float("nan"), rivals) == []

@@ -544,6 +544,37 @@ def confounding_notes(df: pd.DataFrame, variable: str, values: np.ndarray, withi
     return out
 
 
+def rival_notes(df: pd.DataFrame, variable: str, values: np.ndarray, error: float,
+                rivals: Sequence[tuple[str, np.ndarray, float]], threshold: float = CONFOUND_R) -> list[str]:
+    """The other candidates whose laws predicted the same held-out sweeps about as well as the law written (within
+    :data:`SAME_HELDOUT` of its error ``error``) and that correlate with ``variable`` across sweeps (|r| >
+    ``threshold``), in words.  ``rivals``: ``(variable, values on the rows of df, held-out error)``, the errors on the
+    same footing as ``error`` (:func:`common_heldout`).  Two columns that drift together along a programme (an
+    ambient and a track temperature, a hub temperature following the load) are equal explanations of such data: the
+    diagnosis writes one law, and says which others the data do not rule out."""
+    if not np.isfinite(error):
+        return []
+    sweeps = df["sweep_id"].to_numpy()
+    vm = pd.Series(np.asarray(values, float)).groupby(sweeps).mean()
+    out = []
+    for name, other, err in rivals:
+        if name == variable or not np.isfinite(err) or err > (1.0 + SAME_HELDOUT) * error:
+            continue
+        om = pd.Series(np.asarray(other, float)).groupby(sweeps).mean().reindex(vm.index)
+        ok = np.isfinite(vm.to_numpy()) & np.isfinite(om.to_numpy())
+        if ok.sum() < 3 or np.std(vm.to_numpy()[ok]) == 0 or np.std(om.to_numpy()[ok]) == 0:
+            continue
+        r = float(np.corrcoef(vm.to_numpy()[ok], om.to_numpy()[ok])[0, 1])
+        if abs(r) <= threshold:
+            continue
+        out.append(f"{name} correlates with {variable} across sweeps (r = {r:+.2f}), and its own law predicted the "
+                   f"same held-out sweeps about as well ({err / error:.2f} × the error of the law written): the data "
+                   f"do not separate them, and the law is written in {variable}; a programme in which they vary apart "
+                   "(a reference condition repeated through the day, the other quantity changed deliberately) "
+                   "decides between them")  # fmt: skip
+    return out
+
+
 #: Pseudo-channel of candidates found by the scaling-factor profiles (their entry names the factor).
 PROFILE_CHANNELS = ("profile",)
 
@@ -944,6 +975,7 @@ def _diagnose(
     if errors is None:  # one candidate (or different rows): its law's ratio on its own folds
         errors = [t[0].heldout for t in found]
     best = preferred_cause(found, {*HISTORY_CANDIDATES, tcol}, errors)
+    cand_errors = list(errors)  # one per entry of found, on one footing
     if best is None:
         msg = ("no significant effect: candidates were flagged, but no model term explains the residual better "
                "than refitting the model without it")
@@ -965,7 +997,9 @@ def _diagnose(
     judge = _HeldOutJudge(tyre, dtest, chans, noise, n_pressures, column)
     drifting = [e.variable for e in significant]  # the judged causes are among them
     dvals = {name: by_name[name].values[train] for name in drifting if name in by_name}
-    for effect, cause, context in order[:CAUSES_TRIED]:
+    judged = None  # the entry of found whose law is accepted
+    for judged in order[:CAUSES_TRIED]:
+        effect, cause, context = judged
         behind = drift_behind_input(dtrain, cause.variable, dvals, drifting)
         if behind is not None:
             lost.append(f"{cause.variable}: its levels were tested in an order that follows the programme "
@@ -1020,9 +1054,15 @@ def _diagnose(
 
     # extended: the refined tyre; its variables are columns of the data (closed variables)
     cvals = df[effect.variable].to_numpy(float) if effect.variable in df.columns else by_name[cause.variable].values
+    # the other candidates whose laws held out about as well, and that drift with it: equal explanations
+    err_of = {id(t): e for t, e in zip(found, cand_errors, strict=True)}
+    rivals = [(t[0].variable, df[t[0].variable].to_numpy(float) if t[0].variable in df.columns
+               else by_name[t[1].variable].values, err_of[id(t)]) for t in found if t is not judged]  # fmt: skip
     confounding = list(dict.fromkeys(
         confounding_notes(df[train].reset_index(drop=True), effect.variable, cvals[train],
                           effect.heldout if in_blocks else None)
+        + rival_notes(df[train].reset_index(drop=True), effect.variable, cvals[train], err_of[id(judged)],
+                      [(n, v[train], e) for n, v, e in rivals])
         + profiles.confounding(effect.variable)))  # fmt: skip
     # validated: the same law refitted the same way on every row (the held-out condition too)
     say(f"refitting {effect.name} in {effect.variable} on every row")
