@@ -323,3 +323,48 @@ def test_an_aligning_moment_effect_is_offered_an_effective_pressure():
 
     assert {"effective_pressure", "effective_pressure_quadratic"} <= names("trail")
     assert not any(n.startswith("effective_pressure") for n in names("residual_torque"))
+
+
+def test_full_refit_keeps_the_sweeps_it_is_given(monkeypatch):
+    """Cornering sweeps thinned to a few steps that return to alpha = 0 (as rows are left out around the diagnosis's
+    held-out condition), each followed by a braking sweep at the same set points (zoo seed 1152): the grouping in row
+    order read each pair as one combined sweep, and the diagnosis's full refit then fitted the combined-slip
+    coefficients to pure slip data (RBX2 went to its bound, -500)."""
+    from mftire.diagnosis.effects import _full_refit
+    from mftire.fitting.fitter import _classify_rows
+    from mftire.segmentation.grouping import group_sweeps
+
+    rng = np.random.default_rng(4)
+    kappa = -0.25 * (np.arange(14) / 13) ** 1.5
+    steps = (np.radians([-1.67, 0.0, 10.0, 6.67, 1.67, 0.0, -5.0]), np.radians([-6.67, 0.0, 3.33, 8.33, 0.0, -5.0]))
+    parts, sid = [], 0
+    for lf in (0.6, 1.0, 1.4):
+        for a in steps:
+            fz = lf * TYRE["FNOMIN"] * (1 + 0.01 * rng.standard_normal(a.size + kappa.size))
+            parts += [pd.DataFrame(dict(Fz=fz[: a.size], kappa=0.0, alpha=a, sweep_id=sid)),
+                      pd.DataFrame(dict(Fz=fz[a.size:], kappa=kappa, alpha=0.0, sweep_id=sid + 1))]
+            sid += 2
+    df = pd.concat(parts, ignore_index=True).assign(gamma=0.0, Vx=22.0, P=TYRE["NOMPRES"])
+    df = _measure(df, None)
+    # the grouping in row order reads them as pure sweeps (mftire.segmentation.grouping._split_runs: a slip that
+    # steps away from its level and back has left it) ...
+    regrouped = _classify_rows(group_sweeps(df.drop(columns="sweep_id")))
+    assert set(regrouped["kind"]) == {"pure_lateral", "pure_longitudinal"}
+    assert regrouped.groupby("sweep_id").ngroups == sid
+    # ... and the full refit hands the fitter the diagnosis's sweeps (found on the full data), whatever its own
+    # grouping in row order would make of thinned rows
+    import mftire.fitting.fitter as fitter
+
+    seen = []
+    real = fitter.fit_tir
+
+    def spy(table, *args, **kwargs):
+        seen.append(table)
+        return real(table, *args, **kwargs)
+
+    monkeypatch.setattr(fitter, "fit_tir", spy)
+    out = _full_refit(df, TYRE)
+    assert (seen[0]["source"].to_numpy() == df["sweep_id"].astype(str).to_numpy()).all()
+    combined = ("RBX1", "RBX2", "RCX1", "REX1", "RHX1", "RBY1", "RBY2", "RCY1", "RHY1")
+    assert {k: out[k] for k in combined} == {k: TYRE[k] for k in combined}
+    assert out["PDX1"] != TYRE["PDX1"]  # the pure-slip stages were refitted

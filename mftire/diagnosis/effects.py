@@ -922,9 +922,16 @@ def _full_refit(data: pd.DataFrame, tyre: Tyre, stages: str = REFIT_STAGES) -> T
     from mftire.fitting.fitter import fit_tir
 
     cols = [c for c in data.columns if not str(c).startswith(("residual_", "_"))]
+    table = data[cols]
+    if "sweep_id" in table.columns:
+        # the sweeps as found on the full data (mftire.diagnosis.candidates.with_sweeps): the fitter groups sweeps
+        # in row order again, and on rows thinned by outlier removal or a held-out condition the tail of a
+        # cornering sweep and the head of a braking sweep at the same set points became one "combined" sweep, whose
+        # few rows then drove the combined-slip coefficients to their bounds (zoo seed 1152: RBX2 = -500)
+        table = table.assign(source=table["sweep_id"].astype(str))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = fit_tir(data[cols], tyre.parameters, stages=stages, progress=False)
+        res = fit_tir(table, tyre.parameters, stages=stages, progress=False)
     return Tyre(res.parameters, name=tyre.name)
 
 

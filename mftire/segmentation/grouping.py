@@ -170,7 +170,13 @@ def _split_runs(
     r = 0
 
     def out_of_level(x: list[float], i: int, ref: float, tol: float) -> bool:
-        return all(abs(v - ref) > tol for v in x[i : i + patience])
+        if all(abs(v - ref) > tol for v in x[i : i + patience]):
+            return True
+        # a sweep of a few steps that returns to the level between them (alpha -7, 0, +3, +8, 0, -5 deg: a sparse
+        # cornering sweep after a braking sweep at the same set points): the slip has left its level when this row
+        # and most of the next 2 x patience rows lie beyond 3 x tol, far outside the noise of a held slip
+        far = 3.0 * tol
+        return abs(x[i] - ref) > far and sum(abs(v - ref) > far for v in x[i : i + 2 * patience]) >= patience
 
     k_arr, a_arr = kappa, alpha
     kappa, alpha = kappa.tolist(), alpha.tolist()  # row by row: Python floats are faster than numpy scalars
