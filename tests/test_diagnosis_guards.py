@@ -216,7 +216,7 @@ def test_rival_notes_name_the_columns_the_data_do_not_separate():
     # 12 sweeps of 5 rows; the law's variable drifts along the programme
     sweeps = np.repeat(np.arange(12), 5)
     df = pd.DataFrame({"sweep_id": sweeps})
-    track = 20.0 + 0.8 * sweeps + 0.01 * np.arange(60) % 5
+    track = 20.0 + 0.8 * sweeps + 0.01 * (np.arange(60) % 5)  # and a little within each sweep
     ambient = 18.0 + 0.5 * sweeps  # drifts with it (r ~ 1)
     humidity = np.where(sweeps % 2, 40.0, 60.0)  # does not
     rivals = [("ambient_temp", ambient, 1.05), ("humidity", humidity, 1.0), ("hub_temp", ambient + 1.0, 1.3)]

@@ -372,6 +372,17 @@ def cause_without_law(top: CandidateScore, found: Sequence[tuple], best: tuple, 
 ORDER_CONFOUND_R = 0.3
 
 
+def sweep_correlation(a: pd.Series, b: pd.Series, min_sweeps: int) -> float | None:
+    """Correlation across sweeps of two per-sweep series (``b`` aligned to ``a``'s sweeps), over the sweeps where
+    both are finite; None with fewer than ``min_sweeps`` of them or a constant series."""
+    b = b.reindex(a.index)
+    ok = np.isfinite(a.to_numpy(float)) & np.isfinite(b.to_numpy(float))
+    x, y = a.to_numpy(float)[ok], b.to_numpy(float)[ok]
+    if ok.sum() < min_sweeps or np.std(x) == 0 or np.std(y) == 0:
+        return None
+    return float(np.corrcoef(x, y)[0, 1])
+
+
 def drift_behind_input(df: pd.DataFrame, variable: str, values: Mapping[str, np.ndarray],
                        significant: Collection[str]) -> tuple[str, float] | None:
     """For a candidate that is an MF operating input (``variable``: Vx, Vs, P, gamma, dfz, or ``Fz_dev``, whose
@@ -398,11 +409,8 @@ def drift_behind_input(df: pd.DataFrame, variable: str, values: Mapping[str, np.
     start = sweep_starts(df)
 
     def r_order(v: np.ndarray) -> float:
-        m = pd.Series(np.asarray(v, float)).groupby(sweeps).mean().reindex(start.index)
-        ok = np.isfinite(m.to_numpy())
-        if ok.sum() < 4 or np.std(m.to_numpy()[ok]) == 0:
-            return 0.0
-        return float(np.corrcoef(m.to_numpy()[ok], start.to_numpy()[ok])[0, 1])
+        r = sweep_correlation(start, pd.Series(np.asarray(v, float)).groupby(sweeps).mean(), 4)
+        return 0.0 if r is None else r
 
     r = r_order(levels_of)
     if abs(r) <= ORDER_CONFOUND_R:
@@ -560,12 +568,8 @@ def rival_notes(df: pd.DataFrame, variable: str, values: np.ndarray, error: floa
     for name, other, err in rivals:
         if name == variable or not np.isfinite(err) or err > (1.0 + SAME_HELDOUT) * error:
             continue
-        om = pd.Series(np.asarray(other, float)).groupby(sweeps).mean().reindex(vm.index)
-        ok = np.isfinite(vm.to_numpy()) & np.isfinite(om.to_numpy())
-        if ok.sum() < 3 or np.std(vm.to_numpy()[ok]) == 0 or np.std(om.to_numpy()[ok]) == 0:
-            continue
-        r = float(np.corrcoef(vm.to_numpy()[ok], om.to_numpy()[ok])[0, 1])
-        if abs(r) <= threshold:
+        r = sweep_correlation(vm, pd.Series(np.asarray(other, float)).groupby(sweeps).mean(), 3)
+        if r is None or abs(r) <= threshold:
             continue
         out.append(f"{name} correlates with {variable} across sweeps (r = {r:+.2f}), and its own law predicted the "
                    f"same held-out sweeps about as well ({err / error:.2f} × the error of the law written): the data "
@@ -997,8 +1001,7 @@ def _diagnose(
     judge = _HeldOutJudge(tyre, dtest, chans, noise, n_pressures, column)
     drifting = [e.variable for e in significant]  # the judged causes are among them
     dvals = {name: by_name[name].values[train] for name in drifting if name in by_name}
-    judged = None  # the entry of found whose law is accepted
-    for judged in order[:CAUSES_TRIED]:
+    for judged in order[:CAUSES_TRIED]:  # judged: after the loop, the entry of found whose law is accepted
         effect, cause, context = judged
         behind = drift_behind_input(dtrain, cause.variable, dvals, drifting)
         if behind is not None:
@@ -1055,14 +1058,13 @@ def _diagnose(
     # extended: the refined tyre; its variables are columns of the data (closed variables)
     cvals = df[effect.variable].to_numpy(float) if effect.variable in df.columns else by_name[cause.variable].values
     # the other candidates whose laws held out about as well, and that drift with it: equal explanations
-    err_of = {id(t): e for t, e in zip(found, cand_errors, strict=True)}
-    rivals = [(t[0].variable, df[t[0].variable].to_numpy(float) if t[0].variable in df.columns
-               else by_name[t[1].variable].values, err_of[id(t)]) for t in found if t is not judged]  # fmt: skip
+    rivals = [(t[0].variable, (df[t[0].variable].to_numpy(float) if t[0].variable in df.columns
+                               else by_name[t[1].variable].values)[train], e)
+              for t, e in zip(found, cand_errors, strict=True) if t is not judged]  # fmt: skip
+    judged_error = next(e for t, e in zip(found, cand_errors, strict=True) if t is judged)
     confounding = list(dict.fromkeys(
-        confounding_notes(df[train].reset_index(drop=True), effect.variable, cvals[train],
-                          effect.heldout if in_blocks else None)
-        + rival_notes(df[train].reset_index(drop=True), effect.variable, cvals[train], err_of[id(judged)],
-                      [(n, v[train], e) for n, v, e in rivals])
+        confounding_notes(dtrain, effect.variable, cvals[train], effect.heldout if in_blocks else None)
+        + rival_notes(dtrain, effect.variable, cvals[train], judged_error, rivals)
         + profiles.confounding(effect.variable)))  # fmt: skip
     # validated: the same law refitted the same way on every row (the held-out condition too)
     say(f"refitting {effect.name} in {effect.variable} on every row")
