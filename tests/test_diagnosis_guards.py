@@ -15,10 +15,11 @@ import pandas as pd
 import pytest
 from test_diagnosis import TYRE, _campaign, _measure
 
-from mftire.diagnosis.candidates import with_sweeps
+from mftire.diagnosis.candidates import Candidate, with_sweeps
 from mftire.diagnosis.diagnose import (
     SAME_HELDOUT,
     cause_without_law,
+    condition_runs,
     diagnose,
     drift_behind_input,
     extra_conditions,
@@ -28,6 +29,7 @@ from mftire.diagnosis.diagnose import (
     worse_in_sample,
 )
 from mftire.diagnosis.effects import CHANNEL_COEFFICIENTS, EffectFit, plausible_inputs, with_given_channels
+from mftire.diagnosis.ranking import baseline_features, rank_candidates
 from mftire.mf.extensions import identifier_name
 from mftire.tyre import Tyre
 
@@ -227,3 +229,47 @@ def test_rival_notes_name_the_columns_the_data_do_not_separate():
     # a rival whose law held out worse than SAME_HELDOUT is not an equal explanation
     assert rival_notes(df, "track_temp", track, 1.0, [("ambient_temp", ambient, 1.0 + SAME_HELDOUT + 0.01)]) == []
     assert rival_notes(df, "track_temp", track, float("nan"), rivals) == []
+
+
+def test_condition_runs_join_consecutive_sweeps_at_one_condition():
+    # six sweeps of 4 rows, in test order by time (not by sweep label): conditions A A B A C C
+    cond = {0: (4000.0, 16.7), 1: (4000.0, 16.7), 2: (6000.0, 16.7), 3: (4000.0, 16.7), 4: (4000.0, 27.8),
+            5: (4000.0, 27.8)}
+    order = [5, 4, 3, 2, 1, 0]  # sweep labels in the order they were run
+    rows = []
+    for t, s in enumerate(order):
+        fz, vx = cond[t]
+        rows += [{"sweep_id": s, "Fz_set": fz, "Vx_set": vx, "P_set": 2.2e5, "gamma_set": 0.0, "time": 10.0 * t + i}
+                 for i in range(4)]
+    df = pd.DataFrame(rows).sample(frac=1.0, random_state=1)  # row order does not matter, the time does
+    runs = pd.Series(condition_runs(df), index=df.index).groupby(df["sweep_id"]).agg(["min", "max"])
+    assert (runs["min"] == runs["max"]).all()
+    assert runs["min"].reindex(order).tolist() == [0, 0, 1, 2, 3, 3]
+    # without set-point columns every sweep is a run
+    assert np.unique(condition_runs(df[["sweep_id", "time"]])).size == 6
+
+
+def _run_scatter_trial(seed: int, units: str) -> bool:
+    """A campaign with friction scatter from run to run (three sweeps per run) that no column explains, and a
+    column constant in each run (an operator code): is the column found significant?"""
+    rng = np.random.default_rng(seed)
+    n_runs, per, pts = 16, 3, 12
+    runs = np.repeat(np.arange(n_runs), per * pts)
+    sweeps = np.repeat(np.arange(n_runs * per), pts)
+    n = runs.size
+    kappa = np.tile(np.linspace(0.0, -0.2, pts), n_runs * per)
+    fz = np.repeat(rng.choice([2000.0, 4000.0, 6000.0], n_runs), per * pts)
+    x0 = baseline_features(kappa, np.zeros(n), np.zeros(n), fz, 4000.0)
+    residual = 0.02 * rng.standard_normal(n_runs)[runs] + 0.003 * rng.standard_normal(n)
+    decoy = Candidate("operator", rng.standard_normal(n_runs)[runs], False, True)
+    ranked = rank_candidates({"Fx": residual}, {"Fx": 1.0}, x0, [decoy], runs if units == "runs" else sweeps,
+                             n_perm=49, seed=seed)  # fmt: skip
+    return ranked[0].significant
+
+
+def test_run_scatter_is_not_a_finding_when_runs_are_the_units():
+    """The sweeps of a run share its scatter: predicted and permuted as single sweeps, a column constant in each
+    run explains the scatter far above the test's 5 % level (the reason the ranking's units are whole runs,
+    :func:`condition_runs`); with whole runs it holds the level."""
+    assert sum(_run_scatter_trial(s, "runs") for s in range(10)) <= 1
+    assert sum(_run_scatter_trial(s, "sweeps") for s in range(10)) >= 5

@@ -281,6 +281,35 @@ def sweep_starts(df: pd.DataFrame) -> pd.Series:
     return pd.Series(order).groupby(df["sweep_id"].to_numpy()).min()
 
 
+#: Fewest runs (:func:`condition_runs`) the ranking's cross-validation and permutations use as their units; with
+#: fewer, the sweeps are the units.
+MIN_RUNS = 10
+
+
+def condition_runs(df: pd.DataFrame, set_points: Sequence[str] = SET_POINTS) -> np.ndarray:
+    """The run of every row: consecutive sweeps in test order (:func:`sweep_starts`) at one operating condition (the
+    set points of ``set_points`` at the sweep's first row) are one run [-].
+
+    The sweeps of one run share what changes between runs (the mounting, the warm-up, the surface): their residuals
+    are not independent, so the ranking predicts and permutes whole runs (:func:`mftire.diagnosis.ranking.
+    rank_candidates`), not single sweeps.  Labels are 0, 1, … in test order; without set-point columns every sweep
+    is its own run."""
+    sweeps = df["sweep_id"].to_numpy()
+    keys = [c for c in set_points if c in df.columns]
+    order = sweep_starts(df).sort_values(kind="stable").index
+    if not keys:
+        label = {s: i for i, s in enumerate(order)}
+    else:
+        first = df.groupby(sweeps, sort=False)[keys].first().astype(float).round(6)
+        label, run, prev = {}, -1, None
+        for s in order:
+            cond = tuple(first.loc[s].to_numpy())
+            if cond != prev:
+                run, prev = run + 1, cond
+            label[s] = run
+    return np.array([label[s] for s in sweeps])
+
+
 def order_fold(df: pd.DataFrame, kinds: np.ndarray | None, share: float = ORDER_SHARE,
                levels: np.ndarray | None = None, set_points: Sequence[str] = SET_POINTS) -> np.ndarray | None:
     """The last ``share`` of the sweeps in test order (the time column, else the row order) as one held-out fold
@@ -847,7 +876,10 @@ def _diagnose(
     X0 = baseline_features(df["kappa"].to_numpy(float), df["alpha"].to_numpy(float), df["gamma"].to_numpy(float),
                            Fz, tyre["FNOMIN"])  # fmt: skip
     say(f"ranking {len(cands)} candidates")
-    ranking = rank_candidates(residuals, peaks, X0, cands, df["sweep_id"].to_numpy(), n_perm=n_perm, seed=seed,
+    # the ranking's units: whole runs at one condition (they share a run's scatter), else the sweeps
+    runs = condition_runs(df)
+    units = runs if np.unique(runs).size >= MIN_RUNS else df["sweep_id"].to_numpy()
+    ranking = rank_candidates(residuals, peaks, X0, cands, units, n_perm=n_perm, seed=seed,
                               **(ranking_kwargs or {}))  # fmt: skip
     for name, c in by_name.items():
         if name not in df.columns:

@@ -14,14 +14,17 @@ is then a Δµ):
 A k-nearest-neighbour regression predicts r from the Magic Formula operating point alone — the *baseline*
 features |kappa|, |tan alpha|, gamma, Fz/FNOMIN (slip magnitudes, so that left/right and drive/brake
 asymmetry remain for the candidates ``sign_alpha`` and ``sign_kappa`` to explain) — and from the operating
-point plus one candidate.  Both are scored by cross-validation grouped by sweep: a whole sweep is predicted
-from the others, never a point from its neighbours in the same sweep.  The score of a candidate is
+point plus one candidate.  Both are scored by cross-validation grouped by unit: a whole unit is predicted
+from the others, never a point from its neighbours in the same unit.  The units are the runs (consecutive sweeps
+at one operating condition, :func:`mftire.diagnosis.diagnose.condition_runs`), else the sweeps: the sweeps of a
+run share its scatter (the mounting, the warm-up), and a column constant in a run would otherwise "explain" it
+from the run's other sweeps.  The score of a candidate is
 
     score = (MSE_baseline − MSE_with_candidate) / MSE_baseline,
 
 the share of the residual variance it explains beyond what the MF inputs explain.
 
-Significance is a permutation test that keeps the structure of the candidate: sweeps exchange their
+Significance is a permutation test that keeps the structure of the candidate: units exchange their
 trajectories of the candidate (:func:`_null_values`).  A candidate is tested on its best-scoring residuals in
 turn (channels and forms, at most :data:`MAX_TESTS`) where it explains at least :data:`MIN_SCORE` of the
 variance and an RMS of at least :data:`MIN_EFFECT` of the channel's peak.  Its p-value is the larger of the
@@ -102,7 +105,7 @@ def _standardise(X: np.ndarray) -> np.ndarray:
 
 
 def fold_of_groups(groups: np.ndarray, n_folds: int, seed: int = 0) -> np.ndarray:
-    """Assign every row to a fold so that each group (sweep) lies in one fold."""
+    """Assign every row to a fold so that each group (run or sweep) lies in one fold."""
     uniq = np.unique(groups)
     rng = np.random.default_rng(seed)
     order = rng.permutation(len(uniq))
@@ -131,11 +134,11 @@ def _score(X0: np.ndarray, c: np.ndarray, r: np.ndarray, folds: np.ndarray, mse0
 
 
 def _null_values(c: Candidate, values: np.ndarray, groups: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """Candidate values under the null: sweeps exchange their trajectories.
+    """Candidate values under the null: units (runs or sweeps, ``groups``) exchange their trajectories.
 
-    Sweep i receives the values of sweep perm(i), linearly resampled over the
-    normalised position in the sweep, so within-sweep shape is kept and the link
-    between a sweep's candidate values and its residual is broken.
+    Unit i receives the values of unit perm(i), linearly resampled over the
+    normalised position in the unit, so within-unit shape is kept and the link
+    between a unit's candidate values and its residual is broken.
     """
     uniq, inv = np.unique(groups, return_inverse=True)
     rows = [np.flatnonzero(inv == g) for g in range(len(uniq))]
@@ -242,7 +245,7 @@ def rank_candidates(
         Baseline features (:func:`baseline_features`).
     cands : sequence of Candidate
     groups : ndarray
-        Sweep id of every row (cross-validation and permutation groups).
+        Unit of every row, the run or the sweep (cross-validation and permutation groups).
 
     A candidate is tested on its best-scoring residuals in turn (at most :data:`MAX_TESTS`), and reported with
     the first on which it is significant, else with its best.  Its p-value is the larger of the permutation
