@@ -1013,8 +1013,11 @@ def _diagnose(
     best = preferred_cause(found, {*HISTORY_CANDIDATES, tcol}, errors)
     cand_errors = list(errors)  # one per entry of found, on one footing
     if best is None:
-        msg = ("no significant effect: candidates were flagged, but no model term explains the residual better "
-               "than refitting the model without it")
+        # the ranking's first significant candidate is named: it explains the residual beyond the MF inputs, but no
+        # law of any candidate beat the model refitted without an effect on the held-out folds
+        msg = (f"cause named, no law found: {top.variable} explains the residual beyond the MF inputs (ranking p = "
+               f"{top.p_value:.3g}), but no law of any flagged candidate predicted the held-out folds better than "
+               "the model refitted without it")  # fmt: skip
         if two_level:
             msg = (f"cause named, no law found: {', '.join(two_level)} has two levels of a quantity in the data; a law "
                    "between or beyond them cannot be checked on held-out data, so none is written (test a third "
