@@ -806,9 +806,8 @@ def evaluate_draw(seed: int, n_perm: int = 99) -> dict:
     rec["finding"] = finding  # an effect or a cause reported (on a null: a false finding)
     rec["law"] = None
     # the diagnosis's first message (why no law, or the law's own first note), for reading a run's failures
-    rec["message"] = (res.effect.messages[0] if res is not None and res.significant and res.effect is not None
-                      and res.effect.messages else (res.messages[0] if res is not None and res.messages else None))
-    rec["message"] = rec["message"] if rec["message"] is None else rec["message"][:400]
+    msgs = [] if res is None else (res.significant and res.effect is not None and res.effect.messages) or res.messages
+    rec["message"] = msgs[0][:400] if msgs else None
     if res is not None and res.effect is not None and res.extended is not None:
         e = res.effect
         rec["law"] = f"{' '.join(e.targets) or e.name} x {e.name} in {e.variable}"

@@ -297,17 +297,11 @@ def condition_runs(df: pd.DataFrame, set_points: Sequence[str] = SET_POINTS) -> 
     sweeps = df["sweep_id"].to_numpy()
     keys = [c for c in set_points if c in df.columns]
     order = sweep_starts(df).sort_values(kind="stable").index
-    if not keys:
-        label = {s: i for i, s in enumerate(order)}
-    else:
-        first = df.groupby(sweeps, sort=False)[keys].first().astype(float).round(6)
-        label, run, prev = {}, -1, None
-        for s in order:
-            cond = tuple(first.loc[s].to_numpy())
-            if cond != prev:
-                run, prev = run + 1, cond
-            label[s] = run
-    return np.array([label[s] for s in sweeps])
+    new_run = np.ones(len(order), bool)  # a sweep whose condition differs from the one before it starts a run
+    if keys:
+        first = df.groupby(sweeps)[keys].first().astype(float).round(6).loc[order]
+        new_run = first.ne(first.shift()).any(axis=1).to_numpy()
+    return pd.Series(np.cumsum(new_run) - 1, index=order).reindex(sweeps).to_numpy()
 
 
 def order_fold(df: pd.DataFrame, kinds: np.ndarray | None, share: float = ORDER_SHARE,
