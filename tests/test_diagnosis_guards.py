@@ -17,7 +17,9 @@ from test_diagnosis import TYRE, _campaign, _measure
 
 from mftire.diagnosis.candidates import Candidate, with_sweeps
 from mftire.diagnosis.diagnose import (
+    NAMED_ALONE_P,
     SAME_HELDOUT,
+    cause_without_any_law,
     cause_without_law,
     condition_runs,
     diagnose,
@@ -29,7 +31,7 @@ from mftire.diagnosis.diagnose import (
     worse_in_sample,
 )
 from mftire.diagnosis.effects import CHANNEL_COEFFICIENTS, EffectFit, plausible_inputs, with_given_channels
-from mftire.diagnosis.ranking import baseline_features, rank_candidates
+from mftire.diagnosis.ranking import CandidateScore, baseline_features, rank_candidates
 from mftire.mf.extensions import identifier_name
 from mftire.tyre import Tyre
 
@@ -273,3 +275,19 @@ def test_run_scatter_is_not_a_finding_when_runs_are_the_units():
     :func:`condition_runs`); with whole runs it holds the level."""
     assert sum(_run_scatter_trial(s, "runs") for s in range(10)) <= 1
     assert sum(_run_scatter_trial(s, "sweeps") for s in range(10)) >= 5
+
+
+def test_without_any_law_the_ranking_alone_names_a_cause_only_at_the_stricter_level():
+    """Issue 21, false findings: when no law of any flagged candidate beat the control refit on the held-out folds,
+    nothing confirms the ranking; its first is named only at p <= NAMED_ALONE_P (half the ranking's 0.05)."""
+    def top(p: float) -> CandidateScore:
+        return CandidateScore("track_temp", "Fy", 0.3, p, True, 0.01, False, False)
+
+    cause, msg = cause_without_any_law(top(0.01), [])
+    assert cause == "track_temp" and msg.startswith("cause named, no law found: track_temp")
+    assert cause_without_any_law(top(NAMED_ALONE_P), [])[0] == "track_temp"
+    cause, msg = cause_without_any_law(top(0.04), [])
+    assert cause is None and msg.startswith("no effect established: track_temp") and "p = 0.04" in msg
+    # two levels of a quantity: the cause is named (the levels differ), no law can be checked between them
+    cause, msg = cause_without_any_law(top(0.04), ["hardness"])
+    assert cause == "track_temp" and "hardness has two levels" in msg

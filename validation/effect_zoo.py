@@ -798,6 +798,7 @@ def evaluate_draw(seed: int, n_perm: int = 99) -> dict:
     top = res.ranking[0] if res is not None and res.ranking else None
     rec["found_first"] = None if top is None else top.variable
     rec["top_significant"] = bool(top is not None and top.significant)
+    rec["top_p"] = None if top is None else float(top.p_value)  # the ranking's permutation p-value of its first
     rec["significant"] = bool(res is not None and res.significant)
     # the cause the diagnosis names: the first of the ranking when it reports an effect, or the cause it
     # names without a law (``DiagnosisResult.cause`` where the method has it: "cause named, no law found")

@@ -29,7 +29,9 @@ Procedure (:func:`diagnose`)
    model most, each refitted without them), is refitted on every row and written.  Its model changes
    only the coefficients of the channels the law acts on.  When none holds: "cause named, no law
    found", the model unchanged; the cause named is the ranking's first unless another candidate's law
-   predicted the common held-out sweeps clearly better (or the first's laws never beat the control).
+   predicted the common held-out sweeps clearly better (or the first's laws never beat the control).  When no
+   law of any candidate beat the control on the held-out folds, nothing confirms the ranking: its first is named
+   only at p <= :data:`NAMED_ALONE_P`, else "no effect established".
 6. Never worse than no effect (issue 21): the law refitted on every row must fit those rows on every
    scored channel at least as well as the given model (:func:`worse_in_sample`; a channel the law does
    not act on keeps its given coefficients, or has them refitted when it reads a channel the law changes,
@@ -139,6 +141,8 @@ class DiagnosisResult:
             return (f"cause named, no law found: {self.cause} explains the residual, but no law in it predicts "
                     "held-out data better than refitting the model without it on every scored channel; the model "
                     "is left unchanged (see the per-sweep profiles)")  # fmt: skip
+        if not self.significant and self.messages and self.messages[0].startswith("no effect established"):
+            return self.messages[0]
         if not self.significant:
             return "no significant effect: the residual is not explained by any candidate beyond the MF inputs"
         e = self.effect
@@ -336,6 +340,11 @@ def order_fold(df: pd.DataFrame, kinds: np.ndarray | None, share: float = ORDER_
 CAUSES_TRIED = 3
 #: Candidates' held-out ratios within this share of the lowest count as equally good (:func:`preferred_cause`).
 SAME_HELDOUT = 0.1
+#: The ranking's p-value at most which its first names the cause alone, when no law of any flagged candidate beat
+#: the control refit on the held-out folds [-]: half the ranking's level (0.05).  A law that predicts held-out sweeps
+#: is a second, independent confirmation; without it the ranking's test alone decides, at a stricter level (on the
+#: effect zoo the nulls flagged there reached p = 0.026-0.05, the effects mostly the permutation floor, 0.01).
+NAMED_ALONE_P = 0.025
 
 
 def preferred_cause(found: Sequence[tuple], test_order: Collection[str | None],
@@ -388,6 +397,23 @@ def cause_without_law(top: CandidateScore, found: Sequence[tuple], best: tuple, 
     if first is None or err[id(best)] * (1.0 + SAME_HELDOUT) < err[id(first)]:
         return best[1]
     return top
+
+
+def cause_without_any_law(top: CandidateScore, two_level: Sequence[str]) -> tuple[str | None, str]:
+    """The cause named, and the message, when no law of any flagged candidate beat the control refit on the held-out
+    folds: the ranking's first (``top``) only at p <= :data:`NAMED_ALONE_P`, since nothing else confirms it; the
+    first (the message names them) when candidates with two levels of a quantity got no law (``two_level``)."""
+    if two_level:
+        return top.variable, (f"cause named, no law found: {', '.join(two_level)} has two levels of a quantity in the "
+                              "data; a law between or beyond them cannot be checked on held-out data, so none is "
+                              "written (test a third level to fit one)")  # fmt: skip
+    if top.p_value > NAMED_ALONE_P:
+        return None, (f"no effect established: {top.variable} was flagged by the ranking (p = {top.p_value:.3g}), but "
+                      "no law of any flagged candidate predicted the held-out folds better than the model refitted "
+                      f"without it, and without a law the ranking alone names a cause only at p <= {NAMED_ALONE_P:g}")
+    return top.variable, (f"cause named, no law found: {top.variable} explains the residual beyond the MF inputs "
+                          f"(ranking p = {top.p_value:.3g}), but no law of any flagged candidate predicted the "
+                          "held-out folds better than the model refitted without it")  # fmt: skip
 
 
 #: |r| across sweeps between an MF operating input's sweep means and the test order beyond which the input's levels
@@ -1007,18 +1033,10 @@ def _diagnose(
     best = preferred_cause(found, {*HISTORY_CANDIDATES, tcol}, errors)
     cand_errors = list(errors)  # one per entry of found, on one footing
     if best is None:
-        # the ranking's first significant candidate is named: it explains the residual beyond the MF inputs, but no
-        # law of any candidate beat the model refitted without an effect on the held-out folds
-        msg = (f"cause named, no law found: {top.variable} explains the residual beyond the MF inputs (ranking p = "
-               f"{top.p_value:.3g}), but no law of any flagged candidate predicted the held-out folds better than "
-               "the model refitted without it")  # fmt: skip
-        if two_level:
-            msg = (f"cause named, no law found: {', '.join(two_level)} has two levels of a quantity in the data; a law "
-                   "between or beyond them cannot be checked on held-out data, so none is written (test a third "
-                   "level to fit one)")  # fmt: skip
+        cause, msg = cause_without_any_law(top, two_level)
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
-                               profiles=profiles, cause=top.variable)  # fmt: skip
+                               profiles=profiles, cause=cause)  # fmt: skip
     # the preferred candidate first, then the others by held-out error: when every law of one is refused (by the
     # control refitted in full or on the held-out condition), the next candidate's laws are tried
     order = [best] + [found[i] for i in sorted(range(len(found)), key=errors.__getitem__) if found[i] is not best]
