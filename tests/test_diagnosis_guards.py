@@ -10,6 +10,8 @@ Campaigns as in tests/test_diagnosis.py (a known MF tyre, one injected effect).
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -291,3 +293,17 @@ def test_without_any_law_the_ranking_alone_names_a_cause_only_at_the_stricter_le
     # two levels of a quantity: the cause is named (the levels differ), no law can be checked between them
     cause, msg = cause_without_any_law(top(0.04), ["hardness"])
     assert cause == "track_temp" and "hardness has two levels" in msg
+
+
+def test_without_any_law_a_sign_of_the_slip_is_never_named_alone():
+    """Issue 21: sign_alpha ranked first with no law that works (not even its own asymmetry law) is a misfit of the
+    characteristic's shape in the operating point, not a column: on the effect zoo it was named in ten draws (one a
+    null) and never generated an effect.  It names no cause, and says why, however small its p-value."""
+    top = CandidateScore("sign_alpha", "Mz", 0.31, 0.01, True, 0.03, False, True)
+    cause, msg = cause_without_any_law(top, [])
+    assert cause is None
+    assert msg.startswith("no effect established: the residual of Mz is asymmetric in the slip")
+    assert "(sign_alpha explains 31% of it" in msg
+    assert cause_without_any_law(dataclasses.replace(top, variable="sign_kappa"), [])[0] is None
+    # a direction of the sweep is not a function of the operating point: hysteresis is an effect
+    assert cause_without_any_law(dataclasses.replace(top, variable="sweep_dir"), [])[0] == "sweep_dir"

@@ -89,6 +89,7 @@ from mftire.diagnosis.effects import (
 from mftire.diagnosis.holdout import default_holdout, holdout_mask, levels
 from mftire.diagnosis.profile import CONFOUND_R, SECOND_INPUTS, Profiles, profile_factors
 from mftire.diagnosis.ranking import (
+    SIGN_CANDIDATES,
     CandidateScore,
     baseline_features,
     rank_candidates,
@@ -402,11 +403,23 @@ def cause_without_law(top: CandidateScore, found: Sequence[tuple], best: tuple, 
 def cause_without_any_law(top: CandidateScore, two_level: Sequence[str]) -> tuple[str | None, str]:
     """The cause named, and the message, when no law of any flagged candidate beat the control refit on the held-out
     folds: the ranking's first (``top``) only at p <= :data:`NAMED_ALONE_P`, since nothing else confirms it; the
-    first (the message names them) when candidates with two levels of a quantity got no law (``two_level``)."""
+    first (the message names them) when candidates with two levels of a quantity got no law (``two_level``).  A sign
+    of the slip (:data:`~mftire.diagnosis.ranking.SIGN_CANDIDATES`) is never named alone: it is a function of the MF
+    operating point, and a residual it explains in every run is a misfit of the characteristic's shape (the fitted
+    coefficients' compromise when an effect is confounded with the load blocks, say), not a missing variable; only a
+    law in it that predicts held-out sweeps (an asymmetry of grip) makes it a cause."""
     if two_level:
         return top.variable, (f"cause named, no law found: {', '.join(two_level)} has two levels of a quantity in the "
                               "data; a law between or beyond them cannot be checked on held-out data, so none is "
                               "written (test a third level to fit one)")  # fmt: skip
+    if top.variable in SIGN_CANDIDATES:
+        return None, (f"no effect established: the residual of {top.channel} is asymmetric in the slip "
+                      f"({top.variable} explains {top.score:.0%} of it beyond the MF inputs, ranking p = "
+                      f"{top.p_value:.3g}), but no law of any flagged candidate, the asymmetry's own among them, "
+                      "predicted the held-out folds better than "
+                      "the model refitted without it.  A residual that follows the sign of the slip in every run is a "
+                      "function of the operating point: a shape the fitted coefficients do not reproduce, or the "
+                      "trace of an effect confounded with the operating conditions, not a column; none is named")
     if top.p_value > NAMED_ALONE_P:
         return None, (f"no effect established: {top.variable} was flagged by the ranking (p = {top.p_value:.3g}), but "
                       "no law of any flagged candidate predicted the held-out folds better than the model refitted "
