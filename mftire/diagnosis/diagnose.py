@@ -758,6 +758,50 @@ def worse_in_sample(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Seq
     return [e.channel for e in worse_errors(errs, noise, GUARD_ALLOWANCE)]
 
 
+#: A variable with at most this many levels is checked level by level (:func:`worse_in_ranges`), else in
+#: :data:`RANGES` contiguous ranges of its sweep means.
+RANGE_LEVELS = 6
+RANGES = 4
+
+
+def variable_ranges(v: np.ndarray, sweeps: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """The ranges of a law's variable (values ``v`` per row) on which :func:`worse_in_ranges` compares the models:
+    each level (at most :data:`RANGE_LEVELS` of them), else :data:`RANGES` contiguous ranges of the sweeps' mean
+    values.  ``[(label, row mask), ...]``."""
+    v = np.asarray(v, float)
+    ok = np.isfinite(v)
+    lv = np.unique(np.round(v[ok], 6))
+    if lv.size <= RANGE_LEVELS:
+        return [(f"{x:g}", ok & np.isclose(v, x, rtol=0.0, atol=1e-6)) for x in lv]
+    means = pd.Series(v).groupby(np.asarray(sweeps)).transform("mean").to_numpy()
+    edges = np.nanquantile(means, np.linspace(0.0, 1.0, RANGES + 1))
+    out = []
+    for i in range(RANGES):
+        rows = ok & (means >= edges[i]) & ((means < edges[i + 1]) if i < RANGES - 1 else (means <= edges[i + 1]))
+        if rows.any():
+            out.append((f"{edges[i]:.4g} to {edges[i + 1]:.4g}", rows))
+    return out
+
+
+def worse_in_ranges(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Sequence[str],
+                    noise: Mapping[str, float], v: np.ndarray) -> list[str]:
+    """Where the law's model ``extended``, refitted on every row, fits a range of its own variable (``v`` per row of
+    ``df``; :func:`variable_ranges`) worse than the given model on a scored channel, beyond :data:`GUARD_ALLOWANCE` ×
+    the allowance of :func:`~mftire.diagnosis.effects.is_worse`, in words (empty: nowhere).  A law that fits the
+    variable better overall but a level of it worse than no law has the wrong shape (a straight line through an
+    optimum): a user at that level gets a worse model than the one given."""
+    sweeps = df["sweep_id"].to_numpy() if "sweep_id" in df.columns else np.arange(len(df))
+    mg, me = _model(given, df), _model(extended, df)
+    out = []
+    for label, rows in variable_ranges(v, sweeps):
+        sub = df[rows]
+        errs = channel_errors(sub, {ch: m[rows] for ch, m in mg.items()}, {ch: m[rows] for ch, m in me.items()},
+                              channels)  # fmt: skip
+        out += [f"{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g} at {label}"
+                for e in worse_errors(errs, noise, GUARD_ALLOWANCE)]  # fmt: skip
+    return out
+
+
 @dataclass
 class _HeldOutJudge:
     """Judges a candidate's refined laws on the diagnosis's held-out condition (``test``: its rows); keeps the
@@ -1153,6 +1197,17 @@ def _diagnose(
             effect.messages.append(f"{', '.join(worse)}: its coefficients refitted on every row with the law (it "
                                    "reads the channels the law changes)")  # fmt: skip
             extended, worse = refit, []
+    if not worse and values_all is not None:
+        ranges = worse_in_ranges(pall.df, tyre, extended, chans, noise, values_all)
+        if ranges:
+            msg = (f"cause named, no law found: {effect.name} in {effect.variable}, refitted on every row, fits the "
+                   f"data better overall but a range of {effect.variable} worse than the given model ("
+                   + "; ".join(ranges) + "): the law's shape does not hold across the variable, and a user at that "
+                   "range would get a worse model; the model is left unchanged")  # fmt: skip
+            held_out = {"column": column, "values": values, "n_rows": int(test.sum())}
+            return DiagnosisResult(False, ranking, None, held_out, [], None, tried + [effect], messages=[msg], data=df,
+                                   train=train, not_measured=not_measured, profiles=profiles,
+                                   cause=cause.variable)  # fmt: skip
     if worse:
         msg = (f"cause named, no law found: {effect.name} in {effect.variable}, refitted on every row, fits "
                f"{', '.join(worse)} worse than the given model on those same rows; the model is left unchanged")
