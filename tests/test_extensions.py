@@ -97,7 +97,12 @@ def test_stiffness_term_moves_stiffness_not_friction():
         ("saturating", {"ref": 0.0, "scale": 100.0, "c1": -0.3, "c2": 2.0}, -50.0, 1.0),
         ("power", {"ref": 4000.0, "c1": -0.5}, 16000.0, 0.5),
         ("decay", {"scale": 10.0, "c1": 1.0}, 10.0, 0.5),
-        ("table", {"l1": 0.0, "l2": 1.0, "c1": 0.0, "c2": -0.3}, 0.9, 0.7),
+        # a table is linear between its levels (a temperature between two tested ones), the end value beyond them
+        ("table", {"l1": 0.0, "l2": 1.0, "c1": 0.0, "c2": -0.3}, 0.9, 0.73),
+        ("table", {"l1": 0.0, "l2": 1.0, "c1": 0.0, "c2": -0.3}, 1.0, 0.7),
+        ("table", {"l1": 0.0, "l2": 1.0, "c1": 0.0, "c2": -0.3}, 7.0, 0.7),
+        ("table", {"l1": 0.0, "l2": 1.0, "c1": 0.1, "c2": -0.3}, -2.0, 1.1),
+        ("table", {"l1": 50.0, "l2": 10.0, "l3": 30.0, "c1": 0.2, "c2": -0.2, "c3": 0.0}, 40.0, 1.1),  # any order
         ("linear", {"ref": 10.0, "scale": 5.0, "min": 0.0, "max": 15.0, "c1": 0.1}, 40.0, 1.1),  # clipped
     ],
 )

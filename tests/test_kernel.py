@@ -278,8 +278,9 @@ EXTENDED = {
     "EXT3_TARGET": "FX_OFFSET", "EXT3_FORM": "linear", "EXT3_VARIABLE": "sign_kappa", "EXT3_C1": 0.005,
     "EXT4_TARGET": "LEY FY_OFFSET", "EXT4_FORM": "interaction", "EXT4_VARIABLE": "wear",
     "EXT4_VARIABLE2": "temperature", "EXT4_C1": 0.05, "EXT4_C2": -0.03, "EXT4_SCALE2": 30.0,
-    "EXT5_TARGET": "LKYC LMY", "EXT5_FORM": "table", "EXT5_VARIABLE": "dfz", "EXT5_L1": -0.5, "EXT5_L2": 0.0,
-    "EXT5_L3": 0.5, "EXT5_C1": 0.1, "EXT5_C2": 0.0, "EXT5_C3": -0.1,
+    # a table in any order of its levels, linear between them (dfz is continuous here)
+    "EXT5_TARGET": "LKYC LMY", "EXT5_FORM": "table", "EXT5_VARIABLE": "dfz", "EXT5_L1": 0.5, "EXT5_L2": -0.5,
+    "EXT5_L3": 0.0, "EXT5_C1": -0.1, "EXT5_C2": 0.1, "EXT5_C3": 0.0,
     "EXT6_TARGET": "LRES", "EXT6_FORM": "saturating", "EXT6_VARIABLE": "P", "EXT6_REF": 2.2e5, "EXT6_SCALE": 5e4,
     "EXT6_C1": 0.3, "EXT6_C2": 2.0,
     # the constant part of an offset law (mftire.diagnosis.effects.intercept_term): a one-level table, summed with

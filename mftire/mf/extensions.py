@@ -42,7 +42,8 @@ form             f                                               use
 ``decay``        1/(1 + C1·max(z, 0))                            friction decaying with slip speed:
                                                                  Pacejka 2012 eq 4.E7 (C1 = LMUV,
                                                                  v = Vs, SCALE = LONGVL)
-``table``        1 + C_k, k the level L_k nearest to u           a categorical variable (road surface)
+``table``        1 + C(u), C linear between the levels L_k       a variable tested at a few levels (road
+                 (C = C_k at L_k), the end values beyond them    surface, compound, temperature steps)
 ``interaction``  1 + C1·z + C2·z·z2                              a condition flag times a variable
                                                                  (grip loss on wet growing with speed)
 ``hinge``        1 + C1·max(z − C2, 0)                           a change above a threshold C2 (grip
@@ -192,12 +193,15 @@ def _decay(u, z, z2, ref, c):
 def _table(u, z, z2, ref, c):
     n = len(c) // 2
     levels, values = np.asarray(c[:n], float), c[n:]
-    k = np.argmin(np.abs(np.asarray(u, float)[..., None] - levels), axis=-1)
-    # the value of the nearest level as a sum of selected terms (1 + 0 + ... + C_k: the same number as an
-    # index), so that the coefficients carry their derivatives (mftire.mf.derivatives)
+    order = np.argsort(levels)
+    u = np.asarray(u, float)
+    # piecewise linear between the levels, the end values beyond them: 1 + sum_k C_k·w_k(u) with the hat weights
+    # w_k of the sorted levels (np.interp of the k-th unit vector), so that the coefficients carry their derivatives
+    # (mftire.mf.derivatives); w_k = 1 at L_k
     out = 1.0
     for i, v in enumerate(values):
-        out = out + v * (k == i)
+        w = np.interp(u, levels[order], (order == i).astype(float))
+        out = out + v * w
     return out
 
 
@@ -250,7 +254,7 @@ FORMS: dict[str, Form] = {
              "pow(fmax(u, 1e-12) / ref, c[0])", _power, amplitudes=()),
         Form("decay", "1/(1 + C1·max(z, 0))", 1, ((0.0, 20.0),), (0.0,),
              "1.0 / (1.0 + c[0] * fmax(z, 0.0))", _decay, equation="Pacejka 2012 eq 4.E7", amplitudes=()),
-        Form("table", "1 + C_k, k: level L_k nearest to u", 0, ((-0.9, 2.0),), (0.0,),
+        Form("table", "1 + C(u): C_k at level L_k, linear between levels, constant beyond", 0, ((-0.9, 2.0),), (0.0,),
              "1.0 + mf_ext_table(u, c, n)", _table),
         Form("interaction", "1 + C1·z + C2·z·z2", 2, ((-2.0, 2.0), (-2.0, 2.0)), (0.0, 0.0),
              "1.0 + c[0] * z + c[1] * z * z2", _interaction, two_variables=True, amplitudes=(0, 1)),
@@ -561,6 +565,9 @@ def parse_section(section: Mapping[str, object] | None) -> ExtensionSet:
             if not 1 <= nl <= MAX_LEVELS or t.level_keys != tuple(f"EXT{n}_L{i}" for i in range(1, nl + 1)):
                 raise MftireInputError(f"[{SECTION}] EXT{n}: a table needs levels EXT{n}_L1..L{{k}}, 1 <= k <= "
                                        f"{MAX_LEVELS}")  # fmt: skip
+            lv = [numbers[k] for k in t.level_keys]
+            if len(set(lv)) != len(lv):
+                raise MftireInputError(f"[{SECTION}] EXT{n}: the levels of a table must differ ({lv})")
         extra = [k for k in numbers if re.fullmatch(rf"EXT{n}_C\d+", k) and k not in t.coefficient_keys]
         if extra:
             raise MftireInputError(f"[{SECTION}] {extra[0]}: the {form.name} form has no such coefficient")

@@ -1084,14 +1084,22 @@ typedef struct {
 } ExtTable;
 
 #if MF_N_TERMS > 0 || defined(MF_EXT_RUNTIME)
-/* The value of the table form: c holds the n levels, then the n values; nearest level wins
- * (numpy argmin: the first of equal distances). */
+/* The value of the table form: c holds the n levels (any order), then the n values; linear between the
+ * levels bracketing u, the value of the end level beyond them (numpy: np.interp of each value's hat weight,
+ * mftire.mf.extensions._table).  NaN gives NaN. */
 MF_FN double mf_ext_table(double u, const double *c, int n)
 {
-    int k, best = 0;
-    for (k = 1; k < n; k++)
-        if (fabs(u - c[k]) < fabs(u - c[best])) best = k;
-    return c[n + best];
+    int k, lo = -1, hi = -1;
+    double w;
+    if (u != u) return u;
+    for (k = 0; k < n; k++) {
+        if (c[k] <= u && (lo < 0 || c[k] > c[lo])) lo = k;
+        if (c[k] >= u && (hi < 0 || c[k] < c[hi])) hi = k;
+    }
+    if (lo < 0) return c[n + hi];
+    if (hi < 0 || c[hi] == c[lo]) return c[n + lo];
+    w = (u - c[lo]) / (c[hi] - c[lo]);
+    return c[n + lo] * (1.0 - w) + c[n + hi] * w;
 }
 
 /* q = p with the targeted scaling factors multiplied by f; off[0], off[1] the FX/FY offset sums; off[2],

@@ -49,7 +49,8 @@ MF_FN double mf_dfz(const MFParams *p, double Fz);
 MF_FN double mf_dpi(const MFParams *p, double P);
 
 #if MF_N_TERMS > 0 || defined(MF_EXT_RUNTIME) /* terms compiled in, or given at run time (mf_ext_gen.h) */
-/* The table form: c holds the n levels, then the n values; the value of the level nearest u. */
+/* The table form: c holds the n levels, then the n values; linear between the levels bracketing u, the end
+ * level's value beyond them. */
 MF_FN double mf_ext_table(double u, const double *c, int n);
 #endif
 

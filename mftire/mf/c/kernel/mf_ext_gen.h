@@ -51,7 +51,7 @@ static double mf_ext_form(int form, double u, double z, double z2, double ref, c
     case 2: return 1.0 + c[0] * (1.0 - exp(-c[1] * fmax(z, 0.0))); /* saturating: 1 + C1_(1 _ exp(_C2_max(z, 0))) */
     case 3: return pow(fmax(u, 1e-12) / ref, c[0]); /* power: (max(u, 1e-12)/REF)^C1 */
     case 4: return 1.0 / (1.0 + c[0] * fmax(z, 0.0)); /* decay: 1/(1 + C1_max(z, 0)) */
-    case 5: return 1.0 + mf_ext_table(u, c, n); /* table: 1 + C_k, k: level L_k nearest to u */
+    case 5: return 1.0 + mf_ext_table(u, c, n); /* table: 1 + C(u): C_k at level L_k, linear between levels, constant beyond */
     case 6: return 1.0 + c[0] * z + c[1] * z * z2; /* interaction: 1 + C1_z + C2_z_z2 */
     case 7: return 1.0 + c[0] * fmax(z - c[1], 0.0); /* hinge: 1 + C1_max(z _ C2, 0) */
     case 8: return 1.0 + c[0] * (double)((z > 0.0) - (z < 0.0)); /* direction: 1 + C1_sgn(z) */
