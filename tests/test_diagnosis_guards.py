@@ -30,11 +30,13 @@ from mftire.diagnosis.diagnose import (
     order_fold,
     preferred_cause,
     rival_notes,
+    variable_ranges,
+    worse_in_ranges,
     worse_in_sample,
 )
 from mftire.diagnosis.effects import CHANNEL_COEFFICIENTS, EffectFit, plausible_inputs, with_given_channels
 from mftire.diagnosis.ranking import CandidateScore, baseline_features, rank_candidates
-from mftire.mf.extensions import identifier_name
+from mftire.mf.extensions import SECTION, identifier_name
 from mftire.tyre import Tyre
 
 pytestmark = pytest.mark.filterwarnings("ignore::mftire.mf.inputs.MFLimitWarning")
@@ -307,3 +309,26 @@ def test_without_any_law_a_sign_of_the_slip_is_never_named_alone():
     assert cause_without_any_law(dataclasses.replace(top, variable="sign_kappa"), [])[0] is None
     # a direction of the sweep is not a function of the operating point: hysteresis is an effect
     assert cause_without_any_law(dataclasses.replace(top, variable="sweep_dir"), [])[0] == "sweep_dir"
+
+
+def test_a_law_that_fits_one_level_of_its_variable_worse_than_the_given_model_is_found_there():
+    """Issue 21, never worse: a law better overall can be worse at one level of its variable (a straight line through
+    an optimum: zoo seed 1152, Fx 94.8 -> 300 N at tread_depth 8).  worse_in_ranges names that level and only it; a
+    continuous variable is checked in quarter ranges of its sweep means."""
+    df = with_sweeps(_campaign(3))
+    level = np.array([55.0, 60.0, 65.0])[df["sweep_id"].to_numpy() % 3]
+    data = _measure(df.assign(hardness=level), None).assign(hardness=level)
+    noise = {ch: 0.01 * float(np.max(np.abs(data[ch]))) for ch in ("Fx", "Fy", "Mz")}
+
+    def with_table(c3: float) -> Tyre:
+        flat = dict(TYRE.flat)
+        flat[SECTION] = {"EXT1_TARGET": "LMUX", "EXT1_FORM": "table", "EXT1_VARIABLE": "hardness", "EXT1_L1": 55.0,
+                         "EXT1_L2": 60.0, "EXT1_L3": 65.0, "EXT1_C1": 0.0, "EXT1_C2": 0.0, "EXT1_C3": c3}
+        return Tyre(flat)
+
+    out = worse_in_ranges(data, TYRE, with_table(0.1), ["Fx", "Fy", "Mz"], noise, level)
+    assert len(out) == 1 and out[0].startswith("Fx RMS") and out[0].endswith("at 65")
+    assert worse_in_ranges(data, TYRE, with_table(0.0), ["Fx", "Fy", "Mz"], noise, level) == []
+    # a continuous variable: four contiguous ranges of the sweeps' means, every row in one
+    ranges = variable_ranges(data["tread_temp"].to_numpy(), data["sweep_id"].to_numpy())
+    assert len(ranges) == 4 and sum(int(r.sum()) for _, r in ranges) == len(data)
