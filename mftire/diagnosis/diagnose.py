@@ -31,11 +31,14 @@ Procedure (:func:`diagnose`)
    found", the model unchanged; the cause named is the ranking's first unless another candidate's law
    predicted the common held-out sweeps clearly better (or the first's laws never beat the control).  When no
    law of any candidate beat the control on the held-out folds, nothing confirms the ranking: its first is named
-   only at p <= :data:`NAMED_ALONE_P`, else "no effect established".
+   only at p <= :data:`NAMED_ALONE_P`, else "no effect established"; a sign of the slip (sign_alpha, sign_kappa)
+   is never named alone (a function of the operating point, not a column).
 6. Never worse than no effect (issue 21): the law refitted on every row must fit those rows on every
    scored channel at least as well as the given model (:func:`worse_in_sample`; a channel the law does
    not act on keeps its given coefficients, or has them refitted when it reads a channel the law changes,
-   as Mz reads Fx); an input law stays within physical limits
+   as Mz reads Fx), and so must it at every level (or quarter range) of its own variable
+   (:func:`worse_in_ranges`: a straight line through an optimum is better overall and worse at a level); an
+   input law stays within physical limits
    (:func:`~mftire.diagnosis.effects.plausible_inputs`); a candidate with two levels of a quantity (not a
    flag, not an MF input) gets no law, since nothing can check its form between the levels; nor does an MF
    operating input whose levels were tested in an order that follows the programme while a measured column
@@ -758,6 +761,9 @@ def worse_in_sample(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Seq
     return [e.channel for e in worse_errors(errs, noise, GUARD_ALLOWANCE)]
 
 
+#: A range of its variable where the law's model is worse than the given model by more than this RMS ratio (and
+#: beyond the noise allowance) refuses the law (:func:`worse_in_ranges`): issue 21's own measure of "worse", 5 %.
+RANGE_WORSE = 1.05
 #: A variable with at most this many levels is checked level by level (:func:`worse_in_ranges`), else in
 #: :data:`RANGES` contiguous ranges of its sweep means.
 RANGE_LEVELS = 6
@@ -787,7 +793,8 @@ def worse_in_ranges(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Seq
                     noise: Mapping[str, float], v: np.ndarray) -> list[str]:
     """Where the law's model ``extended``, refitted on every row, fits a range of its own variable (``v`` per row of
     ``df``; :func:`variable_ranges`) worse than the given model on a scored channel, beyond :data:`GUARD_ALLOWANCE` ×
-    the allowance of :func:`~mftire.diagnosis.effects.is_worse`, in words (empty: nowhere).  A law that fits the
+    the allowance of :func:`~mftire.diagnosis.effects.is_worse` and by more than :data:`RANGE_WORSE` in RMS, in
+    words (empty: nowhere).  A law that fits the
     variable better overall but a level of it worse than no law has the wrong shape (a straight line through an
     optimum): a user at that level gets a worse model than the one given."""
     sweeps = df["sweep_id"].to_numpy() if "sweep_id" in df.columns else np.arange(len(df))
@@ -798,7 +805,7 @@ def worse_in_ranges(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Seq
         errs = channel_errors(sub, {ch: m[rows] for ch, m in mg.items()}, {ch: m[rows] for ch, m in me.items()},
                               channels)  # fmt: skip
         out += [f"{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g} at {label}"
-                for e in worse_errors(errs, noise, GUARD_ALLOWANCE)]  # fmt: skip
+                for e in worse_errors(errs, noise, GUARD_ALLOWANCE) if e.rms_after > RANGE_WORSE * e.rms_before]
     return out
 
 
@@ -853,9 +860,17 @@ class _HeldOutJudge:
             if not worse and gain > 0.0:
                 late = _worse_elsewhere(prob, refined, ext_r, ctrl_r, values, self.n_pressures, effect_channels,
                                         self.channels, self.noise, self.column)  # fmt: skip
-                if not late:
+                if late:
+                    self._refused(refined, "made " + "; ".join(late), rejected)
+                    continue
+                # every level (or quarter range) of the law's variable, in sample against the given model: a law of the
+                # wrong shape is refused here, and the next variant (a table, a curved law) gets its turn
+                ranges = [] if values is None else worse_in_ranges(prob.df, self.tyre, ext_r, self.channels,
+                                                                    self.noise, values)  # fmt: skip
+                if not ranges:
                     return (eff_r, ext_r, errs), rejected
-                self._refused(refined, "made " + "; ".join(late), rejected)
+                self._refused(refined, "fits a range of its variable worse than the given model (" + "; ".join(ranges)
+                              + ")", rejected)  # fmt: skip
                 continue
             what = ", ".join(f"{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g}" for e in errs
                              if e.channel in worse)  # fmt: skip
@@ -1156,6 +1171,7 @@ def _diagnose(
     ranking.remove(cause)
     ranking.insert(0, cause)
     effect, extended, errors = accepted
+    judged_model = extended  # the law's model judged on the held-out condition (fitted without it)
     if rejected:
         effect.messages.append("not chosen on the held-out condition: " + "; ".join(rejected))
 
@@ -1199,6 +1215,13 @@ def _diagnose(
             extended, worse = refit, []
     if not worse and values_all is not None:
         ranges = worse_in_ranges(pall.df, tyre, extended, chans, noise, values_all)
+        if ranges and not worse_in_sample(pall.df, tyre, judged_model, chans, noise) \
+                and not worse_in_ranges(pall.df, tyre, judged_model, chans, noise, values_all):
+            # the refit on every row found another optimum that fits a range worse; the model judged on the held-out
+            # condition (fitted without it) fits every row and every range at least as well as the given model
+            effect.messages.append("the law as fitted without the held-out condition (the refit on every row fitted "
+                                   + "; ".join(ranges) + " worse than the given model)")  # fmt: skip
+            extended, ranges = judged_model, []
         if ranges:
             msg = (f"cause named, no law found: {effect.name} in {effect.variable}, refitted on every row, fits the "
                    f"data better overall but a range of {effect.variable} worse than the given model ("
