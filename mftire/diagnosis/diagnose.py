@@ -860,17 +860,9 @@ class _HeldOutJudge:
             if not worse and gain > 0.0:
                 late = _worse_elsewhere(prob, refined, ext_r, ctrl_r, values, self.n_pressures, effect_channels,
                                         self.channels, self.noise, self.column)  # fmt: skip
-                if late:
-                    self._refused(refined, "made " + "; ".join(late), rejected)
-                    continue
-                # every level (or quarter range) of the law's variable, in sample against the given model: a law of the
-                # wrong shape is refused here, and the next variant (a table, a curved law) gets its turn
-                ranges = [] if values is None else worse_in_ranges(prob.df, self.tyre, ext_r, self.channels,
-                                                                    self.noise, values)  # fmt: skip
-                if not ranges:
+                if not late:
                     return (eff_r, ext_r, errs), rejected
-                self._refused(refined, "fits a range of its variable worse than the given model (" + "; ".join(ranges)
-                              + ")", rejected)  # fmt: skip
+                self._refused(refined, "made " + "; ".join(late), rejected)
                 continue
             what = ", ".join(f"{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g}" for e in errs
                              if e.channel in worse)  # fmt: skip
