@@ -772,13 +772,16 @@ RANGES = 4
 
 def variable_ranges(v: np.ndarray, sweeps: np.ndarray) -> list[tuple[str, np.ndarray]]:
     """The ranges of a law's variable (values ``v`` per row) on which :func:`worse_in_ranges` compares the models:
-    each level (at most :data:`RANGE_LEVELS` of them), else :data:`RANGES` contiguous ranges of the sweeps' mean
-    values.  ``[(label, row mask), ...]``."""
+    each level (at most :data:`RANGE_LEVELS` of them) holding at least half its share of the rows, else
+    :data:`RANGES` contiguous ranges of the sweeps' mean values.  ``[(label, row mask), ...]``."""
     v = np.asarray(v, float)
     ok = np.isfinite(v)
     lv = np.unique(np.round(v[ok], 6))
     if lv.size <= RANGE_LEVELS:
-        return [(f"{x:g}", ok & np.isclose(v, x, rtol=0.0, atol=1e-6)) for x in lv]
+        # a level holding less than half its share of the rows is a fragment, not a condition a user tests (the
+        # turning points of the sweeps, sweep_dir = 0, where a direction law is 1 anyway)
+        rows = [(f"{x:g}", ok & np.isclose(v, x, rtol=0.0, atol=1e-6)) for x in lv]
+        return [(label, r) for label, r in rows if r.sum() >= ok.sum() / (2 * lv.size)]
     means = pd.Series(v).groupby(np.asarray(sweeps)).transform("mean").to_numpy()
     edges = np.nanquantile(means, np.linspace(0.0, 1.0, RANGES + 1))
     out = []
