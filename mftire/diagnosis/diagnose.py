@@ -1217,6 +1217,7 @@ def _diagnose(
             effect.messages.append("the law as fitted without the held-out condition (the refit on every row fitted "
                                    + "; ".join(ranges) + " worse than the given model)")  # fmt: skip
             extended, ranges = judged_model, []
+            effect.written = "the law as fitted without the held-out condition (the range check's fallback)"
         if ranges:
             msg = (f"cause named, no law found: {effect.name} in {effect.variable}, refitted on every row, fits the "
                    f"data better overall but a range of {effect.variable} worse than the given model ("
@@ -1236,7 +1237,7 @@ def _diagnose(
     effect.section = {k: v for k, v in (extended.extensions or {}).items() if k not in (tyre.extensions or {})}
     effect.parameters = {k: float(v) for k, v in effect.section.items() if isinstance(v, float) and "_C" in k}
     effect.messages.append(f"held out: {column} = {values} (the law's model and the control refitted without "
-                           "it); the model written is the law refitted on every row")  # fmt: skip
+                           f"it); the model written is {effect.written}")  # fmt: skip
     full_after = _model(extended, df)
     for ch in chans:
         df[f"residual_after_{ch}"] = df[ch].to_numpy(float) - full_after[ch]

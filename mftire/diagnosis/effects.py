@@ -176,6 +176,10 @@ def refit_bounds(key: str, value: float) -> tuple[float, float]:
     return (min(lo, value), max(hi, value)) if lo < hi else (value - 1e-3, value + 1e-3)
 
 
+#: The model of a law the diagnosis writes, normally: refitted on every row (the held-out condition too).
+WRITTEN_EVERY_ROW = "the law refitted on every row"
+
+
 @dataclass
 class EffectFit:
     """A fitted effect."""
@@ -199,6 +203,7 @@ class EffectFit:
     law: Law | None = None  #: the law fitted
     rejected: bool = False  #: a scored channel was worse on held-out folds than under the control
     refit: str = "main"  #: how the chosen model was refitted: its "main" coefficients or "all" (staged fitter)
+    written: str = WRITTEN_EVERY_ROW  #: which model of the law was written (the diagnosis's last step)
     control_tyre: Tyre | None = field(default=None, repr=False)  #: the control refitted the same way
     control: EffectFit | None = field(default=None, repr=False)  #: the control of the same channels (local fit)
 

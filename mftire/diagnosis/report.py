@@ -10,6 +10,7 @@ import numpy as np
 from matplotlib import colormaps
 
 from mftire.diagnosis.diagnose import DiagnosisResult
+from mftire.diagnosis.effects import WRITTEN_EVERY_ROW
 from mftire.iotools.atomic import atomic_path, write_text_atomic
 from mftire.iotools.output import safe_name
 from mftire.iotools.tir import write_tir
@@ -41,6 +42,7 @@ def to_json(result: DiagnosisResult, extended_tir: str | None) -> dict:
             "refitted_coefficients": e.standard,
             "training_residual_removed": e.removed,
             "messages": e.messages,
+            "written": e.written,
         }
     return {
         "significant": bool(result.significant),
@@ -144,7 +146,7 @@ def _markdown(doc: dict) -> str:
         lines += ["## Held-out condition", "",
                   f"{h['column']} = {vals} ({h['n_rows']} rows, not used in any fit). Before: the model "
                   "refitted without the law (the control), after: with it, both on the same training rows; "
-                  "the model written is the law refitted on every row.", "",
+                  f"the model written is {(doc.get('effect') or {}).get('written', WRITTEN_EVERY_ROW)}.", "",
                   "| channel | RMS before | RMS after | RMS % of peak before | after | residual variance removed |",
                   "|---|---:|---:|---:|---:|---:|"]  # fmt: skip
         for ch, c in h["channels"].items():
