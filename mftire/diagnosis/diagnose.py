@@ -1113,6 +1113,7 @@ def _diagnose(
     all_variants: list[EffectFit] = []
     accepted = None
     judge = _HeldOutJudge(tyre, dtest, chans, noise, n_pressures, column)
+    refit_cache: dict = {}  # the full refits of the candidates' laws and controls (one control for every candidate)
     drifting = [e.variable for e in significant]  # the judged causes are among them
     dvals = {name: by_name[name].values[train] for name in drifting if name in by_name}
     for judged in order[:CAUSES_TRIED]:  # judged: after the loop, the entry of found whose law is accepted
@@ -1127,7 +1128,7 @@ def _diagnose(
         say(f"refitting every coefficient with the laws of {effect.variable}")
         prob, law_fits, eff_ch, folds, in_blocks, control_cv, control_channels, local_control, forward = context
         variants, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv, control_channels,
-                                        local_control, forward)  # fmt: skip
+                                        local_control, forward, refit_cache)  # fmt: skip
         if not variants:
             refits.append(f"{cause.variable}: " + "; ".join(notes))
             continue

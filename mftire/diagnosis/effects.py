@@ -917,17 +917,28 @@ REFINE_LAWS = 3
 REFIT_STAGES = "1,2,3,4,5"
 
 
-def _full_refit(data: pd.DataFrame, tyre: Tyre, stages: str = REFIT_STAGES) -> Tyre:
+def _full_refit(data: pd.DataFrame, tyre: Tyre, stages: str = REFIT_STAGES,
+                cache: dict | None = None) -> Tyre:
     """The staged fit (:func:`mftire.fitting.fit_tir`) of the rows ``data`` (without the diagnosis's own columns,
     ``residual_*`` and ``_*``), started from ``tyre`` (its extension terms included): a global refit of every
     coefficient of ``stages`` (default :data:`REFIT_STAGES`, the force and aligning-moment stages), with the
-    fitter's own start values; the other stages' coefficients, Mx and My, stay as they are."""
+    fitter's own start values; the other stages' coefficients, Mx and My, stay as they are.
+    ``cache`` (one diagnosis's dict) keeps each refit's parameters by its rows, start and stages: the control
+    is refitted on the same rows for every candidate, and two laws may start the same model."""
+    import hashlib
     import warnings
 
     from mftire.fitting.fitter import fit_tir
 
     cols = [c for c in data.columns if not str(c).startswith(("residual_", "_"))]
     table = data[cols]
+    key = None
+    if cache is not None:
+        rows = pd.util.hash_pandas_object(table, index=False).to_numpy()
+        key = (tuple(map(str, cols)), hashlib.sha1(rows.tobytes()).hexdigest(), tuple(sorted(tyre.flat.items())),
+               repr(sorted((tyre.extensions or {}).items())), stages)  # fmt: skip
+        if key in cache:
+            return Tyre(cache[key].copy(), name=tyre.name)
     if "sweep_id" in table.columns:
         # the sweeps as found on the full data (mftire.diagnosis.candidates.with_sweeps): the fitter groups sweeps
         # in row order again, and on rows thinned by outlier removal or a held-out condition the tail of a
@@ -937,6 +948,8 @@ def _full_refit(data: pd.DataFrame, tyre: Tyre, stages: str = REFIT_STAGES) -> T
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = fit_tir(table, tyre.parameters, stages=stages, progress=False)
+    if key is not None:
+        cache[key] = res.parameters.copy()
     return Tyre(res.parameters, name=tyre.name)
 
 
@@ -955,6 +968,7 @@ def refine_effect(
     local_control_channels: Mapping[str, tuple[float, int]] | None = None,
     local_control: EffectFit | None = None,
     forward: np.ndarray | None = None,
+    refits: dict | None = None,
 ) -> tuple[list[tuple[EffectFit, Tyre]], list[str]]:
     """Refit the best laws and the control with every MF coefficient (the staged fitter), then choose
     among them by held-out-sweep error, each model's law and main coefficients refitted on each fold.
@@ -976,6 +990,7 @@ def refine_effect(
     :data:`MAX_RESIDUAL_VS_CONTROL` on held-out sweeps, the preferred first (empty: none).  An effect's
     ``refit`` says how its model was refitted (``"main"`` coefficients or ``"all"``) and ``control_tyre`` is
     the control refitted the same way on the same rows (:func:`final_fit` refits the chosen way on every row).
+    ``refits``: the diagnosis's cache of full refits (:func:`_full_refit`), shared by its candidates.
     """
     base = prob.tyre
     prob, idx = subsample(prob)
@@ -986,7 +1001,7 @@ def refine_effect(
     fits = [(f, law, None if v is None else np.asarray(v)[idx]) for f, law, v in fits]
     cols = [c for c in prob.df.columns if not str(c).startswith(("residual_", "_"))]
     train = prob.df[cols]  # the training rows without gross outliers, subsampled
-    control_tyre = _full_refit(train, base)
+    control_tyre = _full_refit(train, base, cache=refits)
     full: dict[tuple[str, ...] | None, tuple[float, dict]] = {}
 
     def full_control(chs: tuple[str, ...] | None) -> tuple[float, dict]:
@@ -1036,7 +1051,7 @@ def refine_effect(
     base_terms = {t.index for t in base.extension_set.terms}
     for fit, law, values in list(fits)[:REFINE_LAWS]:
         chs = refit_channels_of(law) if law is not None else None
-        tyre = _full_refit(train, fit.apply(base))
+        tyre = _full_refit(train, fit.apply(base), cache=refits)
         keys = [k for t in tyre.extension_set.terms if t.index not in base_terms for k in t.coefficient_keys]
         p = replace_tyre(prob, tyre)
         if values is not None and fit.variable not in BUILTIN_VARIABLES:
