@@ -180,3 +180,17 @@ def test_the_judge_flags_a_channel_made_worse_and_scores_the_cut():
     bad = zoo.score_heldout(held, truth, worse, truth, None, chans)
     assert bad["violation"] and bad["change_Fx"] > 0.05 and bad["change_Fy"] == 0.0
     assert zoo.score_heldout(held, truth, None, truth, None, chans)["violation"]  # not evaluable: a violation
+
+
+def test_aliased_r2_says_when_the_training_rows_cannot_tell_the_effect_from_the_set_points():
+    # seed 89: a heater flag on in the 9.8 kN runs only, off in every other training run: constant in every cell
+    assert zoo.aliased_r2(zoo.draw(89)) == pytest.approx(1.0)
+    assert zoo.aliased_r2(zoo.draw(0)) < 0.5  # a wear drift across the runs of every load
+    assert math.isnan(zoo.aliased_r2(zoo.draw(8)))  # a law in Vx, an MF input (a set point itself)
+    assert math.isnan(zoo.aliased_r2(zoo.draw(1)))  # a null
+    # the table's breakdown, from the shipped results (an old file without the column: computed from the draws)
+    df = pd.read_csv(ROOT / "validation" / "effect_zoo_results.csv")
+    df = df[df.seed.isin([88, 89])].drop(columns=["aliased_r2"], errors="ignore")
+    text = zoo.table_markdown(df, "x")
+    assert f"| aliased with the set points (R² ≥ {zoo.ALIASED_R2}) | 1 | 0 % | 1 | 0 % | 0 |" in text
+    assert "| the others | 1 |" in text

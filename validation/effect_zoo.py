@@ -729,6 +729,37 @@ def _derived_for_eval(d: ZooDraw) -> pd.DataFrame:
     return full
 
 
+#: An effect draw whose law shape g is this well explained by the set-point cells of the training rows (R²: it is
+#: constant within every cell to a per cent of its variance) is aliased with the test conditions there: the
+#: training data cannot tell the effect from a load or speed effect.
+ALIASED_R2 = 0.99
+
+
+def aliased_r2(d: ZooDraw) -> float:
+    """R² of the generating law's shape g over the training rows explained by their set-point cells (each row at
+    its nearest programme load, speed, pressure and camber): 1 when the effect is constant in every cell, so that
+    the training data cannot tell it from a function of the set points (NaN for a null or an MF-input variable,
+    which is a set point itself and which a law reads directly).  The oracle ceiling (:func:`_ceiling_model`)
+    starts at the true law and keeps it on such a draw, so its ceiling says nothing of what the data identify."""
+    t = d.truth
+    if t["is_null"] or d.law_g is None or t["variable_kind"] == "mf_input":
+        return float("nan")
+    train = ~d.holdout
+    g = np.asarray(d.law_g, float)[train]
+    rows = d.data[train]
+    cells = []
+    for col, key in (("Fz", "loads"), ("Vx", "speeds"), ("P", "pressures"), ("gamma", "gammas")):
+        levels = np.asarray(t["levels"].get(key) or [0.0], float)
+        x = rows[col].to_numpy(float)
+        cells.append(np.argmin(np.abs(x[:, None] - levels[None, :]), axis=1))
+    _, cell = np.unique(np.column_stack(cells), axis=0, return_inverse=True)
+    var = float(np.var(g))
+    if not var > 0:
+        return 1.0
+    means = np.bincount(cell.ravel(), weights=g) / np.bincount(cell.ravel())
+    return 1.0 - float(np.mean((g - means[cell.ravel()]) ** 2)) / var
+
+
 def score_heldout(held: pd.DataFrame, before: pd.DataFrame, after: pd.DataFrame | None, truth: pd.DataFrame,
                   ceiling: pd.DataFrame | None, channels: list[str]) -> dict:
     """Held-out scores of the measured rows ``held`` (outliers already excluded) for the models ``before``
@@ -781,6 +812,7 @@ def evaluate_draw(seed: int, n_perm: int = 99) -> dict:
                  "noise": t["noise"], "outliers": t["outlier_fraction"], "rows": t["rows"],
                  "not_measured": " ".join(f"{k}:{v}" for k, v in t["not_measured"].items()), "tyre": t["tyre"],
                  "accepted": " ".join(t["accepted"]), "identifiers": " ".join(t["identifiers"].values())}  # fmt: skip
+    rec["aliased_r2"] = aliased_r2(d)
     train_rows = ~d.holdout
     fit_data = d.data.drop(columns=[c for c in d.zero_channels if c in d.data.columns])
     base_params = _fit(fit_data[train_rows], d.start)
@@ -896,6 +928,16 @@ def table_markdown(df: pd.DataFrame, command: str) -> str:
             cut = _pct((c.cut >= CUT_MIN).mean()) if len(c) else "-"
             lines.append(f"| {name} | {len(g)} | {_pct(g.cause_named.astype(bool).mean())} | {len(c)} | {cut} | "
                          f"{int(g.violation.astype(bool).sum())} |")
+    if "aliased_r2" not in eff:
+        eff = eff.assign(aliased_r2=[aliased_r2(draw(int(x))) for x in eff.seed])
+    alias = eff.aliased_r2.to_numpy(float) >= ALIASED_R2
+    lines += ["", "| effect draws, by what the training rows identify | draws | cause first | ceiling ≥ 70 % | "
+              "cut ≥ 50 % of those | worse > 5 % |", "|---|---:|---:|---:|---:|---:|"]  # fmt: skip
+    for name, g in ((f"aliased with the set points (R² ≥ {ALIASED_R2})", eff[alias]), ("the others", eff[~alias])):
+        c = g[g.ceiling_cut >= CEILING_MIN]
+        cut = _pct((c.cut >= CUT_MIN).mean()) if len(c) else "-"
+        lines.append(f"| {name} | {len(g)} | {_pct(g.cause_named.astype(bool).mean()) if len(g) else '-'} | "
+                     f"{len(c)} | {cut} | {int(g.violation.astype(bool).sum())} |")
     lines += [""]
     if "identifiers" in df:
         ids = [set(str(x).split()) for x in df.identifiers]
