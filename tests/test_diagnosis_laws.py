@@ -15,7 +15,7 @@ from test_diagnosis import TYRE, _campaign, _measure, _refit, _term
 
 from mftire.diagnosis.candidates import candidates, is_identifier, numbers_things, with_sweeps
 from mftire.diagnosis.diagnose import diagnose, split_fit_rows
-from mftire.diagnosis.effects import CONTROL, EffectFit, Law, fold_loss_in_scatter, trimmed, worse_channels
+from mftire.diagnosis.effects import CONTROL, EffectFit, Law, trimmed, worse_channels
 from mftire.mf.extensions import SECTION
 
 # the diagnosis evaluates held-out levels beyond a law's fitted range: clamped, with the range warning
@@ -66,26 +66,6 @@ def test_worse_channels_and_trimmed_law():
     assert trimmed(Law("f", ("LMUX",), "linear"), ["Fx"]) is None
     assert trimmed(CONTROL, ["Fx"]) is None
     assert EffectFit("x", "v", True, {}, {}, {}, 1.0, 0.5, 0.0, 1).rejected is False
-
-
-def test_a_fold_loss_within_the_scatter_of_its_sweeps_is_not_worse():
-    # the control's fold sums of each held-out sweep (third element), the law's: a loss on one sweep of four
-    control = {"Fx": (1.0, 200), "Fx#0": (0.5, 100, np.full(4, 0.125)), "Fx#1": (0.5, 100, np.full(4, 0.125))}
-    one = (0.58, 100, np.array([0.205, 0.125, 0.125, 0.125]))  # +16 % on the fold, one sweep
-    every = (0.58, 100, np.full(4, 0.145))  # the same loss spread over every sweep
-    assert fold_loss_in_scatter(one[2], control["Fx#0"][2]) and not fold_loss_in_scatter(every[2], control["Fx#0"][2])
-    better = (0.3, 100, np.full(4, 0.075))
-    # the law fits Fx better over the folds together: the one-sweep loss is scatter, the loss on every sweep is not
-    assert worse_channels({"Fx": (0.88, 200), "Fx#0": one, "Fx#1": better}, control) == []
-    assert worse_channels({"Fx": (0.88, 200), "Fx#0": every, "Fx#1": better}, control) == ["Fx"]
-    # worse over the folds together: no fold is forgiven (the whole channel already fails here)
-    assert worse_channels({"Fx": (1.2, 200), "Fx#0": one, "Fx#1": (0.62, 100, np.full(4, 0.155))}, control) == ["Fx"]
-    # with the channel not better overall, a fold's loss on one sweep still counts
-    same = (0.42, 100, np.full(4, 0.105))
-    assert worse_channels({"Fx": (1.0, 200), "Fx#0": one, "Fx#1": same}, control) == ["Fx"]
-    # two sweeps in the fold: too few to tell scatter from a range, the allowance alone decides
-    two = {"Fx": (1.0, 200), "Fx#0": (0.5, 100, np.array([0.25, 0.25, 0.0]))}
-    assert worse_channels({"Fx": (0.9, 200), "Fx#0": (0.58, 100, np.array([0.33, 0.25, 0.0]))}, two) == ["Fx"]
 
 
 def _cornering_campaign(seed: int = 2) -> pd.DataFrame:
