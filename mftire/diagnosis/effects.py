@@ -199,7 +199,7 @@ class EffectFit:
     cv: float = float("nan")  #: held-out-sweep error (sum of squared weighted residuals) [-]
     targets: tuple[str, ...] = ()  #: scaling factors (or offsets) the law acts on
     #: held-out-fold error per channel: channel -> (sum of squared weighted residuals, held-out rows)
-    cv_channels: dict[str, tuple] = field(default_factory=dict)
+    cv_channels: dict[str, tuple[float, int]] = field(default_factory=dict)
     law: Law | None = None  #: the law fitted
     rejected: bool = False  #: a scored channel was worse on held-out folds than under the control
     refit: str = "main"  #: how the chosen model was refitted: its "main" coefficients or "all" (staged fitter)
@@ -692,13 +692,12 @@ def heldout_error(
     prob: _Problem, law: Law, variable: str, values: np.ndarray | None, n_pressures: int,
     warm: Mapping[str, float] | None, pressure_channels: Sequence[str] | None, folds: np.ndarray | None = None,
     extra_keys: Sequence[str] = (),
-    per_channel: dict[str, tuple] | None = None,
+    per_channel: dict[str, tuple[float, int]] | None = None,
     refit_channels: Sequence[str] | None = None,
 ) -> float:
     """Sum of squared weighted residuals on held-out rows: each label of ``folds`` held out in
     turn (default ``CV_FOLDS`` groups of whole sweeps; rows labelled -1 are never held out).
-    ``per_channel`` (a dict, filled): channel -> (its share of the sum, its held-out rows); per channel and fold
-    (``"Fy#2"``) also the sums of each held-out sweep, in the order of their sweep ids (:func:`worse_channels`)."""
+    ``per_channel`` (a dict, filled): channel -> (its share of the sum, its held-out rows)."""
     from mftire.diagnosis.ranking import fold_of_groups
 
     if folds is None:
@@ -720,8 +719,7 @@ def heldout_error(
                 ss, n = per_channel.get(ch, (0.0, 0))
                 per_channel[ch] = (ss + float(part @ part), n + n_f)
                 if n_f:
-                    _, unit = np.unique(te.df["sweep_id"].to_numpy(), return_inverse=True)
-                    per_channel[f"{ch}#{f}"] = (float(part @ part), n_f, np.bincount(unit, weights=part * part))
+                    per_channel[f"{ch}#{f}"] = (float(part @ part), n_f)
     return total
 
 
@@ -741,40 +739,15 @@ def is_worse(ss: float, ss_control: float, n: int, sigma: float, scale: float = 
     return ss > ss_control + scale * allowance
 
 
-#: On a channel the law fits better over every fold together, a fold's loss must also stand out of the
-#: sweep-to-sweep scatter of the loss: at least this many standard errors under the sign-flip null (each held-out
-#: sweep's difference as likely to fall either way; 1.5 flags a loss on all three sweeps of a three-sweep fold,
-#: not one on one or two of them), where the fold holds at least :data:`FOLD_SWEEPS_TESTED` sweeps of the
-#: channel (fewer: the allowance alone decides).
-FOLD_LOSS_Z = 1.5
-FOLD_SWEEPS_TESTED = 3
-
-
-def fold_loss_in_scatter(fit_units: np.ndarray, control_units: np.ndarray) -> bool:
-    """True when a fold's loss under a law, sweep by sweep (the held-out sweeps' sums of squares of the law's
-    model ``fit_units`` and of the control's), is within the scatter of its sweeps: Σδ < :data:`FOLD_LOSS_Z` ×
-    sqrt(Σδ²), δ the per-sweep differences (a sign-flip test over the sweeps, which share their noise within a
-    sweep and not between sweeps).  A loss on one or two sweeps of a fold that the law helps or leaves alone on
-    the others is the scatter of two refits, not a law that fails a range (zoo 1010: an Fx fold 9 % worse over
-    one sweep, the channel 22 % better over every fold)."""
-    fu, cu = np.asarray(fit_units, float), np.asarray(control_units, float)
-    if fu.shape != cu.shape or np.count_nonzero(cu) < FOLD_SWEEPS_TESTED:
-        return False
-    d = fu - cu
-    return float(d.sum()) < FOLD_LOSS_Z * float(np.sqrt(d @ d))
-
-
-def worse_channels(fit: Mapping[str, tuple], control: Mapping[str, tuple],
+def worse_channels(fit: Mapping[str, tuple[float, int]], control: Mapping[str, tuple[float, int]],
                    noise: Mapping[str, float] | None = None) -> list[str]:
-    """The channels whose held-out-fold error under a law (``fit``: channel -> (SS, rows); per fold, key
-    ``"Fy#2"``, also the SS of each held-out sweep) exceeds the control's beyond its noise (:func:`is_worse`),
-    over the folds together and (with twice the allowance) in each fold, unless the law fits the channel better
-    over every fold together and a fold's loss is within the scatter of its sweeps (:func:`fold_loss_in_scatter`):
-    a law that helps on some held-out ranges and hurts on
-    others is not consistent.  A law that makes any scored channel worse on data it was not fitted on is never
-    accepted (issue 21: a diagnosis that makes the model worse must never happen)."""
+    """The channels whose held-out-fold error under a law (``fit``: channel -> (SS, rows)) exceeds the
+    control's beyond its noise (:func:`is_worse`), over the folds together and (with twice the allowance) in each fold
+    (keys ``"Fy#2"``): a law that helps on some held-out ranges and hurts on others is not consistent.  A law
+    that makes any scored channel worse on data it was not fitted on is never accepted (issue 21: a diagnosis
+    that makes the model worse must never happen)."""
     out: list[str] = []
-    for key, (ss_c, n, *units_c) in control.items():
+    for key, (ss_c, n) in control.items():
         ch = key.split("#")[0]
         if key not in fit or ch in out:
             continue
@@ -782,11 +755,8 @@ def worse_channels(fit: Mapping[str, tuple], control: Mapping[str, tuple],
         if "#" in key:
             # a fold ("Fy#2") may lose by twice the allowance of the whole, and by a share of the channel's
             # control error over every fold (a fold holding a few rows of the channel does not decide alone)
-            units_f = fit[key][2:]
-            better = ch in fit and ch in control and fit[ch][0] < control[ch][0]
             if is_worse(fit[key][0], ss_c, n, sigma, 2.0) and \
-                    fit[key][0] - ss_c > CHANNEL_WORSE_REL * control.get(ch, (ss_c, n))[0] and \
-                    not (better and units_c and units_f and fold_loss_in_scatter(units_f[0], units_c[0])):
+                    fit[key][0] - ss_c > CHANNEL_WORSE_REL * control.get(ch, (ss_c, n))[0]:
                 out.append(ch)
             continue
         if is_worse(fit[key][0], ss_c, n, sigma):
@@ -873,7 +843,7 @@ def choose_effect(
     def control_cv(chs: tuple[str, ...] | None) -> EffectFit:
         c = control_for(chs)
         if chs not in scored_controls:  # a control's held-out error on this candidate's folds
-            per: dict[str, tuple] = {}
+            per: dict[str, tuple[float, int]] = {}
             c.cv = heldout_error(prob, CONTROL, "", None, n_pressures, None, effect_channels, folds, per_channel=per,
                                  refit_channels=chs)  # fmt: skip
             c.cv_channels = per
@@ -905,7 +875,7 @@ def choose_effect(
         fit, v, law = queue.pop(0)
         chs = refit_channels_of(law)
         ctrl = control_cv(chs)
-        per: dict[str, tuple] = {}
+        per: dict[str, tuple[float, int]] = {}
         cv = heldout_error(prob, law, fit.variable, v, n_pressures, ctrl.standard, effect_channels, folds,
                            per_channel=per, refit_channels=chs)  # fmt: skip
         fit.messages.append(f"held-out-sweep error {cv:.4g} (control {ctrl.cv:.4g})")
@@ -1037,7 +1007,7 @@ def refine_effect(
     def full_control(chs: tuple[str, ...] | None) -> tuple[float, dict]:
         """The full control's held-out error, its main coefficients of the channels ``chs`` refitted per fold."""
         if chs not in full:
-            per: dict[str, tuple] = {}
+            per: dict[str, tuple[float, int]] = {}
             cv = heldout_error(replace_tyre(prob, control_tyre), CONTROL, "", None, n_pressures, None,
                                effect_channels, folds, per_channel=per, refit_channels=chs)  # fmt: skip
             full[chs] = (cv, per)
@@ -1055,8 +1025,8 @@ def refine_effect(
              extra_keys: Sequence[str] = ()) -> list[str]:
         """The channels on which a law's model, fitted without the last tests (``forward``), is worse there than
         its control fitted the same way (:func:`worse_channels`)."""
-        per_f: dict[str, tuple] = {}
-        per_c: dict[str, tuple] = {}
+        per_f: dict[str, tuple[float, int]] = {}
+        per_c: dict[str, tuple[float, int]] = {}
         heldout_error(law_prob, law, variable, values, n_pressures, warm, effect_channels, forward,
                       extra_keys=extra_keys, per_channel=per_f, refit_channels=chs)  # fmt: skip
         heldout_error(ctrl_prob, CONTROL, "", None, n_pressures, ctrl_warm, effect_channels, forward,
@@ -1086,7 +1056,7 @@ def refine_effect(
         p = replace_tyre(prob, tyre)
         if values is not None and fit.variable not in BUILTIN_VARIABLES:
             p.variables = {**p.variables, fit.variable: np.asarray(values)}
-        per: dict[str, tuple] = {}
+        per: dict[str, tuple[float, int]] = {}
         cv = heldout_error(p, CONTROL, "", None, n_pressures, None, effect_channels, folds, extra_keys=keys,
                            per_channel=per, refit_channels=chs)  # fmt: skip
         cv_c, per_c = full_control(chs)
