@@ -920,24 +920,21 @@ def table_markdown(df: pd.DataFrame, command: str) -> str:
                      f"{_pct(g.cut.median())} | {'-' if null else _pct(g.ceiling_cut.median())} | "
                      f"{int(g.violation.astype(bool).sum())} | {int(g.finding.astype(bool).sum())} |")  # fmt: skip
     eff = df[~df.is_null.astype(bool)]
-    for key, title in (("variable_kind", "variable kind"), ("holdout_design", "held-out design")):
-        lines += ["", f"| effect draws by {title} | draws | cause first | ceiling ≥ 70 % | cut ≥ 50 % of those | "
-                  "worse > 5 % |", "|---|---:|---:|---:|---:|---:|"]  # fmt: skip
-        for name, g in sorted(eff.groupby(eff[key].astype(str).str.split(" ").str[0])):
-            c = g[g.ceiling_cut >= CEILING_MIN]
-            cut = _pct((c.cut >= CUT_MIN).mean()) if len(c) else "-"
-            lines.append(f"| {name} | {len(g)} | {_pct(g.cause_named.astype(bool).mean())} | {len(c)} | {cut} | "
-                         f"{int(g.violation.astype(bool).sum())} |")
-    if "aliased_r2" not in eff:
+    if "aliased_r2" not in eff:  # results written before the column: computed from the draws
         eff = eff.assign(aliased_r2=[aliased_r2(draw(int(x))) for x in eff.seed])
     alias = eff.aliased_r2.to_numpy(float) >= ALIASED_R2
-    lines += ["", "| effect draws, by what the training rows identify | draws | cause first | ceiling ≥ 70 % | "
-              "cut ≥ 50 % of those | worse > 5 % |", "|---|---:|---:|---:|---:|---:|"]  # fmt: skip
-    for name, g in ((f"aliased with the set points (R² ≥ {ALIASED_R2})", eff[alias]), ("the others", eff[~alias])):
-        c = g[g.ceiling_cut >= CEILING_MIN]
-        cut = _pct((c.cut >= CUT_MIN).mean()) if len(c) else "-"
-        lines.append(f"| {name} | {len(g)} | {_pct(g.cause_named.astype(bool).mean()) if len(g) else '-'} | "
-                     f"{len(c)} | {cut} | {int(g.violation.astype(bool).sum())} |")
+    breakdowns = [(f" by {title}", sorted(eff.groupby(eff[key].astype(str).str.split(" ").str[0])))
+                  for key, title in (("variable_kind", "variable kind"), ("holdout_design", "held-out design"))]
+    breakdowns.append((", by what the training rows identify",
+                       [(f"aliased with the set points (R² ≥ {ALIASED_R2})", eff[alias]), ("the others", eff[~alias])]))
+    for title, groups in breakdowns:
+        lines += ["", f"| effect draws{title} | draws | cause first | ceiling ≥ 70 % | cut ≥ 50 % of those | "
+                  "worse > 5 % |", "|---|---:|---:|---:|---:|---:|"]  # fmt: skip
+        for name, g in groups:
+            c = g[g.ceiling_cut >= CEILING_MIN]
+            cut = _pct((c.cut >= CUT_MIN).mean()) if len(c) else "-"
+            lines.append(f"| {name} | {len(g)} | {_pct(g.cause_named.astype(bool).mean()) if len(g) else '-'} | "
+                         f"{len(c)} | {cut} | {int(g.violation.astype(bool).sum())} |")
     lines += [""]
     if "identifiers" in df:
         ids = [set(str(x).split()) for x in df.identifiers]

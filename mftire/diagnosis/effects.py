@@ -968,7 +968,7 @@ def refine_effect(
     local_control_channels: Mapping[str, tuple[float, int]] | None = None,
     local_control: EffectFit | None = None,
     forward: np.ndarray | None = None,
-    refits: dict | None = None,
+    refit_cache: dict | None = None,
 ) -> tuple[list[tuple[EffectFit, Tyre]], list[str]]:
     """Refit the best laws and the control with every MF coefficient (the staged fitter), then choose
     among them by held-out-sweep error, each model's law and main coefficients refitted on each fold.
@@ -990,7 +990,7 @@ def refine_effect(
     :data:`MAX_RESIDUAL_VS_CONTROL` on held-out sweeps, the preferred first (empty: none).  An effect's
     ``refit`` says how its model was refitted (``"main"`` coefficients or ``"all"``) and ``control_tyre`` is
     the control refitted the same way on the same rows (:func:`final_fit` refits the chosen way on every row).
-    ``refits``: the diagnosis's cache of full refits (:func:`_full_refit`), shared by its candidates.
+    ``refit_cache``: the diagnosis's cache of full refits (:func:`_full_refit`), shared by its candidates.
     """
     base = prob.tyre
     prob, idx = subsample(prob)
@@ -1001,7 +1001,7 @@ def refine_effect(
     fits = [(f, law, None if v is None else np.asarray(v)[idx]) for f, law, v in fits]
     cols = [c for c in prob.df.columns if not str(c).startswith(("residual_", "_"))]
     train = prob.df[cols]  # the training rows without gross outliers, subsampled
-    control_tyre = _full_refit(train, base, cache=refits)
+    control_tyre = _full_refit(train, base, cache=refit_cache)
     full: dict[tuple[str, ...] | None, tuple[float, dict]] = {}
 
     def full_control(chs: tuple[str, ...] | None) -> tuple[float, dict]:
@@ -1051,7 +1051,7 @@ def refine_effect(
     base_terms = {t.index for t in base.extension_set.terms}
     for fit, law, values in list(fits)[:REFINE_LAWS]:
         chs = refit_channels_of(law) if law is not None else None
-        tyre = _full_refit(train, fit.apply(base), cache=refits)
+        tyre = _full_refit(train, fit.apply(base), cache=refit_cache)
         keys = [k for t in tyre.extension_set.terms if t.index not in base_terms for k in t.coefficient_keys]
         p = replace_tyre(prob, tyre)
         if values is not None and fit.variable not in BUILTIN_VARIABLES:
