@@ -21,6 +21,7 @@ from mftire.diagnosis.candidates import Candidate, with_sweeps
 from mftire.diagnosis.diagnose import (
     NAMED_ALONE_P,
     SAME_HELDOUT,
+    beyond_asymmetry,
     cause_without_any_law,
     cause_without_law,
     condition_runs,
@@ -309,6 +310,50 @@ def test_without_any_law_a_sign_of_the_slip_is_never_named_alone():
     assert cause_without_any_law(dataclasses.replace(top, variable="sign_kappa"), [])[0] is None
     # a direction of the sweep is not a function of the operating point: hysteresis is an effect
     assert cause_without_any_law(dataclasses.replace(top, variable="sweep_dir"), [])[0] == "sweep_dir"
+
+
+def _offset_campaign(seed: int, drift: float):
+    """Cornering sweeps in 16 runs, the residual along the model odd in the slip angle (a slip-angle offset) with
+    a size 1 + ``drift``·T of a run-level temperature T, and a decoy column constant in each run."""
+    rng = np.random.default_rng(seed)
+    n_runs, per, pts = 16, 2, 15
+    runs = np.repeat(np.arange(n_runs), per * pts)
+    n = runs.size
+    sweep = np.linspace(-0.15, 0.15, pts)
+    # each run a cornering and a braking sweep (alpha 0), in either order: the runs' trajectories of the sign differ
+    alpha = np.concatenate([np.concatenate([sweep, 0 * sweep][:: 1 if rng.random() < 0.5 else -1])
+                            for _ in range(n_runs)])  # fmt: skip
+    fz = np.repeat(rng.choice([2000.0, 4000.0, 6000.0], n_runs), per * pts)
+    temp = np.linspace(-1.0, 1.0, n_runs)[rng.permutation(n_runs)]  # a temperature per run, in no test order
+    size = 0.01 * (1.0 + drift * temp[runs])
+    residual = np.sign(alpha) * size + 0.002 * rng.standard_normal(n)
+    x0 = baseline_features(np.zeros(n), alpha, np.zeros(n), fz, 4000.0)
+    cands = [Candidate("sign_alpha", np.sign(alpha), True, False),
+             Candidate("track_temp", temp[runs] + 0.001 * rng.standard_normal(n), False, True),
+             Candidate("operator", rng.standard_normal(n_runs)[runs], False, True)]
+    ranking = rank_candidates({"Fy": residual}, {"Fy": 1.0}, x0, cands, runs, n_perm=49, seed=seed)
+    return ranking, ({"Fy": residual}, {"Fy": 1.0}, x0, cands, runs)
+
+
+def test_a_column_that_sets_the_size_of_an_asymmetry_is_ranked_beyond_the_sign():
+    """Issue 21: a slip-angle or camber offset that drifts with a temperature makes the residual odd in the slip in
+    every run; sign_alpha explains it first, and the temperature only how large it is in each run.  Ranked again
+    with the sign among the operating point (:func:`beyond_asymmetry`), the temperature is significant and follows
+    the sign; a column with no part in it (an operator code) is not.  Without the drift nothing is beyond the sign."""
+    ranking, args = _offset_campaign(3, drift=0.8)
+    assert ranking[0].variable == "sign_alpha" and ranking[0].significant
+    new, beyond = beyond_asymmetry(ranking, *args, n_perm=49, seed=3, ranking_kwargs=None)
+    assert [e.variable for e in beyond] == ["track_temp"]
+    assert [e.variable for e in new][:2] == ["sign_alpha", "track_temp"] and len(new) == len(ranking)
+    assert beyond[0].p_value <= NAMED_ALONE_P and beyond[0].score > 0.5
+    cause, msg = cause_without_any_law(ranking[0], [], beyond)
+    assert cause == "track_temp" and "the asymmetry changes with track_temp" in msg
+    ranking, args = _offset_campaign(3, drift=0.0)
+    assert ranking[0].variable == "sign_alpha"
+    assert beyond_asymmetry(ranking, *args, n_perm=49, seed=3, ranking_kwargs=None) == (ranking, [])
+    # a first that is not a sign: unchanged
+    first = [e for e in ranking if e.variable != "sign_alpha"]
+    assert beyond_asymmetry(first, *args, n_perm=49, seed=3, ranking_kwargs=None) == (first, [])
 
 
 def test_a_law_that_fits_one_level_of_its_variable_worse_than_the_given_model_is_found_there():

@@ -403,18 +403,29 @@ def cause_without_law(top: CandidateScore, found: Sequence[tuple], best: tuple, 
     return top
 
 
-def cause_without_any_law(top: CandidateScore, two_level: Sequence[str]) -> tuple[str | None, str]:
+def cause_without_any_law(top: CandidateScore, two_level: Sequence[str],
+                          beyond: Sequence[CandidateScore] = ()) -> tuple[str | None, str]:
     """The cause named, and the message, when no law of any flagged candidate beat the control refit on the held-out
     folds: the ranking's first (``top``) only at p <= :data:`NAMED_ALONE_P`, since nothing else confirms it; the
     first (the message names them) when candidates with two levels of a quantity got no law (``two_level``).  A sign
     of the slip (:data:`~mftire.diagnosis.ranking.SIGN_CANDIDATES`) is never named alone: it is a function of the MF
     operating point, and a residual it explains in every run is a misfit of the characteristic's shape (the fitted
     coefficients' compromise when an effect is confounded with the load blocks, say), not a missing variable; only a
-    law in it that predicts held-out sweeps (an asymmetry of grip) makes it a cause."""
+    law in it that predicts held-out sweeps (an asymmetry of grip) makes it a cause.  Then the first candidate that
+    explains the asymmetry's size beyond the sign (``beyond``, :func:`beyond_asymmetry`) is named at p <=
+    :data:`NAMED_ALONE_P`."""
     if two_level:
         return top.variable, (f"cause named, no law found: {', '.join(two_level)} has two levels of a quantity in the "
                               "data; a law between or beyond them cannot be checked on held-out data, so none is "
                               "written (test a third level to fit one)")  # fmt: skip
+    if top.variable in SIGN_CANDIDATES and beyond and beyond[0].p_value <= NAMED_ALONE_P:
+        b = beyond[0]
+        return b.variable, (f"cause named, no law found: the residual of {top.channel} is asymmetric in the slip "
+                            f"({top.variable} explains {top.score:.0%} of it beyond the MF inputs), and {b.variable} "
+                            f"explains {b.score:.0%} of the rest beyond the MF inputs and the sign (ranking p = "
+                            f"{b.p_value:.3g}): the asymmetry changes with {b.variable} (an offset of the slip angle, "
+                            "the camber or the force that moves with it), but no law of any flagged candidate "
+                            "predicted the held-out folds better than the model refitted without it")  # fmt: skip
     if top.variable in SIGN_CANDIDATES:
         return None, (f"no effect established: the residual of {top.channel} is asymmetric in the slip "
                       f"({top.variable} explains {top.score:.0%} of it beyond the MF inputs, ranking p = "
@@ -430,6 +441,36 @@ def cause_without_any_law(top: CandidateScore, two_level: Sequence[str]) -> tupl
     return top.variable, (f"cause named, no law found: {top.variable} explains the residual beyond the MF inputs "
                           f"(ranking p = {top.p_value:.3g}), but no law of any flagged candidate predicted the "
                           "held-out folds better than the model refitted without it")  # fmt: skip
+
+
+def beyond_asymmetry(
+    ranking: list[CandidateScore], residuals: Mapping[str, np.ndarray], peaks: Mapping[str, float], X0: np.ndarray,
+    cands: Sequence[Candidate], units: np.ndarray, *, n_perm: int, seed: int, ranking_kwargs: Mapping | None,
+) -> tuple[list[CandidateScore], list[CandidateScore]]:
+    """When a sign of the slip (:data:`~mftire.diagnosis.ranking.SIGN_CANDIDATES`) leads the ranking, the other
+    candidates ranked again with that sign among the operating-point features: ``(ranking, beyond)``.
+
+    An offset of the slip angle, the camber or the force makes the residual along the model odd in the slip, which
+    the sign explains in every run at once; a column that sets how large the offset is in each run (a temperature
+    it drifts with) then explains only what is left once the sign is known, and ranks below it.  Scored with the
+    sign in the baseline (:func:`~mftire.diagnosis.ranking.rank_candidates`, its own permutation test; the data's
+    columns, the test-order accumulators and the sweep direction), the significant ones (``beyond``) follow the
+    sign in the ranking returned, ahead of the rest, and their laws are fitted.  Unchanged (``beyond`` empty)
+    when the first is not a sign or nothing is significant beyond it."""
+    first = next((e for e in ranking if e.significant), None)
+    if first is None or first.variable not in SIGN_CANDIDATES:
+        return ranking, []
+    sign = next(c.values for c in cands if c.name == first.variable)
+    # the data's columns, the test-order accumulators and the sweep direction (hysteresis); not the functions of
+    # the operating point (Vs, Vx, P, the load deviation), which the baseline's slip and load already half hold
+    others = [c for c in cands if not c.derived or c.name in (*HISTORY_CANDIDATES, "sweep_dir")]
+    again = rank_candidates(residuals, peaks, np.column_stack([X0, sign]), others, units, n_perm=n_perm, seed=seed,
+                            **(ranking_kwargs or {}))  # fmt: skip
+    beyond = [e for e in again if e.significant]
+    if not beyond:
+        return ranking, []
+    names = {e.variable for e in beyond}
+    return [first, *beyond, *(e for e in ranking if e is not first and e.variable not in names)], beyond
 
 
 #: |r| across sweeps between an MF operating input's sweep means and the test order beyond which the input's levels
@@ -968,6 +1009,10 @@ def _diagnose(
     units = runs if np.unique(runs).size >= MIN_RUNS else df["sweep_id"].to_numpy()
     ranking = rank_candidates(residuals, peaks, X0, cands, units, n_perm=n_perm, seed=seed,
                               **(ranking_kwargs or {}))  # fmt: skip
+    ranking, beyond = beyond_asymmetry(ranking, residuals, peaks, X0, cands, units, n_perm=n_perm, seed=seed,
+                                       ranking_kwargs=ranking_kwargs)  # fmt: skip
+    if beyond:
+        say(f"{ranking[0].variable} first: {', '.join(e.variable for e in beyond)} explain the asymmetry beyond it")
     for name, c in by_name.items():
         if name not in df.columns:
             df[name] = c.values
@@ -998,7 +1043,7 @@ def _diagnose(
     group, reads = [], set()
     for e in significant:
         read = tcol if e.variable in HISTORY_CANDIDATES and tcol is not None else e.variable
-        if e.score >= 0.6 * top.score and read not in reads and len(group) < 3:
+        if (e.score >= 0.6 * top.score or e in beyond) and read not in reads and len(group) < 3:
             group.append(e)
             reads.add(read)
     group += [e for e in significant if e.channel in PROFILE_CHANNELS and e not in group][:2]
@@ -1100,7 +1145,7 @@ def _diagnose(
     best = preferred_cause(found, {*HISTORY_CANDIDATES, tcol}, errors)
     cand_errors = list(errors)  # one per entry of found, on one footing
     if best is None:
-        cause, msg = cause_without_any_law(top, two_level)
+        cause, msg = cause_without_any_law(top, two_level, beyond)
         return DiagnosisResult(False, ranking, None, {"column": column, "values": values, "n_rows": int(test.sum())},
                                tried=tried, messages=[msg], data=df, train=train, not_measured=not_measured,
                                profiles=profiles, cause=cause)  # fmt: skip
