@@ -372,7 +372,7 @@ def test_a_law_that_fits_one_level_of_its_variable_worse_than_the_given_model_is
         return Tyre(flat)
 
     out = worse_in_ranges(data, TYRE, with_table(0.1), ["Fx", "Fy", "Mz"], noise, level)
-    assert len(out) == 1 and out[0].startswith("Fx RMS") and out[0].endswith("at 65")
+    assert len(out) == 1 and out[0][0] == "Fx" and out[0][1].startswith("Fx RMS") and out[0][1].endswith("at 65")
     assert worse_in_ranges(data, TYRE, with_table(0.0), ["Fx", "Fy", "Mz"], noise, level) == []
     # a continuous variable: four contiguous ranges of the sweeps' means, every row in one
     ranges = variable_ranges(data["tread_temp"].to_numpy(), data["sweep_id"].to_numpy())

@@ -56,7 +56,7 @@ importer's ``fit_row`` column, the accumulated candidates run through the flagge
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -72,6 +72,7 @@ from mftire.diagnosis.effects import (
     PRESSURE_COEFFICIENTS,
     SHIFT_FAMILIES,
     EffectFit,
+    Law,
     choose_effect,
     drop_outliers,
     effects_for,
@@ -836,11 +837,11 @@ def variable_ranges(v: np.ndarray, sweeps: np.ndarray) -> list[tuple[str, np.nda
 
 
 def worse_in_ranges(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Sequence[str],
-                    noise: Mapping[str, float], v: np.ndarray) -> list[str]:
+                    noise: Mapping[str, float], v: np.ndarray) -> list[tuple[str, str]]:
     """Where the law's model ``extended``, refitted on every row, fits a range of its own variable (``v`` per row of
     ``df``; :func:`variable_ranges`) worse than the given model on a scored channel, beyond :data:`GUARD_ALLOWANCE` ×
     the allowance of :func:`~mftire.diagnosis.effects.is_worse` and by more than :data:`RANGE_WORSE` in RMS, in
-    words (empty: nowhere).  A law that fits the
+    ``(channel, words)`` pairs (empty: nowhere).  A law that fits the
     variable better overall but a level of it worse than no law has the wrong shape (a straight line through an
     optimum): a user at that level gets a worse model than the one given."""
     sweeps = df["sweep_id"].to_numpy() if "sweep_id" in df.columns else np.arange(len(df))
@@ -850,10 +851,69 @@ def worse_in_ranges(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Seq
         sub = df[rows]
         errs = channel_errors(sub, {ch: m[rows] for ch, m in mg.items()}, {ch: m[rows] for ch, m in me.items()},
                               channels)  # fmt: skip
-        out += [f"{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g} at {label}"
+        out += [(e.channel, f"{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g} at {label}")
                 for e in worse_errors(errs, noise, GUARD_ALLOWANCE) if e.rms_after > RANGE_WORSE * e.rms_before]
     return out
 
+
+
+#: Forms whose shape between the levels of a variable a per-level table can show wrong (:func:`levels_form`).
+SMOOTH_FORMS = ("linear", "quadratic", "decay", "saturating", "hinge")
+
+
+def levels_form(prob, given: Tyre, effect: EffectFit, extended: Tyre, values: np.ndarray, n_pressures: int,
+                effect_channels: Sequence[str] | None, channels: Sequence[str],
+                noise: Mapping[str, float]) -> tuple[EffectFit, Tyre]:
+    """The law's form checked against the levels of its variable: where the variable has 3 to 5 levels (a
+    table's range, :func:`~mftire.diagnosis.effects.effects_for`), the same targets as a per-level table (linear
+    between the levels, constant beyond) are refitted on every row the same way (``prob``), and when the law's
+    model ``extended`` fits a level worse than the table's (:func:`worse_in_ranges`: beyond the noise and by
+    more than :data:`RANGE_WORSE`), the table is the model: a smooth form that misses a level the data hold
+    (a straight line through an optimum, a curve chosen on two levels when the held-out condition was the
+    third) is wrong between the levels too, where a user's next batch or temperature lands.  With every level
+    fitted, the forms agree and the law is kept.  ``(effect, model)``."""
+    law = effect.law
+    if law is None or law.form not in SMOOTH_FORMS or not effect.targets:
+        return effect, extended
+    n_levels = len(np.unique(np.round(values[np.isfinite(values)], 6)))
+    if not 3 <= n_levels <= min(MAX_LEVELS, 5):
+        return effect, extended
+    table = Law(law.name.removesuffix("_quadratic").removesuffix("_variable") + "_levels", law.targets, "table")
+    local = final_fit(prob, dataclasses.replace(effect, law=table, refit="main"), values, n_pressures,
+                      effect_channels)  # fmt: skip
+    trial = dataclasses.replace(effect, law=table, name=table.name, section=dict(local.extensions or {}))
+    model = local if effect.refit != "all" else final_fit(prob, trial, values, n_pressures, effect_channels)
+    model, trial = restricted(given, model, trial)
+    missed = worse_in_ranges(prob.df, model, extended, channels, noise, values)
+    if not missed:
+        return effect, extended
+    trial.messages = effect.messages + [
+        f"{law.name} ({law.form}) fitted a level of {effect.variable} worse than a per-level table ("
+        + "; ".join(t for _, t in missed) + "): the table is written (linear between the levels, constant beyond)"]
+    return trial, model
+
+
+def repaired_channels(df: pd.DataFrame, given: Tyre, extended: Tyre, worse: Sequence[str], direct: set[str],
+                      where: str, check: Callable[[Tyre], Sequence[str]]) -> tuple[Tyre, list[str], list[str]]:
+    """A law's model that a check finds worse than ``given`` on channels ``worse`` the law does not act on
+    (``direct``: the channels its targets act on), repaired: those channels keep the given coefficients, and if
+    ``check`` (the channels still worse) is not then empty, the channels it names have their own coefficients
+    refitted on ``df`` with the law (they read a channel the law changed: Mz reads Fx and Fy, Pacejka 2012
+    eqs 4.E31, 4.E71).  ``(model, channels still worse, notes)``; a channel the law acts on is not repaired."""
+    notes: list[str] = []
+    worse = list(worse)
+    if worse and not set(worse) & direct:
+        extended = with_given_channels(given, extended, worse)
+        notes.append(f"{', '.join(worse)}: the given coefficients kept (the refit with the law fitted {where} "
+                     "worse there)")  # fmt: skip
+        worse = list(check(extended))
+    if worse and not set(worse) & direct:
+        refit = refit_channels(df, extended, worse)
+        if not check(refit):
+            notes.append(f"{', '.join(worse)}: its coefficients refitted on every row with the law (it reads the "
+                         "channels the law changes)")  # fmt: skip
+            extended, worse = refit, []
+    return extended, worse, notes
 
 @dataclass
 class _HeldOutJudge:
@@ -1237,40 +1297,43 @@ def _diagnose(
     pall = drop_outliers(pall)
     values_all = pall.df["_cand"].to_numpy(float) if effect.variable not in BUILTIN_VARIABLES else None
     extended, _ = restricted(tyre, final_fit(pall, effect, values_all, n_pressures, eff_ch), effect)
+    if values_all is not None:
+        effect, extended = levels_form(pall, tyre, effect, extended, values_all, n_pressures, eff_ch, chans, noise)
     # never worse than the model as given (issue 21): the law's model, refitted on every row, is compared with the
     # given model on those same rows.  With one more law it must fit them at least as well on every scored
     # channel; a channel it fits worse is a refit that went astray.  A channel the law does not act on directly
     # keeps its given coefficients; on a channel the law acts on, the law is not written.
     worse = worse_in_sample(pall.df, tyre, extended, chans, noise)
     direct = {c for t in effect.targets for c in TARGET_CHANNELS.get(t, ())}
-    if worse and not set(worse) & direct:
-        extended = with_given_channels(tyre, extended, worse)
-        effect.messages.append(f"{', '.join(worse)}: the given coefficients kept (the refit with the law fitted "
-                               "the training rows worse there)")  # fmt: skip
-        worse = worse_in_sample(pall.df, tyre, extended, chans, noise)
-    if worse and not set(worse) & direct:
-        # the channel reads a channel the law changed (Mz reads Fx and Fy, eqs 4.E31, 4.E71): its own
-        # coefficients, which absorbed the old error, refitted on every row
-        refit = refit_channels(pall.df, extended, worse)
-        if not worse_in_sample(pall.df, tyre, refit, chans, noise):
-            effect.messages.append(f"{', '.join(worse)}: its coefficients refitted on every row with the law (it "
-                                   "reads the channels the law changes)")  # fmt: skip
-            extended, worse = refit, []
+    extended, worse, notes = repaired_channels(pall.df, tyre, extended, worse, direct, "the training rows",
+                                               lambda m: worse_in_sample(pall.df, tyre, m, chans, noise))
+    effect.messages += notes
     if not worse and values_all is not None:
         ranges = worse_in_ranges(pall.df, tyre, extended, chans, noise, values_all)
+        if ranges:
+            # the same repair when the refit fits a range of the variable worse on a channel the law does not act
+            # on (Mz at one level after a law on Fx): kept only if it leaves no row and no range worse
+            fixed, left, notes = repaired_channels(
+                pall.df, tyre, extended, list(dict.fromkeys(ch for ch, _ in ranges)), direct,
+                "a range of " + effect.variable,
+                lambda m: worse_in_sample(pall.df, tyre, m, chans, noise)
+                or [ch for ch, _ in worse_in_ranges(pall.df, tyre, m, chans, noise, values_all)])  # fmt: skip
+            if not left:
+                extended, ranges = fixed, []
+                effect.messages += notes
         if ranges and not worse_in_sample(pall.df, tyre, judged_model, chans, noise) \
                 and not worse_in_ranges(pall.df, tyre, judged_model, chans, noise, values_all):
             # the refit on every row found another optimum that fits a range worse; the model judged on the held-out
             # condition (fitted without it) fits every row and every range at least as well as the given model
             effect.messages.append("the law as fitted without the held-out condition (the refit on every row fitted "
-                                   + "; ".join(ranges) + " worse than the given model)")  # fmt: skip
+                                   + "; ".join(t for _, t in ranges) + " worse than the given model)")  # fmt: skip
             extended, ranges = judged_model, []
             effect.written = "the law as fitted without the held-out condition (the range check's fallback)"
         if ranges:
             msg = (f"cause named, no law found: {effect.name} in {effect.variable}, refitted on every row, fits the "
                    f"data better overall but a range of {effect.variable} worse than the given model ("
-                   + "; ".join(ranges) + "): the law's shape does not hold across the variable, and a user at that "
-                   "range would get a worse model; the model is left unchanged")  # fmt: skip
+                   + "; ".join(t for _, t in ranges) + "): the law's shape does not hold across the variable, and a "
+                   "user at that range would get a worse model; the model is left unchanged")  # fmt: skip
             held_out = {"column": column, "values": values, "n_rows": int(test.sum())}
             return DiagnosisResult(False, ranking, None, held_out, [], None, tried + [effect], messages=[msg], data=df,
                                    train=train, not_measured=not_measured, profiles=profiles,
