@@ -28,14 +28,25 @@ from mftire.diagnosis.diagnose import (
     diagnose,
     drift_behind_input,
     extra_conditions,
+    levels_form,
     order_fold,
     preferred_cause,
+    repaired_channels,
     rival_notes,
     variable_ranges,
     worse_in_ranges,
     worse_in_sample,
 )
-from mftire.diagnosis.effects import CHANNEL_COEFFICIENTS, EffectFit, plausible_inputs, with_given_channels
+from mftire.diagnosis.effects import (
+    CHANNEL_COEFFICIENTS,
+    EffectFit,
+    Law,
+    final_fit,
+    make_problem,
+    plausible_inputs,
+    restricted,
+    with_given_channels,
+)
 from mftire.diagnosis.ranking import CandidateScore, baseline_features, rank_candidates
 from mftire.mf.extensions import SECTION, identifier_name
 from mftire.tyre import Tyre
@@ -193,6 +204,50 @@ def test_final_model_never_fits_its_rows_worse_than_the_given_one(grouped):
     assert "QDZ1" in CHANNEL_COEFFICIENTS["Mz"]
     assert worse_in_sample(grouped, TYRE, kept, ["Fx", "Fy", "Mz"], noise) == ["Fx"]
 
+
+
+def test_a_channel_the_law_does_not_act_on_is_repaired_and_one_it_acts_on_is_not(grouped):
+    """The repair of the final checks (in-sample and per range): a law on Fx whose refit left Mz worse keeps
+    Mz's given coefficients; a law acting on Mz itself is not repaired (its law is not written)."""
+    noise = {"Fx": 30.0, "Fy": 30.0, "Mz": 1.0}
+    astray = Tyre({**TYRE.flat, "QDZ1": 1.3 * TYRE["QDZ1"], "PDX1": 1.0005 * TYRE["PDX1"]})
+    check = lambda m: worse_in_sample(grouped, TYRE, m, ["Fx", "Fy", "Mz"], noise)  # noqa: E731
+    assert check(astray) == ["Mz"]
+    fixed, left, notes = repaired_channels(grouped, TYRE, astray, ["Mz"], {"Fx"}, "the training rows", check)
+    assert left == [] and fixed["QDZ1"] == TYRE["QDZ1"] and fixed["PDX1"] == astray["PDX1"]
+    assert notes == ["Mz: the given coefficients kept (the refit with the law fitted the training rows worse there)"]
+    same, left, notes = repaired_channels(grouped, TYRE, astray, ["Mz"], {"Mz"}, "the training rows", check)
+    assert same is astray and left == ["Mz"] and notes == []
+
+
+@pytest.mark.parametrize("middle, form", [(0.025, "linear"), (-0.08, "table")])
+def test_a_straight_law_that_misses_a_level_gives_way_to_the_per_level_table(middle, form):
+    """Issue 21, never worse (zoo seed 1042: a force offset quadratic in hardness, tested at 3 levels; the law
+    chosen while the middle level was held out was a straight line, +63 % at a fourth level in between).  Grip
+    at 55, 60 and 75 (hardness): on a straight line the linear law is kept; with the middle level low (an
+    optimum) the line misses the levels and the per-level table is the model.  The choice saw 2 of the levels
+    (the held-out condition was the third)."""
+    df = with_sweeps(_campaign(3))
+    level = np.array([55.0, 60.0, 75.0])[df["sweep_id"].to_numpy() % 3]
+    truth = {"EXT1_TARGET": "LMUX", "EXT1_FORM": "table", "EXT1_VARIABLE": "hardness", "EXT1_L1": 55.0,
+             "EXT1_L2": 60.0, "EXT1_L3": 75.0, "EXT1_C1": 0.0, "EXT1_C2": middle, "EXT1_C3": 0.1}  # fmt: skip
+    data = _measure(df.assign(hardness=level), truth, {"hardness": level}).assign(hardness=level)
+    noise = {ch: 0.01 * float(np.max(np.abs(data[ch]))) for ch in ("Fx", "Fy", "Mz")}
+    prob = make_problem(TYRE, data, ("Fx", "Fy", "Mz"))
+    prob.noise = noise
+    law = Law("friction_variable", ("LMUX",), "linear")
+    fit = EffectFit(law.name, "hardness", True, {}, {}, {}, 1.0, 1.0, 0.0, 1, targets=law.targets, law=law)
+    model, _ = restricted(TYRE, final_fit(prob, fit, level, 1, None), fit)
+    chosen, written = levels_form(prob, TYRE, fit, model, level, 2, 1, None, ("Fx", "Fy", "Mz"), noise)
+    assert chosen.law.form == form and written.extensions["EXT1_FORM"] == form
+    if form == "table":
+        assert chosen.name == "friction_levels" and "the table is written" in chosen.messages[-1]
+        c = [written.extensions[f"EXT1_C{i}"] for i in (1, 2, 3)]
+        assert c[1] - c[0] == pytest.approx(middle, abs=0.02) and c[2] - c[0] == pytest.approx(0.1, abs=0.02)
+    else:
+        assert chosen is fit and written is model
+    # a form chosen on every level: not checked again
+    assert levels_form(prob, TYRE, fit, model, level, 3, 1, None, ("Fx", "Fy", "Mz"), noise) == (fit, model)
 
 def test_no_law_in_two_levels_of_a_quantity():
     """Grip falls with a rim temperature tested at two levels only: the cause is named, no law is written (a

@@ -861,22 +861,30 @@ def worse_in_ranges(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Seq
 SMOOTH_FORMS = ("linear", "quadratic", "decay", "saturating", "hinge")
 
 
-def levels_form(prob, given: Tyre, effect: EffectFit, extended: Tyre, values: np.ndarray, n_pressures: int,
-                effect_channels: Sequence[str] | None, channels: Sequence[str],
+def n_levels_of(values: np.ndarray) -> int:
+    """The number of distinct finite values (levels) of a variable."""
+    v = np.asarray(values, float)
+    return len(np.unique(np.round(v[np.isfinite(v)], 6)))
+
+
+def levels_form(prob, given: Tyre, effect: EffectFit, extended: Tyre, values: np.ndarray, trained_levels: int,
+                n_pressures: int, effect_channels: Sequence[str] | None, channels: Sequence[str],
                 noise: Mapping[str, float]) -> tuple[EffectFit, Tyre]:
-    """The law's form checked against the levels of its variable: where the variable has 3 to 5 levels (a
+    """The law's form checked against the levels of its variable that its choice did not see.  A form is chosen
+    on the training rows (``trained_levels`` levels of the variable); when the held-out condition was a level
+    of the law's own variable, the rows of the final refit (``values``) hold more levels than that choice saw
+    (a straight line chosen on two levels, the third held out).  Then, where the variable has 3 to 5 levels (a
     table's range, :func:`~mftire.diagnosis.effects.effects_for`), the same targets as a per-level table (linear
     between the levels, constant beyond) are refitted on every row the same way (``prob``), and when the law's
-    model ``extended`` fits a level worse than the table's (:func:`worse_in_ranges`: beyond the noise and by
-    more than :data:`RANGE_WORSE`), the table is the model: a smooth form that misses a level the data hold
-    (a straight line through an optimum, a curve chosen on two levels when the held-out condition was the
-    third) is wrong between the levels too, where a user's next batch or temperature lands.  With every level
-    fitted, the forms agree and the law is kept.  ``(effect, model)``."""
+    model ``extended`` fits a level worse than the table's (:func:`worse_in_ranges`: beyond the noise and by more
+    than :data:`RANGE_WORSE`), the table is the model: a smooth form that misses a level the data hold (a
+    straight line through an optimum) is wrong between the levels too, where a user's next batch or
+    temperature lands.  ``(effect, model)``."""
     law = effect.law
     if law is None or law.form not in SMOOTH_FORMS or not effect.targets:
         return effect, extended
-    n_levels = len(np.unique(np.round(values[np.isfinite(values)], 6)))
-    if not 3 <= n_levels <= min(MAX_LEVELS, 5):
+    n_levels = n_levels_of(values)
+    if n_levels <= trained_levels or not 3 <= n_levels <= min(MAX_LEVELS, 5):
         return effect, extended
     table = Law(law.name.removesuffix("_quadratic").removesuffix("_variable") + "_levels", law.targets, "table")
     local = final_fit(prob, dataclasses.replace(effect, law=table, refit="main"), values, n_pressures,
@@ -1298,7 +1306,8 @@ def _diagnose(
     values_all = pall.df["_cand"].to_numpy(float) if effect.variable not in BUILTIN_VARIABLES else None
     extended, _ = restricted(tyre, final_fit(pall, effect, values_all, n_pressures, eff_ch), effect)
     if values_all is not None:
-        effect, extended = levels_form(pall, tyre, effect, extended, values_all, n_pressures, eff_ch, chans, noise)
+        effect, extended = levels_form(pall, tyre, effect, extended, values_all, n_levels_of(cvals[train]),
+                                       n_pressures, eff_ch, chans, noise)  # fmt: skip
     # never worse than the model as given (issue 21): the law's model, refitted on every row, is compared with the
     # given model on those same rows.  With one more law it must fit them at least as well on every scored
     # channel; a channel it fits worse is a refit that went astray.  A channel the law does not act on directly
