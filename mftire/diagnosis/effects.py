@@ -425,12 +425,19 @@ def _residuals(prob: _Problem, model: Model, q: Mapping[str, float]) -> np.ndarr
     return _residual_vector(prob, out)
 
 
+def _scored(prob: _Problem, y: Mapping[str, np.ndarray], masks: Mapping[str, np.ndarray], c: str,
+            value: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Channel ``c``'s residual at the model's ``value``, in units of the channel's scale, and the rows it is
+    scored on (its primary rows, a finite residual): the one rule of the effect fits' residuals and Jacobian."""
+    r = (y[c] - value) / prob.scale[c]
+    return r, masks[c] & np.isfinite(r)
+
+
 def _residual_vector(prob: _Problem, out: Channels) -> np.ndarray:
     parts = []
     y, masks, sw = prob.targets()
     for c in prob.channels:
-        r = (y[c] - np.real(getattr(out, c))) / prob.scale[c]
-        use = masks[c] & np.isfinite(r)
+        r, use = _scored(prob, y, masks, c, np.real(getattr(out, c)))
         parts.append(np.where(use, r, 0.0) * sw)
     return np.concatenate(parts)
 
@@ -633,7 +640,7 @@ class _EffectResiduals:
         parts = []
         for c in self.prob.channels:
             value, d = derivatives.sweep(getattr(out, c), leaves, n)
-            use = masks[c] & np.isfinite((y[c] - value) / self.prob.scale[c])
+            use = _scored(self.prob, y, masks, c, value)[1]
             parts.append(-(np.where(use, 1.0, 0.0) * sw / self.prob.scale[c])[:, None] * d)
         return np.concatenate(parts)
 
