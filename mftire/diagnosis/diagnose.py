@@ -71,6 +71,7 @@ from mftire.diagnosis.effects import (
     MAX_RESIDUAL_VS_CONTROL,
     PRESSURE_COEFFICIENTS,
     SHIFT_FAMILIES,
+    WORSE_RMS,
     EffectFit,
     Law,
     choose_effect,
@@ -805,9 +806,6 @@ def worse_in_sample(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Seq
     return [e.channel for e in worse_errors(errs, noise, GUARD_ALLOWANCE)]
 
 
-#: A range of its variable where the law's model is worse than the given model by more than this RMS ratio (and
-#: beyond the noise allowance) refuses the law (:func:`worse_in_ranges`): issue 21's own measure of "worse", 5 %.
-RANGE_WORSE = 1.05
 #: A variable with at most this many levels is checked level by level (:func:`worse_in_ranges`), else in
 #: :data:`RANGES` contiguous ranges of its sweep means.
 RANGE_LEVELS = 6
@@ -840,7 +838,7 @@ def worse_in_ranges(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Seq
                     noise: Mapping[str, float], v: np.ndarray) -> list[tuple[str, str]]:
     """Where the law's model ``extended``, refitted on every row, fits a range of its own variable (``v`` per row of
     ``df``; :func:`variable_ranges`) worse than the given model on a scored channel, beyond :data:`GUARD_ALLOWANCE` ×
-    the allowance of :func:`~mftire.diagnosis.effects.is_worse` and by more than :data:`RANGE_WORSE` in RMS, in
+    the allowance of :func:`~mftire.diagnosis.effects.is_worse` and by more than :data:`WORSE_RMS` in RMS, in
     ``(channel, words)`` pairs (empty: nowhere).  A law that fits the
     variable better overall but a level of it worse than no law has the wrong shape (a straight line through an
     optimum): a user at that level gets a worse model than the one given."""
@@ -852,7 +850,7 @@ def worse_in_ranges(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Seq
         errs = channel_errors(sub, {ch: m[rows] for ch, m in mg.items()}, {ch: m[rows] for ch, m in me.items()},
                               channels)  # fmt: skip
         out += [(e.channel, f"{e.channel} RMS {e.rms_before:.3g} -> {e.rms_after:.3g} at {label}")
-                for e in worse_errors(errs, noise, GUARD_ALLOWANCE) if e.rms_after > RANGE_WORSE * e.rms_before]
+                for e in worse_errors(errs, noise, GUARD_ALLOWANCE) if e.rms_after > WORSE_RMS * e.rms_before]
     return out
 
 
@@ -877,7 +875,7 @@ def levels_form(prob, given: Tyre, effect: EffectFit, extended: Tyre, values: np
     table's range, :func:`~mftire.diagnosis.effects.effects_for`), the same targets as a per-level table (linear
     between the levels, constant beyond) are refitted on every row the same way (``prob``), and when the law's
     model ``extended`` fits a level worse than the table's (:func:`worse_in_ranges`: beyond the noise and by more
-    than :data:`RANGE_WORSE`), the table is the model: a smooth form that misses a level the data hold (a
+    than :data:`WORSE_RMS`), the table is the model: a smooth form that misses a level the data hold (a
     straight line through an optimum) is wrong between the levels too, where a user's next batch or
     temperature lands.  ``(effect, model)``."""
     law = effect.law
