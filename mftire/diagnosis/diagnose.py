@@ -39,7 +39,10 @@ Procedure (:func:`diagnose`)
    scored channel at least as well as the given model (:func:`worse_in_sample`; a channel the law does
    not act on keeps its given coefficients, or has them refitted when it reads a channel the law changes,
    as Mz reads Fx), and so must it at every level (or quarter range) of its own variable
-   (:func:`worse_in_ranges`: a straight line through an optimum is better overall and worse at a level); an
+   (:func:`worse_in_ranges`: a straight line through an optimum is better overall and worse at a level; the
+   same repair of a channel the law does not act on, :func:`repaired_channels`).  A smooth law whose form was
+   chosen on fewer levels of its variable than the final refit holds (the held-out condition was a level of
+   it) and that fits a level worse than a per-level table gives way to the table (:func:`levels_form`).  An
    input law stays within physical limits
    (:func:`~mftire.diagnosis.effects.plausible_inputs`); a candidate with two levels of a quantity (not a
    flag, not an MF input) gets no law, since nothing can check its form between the levels; nor does an MF
