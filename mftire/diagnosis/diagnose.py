@@ -857,7 +857,6 @@ def worse_in_ranges(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Seq
     return out
 
 
-
 #: Forms whose shape between the levels of a variable a per-level table can show wrong (:func:`levels_form`).
 SMOOTH_FORMS = ("linear", "quadratic", "decay", "saturating", "hinge")
 
@@ -923,6 +922,7 @@ def repaired_channels(df: pd.DataFrame, given: Tyre, extended: Tyre, worse: Sequ
                          "channels the law changes)")  # fmt: skip
             extended, worse = refit, []
     return extended, worse, notes
+
 
 @dataclass
 class _HeldOutJudge:
