@@ -205,7 +205,6 @@ def test_final_model_never_fits_its_rows_worse_than_the_given_one(grouped):
     assert worse_in_sample(grouped, TYRE, kept, ["Fx", "Fy", "Mz"], noise) == ["Fx"]
 
 
-
 def test_a_channel_the_law_does_not_act_on_is_repaired_and_one_it_acts_on_is_not(grouped):
     """The repair of the final checks (in-sample and per range): a law on Fx whose refit left Mz worse keeps
     Mz's given coefficients; a law acting on Mz itself is not repaired (its law is not written)."""
@@ -248,6 +247,7 @@ def test_a_straight_law_that_misses_a_level_gives_way_to_the_per_level_table(mid
         assert chosen is fit and written is model
     # a form chosen on every level: not checked again
     assert levels_form(prob, TYRE, fit, model, level, 3, 1, None, ("Fx", "Fy", "Mz"), noise) == (fit, model)
+
 
 def test_no_law_in_two_levels_of_a_quantity():
     """Grip falls with a rim temperature tested at two levels only: the cause is named, no law is written (a

@@ -238,6 +238,12 @@ def confounding_blocks(df: pd.DataFrame, v: np.ndarray, threshold: float = CONFO
     return df[keys].astype(float).round(6).apply(tuple, axis=1).factorize()[0]
 
 
+def levels_of(values: np.ndarray, decimals: int = 6) -> np.ndarray:
+    """The distinct finite values (levels) of a variable, rounded to ``decimals``, sorted."""
+    v = np.asarray(values, float)
+    return np.unique(np.round(v[np.isfinite(v)], decimals))
+
+
 def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4,
                 blocks: np.ndarray | None = None, kinds: np.ndarray | None = None) -> np.ndarray | None:
     """Held-out folds along the candidate: its levels (a sweep-level variable with 3 to 6 levels: one
@@ -250,7 +256,7 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
     kind (``kinds``: braking, cornering, combined), so that no fold holds out every sweep of a kind, which
     the refitted coefficients of that channel need."""
     v = np.asarray(v, float)
-    lv = np.unique(np.round(v[np.isfinite(v)], 6))
+    lv = levels_of(v)
     if sweep_level and 3 <= len(lv) <= 6 and blocks is None:
         out = np.unique(np.round(v, 6), return_inverse=True)[1]
         if kinds is not None:  # a level that holds every sweep of a kind is never held out
@@ -581,8 +587,7 @@ def extra_conditions(df: pd.DataFrame, law: Tyre, control: Tyre, channels: Seque
         if sp not in df.columns or sp == SET_POINT_COLUMNS.get(skip, skip):
             continue
         x = df[sp].to_numpy(float)
-        lv = np.unique(np.round(x[np.isfinite(x)], 6))
-        for v in lv[1:-1]:  # interior levels: the models interpolate, as at a user's next condition
+        for v in levels_of(x)[1:-1]:  # interior levels: the models interpolate, as at a user's next condition
             rows = np.isclose(x, v)
             if rows.mean() >= 0.5 or (kinds is not None and set(kinds[~rows]) != set(kinds)):
                 continue
@@ -821,7 +826,7 @@ def variable_ranges(v: np.ndarray, sweeps: np.ndarray) -> list[tuple[str, np.nda
     :data:`RANGES` contiguous ranges of the sweeps' mean values.  ``[(label, row mask), ...]``."""
     v = np.asarray(v, float)
     ok = np.isfinite(v)
-    lv = np.unique(np.round(v[ok], 6))
+    lv = levels_of(v)
     if lv.size <= RANGE_LEVELS:
         # a level holding less than half its share of the rows is a fragment, not a condition a user tests (the
         # turning points of the sweeps, sweep_dir = 0, where a direction law is 1 anyway)
@@ -861,10 +866,6 @@ def worse_in_ranges(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Seq
 SMOOTH_FORMS = ("linear", "quadratic", "decay", "saturating", "hinge")
 
 
-def n_levels_of(values: np.ndarray) -> int:
-    """The number of distinct finite values (levels) of a variable."""
-    v = np.asarray(values, float)
-    return len(np.unique(np.round(v[np.isfinite(v)], 6)))
 
 
 def levels_form(prob, given: Tyre, effect: EffectFit, extended: Tyre, values: np.ndarray, trained_levels: int,
@@ -883,7 +884,7 @@ def levels_form(prob, given: Tyre, effect: EffectFit, extended: Tyre, values: np
     law = effect.law
     if law is None or law.form not in SMOOTH_FORMS or not effect.targets:
         return effect, extended
-    n_levels = n_levels_of(values)
+    n_levels = levels_of(values).size
     if n_levels <= trained_levels or not 3 <= n_levels <= min(MAX_LEVELS, 5):
         return effect, extended
     table = Law(law.name.removesuffix("_quadratic").removesuffix("_variable") + "_levels", law.targets, "table")
@@ -1165,9 +1166,9 @@ def _diagnose(
         blocks = confounding_blocks(prob.df, v, variable=variable)
         kinds = prob.df["sweep_var"].to_numpy() if "sweep_var" in prob.df.columns else None
         folds = level_folds(v, prob.df["sweep_id"].to_numpy(), c.sweep_level, blocks=blocks, kinds=kinds)
-        n_levels = int(np.unique(np.round(v[np.isfinite(v)], 9)).size)
+        n_levels = int(levels_of(v, 9).size)
         # the levels in every row: the diagnosis's own held-out condition may be a level of the candidate
-        lv = np.unique(np.round(c.values[np.isfinite(c.values)], 9))
+        lv = levels_of(c.values, 9)
         if lv.size == 2 and not set(lv.tolist()) <= {-1.0, 0.0, 1.0} and variable not in MF_INPUTS \
                 and variable not in BUILTIN_VARIABLES:
             # two levels of a quantity (not a 0/1 or ±1 flag, not an MF input, which the MF's own terms interpolate
@@ -1307,7 +1308,7 @@ def _diagnose(
     values_all = pall.df["_cand"].to_numpy(float) if effect.variable not in BUILTIN_VARIABLES else None
     extended, _ = restricted(tyre, final_fit(pall, effect, values_all, n_pressures, eff_ch), effect)
     if values_all is not None:
-        effect, extended = levels_form(pall, tyre, effect, extended, values_all, n_levels_of(cvals[train]),
+        effect, extended = levels_form(pall, tyre, effect, extended, values_all, levels_of(cvals[train]).size,
                                        n_pressures, eff_ch, chans, noise)  # fmt: skip
     # never worse than the model as given (issue 21): the law's model, refitted on every row, is compared with the
     # given model on those same rows.  With one more law it must fit them at least as well on every scored
