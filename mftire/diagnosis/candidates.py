@@ -36,6 +36,12 @@ from mftire.segmentation.grouping import group_sweeps
 #: Derived candidates, in a fixed order.
 DERIVED = ("Vs", "Vx", "P", "Fz_dev", "sign_alpha", "sign_kappa", "sweep_dir", "sequence", "energy")
 
+#: Derived candidates that are functions of the MF operating point (its inputs: the slip speed, the forward speed, the
+#: pressure, the load, the signs of the slips).  The MF models each of them itself, so a residual one of them explains
+#: is a misfit of the MF's own characteristic unless a law in it predicts held-out sweeps better than the model
+#: refitted without one (:func:`mftire.diagnosis.diagnose.cause_without_any_law`).
+OPERATING_POINT = ("Vs", "Vx", "P", "Fz_dev", "sign_alpha", "sign_kappa")
+
 #: Columns that are never candidates: MF inputs and outputs and mftire's own labels.
 EXCLUDED = NOT_VARIABLES
 #: Names that look like time (used for the energy integral).

@@ -65,7 +65,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from mftire.diagnosis.candidates import Candidate, candidates, time_column, with_sweeps
+from mftire.diagnosis.candidates import OPERATING_POINT, Candidate, candidates, time_column, with_sweeps
 from mftire.diagnosis.effects import (
     CV_FOLDS,
     FIT_CHANNELS,
@@ -426,7 +426,9 @@ def cause_without_any_law(top: CandidateScore, two_level: Sequence[str],
     coefficients' compromise when an effect is confounded with the load blocks, say), not a missing variable; only a
     law in it that predicts held-out sweeps (an asymmetry of grip) makes it a cause.  Then the first candidate that
     explains the asymmetry's size beyond the sign (``beyond``, :func:`beyond_asymmetry`) is named at p <=
-    :data:`NAMED_ALONE_P`."""
+    :data:`NAMED_ALONE_P`.  The other functions of the operating point
+    (:data:`~mftire.diagnosis.candidates.OPERATING_POINT`: the slip speed, the speed, the pressure, the load) are
+    never named alone either: the MF models each of them (zoo null draws 1022 and 1182 named Vs and Vx this way)."""
     if two_level:
         return top.variable, (f"cause named, no law found: {', '.join(two_level)} has two levels of a quantity in the "
                               "data; a law between or beyond them cannot be checked on held-out data, so none is "
@@ -447,6 +449,12 @@ def cause_without_any_law(top: CandidateScore, two_level: Sequence[str],
                       "the model refitted without it.  A residual that follows the sign of the slip in every run is a "
                       "function of the operating point: a shape the fitted coefficients do not reproduce, or the "
                       "trace of an effect confounded with the operating conditions, not a column; none is named")
+    if top.variable in OPERATING_POINT:
+        return None, (f"no effect established: {top.variable}, a function of the MF operating point, explains "
+                      f"{top.score:.0%} of the residual of {top.channel} beyond the MF inputs (ranking p = "
+                      f"{top.p_value:.3g}), but no law of any flagged candidate predicted the held-out folds better "
+                      f"than the model refitted without it.  The MF models {top.variable} itself: the residual is a "
+                      "shape its fitted coefficients do not reproduce, not a missing variable; none is named")
     if top.p_value > NAMED_ALONE_P:
         return None, (f"no effect established: {top.variable} was flagged by the ranking (p = {top.p_value:.3g}), but "
                       "no law of any flagged candidate predicted the held-out folds better than the model refitted "

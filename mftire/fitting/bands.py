@@ -15,7 +15,7 @@ where should a new measurement fall?":
    This makes a replicate about 2–4 times faster than a cold fit and keeps every
    replicate in the same basin as the full fit (no spurious multi-modal bands from a
    replicate stuck in a far local minimum).  Effect on coverage: the optimizer stops
-   when the cost stops improving (tolerances 1e-9 and an evaluation budget), so a
+   when the cost stops improving (a relative change of 1e-6 and an evaluation budget), so a
    replicate may stay slightly closer to the full fit than a fully converged refit —
    the confidence band is, if anything, a little narrow.  Restricting ``stages`` (e.g.
    ``"1,2,3"``) leaves the other stages' coefficients at the full fit in every replicate:
