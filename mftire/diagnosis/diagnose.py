@@ -31,8 +31,9 @@ Procedure (:func:`diagnose`)
    found", the model unchanged; the cause named is the ranking's first unless another candidate's law
    predicted the common held-out sweeps clearly better (or the first's laws never beat the control).  When no
    law of any candidate beat the control on the held-out folds, nothing confirms the ranking: its first is named
-   only at p <= :data:`NAMED_ALONE_P`, else "no effect established"; a sign of the slip (sign_alpha, sign_kappa)
-   is never named alone (a function of the operating point, not a column).  When a sign leads the ranking, the
+   only at p <= :data:`NAMED_ALONE_P`, else "no effect established"; a function of the operating point (a sign of
+   the slip, the slip speed, the speed, the pressure, the load deviation: :data:`OPERATING_POINT`) is never named
+   alone (the MF models it; it is not a missing column).  When a sign leads the ranking, the
    data's columns are ranked again with it among the operating point (:func:`beyond_asymmetry`): one that sets
    the asymmetry's size (an offset drifting with a temperature) follows the sign, and its laws are fitted.
 6. Never worse than no effect (issue 21): the law refitted on every row must fit those rows on every
