@@ -36,11 +36,15 @@ from mftire.segmentation.grouping import group_sweeps
 #: Derived candidates, in a fixed order.
 DERIVED = ("Vs", "Vx", "P", "Fz_dev", "sign_alpha", "sign_kappa", "sweep_dir", "sequence", "energy")
 
+#: Candidates odd in the slip (an asymmetry between left and right, drive and brake).  The raw residual of a
+#: change symmetric in the slip (grip, stiffness, shape) is odd too, and such a candidate would stand for it
+#: there: the ranking scores them along the model only, where an asymmetry is what they explain.
+SIGN_CANDIDATES = ("sign_alpha", "sign_kappa")
 #: Derived candidates that are functions of the MF operating point (its inputs: the slip speed, the forward speed, the
 #: pressure, the load, the signs of the slips).  The MF models each of them itself, so a residual one of them explains
 #: is a misfit of the MF's own characteristic unless a law in it predicts held-out sweeps better than the model
 #: refitted without one (:func:`mftire.diagnosis.diagnose.cause_without_any_law`).
-OPERATING_POINT = ("Vs", "Vx", "P", "Fz_dev", "sign_alpha", "sign_kappa")
+OPERATING_POINT = ("Vs", "Vx", "P", "Fz_dev", *SIGN_CANDIDATES)
 
 #: Columns that are never candidates: MF inputs and outputs and mftire's own labels.
 EXCLUDED = NOT_VARIABLES

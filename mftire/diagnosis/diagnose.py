@@ -66,7 +66,14 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from mftire.diagnosis.candidates import OPERATING_POINT, Candidate, candidates, time_column, with_sweeps
+from mftire.diagnosis.candidates import (
+    OPERATING_POINT,
+    SIGN_CANDIDATES,
+    Candidate,
+    candidates,
+    time_column,
+    with_sweeps,
+)
 from mftire.diagnosis.effects import (
     CV_FOLDS,
     FIT_CHANNELS,
@@ -100,7 +107,6 @@ from mftire.diagnosis.effects import (
 from mftire.diagnosis.holdout import default_holdout, holdout_mask, levels
 from mftire.diagnosis.profile import CONFOUND_R, SECOND_INPUTS, Profiles, profile_factors
 from mftire.diagnosis.ranking import (
-    SIGN_CANDIDATES,
     CandidateScore,
     baseline_features,
     rank_candidates,
@@ -422,7 +428,7 @@ def cause_without_any_law(top: CandidateScore, two_level: Sequence[str],
     """The cause named, and the message, when no law of any flagged candidate beat the control refit on the held-out
     folds: the ranking's first (``top``) only at p <= :data:`NAMED_ALONE_P`, since nothing else confirms it; the
     first (the message names them) when candidates with two levels of a quantity got no law (``two_level``).  A sign
-    of the slip (:data:`~mftire.diagnosis.ranking.SIGN_CANDIDATES`) is never named alone: it is a function of the MF
+    of the slip (:data:`~mftire.diagnosis.candidates.SIGN_CANDIDATES`) is never named alone: it is a function of the MF
     operating point, and a residual it explains in every run is a misfit of the characteristic's shape (the fitted
     coefficients' compromise when an effect is confounded with the load blocks, say), not a missing variable; only a
     law in it that predicts held-out sweeps (an asymmetry of grip) makes it a cause.  Then the first candidate that
@@ -469,7 +475,7 @@ def beyond_asymmetry(
     ranking: list[CandidateScore], residuals: Mapping[str, np.ndarray], peaks: Mapping[str, float], X0: np.ndarray,
     cands: Sequence[Candidate], units: np.ndarray, *, n_perm: int, seed: int, ranking_kwargs: Mapping | None,
 ) -> tuple[list[CandidateScore], list[CandidateScore]]:
-    """When a sign of the slip (:data:`~mftire.diagnosis.ranking.SIGN_CANDIDATES`) leads the ranking, the other
+    """When a sign of the slip (:data:`~mftire.diagnosis.candidates.SIGN_CANDIDATES`) leads the ranking, the other
     candidates ranked again with that sign among the operating-point features: ``(ranking, beyond)``.
 
     An offset of the slip angle, the camber or the force makes the residual along the model odd in the slip, which

@@ -47,7 +47,7 @@ import numpy as np
 from scipy import stats
 from scipy.spatial import cKDTree
 
-from mftire.diagnosis.candidates import Candidate
+from mftire.diagnosis.candidates import SIGN_CANDIDATES, Candidate
 
 MOMENTS = ("Mz", "Mx", "My")
 #: Smallest effect reported: RMS of the explained part over the channel's peak [-].  Significance is the
@@ -60,10 +60,6 @@ MIN_EFFECT = 0.001
 #: On campaigns without an effect (run-to-run scatter, decoys drifting with time or load) the first candidate
 #: explains up to ~7 %; the permutation null alone is not tight enough there.
 MIN_SCORE = 0.1
-#: Candidates odd in the slip (an asymmetry between left and right, drive and brake).  The raw residual of a
-#: change symmetric in the slip (grip, stiffness, shape) is odd too, and such a candidate would stand for it
-#: there: they are scored along the model only, where an asymmetry is what they explain.
-SIGN_CANDIDATES = ("sign_alpha", "sign_kappa")
 #: A candidate is tested on at most this many of its best-scoring residuals (channels and forms).
 MAX_TESTS = 3
 #: When nothing is significant, the strongest test that no null score reached is run on until this many times
