@@ -30,7 +30,7 @@ import pandas as pd
 from mftire.iotools.columns import NOT_VARIABLES
 from mftire.iotools.sweeps import FIT_ROW  # the importer's flag: rows the fit uses (False: warm-up, ramps)
 from mftire.mf.basic import slip_speed
-from mftire.mf.extensions import identifier_name
+from mftire.mf.extensions import BUILTIN_VARIABLES, identifier_name
 from mftire.segmentation.grouping import group_sweeps
 
 #: Derived candidates, in a fixed order.
@@ -40,11 +40,12 @@ DERIVED = ("Vs", "Vx", "P", "Fz_dev", "sign_alpha", "sign_kappa", "sweep_dir", "
 #: change symmetric in the slip (grip, stiffness, shape) is odd too, and such a candidate would stand for it
 #: there: the ranking scores them along the model only, where an asymmetry is what they explain.
 SIGN_CANDIDATES = ("sign_alpha", "sign_kappa")
-#: Derived candidates that are functions of the MF operating point (its inputs: the slip speed, the forward speed, the
-#: pressure, the load, the signs of the slips).  The MF models each of them itself, so a residual one of them explains
-#: is a misfit of the MF's own characteristic unless a law in it predicts held-out sweeps better than the model
-#: refitted without one (:func:`mftire.diagnosis.diagnose.cause_without_any_law`).
-OPERATING_POINT = ("Vs", "Vx", "P", "Fz_dev", *SIGN_CANDIDATES)
+#: Derived candidates that are functions of the MF operating point: those the evaluator itself derives from its inputs
+#: (:data:`~mftire.mf.extensions.BUILTIN_VARIABLES`: the slip speed, the forward speed, the pressure, the signs of the
+#: slips) and the load's deviation from its set point (the MF reads the load).  The MF models each of them itself, so
+#: a residual one of them explains is a misfit of the MF's own characteristic unless a law in it predicts held-out
+#: sweeps better than the model refitted without one (:func:`mftire.diagnosis.diagnose.cause_without_any_law`).
+OPERATING_POINT = (*(v for v in DERIVED if v in BUILTIN_VARIABLES), "Fz_dev")
 
 #: Columns that are never candidates: MF inputs and outputs and mftire's own labels.
 EXCLUDED = NOT_VARIABLES

@@ -881,8 +881,6 @@ def worse_in_ranges(df: pd.DataFrame, given: Tyre, extended: Tyre, channels: Seq
 SMOOTH_FORMS = ("linear", "quadratic", "decay", "saturating", "hinge")
 
 
-
-
 def levels_form(prob, given: Tyre, effect: EffectFit, extended: Tyre, values: np.ndarray, trained_levels: int,
                 n_pressures: int, effect_channels: Sequence[str] | None, channels: Sequence[str],
                 noise: Mapping[str, float]) -> tuple[EffectFit, Tyre]:
