@@ -18,7 +18,14 @@ import pandas as pd
 from mftire.errors import MftireInputError
 from mftire.iotools.sweeps import REQUIRED_COLUMNS
 
-__all__ = ["CONDITIONS", "cluster_1d", "condition_tolerances", "sweep_kind", "group_sweeps", "summarize_sweeps"]
+__all__ = ["CONDITIONS", "KAPPA_TOL", "ALPHA_TOL", "cluster_1d", "condition_tolerances", "sweep_kind", "group_sweeps",
+           "summarize_sweeps"]
+
+#: Level tolerances of a held slip, kappa [-] and alpha [rad] (0.5 deg): the defaults of :func:`sweep_kind` and of
+#: the two ways to cut sweeps that pass them on to it, :func:`group_sweeps` (sweep tables) and
+#: :func:`mftire.segmentation.rig_segments.segment` (rig time series).
+KAPPA_TOL = 0.01
+ALPHA_TOL = math.radians(0.5)
 
 
 def cluster_1d(values: Any, rel_tol: float = 0.0, abs_tol: float = 0.0) -> np.ndarray:
@@ -103,8 +110,8 @@ def sweep_kind(
     kappa: Any,
     alpha: Any,
     *,
-    kappa_tol: float = 0.01,
-    alpha_tol: float = math.radians(0.5),
+    kappa_tol: float = KAPPA_TOL,
+    alpha_tol: float = ALPHA_TOL,
 ) -> str:
     """Kind of a sweep from which slips vary.
 
@@ -375,8 +382,8 @@ def group_sweeps(
     p_tol: float = 0.05,
     vx_tol: float = 0.1,
     vx_abs_tol: float = 0.5,
-    kappa_tol: float = 0.01,
-    alpha_tol: float = math.radians(0.5),
+    kappa_tol: float = KAPPA_TOL,
+    alpha_tol: float = ALPHA_TOL,
     by: Sequence[Hashable] | None = None,
     split: bool = True,
     min_points: int = 3,

@@ -22,7 +22,15 @@ from mftire.errors import MftireInputError
 from mftire.iotools.columns import SET_POINT_COLUMNS
 from mftire.iotools.rig import ColumnSpec, PathLike, read_raw, write_sweeps
 from mftire.iotools.sweeps import REQUIRED_COLUMNS
-from mftire.segmentation.grouping import CONDITIONS, cluster_1d, condition_tolerances, set_point, sweep_kind
+from mftire.segmentation.grouping import (
+    ALPHA_TOL,
+    CONDITIONS,
+    KAPPA_TOL,
+    cluster_1d,
+    condition_tolerances,
+    set_point,
+    sweep_kind,
+)
 
 __all__ = ["RigReport", "segment", "import_rig"]
 
@@ -117,8 +125,8 @@ def segment(
     gamma_tol: float = math.radians(0.3),
     vx_tol: float = 0.05,
     vx_abs_tol: float = 0.3,
-    alpha_tol: float = math.radians(0.5),
-    kappa_tol: float = 0.01,
+    alpha_tol: float = ALPHA_TOL,
+    kappa_tol: float = KAPPA_TOL,
     smooth_s: float = 0.5,
     hold_s: float = 1.0,
     min_segment_s: float = 3.0,
