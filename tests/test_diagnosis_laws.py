@@ -373,3 +373,28 @@ def test_full_refit_keeps_the_sweeps_it_is_given(monkeypatch):
     combined = ("RBX1", "RBX2", "RCX1", "REX1", "RHX1", "RBY1", "RBY2", "RCY1", "RHY1")
     assert {k: out[k] for k in combined} == {k: TYRE[k] for k in combined}
     assert out["PDX1"] != TYRE["PDX1"]  # the pure-slip stages were refitted
+
+
+def test_an_input_law_frees_the_channels_that_read_its_input_through_the_combined_slip():
+    """A slip-angle offset acts on Fy and Mz, and also lowers the braking force through the combined-slip weighting
+    (Pacejka 2012 eqs 4.E54-4.E57): its refit frees the Fx coefficients that absorbed it (zoo seed 1108: no law ->
+    a slip-angle offset quadratic in hardness, held-out cut 90 %).  A longitudinal-slip offset frees Fy (4.E58-4.E67)
+    and, through Fy, Mz; a law on Fx's grip frees Fx only."""
+    from mftire.diagnosis.effects import refit_channels_of
+
+    assert refit_channels_of(Law("slip_angle_offset", ("ALPHA_OFFSET",), "linear")) == ("Fx", "Fy", "Mz")
+    assert refit_channels_of(Law("slip_ratio_offset", ("KAPPA_OFFSET",), "linear")) == ("Fx", "Fy", "Mz")
+    assert refit_channels_of(Law("shift_variable", ("FY_OFFSET",), "linear")) == ("Fy", "Mz")
+    assert refit_channels_of(Law("friction_variable", ("LMUX",), "linear")) == ("Fx",)
+    assert refit_channels_of(CONTROL) is None
+
+
+def test_the_elapsed_time_is_never_the_second_variable_of_an_interaction():
+    """Loads tested in blocks along a drifting programme: an interaction of a temperature with the clock fits the
+    blocks one by one (zoo seed 1171: Mz +135 % on new runs).  The other columns stay partners."""
+    from mftire.diagnosis.candidates import interaction_partners
+
+    values = {"track_temp": np.arange(3.0), "time": np.arange(3.0), "tread_depth": np.arange(3.0)}
+    assert set(interaction_partners(values, "track_temp", "time")) == {"tread_depth"}
+    assert set(interaction_partners(values, "track_temp", None)) == {"time", "tread_depth"}
+    assert set(interaction_partners(values, "time", "time")) == {"track_temp", "tread_depth"}

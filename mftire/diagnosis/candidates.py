@@ -22,6 +22,7 @@ energy      cumulative friction energy along the sequence,
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -69,6 +70,17 @@ def time_column(df: pd.DataFrame) -> str | None:
         if str(c).lower() in TIME_NAMES and pd.api.types.is_numeric_dtype(df[c]):
             return str(c)
     return None
+
+
+def interaction_partners(values: Mapping[str, np.ndarray], variable: str,
+                         time_col: str | None) -> dict[str, np.ndarray]:
+    """The candidates ``values`` (name -> values) offered as the second variable of an interaction with
+    ``variable``: every other one but the elapsed time ``time_col``.  The clock orders everything a test
+    programme does (loads tested in blocks, a drifting temperature): an effect whose size follows the clock
+    fits the blocks one by one, has no physical reading and extrapolates on new runs (zoo seed 1171: an
+    interaction of track temperature with time, Mz +135 % on new runs).  The accumulators of the test order
+    (:data:`DERIVED` ``sequence``, ``energy``) are not candidates of the profiles at all."""
+    return {k: v for k, v in values.items() if k not in (variable, time_col)}
 
 
 def with_sweeps(df: pd.DataFrame) -> pd.DataFrame:

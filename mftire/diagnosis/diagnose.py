@@ -71,6 +71,7 @@ from mftire.diagnosis.candidates import (
     SIGN_CANDIDATES,
     Candidate,
     candidates,
+    interaction_partners,
     time_column,
     with_sweeps,
 )
@@ -614,15 +615,15 @@ def extra_conditions(df: pd.DataFrame, law: Tyre, control: Tyre, channels: Seque
 
 def _worse_elsewhere(prob, effect: EffectFit, law: Tyre, control: Tyre, values: np.ndarray | None,
                      n_pressures: int, effect_channels: Sequence[str], channels: Sequence[str],
-                     noise: Mapping[str, float], skip: str) -> list[str]:
+                     noise: Mapping[str, float], skip: str, cache: dict | None = None) -> list[str]:
     """The held-out conditions of :func:`extra_conditions` on which the law's model, refitted without them the way it
     was chosen, is worse than its control refitted the same way on a scored channel beyond its noise
     (:func:`~mftire.diagnosis.effects.is_worse` with :data:`GUARD_ALLOWANCE`), in words (empty: none).  A user's
     next data are new runs and other conditions, not the diagnosis's own held-out condition: never worse than no
-    effect (issue 21)."""
+    effect (issue 21).  ``cache``: the diagnosis's cache of full refits."""
     out = []
     for label, rows in extra_conditions(prob.df, law, control, channels, noise, skip):
-        law_t, ctrl_t = refit_without(prob, effect, values, n_pressures, effect_channels, ~rows)
+        law_t, ctrl_t = refit_without(prob, effect, values, n_pressures, effect_channels, ~rows, cache)
         held = prob.df[rows].reset_index(drop=True)
         worse = worse_errors(channel_errors(held, _model(ctrl_t, held), _model(law_t, held), channels), noise,
                              GUARD_ALLOWANCE)  # fmt: skip
@@ -949,6 +950,9 @@ class _HeldOutJudge:
     noise: Mapping[str, float]
     n_pressures: int
     column: str
+    #: the diagnosis's cache of full refits (:func:`~mftire.diagnosis.effects.refit_without`): the control refitted
+    #: without an extra condition is the same for every variant held out there
+    refit_cache: dict | None = None
     refused_best: float = np.inf
 
     def _refused(self, fit: EffectFit, why: str, rejected: list[str]) -> None:
@@ -988,7 +992,7 @@ class _HeldOutJudge:
             gain = sum(e.rms_pct_before**2 - e.rms_pct_after**2 for e in errs if e.channel in FIT_CHANNELS)
             if not worse and gain > 0.0:
                 late = _worse_elsewhere(prob, refined, ext_r, ctrl_r, values, self.n_pressures, effect_channels,
-                                        self.channels, self.noise, self.column)  # fmt: skip
+                                        self.channels, self.noise, self.column, self.refit_cache)  # fmt: skip
                 if not late:
                     return (eff_r, ext_r, errs), rejected
                 self._refused(refined, "made " + "; ".join(late), rejected)
@@ -1159,8 +1163,8 @@ def _diagnose(
         families = profiles.families_for(variable) or ["friction", *SHIFT_FAMILIES]
         if e.raw:  # the candidate explains the residual as measured best: a shift or an offset
             families = list(dict.fromkeys([*SHIFT_FAMILIES, *profiles.families_for(variable)]))
-        # a second variable of an interaction: another column or an MF input (dfz, gamma, Vx, P)
-        second = profiles.second_variable(variable, {k: x for k, x in cand_values.items() if k != variable})
+        # a second variable of an interaction: another column (not the elapsed time) or an MF input (dfz, gamma, Vx, P)
+        second = profiles.second_variable(variable, interaction_partners(cand_values, variable, tcol))
         if second is None and not derived:
             # an MF input that explains the residual itself: an effect of the column whose size follows the input
             # (a grip change with wear that grows with speed shows in the speed first)
@@ -1242,8 +1246,8 @@ def _diagnose(
     lost: list[str] = []  # candidates whose laws lost on the held-out condition
     all_variants: list[EffectFit] = []
     accepted = None
-    judge = _HeldOutJudge(tyre, dtest, chans, noise, n_pressures, column)
     refit_cache: dict = {}  # the full refits of the candidates' laws and controls (one control for every candidate)
+    judge = _HeldOutJudge(tyre, dtest, chans, noise, n_pressures, column, refit_cache)
     drifting = [e.variable for e in significant]  # the judged causes are among them
     dvals = {name: by_name[name].values[train] for name in drifting if name in by_name}
     for judged in order[:CAUSES_TRIED]:  # judged: after the loop, the entry of found whose law is accepted

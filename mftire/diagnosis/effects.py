@@ -1145,14 +1145,23 @@ CHANNEL_COEFFICIENTS: dict[str, frozenset[str]] = {
 }
 
 
+#: Channels that read an input law's input through the combined-slip weighting only (not in
+#: :data:`~mftire.mf.extensions.TARGET_CHANNELS`, whose pure-slip channels a term acts on): the slip angle in Fx
+#: (Pacejka 2012 eqs 4.E54-4.E57), the longitudinal slip in Fy (4.E58-4.E67).  On pure-slip sweeps the given fit
+#: absorbed the mis-measured input into those channels' own coefficients (an unseen slip angle lowers the braking
+#: force of every braking sweep through G_xα), which the law's refit must free, or the law shows as a loss there.
+COMBINED_READERS: dict[str, tuple[str, ...]] = {"ALPHA_OFFSET": ("Fx",), "KAPPA_OFFSET": ("Fy",)}
+
+
 def refit_channels_of(law: Law) -> tuple[str, ...] | None:
-    """The channels whose main coefficients are refitted with ``law``: those it acts on, and Mz with the lateral
-    force (the aligning moment reads Fy, Pacejka 2012 eqs 4.E31-4.E32; Fx enters only through the combined-slip
-    arm, 4.E71, which no Mz coefficient refitted here carries); None (every channel) for the control and the
-    pressure law."""
+    """The channels whose main coefficients are refitted with ``law``: those it acts on, those that read an input
+    law's input through the combined slip (:data:`COMBINED_READERS`), and Mz with the lateral force (the aligning
+    moment reads Fy, Pacejka 2012 eqs 4.E31-4.E32; Fx enters only through the combined-slip arm, 4.E71, which no Mz
+    coefficient refitted here carries); None (every channel) for the control and the pressure law."""
     chans = set(ch for t in law.targets for ch in TARGET_CHANNELS.get(t, ()) if ch in FIT_CHANNELS)
     if not chans:
         return None
+    chans |= {ch for t in law.targets for ch in COMBINED_READERS.get(t, ())}
     if "Fy" in chans:  # pure Mz reads the lateral force (eqs 4.E31-4.E32); Fx enters only combined Mz (4.E71)
         chans.add("Mz")
     return tuple(ch for ch in FIT_CHANNELS if ch in chans)
@@ -1195,15 +1204,17 @@ def with_given_channels(base: Tyre, extended: Tyre, channels: Sequence[str]) -> 
 
 
 def refit_without(prob: _Problem, effect: EffectFit, values: np.ndarray | None, n_pressures: int,
-                  effect_channels: Sequence[str] | None, rows: np.ndarray) -> tuple[Tyre, Tyre]:
+                  effect_channels: Sequence[str] | None, rows: np.ndarray,
+                  cache: dict | None = None) -> tuple[Tyre, Tyre]:
     """The law's model and its control refitted the way ``effect`` was chosen (``effect.refit``: the main
     coefficients with the law's, or every coefficient) on the rows ``rows`` of ``prob`` only, both restricted to
-    the law's channels (:func:`restricted`): a second held-out condition for the same comparison."""
+    the law's channels (:func:`restricted`): a second held-out condition for the same comparison.  ``cache``: the
+    diagnosis's cache of full refits (:func:`_full_refit`; the control without the same rows is refitted once)."""
     base = prob.tyre
     sub, idx = subsample(take(prob, rows))
     if effect.refit == "all" or effect.law is None:
-        law_t = _full_refit(sub.df, _tyre_with(base, {}, effect.section))
-        ctrl_t = _full_refit(sub.df, base)
+        law_t = _full_refit(sub.df, _tyre_with(base, {}, effect.section), cache=cache)
+        ctrl_t = _full_refit(sub.df, base, cache=cache)
     else:
         chs = refit_channels_of(effect.law)
         v = None if values is None else np.asarray(values)[np.flatnonzero(rows)][idx]
