@@ -837,13 +837,14 @@ def evaluate_draw(seed: int, n_perm: int = 99) -> dict:
     rec["cause"] = rec["found_first"] if rec["significant"] else getattr(res, "cause", None)
     finding = bool(res is not None and (res.significant or res.extended is not None or rec["cause"] is not None))
     rec["finding"] = finding  # an effect or a cause reported (on a null: a false finding)
-    rec["law"] = None
+    rec["law"], rec["law_ratio"] = None, None
     # the diagnosis's first message (why no law, or the law's own first note), for reading a run's failures
     msgs = [] if res is None else (res.significant and res.effect is not None and res.effect.messages) or res.messages
     rec["message"] = msgs[0][:400] if msgs else None
     if res is not None and res.effect is not None and res.extended is not None:
         e = res.effect
         rec["law"] = f"{' '.join(e.targets) or e.name} x {e.name} in {e.variable}"
+        rec["law_ratio"] = float(e.heldout)  # its held-out-fold error over the control's (the selection's measure)
     rec["cause_named"] = bool(not t["is_null"] and rec["cause"] in t["accepted"])
 
     held = d.holdout & ~d.outlier

@@ -16,10 +16,14 @@ Procedure (:func:`diagnose`)
    candidate, else of load, speed or pressure).  For the significant candidates
    close to the top, laws on the affected families of the affected channels are fitted on the
    remaining data (:mod:`mftire.diagnosis.effects`), each refitting the main coefficients of the
-   channels it acts on, and compared on held-out folds (contiguous ranges or levels of the
-   candidate, every sweep kind kept) with the control refitted the same way without a law; a law
+   channels it acts on (an input law also those of the channels that read its input through the combined
+   slip, :data:`~mftire.diagnosis.effects.COMBINED_READERS`), and compared on held-out folds (contiguous ranges
+   or levels of the candidate, every sweep kind kept) with the control refitted the same way without a law; a law
    that makes any scored channel (Fx, Fy, Mz) worse than the control beyond its noise, over the folds
-   or in one of them, is never chosen (:func:`~mftire.diagnosis.effects.worse_channels`).  The candidates are
+   or in one of them, is never chosen (:func:`~mftire.diagnosis.effects.worse_channels`), nor one that cuts the
+   control's held-out error by less than 20 % (:data:`~mftire.diagnosis.effects.MAX_HELDOUT_VS_CONTROL`).  The
+   second variable of an interaction is another column (never the elapsed time:
+   :func:`~mftire.diagnosis.candidates.interaction_partners`) or an MF input.  The candidates are
    then compared with each other by their chosen laws on the same held-out sweeps (:func:`common_heldout`), and
    judged in that order (:func:`preferred_cause`).
 5. The held-out condition: each surviving law's model and its control, both fitted without it, per
