@@ -322,10 +322,10 @@ def _diagnosis_numbers(diag) -> dict:
 
 
 #: The demo's rig run: 10 points per sweep, and every ``RIG_PAIR_STEP``-th pair of sweeps (one
-#: up, one down) of the shipped file, (full, quick): 100 and 34 of its 400 sweeps.  The
+#: up, one down) of the shipped file, (full, quick): 100 and 68 of its 400 sweeps.  The
 #: whole file takes 3-4 times as long to fit and diagnose (validation/make_rig_file.py --chain OUT 1).
 RIG_POINTS_PER_SWEEP = 10
-RIG_PAIR_STEP = (4, 12)
+RIG_PAIR_STEP = (4, 6)
 #: The load held out of the rig fit and of the effect fit [x FNOMIN].
 RIG_HOLDOUT_LOAD = 0.7
 

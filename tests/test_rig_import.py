@@ -439,7 +439,7 @@ def test_import_fit_recovers_the_generating_tyre(tmp_path, gen):
 
 
 #: The chain fits and diagnoses every ``CHAIN_PAIR_STEP``-th pair of sweeps (one up, one down) of the shipped
-#: file, 134 of its 400 (the demo: 100 and 34), with every flagged row (left out of the fits, they feed the
+#: file, 134 of its 400 (the demo: 100 and 68), with every flagged row (left out of the fits, they feed the
 #: diagnosis' accumulators): the same findings in a quarter of the fit and diagnosis time of the whole file
 #: (measured with this fixture on 2026-11-26, whole file / this subset: a tread temperature first, p = 0.02 /
 #: 0.005; held-out Fx error cut by 87 / 87 %, Fy by 83 / 83 %; 275 s / 69 s on a loaded 2-core machine).
