@@ -398,25 +398,3 @@ def test_the_elapsed_time_is_never_the_second_variable_of_an_interaction():
     assert set(interaction_partners(values, "track_temp", "time")) == {"tread_depth"}
     assert set(interaction_partners(values, "track_temp", None)) == {"time", "tread_depth"}
     assert set(interaction_partners(values, "time", "time")) == {"track_temp", "tread_depth"}
-
-
-def test_held_out_folds_are_whole_levels_of_a_few_level_candidate_also_inside_blocks():
-    """Three road temperatures over two load blocks: each fold holds out one whole level, so that a law's value
-    between the trained levels is what a fold tests (zoo seed 1119: folds of sweep ranks split a level between a
-    fold and training, and a per-level table interpolating an optimum passed them, Fy +6 % at an unseen level).
-    A block with one level keeps it in training; a sweep that spans two levels is split by its rows."""
-    from mftire.diagnosis.diagnose import level_folds
-
-    sweeps = np.repeat(np.arange(12), 5)
-    v = np.repeat(np.tile([10.0, 23.3, 50.0], 4), 5)
-    blocks = np.repeat([0, 1], 30)
-    folds = level_folds(v, sweeps, blocks=blocks)
-    assert sorted(np.unique(folds)) == [0, 1, 2]
-    assert all(np.unique(v[folds == f]).size == 1 for f in range(3))
-    alone = np.where(v == 50.0, 2, blocks)  # 50 °C tested in a block of its own
-    folds = level_folds(v, sweeps, blocks=alone)
-    assert np.all(folds[v == 50.0] == -1) and sorted(np.unique(folds[folds >= 0])) == [0, 1]
-    spans = v.copy()
-    spans[3:5] = 23.3  # the first sweep ends at the next level
-    folds = level_folds(spans, sweeps)
-    assert all(np.unique(spans[folds == f]).size == 1 for f in np.unique(folds))
