@@ -256,12 +256,11 @@ def levels_of(values: np.ndarray, decimals: int = 6) -> np.ndarray:
     return np.unique(np.round(v[np.isfinite(v)], decimals))
 
 
-def level_folds(v: np.ndarray, sweeps: np.ndarray, k: int = 4,
+def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4,
                 blocks: np.ndarray | None = None, kinds: np.ndarray | None = None) -> np.ndarray | None:
-    """Held-out folds along the candidate: its levels (a variable with 3 to 6 levels: one level out at a time;
-    with ``blocks``, out of the blocks that hold another level too), else ``k`` contiguous
-    ranges of the sweeps' mean value, so that every fold is a range of the variable between or beyond the trained
-    ones, as the held-out condition is.
+    """Held-out folds along the candidate: its levels (a sweep-level variable with 3 to 6 levels: one
+    level out at a time), else ``k`` contiguous ranges of the sweeps' mean value, so that every fold is
+    a range of the variable between or beyond the trained ones, as the held-out condition is.
 
     With ``blocks`` (:func:`confounding_blocks`) the ranges are taken inside each block, so that every
     fold keeps every operating condition in training and tests the candidate by its variation within
@@ -270,16 +269,8 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, k: int = 4,
     the refitted coefficients of that channel need."""
     v = np.asarray(v, float)
     lv = levels_of(v)
-    if 3 <= len(lv) <= 6:  # a staircase, a run-level constant (a sweep that spans two runs holds two of its levels)
+    if sweep_level and 3 <= len(lv) <= 6 and blocks is None:
         out = np.unique(np.round(v, 6), return_inverse=True)[1]
-        if blocks is not None:
-            # whole levels inside the blocks too: a range of sweep ranks would split a level between a fold and
-            # training, and a law's value between the levels (a table interpolating an optimum) would never be
-            # tested (zoo seed 1119).  A block with one level keeps it in training (its operating condition)
-            bb = np.asarray(blocks)
-            for blk in np.unique(bb):
-                if np.unique(out[bb == blk]).size < 2:
-                    out = np.where(bb == blk, -1, out)
         if kinds is not None:  # a level that holds every sweep of a kind is never held out
             kk = np.asarray(kinds)
             for level in np.unique(out):
@@ -1195,7 +1186,7 @@ def _diagnose(
         # held-out condition), else groups of sweeps
         blocks = confounding_blocks(prob.df, v, variable=variable)
         kinds = prob.df["sweep_var"].to_numpy() if "sweep_var" in prob.df.columns else None
-        folds = level_folds(v, prob.df["sweep_id"].to_numpy(), blocks=blocks, kinds=kinds)
+        folds = level_folds(v, prob.df["sweep_id"].to_numpy(), c.sweep_level, blocks=blocks, kinds=kinds)
         n_levels = int(levels_of(v, 9).size)
         # the levels in every row: the diagnosis's own held-out condition may be a level of the candidate
         lv = levels_of(c.values, 9)
