@@ -17,7 +17,7 @@ Procedure (:func:`diagnose`)
    close to the top, laws on the affected families of the affected channels are fitted on the
    remaining data (:mod:`mftire.diagnosis.effects`), each refitting the main coefficients of the
    channels it acts on (an input law also those of the channels that read its input through the combined
-   slip, :data:`~mftire.diagnosis.effects.COMBINED_READERS`), and compared on held-out folds (contiguous ranges
+   slip, :data:`~mftire.mf.extensions.COMBINED_READERS`), and compared on held-out folds (contiguous ranges
    or levels of the candidate, every sweep kind kept) with the control refitted the same way without a law; a law
    that makes any scored channel (Fx, Fy, Mz) worse than the control beyond its noise, over the folds
    or in one of them, is never chosen (:func:`~mftire.diagnosis.effects.worse_channels`), nor one that cuts the

@@ -38,6 +38,7 @@ from mftire.fitting.stages import STAGES
 from mftire.mf import derivatives
 from mftire.mf.extensions import (
     BUILTIN_VARIABLES,
+    COMBINED_READERS,
     MAX_LEVELS,
     OFFSET_TARGETS,
     SECTION,
@@ -1152,19 +1153,12 @@ CHANNEL_COEFFICIENTS: dict[str, frozenset[str]] = {
 }
 
 
-#: Channels that read an input law's input through the combined-slip weighting only (not in
-#: :data:`~mftire.mf.extensions.TARGET_CHANNELS`, whose pure-slip channels a term acts on): the slip angle in Fx
-#: (Pacejka 2012 eqs 4.E54-4.E57), the longitudinal slip in Fy (4.E58-4.E67).  On pure-slip sweeps the given fit
-#: absorbed the mis-measured input into those channels' own coefficients (an unseen slip angle lowers the braking
-#: force of every braking sweep through G_xα), which the law's refit must free, or the law shows as a loss there.
-COMBINED_READERS: dict[str, tuple[str, ...]] = {"ALPHA_OFFSET": ("Fx",), "KAPPA_OFFSET": ("Fy",)}
-
-
 def refit_channels_of(law: Law) -> tuple[str, ...] | None:
     """The channels whose main coefficients are refitted with ``law``: those it acts on, those that read an input
-    law's input through the combined slip (:data:`COMBINED_READERS`), and Mz with the lateral force (the aligning
-    moment reads Fy, Pacejka 2012 eqs 4.E31-4.E32; Fx enters only through the combined-slip arm, 4.E71, which no Mz
-    coefficient refitted here carries); None (every channel) for the control and the pressure law."""
+    law's input through the combined slip (:data:`~mftire.mf.extensions.COMBINED_READERS`), and Mz with the lateral
+    force (the aligning moment reads Fy, Pacejka 2012 eqs 4.E31-4.E32; Fx enters only through the combined-slip arm,
+    4.E71, which no Mz coefficient refitted here carries); None (every channel) for the control and the pressure
+    law."""
     chans = set(ch for t in law.targets for ch in TARGET_CHANNELS.get(t, ()) if ch in FIT_CHANNELS)
     if not chans:
         return None

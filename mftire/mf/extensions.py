@@ -115,12 +115,19 @@ TARGET_CHANNELS: dict[str, tuple[str, ...]] = {
     **{k: ("Mz",) for k in ("LTR", "LRES", "LKZC", "LS")},
     "LMX": ("Mx",), "LVMX": ("Mx",), "LMY": ("My",), "LFZO": ("Fx", "Fy"),
     # an input law acts on the channels whose pure-slip equations read that input: the slip angle those of Fy
-    # and Mz (Fx reads it only through the combined-slip weighting, eqs 4.E54-4.E57, no coefficient refitted
-    # here), the camber also the friction of Fx (Pacejka 2012 eq 4.E13, PDX3), the pressure all three, the
-    # longitudinal slip that of Fx (Fy and Mz read it only through the combined-slip weighting and Fx)
+    # and Mz, the camber also the friction of Fx (Pacejka 2012 eq 4.E13, PDX3), the pressure all three, the
+    # longitudinal slip that of Fx (the channels that read an input through the combined slip only:
+    # COMBINED_READERS)
     "ALPHA_OFFSET": ("Fy", "Mz"), "GAMMA_OFFSET": ("Fy", "Mz", "Fx"), "P_FACTOR": ("Fx", "Fy", "Mz"),
     "KAPPA_OFFSET": ("Fx",),
 }  # fmt: skip
+
+#: Channels that read an input law's input through the combined-slip weighting only (not in
+#: :data:`TARGET_CHANNELS`): the slip angle in Fx (Pacejka 2012 eqs 4.E54-4.E57), the longitudinal slip in Fy
+#: (4.E58-4.E67).  On pure-slip sweeps a fit without the law absorbed the mis-measured input into those channels'
+#: own coefficients (an unseen slip angle lowers the force of every braking sweep through G_xα): the diagnosis
+#: refits them with the law (:func:`mftire.diagnosis.effects.refit_channels_of`).
+COMBINED_READERS: dict[str, tuple[str, ...]] = {"ALPHA_OFFSET": ("Fx",), "KAPPA_OFFSET": ("Fy",)}
 
 #: Variables the evaluator derives from its own (conditioned) inputs: name -> (meaning,
 #: C expression over the conditioned inputs ``c`` and parameters ``p`` of the FMU's C).
