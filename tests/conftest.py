@@ -72,22 +72,58 @@ def _no_windows_dll(request):
 def quick_demo(tmp_path_factory) -> tuple[Path, str, str]:
     """``mftire demo --quick --output local`` run once for the session, from a folder of its own (a relative
     output, as a user runs it): (the output folder, what the run printed on stdout, on stderr).
-    tests/test_demo.py checks this run; tests/test_dask_cluster.py compares a run on a Dask cluster with it."""
+    tests/test_demo.py checks this run; tests/test_dask_cluster.py compares a run on a Dask cluster with it.
+
+    Once for the whole session, not once per pytest-xdist worker: its users are in two modules that may run on
+    different workers, and the run is 95-130 CPU-seconds.  Under xdist the first worker to need it runs it in the
+    session's common temporary folder while holding a lock there; the others wait for the lock and read its
+    output, exit code and printed text (the pytest-xdist docs' recipe, with ``fcntl``).  The tests only read
+    the output folder."""
+    if os.environ.get("PYTEST_XDIST_WORKER") is None:  # one process: its own temporary folder
+        return _quick_demo_in(tmp_path_factory.mktemp("quick_demo"))
+    import fcntl
+
+    shared = tmp_path_factory.getbasetemp().parent  # the session's folder, common to its workers
+    with open(shared / "quick_demo.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file is closed, also if this worker dies
+        here = shared / "quick_demo"
+        if not (here / "rc").exists():
+            if here.exists():  # a run that did not finish (its worker was stopped): start again
+                import shutil
+
+                shutil.rmtree(here)
+            here.mkdir()
+            _quick_demo_in(here)
+    rc = int((here / "rc").read_text())
+    out, err = ((here / name).read_text(encoding="utf-8") for name in ("stdout", "stderr"))
+    assert rc == 0, err
+    return here / "local", out, err
+
+
+def _quick_demo_in(here: Path) -> tuple[Path, str, str]:
+    """:func:`quick_demo` in the folder ``here``; its exit code and printed text also in files there."""
     import contextlib
     import io
 
     from mftire.cli import main
 
-    here = tmp_path_factory.mktemp("quick_demo")
     out, err = io.StringIO(), io.StringIO()
     cwd = os.getcwd()
     os.chdir(here)
+    rc = 1
     try:  # the demo as a user runs it: its FMU with the Windows DLL when the cross compiler is there
         with pytest.MonkeyPatch.context() as mp, contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
             mp.setattr(portable, "mingw_compiler", _MINGW_COMPILER)
             rc = main(["demo", "--quick", "--output", "local"])
+    except Exception:
+        import traceback
+
+        err.write(traceback.format_exc())
     finally:
         os.chdir(cwd)
+        (here / "stdout").write_text(out.getvalue(), encoding="utf-8")
+        (here / "stderr").write_text(err.getvalue(), encoding="utf-8")
+        (here / "rc").write_text(str(rc))  # last: its presence says the run is over
     assert rc == 0, err.getvalue()
     return here / "local", out.getvalue(), err.getvalue()
 
