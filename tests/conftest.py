@@ -79,9 +79,12 @@ def quick_demo(tmp_path_factory) -> tuple[Path, str, str]:
     session's common temporary folder while holding a lock there; the others wait for the lock and read its
     output, exit code and printed text (the pytest-xdist docs' recipe, with ``fcntl``).  The tests only read
     the output folder."""
-    if os.environ.get("PYTEST_XDIST_WORKER") is None:  # one process: its own temporary folder
+    try:
+        import fcntl
+    except ImportError:  # not POSIX (Windows): each worker that needs it runs its own
+        fcntl = None
+    if os.environ.get("PYTEST_XDIST_WORKER") is None or fcntl is None:  # one process: its own temporary folder
         return _quick_demo_in(tmp_path_factory.mktemp("quick_demo"))
-    import fcntl
 
     shared = tmp_path_factory.getbasetemp().parent  # the session's folder, common to its workers
     with open(shared / "quick_demo.lock", "w") as lock:
