@@ -27,9 +27,10 @@ Procedure (:func:`diagnose`)
    then compared with each other by their chosen laws on the same held-out sweeps (:func:`common_heldout`), and
    judged in that order (:func:`preferred_cause`).
 5. The held-out condition: each surviving law's model and its control, both fitted without it, per
-   channel; the first law (in order of preference) that makes no scored channel worse and improves
-   them together, and that also holds on the extra conditions (:func:`extra_conditions`: the last
-   tests at conditions tested before, and the interior set-point levels where the law changes the
+   channel; the first law (in order of preference) that improves them together (a channel may be worse there
+   beyond its noise only for a total gain :data:`OWN_CONDITION_TRADE` times the total loss), and that also holds on
+   the extra conditions (:func:`extra_conditions`: the last tests at conditions tested before, and the
+   interior set-point levels where the law changes the
    model most, each refitted without them), is refitted on every row and written.  Its model changes
    only the coefficients of the channels the law acts on.  When none holds: "cause named, no law
    found", the model unchanged; the cause named is the ranking's first unless another candidate's law
@@ -303,6 +304,13 @@ TRIMMED_FORMS = ("linear", "saturating", "interaction", "hinge", "quadratic")
 #: A law tried after one the held-out condition refused must explain at least this share of what the refused one
 #: explained on the held-out folds (its error ratio to the control at most refused + (1 − share)·(1 − refused)).
 FALLBACK_SHARE = 0.5
+#: On the diagnosis's own held-out condition (the level the given model fits worst, often an edge load) a law may
+#: make scored channels worse beyond their noise when the scored channels' total gain there (RMS in % of the peak,
+#: squared) is more than this many times the loss (:meth:`_HeldOutJudge.first_accepted`); the extra conditions and
+#: the held-out folds still allow no channel worse.  On the 36 zoo draws whose every law the strict rule refused
+#: there, laws in 7, 115, 186, 190 and 1085 (two ceiling draws), none worse on the zoo's held-out data; 1045 (Fy
+#: 98 -> 277 N) and 1092 stay refused.
+OWN_CONDITION_TRADE = 2.0
 #: Share of the sweeps, the last in test order, held out by :func:`order_fold`.
 ORDER_SHARE = 0.25
 
@@ -966,8 +974,9 @@ class _HeldOutJudge:
     def first_accepted(self, prob, variants: Sequence[tuple[EffectFit, Tyre]], candidate: str,
                        effect_channels: Sequence[str]) -> tuple[tuple | None, list[str]]:
         """The first of ``variants`` (in order of preference) whose model and control, both refitted without the
-        held-out condition, make no scored channel worse beyond its noise and improve them together there, and hold on
-        the extra conditions (:func:`_worse_elsewhere`): ``((effect, extended tyre, channel errors), rejections)``, or
+        held-out condition, improve the scored channels together there (a channel worse beyond its noise only when the
+        total gain is :data:`OWN_CONDITION_TRADE` times the total loss), and hold on the extra conditions
+        (:func:`_worse_elsewhere`): ``((effect, extended tyre, channel errors), rejections)``, or
         ``(None, rejections)``.  A law acts on its channels only: every other coefficient stays as the model has it,
         the control is restricted the same way.  A law refused for some channels is retried next without its
         targets on them (:func:`~mftire.diagnosis.effects.trimmed_fit`, refitted the same way)."""
@@ -993,8 +1002,9 @@ class _HeldOutJudge:
             # the scored channels, those the laws are fitted on (Mx and My follow the forces through models of
             # their own and are reported, not scored)
             worse = [e.channel for e in worse_errors(errs, self.noise)]
-            gain = sum(e.rms_pct_before**2 - e.rms_pct_after**2 for e in errs if e.channel in FIT_CHANNELS)
-            if not worse and gain > 0.0:
+            gains = [e.rms_pct_before**2 - e.rms_pct_after**2 for e in errs if e.channel in FIT_CHANNELS]
+            gain, loss = sum(g for g in gains if g > 0.0), -sum(g for g in gains if g < 0.0)
+            if gain > (OWN_CONDITION_TRADE if worse else 1.0) * loss:
                 late = _worse_elsewhere(prob, refined, ext_r, ctrl_r, values, self.n_pressures, effect_channels,
                                         self.channels, self.noise, self.column, self.refit_cache)  # fmt: skip
                 if not late:
