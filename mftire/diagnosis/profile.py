@@ -263,21 +263,43 @@ def _fit_channel(tyre: Tyre, df: pd.DataFrame, channel: str, sigma: float, rng: 
     return ids, theta, se
 
 
-def _cv_score(v: np.ndarray, lam: np.ndarray, categorical: bool) -> float:
-    """Leave-one-sweep-out R² of λ predicted from v (a line, or per-level means)."""
-    n = len(v)
-    if n < 4 or np.std(v) == 0 or np.std(lam) == 0:
-        return 0.0
-    pred = np.empty(n)
-    for i in range(n):
-        m = np.arange(n) != i
-        if categorical:
-            same = m & (v == v[i])
-            pred[i] = lam[same].mean() if same.any() else lam[m].mean()
-        else:
-            a, b = np.polyfit(v[m], lam[m], 1) if np.std(v[m]) > 0 else (0.0, lam[m].mean())
-            pred[i] = a * v[i] + b
-    return 1.0 - float(np.mean((lam - pred) ** 2)) / float(np.var(lam))
+def _cv_scores(V: np.ndarray, lam: np.ndarray, categorical: bool) -> np.ndarray:
+    """Leave-one-sweep-out R² of λ predicted from each row of ``V`` (a line, or per-level means) [-].
+
+    ``V`` is (m, n): the candidate's per-sweep values and permutations of them (one multiset).  Closed form of
+    refitting without sweep i: for the line, the deleted residual e_i / (1 − h_ii) of least squares with an
+    intercept (h_ii = 1/n + (v_i − v̄)²/Sxx); for the levels, the mean of the other sweeps at v_i's level, or
+    of all other sweeps when v_i's level has no other sweep.  0 where v or λ is constant or n < 4."""
+    V = np.atleast_2d(np.asarray(V, float))
+    lam = np.asarray(lam, float)
+    m, n = V.shape
+    out = np.zeros(m)
+    var = float(np.var(lam))
+    if n < 4 or var == 0.0:
+        return out
+    ok = np.std(V, axis=1) > 0
+    total = lam.sum()
+    others = (total - lam) / (n - 1)  # the mean of the other sweeps
+    if categorical:
+        pred = np.empty((m, n))
+        for u in np.unique(V):
+            at = V == u
+            cnt = at.sum(axis=1, keepdims=True)
+            s_u = np.where(at, lam, 0.0).sum(axis=1, keepdims=True)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                mine = (s_u - lam) / (cnt - 1)
+            pred = np.where(at, np.where(cnt > 1, mine, others), pred)
+    else:
+        dv = V - V.mean(axis=1, keepdims=True)
+        sxx = np.sum(dv * dv, axis=1, keepdims=True)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            slope = np.sum(dv * (lam - lam.mean()), axis=1, keepdims=True) / sxx
+            e = lam - (lam.mean() + slope * dv)
+            h = 1.0 / n + dv * dv / sxx
+            pred = np.where(1.0 - h > 1e-12, lam - e / (1.0 - h), others)  # no spread left: the others' mean
+    score = 1.0 - np.mean((lam - pred) ** 2, axis=1) / var
+    out[ok] = score[ok]
+    return out
 
 
 def _within_block_p(v: np.ndarray, lam: np.ndarray, blocks: np.ndarray) -> float:
@@ -368,12 +390,11 @@ def _link(factors: list[FactorProfile], table: pd.DataFrame, candidates, rng, n_
             if not np.all(np.isfinite(v)) or np.std(v) == 0:
                 continue
             categorical = len(np.unique(v)) <= 3
-            score = _cv_score(v, lam, categorical)
+            score = float(_cv_scores(v, lam, categorical)[0])
             if score <= 0:
                 continue
-            exceed = 0
-            for _ in range(n_perm):
-                exceed += _cv_score(rng.permutation(v), lam, categorical) >= score
+            perms = np.array([rng.permutation(v) for _ in range(n_perm)]).reshape(n_perm, len(v))
+            exceed = int(np.sum(_cv_scores(perms, lam, categorical) >= score))
             r = float(np.corrcoef(v, lam)[0, 1])
             link = VariableLink(cname, f.factor, score, (1 + exceed) / (1 + n_perm), r)
             for name, c in confounders.items():

@@ -433,19 +433,32 @@ class TirParameters:
         """Return the body of section ``name`` (KeyError if absent)."""
         return self.sections[name.upper()]
 
+    def _lookup(self, key: str) -> Section | None:
+        """The section body whose value of ``key`` (upper case) :meth:`flat` returns, or None; without building
+        :meth:`flat` (a parameter is read thousands of times in a fit)."""
+        p = BY_KEY.get(key)
+        if p is not None and p.section != "UNITS":
+            body = self.sections.get(p.section)
+            if body is not None and not isinstance(body, TirTable) and key in body:
+                return body
+        for name, body in self.sections.items():
+            if name != "UNITS" and not isinstance(body, TirTable) and key in body:
+                return body
+        return None
+
     def get(self, key: str, default: Any = None) -> Any:
         """Return the value of ``key`` (see :meth:`flat`) or ``default``."""
-        return self.flat().get(key.upper(), default)
+        body = self._lookup(key.upper())
+        return default if body is None else body[key.upper()]
 
     def __getitem__(self, key: str) -> Value:
-        flat = self.flat()
-        try:
-            return flat[key.upper()]
-        except KeyError:
-            raise KeyError(key) from None
+        body = self._lookup(key.upper())
+        if body is None:
+            raise KeyError(key)
+        return body[key.upper()]
 
     def __contains__(self, key: object) -> bool:
-        return isinstance(key, str) and key.upper() in self.flat()
+        return isinstance(key, str) and self._lookup(key.upper()) is not None
 
     def keys(self) -> list[str]:
         """Return the keys of :meth:`flat`."""
