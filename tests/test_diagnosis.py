@@ -14,6 +14,8 @@ import numpy as np
 import pandas as pd
 import pytest
 from conftest import REFERENCE_TYRES
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.optimize import least_squares
 
 from mftire import Tyre, load, read_tir
@@ -198,3 +200,37 @@ def test_cli_diagnose(vs_case, tmp_path, capsys):
     assert doc["ranking"][0]["variable"] == "Vs"
     assert doc["holdout"]["column"] == "Fz"
     assert "Vs" in capsys.readouterr().out
+
+
+@settings(max_examples=60, deadline=None)
+@given(n=st.integers(4, 25), categorical=st.booleans(), seed=st.integers(0, 10_000), lone=st.booleans())
+def test_profile_cv_score_is_the_leave_one_sweep_out_refit(n, categorical, seed, lone):
+    # the closed form (deleted residuals; level means without the sweep) against refitting without each sweep
+    from mftire.diagnosis.profile import _cv_scores
+
+    rng = np.random.default_rng(seed)
+    v = rng.integers(0, 3, n).astype(float) if categorical else rng.normal(size=n)
+    if lone and not categorical:  # every other sweep at one value: no line without the odd one
+        v[:] = 1.0
+        v[rng.integers(n)] = 2.0
+    lam = rng.normal(size=n) + (0.5 * v if seed % 2 else 0.0)
+
+    def refit(v: np.ndarray) -> float:
+        if np.std(v) == 0:
+            return 0.0
+        pred = np.empty(n)
+        for i in range(n):
+            m = np.arange(n) != i
+            if categorical:
+                same = m & (v == v[i])
+                pred[i] = lam[same].mean() if same.any() else lam[m].mean()
+            elif np.std(v[m]) > 0:
+                a, b = np.polyfit(v[m], lam[m], 1)
+                pred[i] = a * v[i] + b
+            else:
+                pred[i] = lam[m].mean()
+        return 1.0 - float(np.mean((lam - pred) ** 2)) / float(np.var(lam))
+
+    perms = np.array([v, *(rng.permutation(v) for _ in range(4))])
+    got = _cv_scores(perms, lam, categorical)
+    assert got == pytest.approx([refit(p) for p in perms], rel=1e-9, abs=1e-9)
