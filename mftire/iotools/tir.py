@@ -560,8 +560,17 @@ class TirParameters:
         return body
 
     def copy(self) -> TirParameters:
-        """Return a deep copy."""
-        return copy.deepcopy(self)
+        """Return a deep copy: every container new; the values (numbers and strings) are immutable and shared,
+        which is what makes it fast (a fit copies its parameters often)."""
+        new = object.__new__(type(self))
+        new.__dict__.update({k: copy.deepcopy(v) for k, v in self.__dict__.items()
+                             if k not in ("sections", "comments", "header_comments", "blocks")})  # fmt: skip
+        new.sections = {name: copy.deepcopy(body) if isinstance(body, TirTable) else dict(body)
+                        for name, body in self.sections.items()}  # fmt: skip
+        new.comments = dict(self.comments)
+        new.header_comments = list(self.header_comments)
+        new.blocks = {name: list(lines) for name, lines in self.blocks.items()}
+        return new
 
     # ------------------------------------------------------------------ compare
     def __eq__(self, other: object) -> bool:
