@@ -834,3 +834,21 @@ def test_write_from_mappings(tmp_path):
     assert read_tir(out).section("MY_SECTION") == {"A": "b"}
     with pytest.raises(TypeError):
         format_tir([1, 2])
+
+
+def test_copy_is_independent_in_every_container():
+    # a table section, comments, header comments and free-text blocks: changing the copy leaves the original
+    params = read_tir(DATA / "MagicFormula52_Parameters.tir")
+    params.blocks.setdefault("MODEL", []).append("'a free-text line'")
+    table = next(name for name, body in params.sections.items() if isinstance(body, TirTable))
+    other = params.copy()
+    assert other == params and other.path == params.path and other.blocks == params.blocks
+    assert other.comments == params.comments and other.header_comments == params.header_comments
+    first = params.sections[table].rows[0][0]
+    other.sections[table].rows[0][0] = first + 1.0
+    other.comments[next(iter(other.comments))] = "changed"
+    other.header_comments.append("$ added")
+    other.blocks["MODEL"].append("'another line'")
+    assert params.sections[table].rows[0][0] == first
+    assert "changed" not in params.comments.values() and "$ added" not in params.header_comments
+    assert params.blocks["MODEL"][-1] == "'a free-text line'" and "'another line'" not in params.blocks["MODEL"]
