@@ -135,7 +135,7 @@ import math
 import os
 import re
 import warnings
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -418,16 +418,15 @@ class TirParameters:
         dict
         """
         out: dict[str, Value] = {}
-        owner: dict[str, str] = {}
-        for name, body in self.sections.items():
-            if name == "UNITS" or isinstance(body, TirTable):
-                continue
-            for key, value in body.items():
-                p = BY_KEY.get(key)
-                if key not in out or (p is not None and p.section == name and owner[key] != name):
-                    out[key] = value
-                    owner[key] = name
+        for body in self._value_sections():
+            for key in body:
+                if key not in out:
+                    out[key] = self._lookup(key)[key]  # type: ignore[index]
         return out
+
+    def _value_sections(self) -> Iterator[dict[str, Value]]:
+        """The key/value sections in file order: every section but ``[UNITS]`` and the tables."""
+        return (body for name, body in self.sections.items() if name != "UNITS" and not isinstance(body, TirTable))
 
     def section(self, name: str) -> Section:
         """Return the body of section ``name`` (KeyError if absent)."""
@@ -440,22 +439,21 @@ class TirParameters:
         if p is not None and p.section != "UNITS":
             body = self.sections.get(p.section)
             if body is not None and not isinstance(body, TirTable) and key in body:
-                return body
-        for name, body in self.sections.items():
-            if name != "UNITS" and not isinstance(body, TirTable) and key in body:
-                return body
-        return None
+                return body  # the standard section wins
+        return next((body for body in self._value_sections() if key in body), None)  # else the first
 
     def get(self, key: str, default: Any = None) -> Any:
         """Return the value of ``key`` (see :meth:`flat`) or ``default``."""
-        body = self._lookup(key.upper())
-        return default if body is None else body[key.upper()]
+        k = key.upper()
+        body = self._lookup(k)
+        return default if body is None else body[k]
 
     def __getitem__(self, key: str) -> Value:
-        body = self._lookup(key.upper())
+        k = key.upper()
+        body = self._lookup(k)
         if body is None:
             raise KeyError(key)
-        return body[key.upper()]
+        return body[k]
 
     def __contains__(self, key: object) -> bool:
         return isinstance(key, str) and self._lookup(key.upper()) is not None
