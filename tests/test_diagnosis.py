@@ -183,8 +183,13 @@ def test_holdout_rules(base_df):
         parse_holdout("Vx")
 
 
-def test_cli_diagnose(vs_case, tmp_path, capsys):
-    d, tyre, _ = vs_case
+def test_cli_diagnose(vs_case, tmp_path, capsys, monkeypatch):
+    # the command's own work: read the data and the .tir, parse --holdout and --permutations, hand them to the
+    # diagnosis, write the report and print its summary.  The diagnosis itself is the slip-speed case's, already
+    # computed (vs_case; the command on a real campaign end to end: tests/test_diagnosis_campaigns.py)
+    import mftire.diagnosis.diagnose as diagnose_module
+
+    d, tyre, res = vs_case
     data = tmp_path / "data.csv"
     d.to_csv(data, index=False)
     from mftire import write_tir
@@ -194,12 +199,23 @@ def test_cli_diagnose(vs_case, tmp_path, capsys):
     for k in ("PDX1", "PDX2", "PDY1", "PDY2", "PKX1", "PKY1", "QDZ1", "PEX1", "PEY1"):
         params.set(k, tyre[k])
     write_tir(params, tir)
+    seen = {}
+
+    def fake(data, tyre, holdout=None, **kw):
+        seen.update(rows=len(data), pdx1=tyre["PDX1"], holdout=holdout, **kw)
+        return res
+
+    monkeypatch.setattr(diagnose_module, "diagnose", fake)
     out = tmp_path / "diag"
-    assert main(["diagnose", str(data), "--tir", str(tir), "--output", str(out), "--holdout", "Fz=3376"]) == 0
+    assert main(["diagnose", str(data), "--tir", str(tir), "--output", str(out), "--holdout", "Fz=3376",
+                 "--permutations", "19", "--seed", "3"]) == 0  # fmt: skip
+    assert seen["holdout"] == ("Fz", [3376.0]) and seen["n_perm"] == 19 and seen["seed"] == 3
+    assert seen["rows"] == len(d) and seen["pdx1"] == pytest.approx(tyre["PDX1"])
     doc = json.loads((out / "diagnosis.json").read_text())
-    assert doc["ranking"][0]["variable"] == "Vs"
-    assert doc["holdout"]["column"] == "Fz"
-    assert "Vs" in capsys.readouterr().out
+    assert doc["ranking"][0]["variable"] == res.ranking[0].variable == "Vs"
+    assert doc["effect"]["name"] == res.effect.name
+    printed = capsys.readouterr().out
+    assert "Vs" in printed and "held out Fx: RMS" in printed and str(out / "diagnosis.md") in printed
 
 
 @settings(max_examples=60, deadline=None)
