@@ -572,13 +572,6 @@ def drift_behind_input(df: pd.DataFrame, variable: str, values: Mapping[str, np.
 
 #: Operating conditions held out besides the diagnosis's own (:func:`_worse_elsewhere`), at most.
 EXTRA_CONDITIONS = 2
-#: The set points the Magic Formula reads through a quadratic term, with the levels that term needs in training:
-#: the load (dfz², Pacejka 2012 eq 4.E40, QBZ3), the camber (γ², eqs 4.E13 and 4.E23, PDX3 and PDY3; 4.E42, QDZ4)
-#: and the pressure (dpi², eqs 4.E13 and 4.E23, PPX4 and PPY4).  An interior level of one of them is held out by
-#: :func:`extra_conditions` only where three levels stay in training: with two, the refits' interpolation to it is
-#: not determined by the data (the law's model and its control land on coefficients the data cannot tell apart),
-#: and their comparison there says nothing about the law.
-QUADRATIC_SET_POINTS = {SET_POINT_COLUMNS["Fz"]: 3, SET_POINT_COLUMNS["gamma"]: 3, SET_POINT_COLUMNS["P"]: 3}
 
 
 def variable_values(df: pd.DataFrame, effect: EffectFit, candidate: str) -> np.ndarray | None:
@@ -598,8 +591,7 @@ def extra_conditions(df: pd.DataFrame, law: Tyre, control: Tyre, channels: Seque
     points where the law's model and its control differ most (their difference per row over each channel's noise,
     averaged over the level's rows; interior levels only): where the law matters, it must hold on a condition it
     was not fitted on.  A level that would take every sweep of a kind out of training, or half the rows, is not held
-    out, nor one that would leave fewer levels than the set point's quadratic MF terms need
-    (:data:`QUADRATIC_SET_POINTS`).  ``[(label, row mask), ...]``."""
+    out.  ``[(label, row mask), ...]``."""
     kinds = df["sweep_var"].to_numpy() if "sweep_var" in df.columns else None
     out: list[tuple[str, np.ndarray]] = []
     levels = df["_cand"].to_numpy(float) if "_cand" in df.columns else None
@@ -622,10 +614,7 @@ def extra_conditions(df: pd.DataFrame, law: Tyre, control: Tyre, channels: Seque
         if sp not in df.columns or sp == SET_POINT_COLUMNS.get(skip, skip):
             continue
         x = df[sp].to_numpy(float)
-        lv = levels_of(x)
-        if len(lv) - 1 < QUADRATIC_SET_POINTS.get(sp, 2):
-            continue  # too few levels would stay to determine the interpolation
-        for v in lv[1:-1]:  # interior levels: the models interpolate, as at a user's next condition
+        for v in levels_of(x)[1:-1]:  # interior levels: the models interpolate, as at a user's next condition
             rows = np.isclose(x, v)
             if rows.mean() >= 0.5 or (kinds is not None and set(kinds[~rows]) != set(kinds)):
                 continue
