@@ -257,7 +257,7 @@ def levels_of(values: np.ndarray, decimals: int = 6) -> np.ndarray:
 
 
 def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4,
-                blocks: np.ndarray | None = None, kinds: np.ndarray | None = None) -> tuple[np.ndarray | None, bool]:
+                blocks: np.ndarray | None = None, kinds: np.ndarray | None = None) -> np.ndarray | None:
     """Held-out folds along the candidate: its levels (a sweep-level variable with 3 to 6 levels: one
     level out at a time), else ``k`` contiguous ranges of the sweeps' mean value, so that every fold is
     a range of the variable between or beyond the trained ones, as the held-out condition is.
@@ -266,10 +266,7 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
     fold keeps every operating condition in training and tests the candidate by its variation within
     the blocks; a block of a single sweep is never held out (label -1).  The ranges are taken per sweep
     kind (``kinds``: braking, cornering, combined), so that no fold holds out every sweep of a kind, which
-    the refitted coefficients of that channel need.
-
-    Returns ``(folds, ordered)``: ``ordered`` when fold ``i`` holds the ``i``-th level or range of the variable from
-    below (in every block and kind), False for the folds of :func:`kind_folds` (sweeps dealt in turn)."""
+    the refitted coefficients of that channel need."""
     v = np.asarray(v, float)
     lv = levels_of(v)
     if sweep_level and 3 <= len(lv) <= 6 and blocks is None:
@@ -279,14 +276,14 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
             for level in np.unique(out):
                 if set(kk[out != level]) != set(kk):
                     out = np.where(out == level, -1, out)
-        return (out, True) if np.unique(out[out >= 0]).size >= 2 else (None, False)
+        return out if np.unique(out[out >= 0]).size >= 2 else None
     b = np.zeros(len(v), int) if blocks is None else np.asarray(blocks)
     if kinds is not None:
         b = pd.MultiIndex.from_arrays([b, np.asarray(kinds)]).factorize()[0]
     frame = pd.DataFrame({"v": v, "s": sweeps, "b": b})
     means = frame.groupby("s").agg(v=("v", "mean"), b=("b", "first"))
     if means["v"].nunique() < k:
-        return kind_folds(sweeps, kinds), False
+        return kind_folds(sweeps, kinds)
     label: dict = {}
     for _, g in means.groupby("b"):
         if len(g) < 2:
@@ -296,7 +293,7 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
         rank = g["v"].rank(method="first").to_numpy()
         label.update(zip(g.index, np.minimum((rank - 1) * kk // len(g), kk - 1).astype(int), strict=True))
     out = np.array([label[s] for s in sweeps])
-    return (out, True) if np.unique(out[out >= 0]).size >= 2 else (kind_folds(sweeps, kinds), False)
+    return out if np.unique(out[out >= 0]).size >= 2 else kind_folds(sweeps, kinds)
 
 
 #: The MF's own operating inputs (a law in them is interpolated between tested levels like the MF's terms).
@@ -1198,7 +1195,7 @@ def _diagnose(
         # held-out condition), else groups of sweeps
         blocks = confounding_blocks(prob.df, v, variable=variable)
         kinds = prob.df["sweep_var"].to_numpy() if "sweep_var" in prob.df.columns else None
-        folds, ordered = level_folds(v, prob.df["sweep_id"].to_numpy(), c.sweep_level, blocks=blocks, kinds=kinds)
+        folds = level_folds(v, prob.df["sweep_id"].to_numpy(), c.sweep_level, blocks=blocks, kinds=kinds)
         n_levels = int(levels_of(v, 9).size)
         # the levels in every row: the diagnosis's own held-out condition may be a level of the candidate
         lv = levels_of(c.values, 9)
@@ -1229,7 +1226,7 @@ def _diagnose(
             laws += [(var, dataclasses.replace(law, targets=tuple(t for t in law.targets if t in keep)), val)
                      for var, law, val in list(laws) if law.form in TRIMMED_FORMS
                      and law.targets and set(law.targets) - keep and set(law.targets) & keep]  # fmt: skip
-        chosen, fits = choose_effect(prob, laws, n_pressures, control, eff_ch, folds, ordered)
+        chosen, fits = choose_effect(prob, laws, n_pressures, control, eff_ch, folds)
         control = fits[0]
         tried += fits[1:] if len(tried) else fits
         if chosen is None or chosen.removed <= 0:
@@ -1242,7 +1239,7 @@ def _diagnose(
         ranked = [chosen] + [f for f in ranked if f is not chosen]
         found.append((chosen, e, (prob, [(f, f.law, by_var.get(f.variable)) for f in ranked], eff_ch, folds,
                                   blocks is not None, control.cv, dict(control.cv_channels), control,
-                                  order_fold(prob.df, kinds, levels=v), ordered)))  # fmt: skip
+                                  order_fold(prob.df, kinds, levels=v))))  # fmt: skip
     say("comparing the candidates' laws on the same held-out sweeps")
     errors = common_heldout(found, n_pressures)
     if errors is None:  # one candidate (or different rows): its law's ratio on its own folds
@@ -1276,10 +1273,9 @@ def _diagnose(
             continue
         # the candidate's best laws and the control, refitted with every MF coefficient
         say(f"refitting every coefficient with the laws of {effect.variable}")
-        prob, law_fits, eff_ch, folds, in_blocks, control_cv, control_channels, local_control, forward, ordered = \
-            context
+        prob, law_fits, eff_ch, folds, in_blocks, control_cv, control_channels, local_control, forward = context
         variants, notes = refine_effect(prob, law_fits, n_pressures, eff_ch, folds, control_cv, control_channels,
-                                        local_control, forward, refit_cache, ordered)  # fmt: skip
+                                        local_control, forward, refit_cache)  # fmt: skip
         if not variants:
             refits.append(f"{cause.variable}: " + "; ".join(notes))
             continue

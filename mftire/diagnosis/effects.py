@@ -733,20 +733,13 @@ def is_worse(ss: float, ss_control: float, n: int, sigma: float, scale: float = 
 
 
 def worse_channels(fit: Mapping[str, tuple[float, int]], control: Mapping[str, tuple[float, int]],
-                   noise: Mapping[str, float] | None = None, ordered: bool = False) -> list[str]:
+                   noise: Mapping[str, float] | None = None) -> list[str]:
     """The channels whose held-out-fold error under a law (``fit``: channel -> (SS, rows)) exceeds the
     control's beyond its noise (:func:`is_worse`), over the folds together and (with twice the allowance, and by more
     than :data:`WORSE_RMS` in RMS) in each fold (keys ``"Fy#2"``): a law that helps on some held-out ranges and hurts
     on others is not consistent.  A law
     that makes any scored channel worse on data it was not fitted on is never accepted (issue 21: a diagnosis
-    that makes the model worse must never happen).
-
-    ``ordered``: the folds are ranges of the law's variable from below (``Fy#2`` between ``Fy#1`` and ``Fy#3``).  An
-    interior fold then does not decide alone when the law beats the control on the folds on both sides of it: there
-    the control, refitted without an effect, fits the middle of the variable's range by construction (a law's effect
-    is about its mean there, and the control's coefficients hold that mean), so the two differ by their refits'
-    estimates only; a law that hurts a range of its variable shows beside it as well, and the channel over every fold
-    is still judged."""
+    that makes the model worse must never happen)."""
     out: list[str] = []
     for key, (ss_c, n) in control.items():
         ch = key.split("#")[0]
@@ -759,21 +752,12 @@ def worse_channels(fit: Mapping[str, tuple[float, int]], control: Mapping[str, t
             # issue 21's 5 % in RMS (a channel the law barely moves, at its noise floor in a fold, differs by
             # its two refits' noise)
             if is_worse(fit[key][0], ss_c, n, sigma, 2.0) and fit[key][0] > WORSE_RMS**2 * ss_c and \
-                    fit[key][0] - ss_c > CHANNEL_WORSE_REL * control.get(ch, (ss_c, n))[0] and \
-                    not (ordered and _bracketed(fit, control, ch, int(key.split("#")[1]))):
+                    fit[key][0] - ss_c > CHANNEL_WORSE_REL * control.get(ch, (ss_c, n))[0]:
                 out.append(ch)
             continue
         if is_worse(fit[key][0], ss_c, n, sigma):
             out.append(ch)
     return out
-
-
-def _bracketed(fit: Mapping[str, tuple[float, int]], control: Mapping[str, tuple[float, int]], ch: str,
-               fold: int) -> bool:
-    """True when the folds ``fold - 1`` and ``fold + 1`` of ``ch`` are both held out and the law's error is below
-    the control's on each (:func:`worse_channels`, ``ordered``)."""
-    sides = [f"{ch}#{fold - 1}", f"{ch}#{fold + 1}"]
-    return all(k in fit and k in control and fit[k][0] < control[k][0] for k in sides)
 
 
 def trimmed(law: Law, worse: Sequence[str]) -> Law | None:
@@ -820,7 +804,6 @@ def choose_effect(
     control: EffectFit | None = None,
     effect_channels: Sequence[str] | None = None,
     folds: np.ndarray | None = None,
-    ordered: bool = False,
 ) -> tuple[EffectFit | None, list[EffectFit]]:
     """Fit the candidate laws ``(variable read, law, values of the variable or None)``; choose one.
 
@@ -834,8 +817,6 @@ def choose_effect(
     sweeps (:func:`heldout_error`): the law with the lowest held-out error is chosen, and
     only when it beats the control's held-out error by 10 %.  Training error alone never
     chooses a law.
-
-    ``ordered``: the folds are ranges of the variable from below (:func:`worse_channels`).
 
     Returns ``(chosen, all_fits)``; chosen is None when no law beats the control.
     """
@@ -898,7 +879,7 @@ def choose_effect(
         fit.cv = cv
         fit.cv_channels = per
         fit.control = ctrl
-        worse = worse_channels(per, ctrl.cv_channels, prob.noise, ordered)
+        worse = worse_channels(per, ctrl.cv_channels, prob.noise)
         fit.rejected = bool(worse)
         if worse:
             fit.messages.append(f"rejected as fitted: held-out error worse than the control on {', '.join(worse)}")
@@ -991,7 +972,6 @@ def refine_effect(
     local_control: EffectFit | None = None,
     forward: np.ndarray | None = None,
     refit_cache: dict | None = None,
-    ordered: bool = False,
 ) -> tuple[list[tuple[EffectFit, Tyre]], list[str]]:
     """Refit the best laws and the control with every MF coefficient (the staged fitter), then choose
     among them by held-out-sweep error, each model's law and main coefficients refitted on each fold.
@@ -1014,7 +994,6 @@ def refine_effect(
     ``refit`` says how its model was refitted (``"main"`` coefficients or ``"all"``) and ``control_tyre`` is
     the control refitted the same way on the same rows (:func:`final_fit` refits the chosen way on every row).
     ``refit_cache``: the diagnosis's cache of full refits (:func:`_full_refit`), shared by its candidates.
-    ``ordered``: the folds are ranges of the variable from below (:func:`worse_channels`).
     """
     base = prob.tyre
     prob, idx = subsample(prob)
@@ -1061,7 +1040,7 @@ def refine_effect(
         ctrl = f.control if f.control is not None else local_control
         if ctrl is None or not np.isfinite(f.cv) or f.rejected or not np.isfinite(ctrl.cv):
             continue
-        if worse_channels(f.cv_channels, ctrl.cv_channels, prob.noise, ordered):
+        if worse_channels(f.cv_channels, ctrl.cv_channels, prob.noise):
             continue
         if forward is not None:
             chs = refit_channels_of(f.law) if f.law is not None else None
@@ -1084,7 +1063,7 @@ def refine_effect(
         cv = heldout_error(p, CONTROL, "", None, n_pressures, None, effect_channels, folds, extra_keys=keys,
                            per_channel=per, refit_channels=chs)  # fmt: skip
         cv_c, per_c = full_control(chs)
-        worse = worse_channels(per, per_c, prob.noise, ordered)
+        worse = worse_channels(per, per_c, prob.noise)
         if not worse and forward is not None:  # the last tests, the law's and the control's models fitted without them
             worse_late = late(p, CONTROL, "", None, None, replace_tyre(prob, control_tyre), None, chs, keys)
             if worse_late:
