@@ -849,6 +849,11 @@ def test_copy_is_independent_in_every_container():
     other.comments[next(iter(other.comments))] = "changed"
     other.header_comments.append("$ added")
     other.blocks["MODEL"].append("'another line'")
+    section = next(name for name, body in params.sections.items() if isinstance(body, dict) and "FNOMIN" in body)
+    fnomin = params.sections[section]["FNOMIN"]
+    other.set("FNOMIN", fnomin + 1.0)  # a key/value section: its dict is the copy's own
+    other.sections[section]["NEW_KEY"] = 1.0
+    assert params["FNOMIN"] == fnomin and other["FNOMIN"] == fnomin + 1.0 and "NEW_KEY" not in params
     assert params.sections[table].rows[0][0] == first
     assert "changed" not in params.comments.values() and "$ added" not in params.header_comments
     assert params.blocks["MODEL"][-1] == "'a free-text line'" and "'another line'" not in params.blocks["MODEL"]
