@@ -161,13 +161,15 @@ class Profiles:
             if flag:
                 for level in np.unique(x):
                     m = x == level
-                    if m.sum() >= 3 and np.std(v[m]) > 0 and np.std(rest[m]) > 0:
+                    # np.ptp, not np.std: the std of equal floats can round to a tiny non-zero number, and
+                    # scipy then warns of a constant input and returns NaN (no correlation either way)
+                    if m.sum() >= 3 and np.ptp(v[m]) > 0 and np.ptp(rest[m]) > 0:
                         pv = float(stats.pearsonr(v[m], rest[m]).pvalue)
                         if pv < best_p:
                             best, best_p = name, pv
             else:
                 prod = (x - x.mean()) * (v - v.mean())
-                if len(x) >= 6 and np.std(prod) > 0 and np.std(rest) > 0:
+                if len(x) >= 6 and np.ptp(prod) > 0 and np.ptp(rest) > 0:
                     pv = float(stats.pearsonr(prod, rest).pvalue)
                     if pv < best_p:
                         best, best_p = name, pv

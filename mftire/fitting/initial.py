@@ -59,14 +59,17 @@ def sweep_shape(x: np.ndarray, y: np.ndarray, Fz: float) -> SweepShape | None:
     lin = (np.abs(ys) < 0.5 * D) & (np.abs(x) <= max(abs(xp), 1e-9))
     if lin.sum() < 3:
         lin = np.argsort(np.abs(x))[: min(5, x.size)]
-    res = stats.theilslopes(y[lin], x[lin])
-    K = float(res.slope)
+    if np.ptp(x[lin]) > 0:
+        res = stats.theilslopes(y[lin], x[lin])
+        K, intercept = float(res.slope), float(res.intercept)
+    else:  # the linear region's points at one slip: no slope (scipy would warn and return NaN)
+        K = intercept = math.nan
     # intercept from the points closest to zero slip (less curvature bias)
     near = np.abs(x) <= 0.3 * abs(xp)
     if near.sum() >= 3:
         y0 = float(np.median(y[near] - K * x[near]))
     else:
-        y0 = float(res.intercept)
+        y0 = intercept
     C = E = math.nan
     side = np.sign(xp) if xp != 0 else 1.0
     far = x * side
