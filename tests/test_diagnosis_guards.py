@@ -249,6 +249,39 @@ def test_a_straight_law_that_misses_a_level_gives_way_to_the_per_level_table(mid
     assert levels_form(prob, TYRE, fit, model, level, 3, 1, None, ("Fx", "Fy", "Mz"), noise) == (fit, model)
 
 
+@pytest.mark.parametrize("middle, holds", [(0.025, True), (0.15, False)])
+def test_a_table_that_does_not_hold_between_its_levels_is_refused(middle, holds):
+    """Issue 21, never worse (zoo seed 1119: a table in road temperature at 10, 23.3 and 50 °C, linear between its
+    levels, gave Fy 6 % worse at 36.7 °C, where the grip had its optimum).  Grip at hardness 55, 60 and 75: on a
+    straight line the table interpolates its middle level from its neighbours better than the control refit
+    (constant in hardness) does there and is kept; with a grip peak at the middle level the straight line between
+    its neighbours lies further from it than the control's mean of them, the table is worse there on Fx, its own
+    channel, and is refused, with the reason.  Other forms are not checked this way."""
+    from mftire.diagnosis.effects import CONTROL, fit_effect, refit_channels_of, table_between_levels
+
+    df = with_sweeps(_campaign(3))
+    level = np.array([55.0, 60.0, 75.0])[df["sweep_id"].to_numpy() % 3]
+    truth = {"EXT1_TARGET": "LMUX", "EXT1_FORM": "table", "EXT1_VARIABLE": "hardness", "EXT1_L1": 55.0,
+             "EXT1_L2": 60.0, "EXT1_L3": 75.0, "EXT1_C1": 0.0, "EXT1_C2": middle, "EXT1_C3": 0.1}  # fmt: skip
+    data = _measure(df.assign(hardness=level), truth, {"hardness": level}).assign(hardness=level)
+    prob = make_problem(TYRE, data, ("Fx", "Fy", "Mz"))
+    prob.noise = {ch: 0.01 * float(np.max(np.abs(data[ch]))) / prob.scale[ch] for ch in ("Fx", "Fy", "Mz")}
+    control = fit_effect(prob, CONTROL, "", None, 1)
+    table = Law("friction_levels", ("LMUX",), "table")
+    chs = refit_channels_of(table)
+    fit = fit_effect(prob, table, "hardness", level, 1, warm=control.standard, refit_channels=chs)
+    why = table_between_levels(prob, fit, table, level, 1, control, None, chs)
+    if holds:
+        assert why is None
+    else:
+        assert why is not None and "does not hold between its levels" in why and why.endswith("on Fx)")
+    # a straight law in the same levels, and a table in two levels, are not checked this way
+    line = Law("friction_variable", ("LMUX",), "linear")
+    assert table_between_levels(prob, fit, line, level, 1, control, None, chs) is None
+    two = np.where(level == 60.0, 55.0, level)
+    assert table_between_levels(prob, fit, table, two, 1, control, None, chs) is None
+
+
 def test_no_law_in_two_levels_of_a_quantity():
     """Grip falls with a rim temperature tested at two levels only: the cause is named, no law is written (a
     third level could sit anywhere on a curve through two points); the same effect in a 0/1 flag gets its law."""
