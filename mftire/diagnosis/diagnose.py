@@ -21,7 +21,8 @@ Procedure (:func:`diagnose`)
    or levels of the candidate, every sweep kind kept) with the control refitted the same way without a law; a law
    that makes any scored channel (Fx, Fy, Mz) worse than the control beyond its noise, over the folds
    or in one of them, is never chosen (:func:`~mftire.diagnosis.effects.worse_channels`), nor one that cuts the
-   control's held-out error by less than 20 % (:data:`~mftire.diagnosis.effects.MAX_HELDOUT_VS_CONTROL`).  The
+   control's held-out error by less than 20 % (:data:`~mftire.diagnosis.effects.MAX_HELDOUT_VS_CONTROL`), nor a
+   per-level table that does not hold between its levels (:func:`~mftire.diagnosis.effects.table_between_levels`).  The
    second variable of an interaction is another column (never the elapsed time:
    :func:`~mftire.diagnosis.candidates.interaction_partners`) or an MF input.  The candidates are
    then compared with each other by their chosen laws on the same held-out sweeps (:func:`common_heldout`), and
