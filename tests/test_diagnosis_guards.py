@@ -250,13 +250,14 @@ def test_a_straight_law_that_misses_a_level_gives_way_to_the_per_level_table(mid
 
 
 @pytest.mark.parametrize("middle, holds", [(0.025, True), (0.15, False)])
-def test_a_table_that_does_not_hold_between_its_levels_is_refused(middle, holds):
+def test_a_table_that_does_not_hold_between_its_levels_is_refused(middle, holds, monkeypatch):
     """Issue 21, never worse (zoo seed 1119: a table in road temperature at 10, 23.3 and 50 °C, linear between its
     levels, gave Fy 6 % worse at 36.7 °C, where the grip had its optimum).  Grip at hardness 55, 60 and 75: on a
     straight line the table interpolates its middle level from its neighbours better than the control refit
     (constant in hardness) does there and is kept; with a grip peak at the middle level the straight line between
     its neighbours lies further from it than the control's mean of them, the table is worse there on Fx, its own
     channel, and is refused, with the reason.  Other forms are not checked this way."""
+    from mftire.diagnosis import effects
     from mftire.diagnosis.effects import CONTROL, fit_effect, refit_channels_of, table_between_levels
 
     df = with_sweeps(_campaign(3))
@@ -280,6 +281,20 @@ def test_a_table_that_does_not_hold_between_its_levels_is_refused(middle, holds)
     assert table_between_levels(prob, fit, line, level, 1, control, None, chs) is None
     two = np.where(level == 60.0, 55.0, level)
     assert table_between_levels(prob, fit, table, two, 1, control, None, chs) is None
+    # an interior level that holds every sweep of a kind (all the cornering at 60) is never held out: without it the
+    # cornering coefficients are unknown to both refits
+    cornering = data["sweep_var"].to_numpy() == "alpha"
+    by_kind = np.where(cornering, 60.0, np.where(data["sweep_id"].to_numpy() % 2 == 0, 55.0, 75.0))
+    prob_k = make_problem(TYRE, data.assign(hardness=by_kind), ("Fx", "Fy", "Mz"))
+    prob_k.noise = prob.noise
+
+    def no_refit(*args, **kwargs):
+        raise AssertionError("a level holding every sweep of a kind was held out")
+
+    monkeypatch.setattr(effects, "heldout_error", no_refit)
+    assert table_between_levels(prob_k, fit, table, by_kind, 1, control, None, chs) is None
+    with pytest.raises(AssertionError, match="was held out"):  # the middle level of the first layout is held out
+        table_between_levels(prob, fit, table, level, 1, control, None, chs)
 
 
 def test_no_law_in_two_levels_of_a_quantity():

@@ -924,9 +924,14 @@ def table_between_levels(prob: _Problem, fit: EffectFit, law: Law, v: np.ndarray
     lv = np.unique(vv[np.isfinite(vv)])
     if lv.size < 3:
         return None
+    kinds = prob.df["sweep_var"].to_numpy() if "sweep_var" in prob.df.columns else None
     folds = np.full(len(vv), -1)
     for i, level in enumerate(lv[1:-1]):
+        if kinds is not None and set(kinds[vv != level]) != set(kinds):
+            continue  # the level holds every sweep of a kind: without it that channel's coefficients are unknown
         folds[vv == level] = i
+    if not np.any(folds >= 0):
+        return None
     per: dict[str, tuple[float, int]] = {}
     per_c: dict[str, tuple[float, int]] = {}
     heldout_error(prob, law, fit.variable, v, n_pressures, control.standard, effect_channels, folds, per_channel=per,
