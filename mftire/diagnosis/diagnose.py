@@ -110,7 +110,7 @@ from mftire.diagnosis.effects import (
     trimmed_fit,
     with_given_channels,
 )
-from mftire.diagnosis.holdout import default_holdout, holdout_mask, levels
+from mftire.diagnosis.holdout import default_holdout, holdout_mask, keeps_every_kind, levels
 from mftire.diagnosis.profile import CONFOUND_R, SECOND_INPUTS, Profiles, profile_factors
 from mftire.diagnosis.ranking import (
     CandidateScore,
@@ -275,7 +275,7 @@ def level_folds(v: np.ndarray, sweeps: np.ndarray, sweep_level: bool, k: int = 4
         if kinds is not None:  # a level that holds every sweep of a kind is never held out
             kk = np.asarray(kinds)
             for level in np.unique(out):
-                if set(kk[out != level]) != set(kk):
+                if not keeps_every_kind(kk, out == level):
                     out = np.where(out == level, -1, out)
         return out if np.unique(out[out >= 0]).size >= 2 else None
     b = np.zeros(len(v), int) if blocks is None else np.asarray(blocks)
@@ -617,7 +617,7 @@ def extra_conditions(df: pd.DataFrame, law: Tyre, control: Tyre, channels: Seque
         x = df[sp].to_numpy(float)
         for v in levels_of(x)[1:-1]:  # interior levels: the models interpolate, as at a user's next condition
             rows = np.isclose(x, v)
-            if rows.mean() >= 0.5 or (kinds is not None and set(kinds[~rows]) != set(kinds)):
+            if rows.mean() >= 0.5 or not keeps_every_kind(kinds, rows):
                 continue
             scored.append((float(change[rows].mean()), f"{sp.removesuffix('_set')} = {v:g}", rows))
     for _, label, rows in sorted(scored, key=lambda t: -t[0])[:k]:

@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
+from mftire.diagnosis.holdout import keeps_every_kind
 from mftire.fitting.model import Inputs, Model
 from mftire.fitting.stages import STAGES
 from mftire.mf import derivatives
@@ -927,7 +928,7 @@ def table_between_levels(prob: _Problem, fit: EffectFit, law: Law, v: np.ndarray
     kinds = prob.df["sweep_var"].to_numpy() if "sweep_var" in prob.df.columns else None
     folds = np.full(len(vv), -1)
     for i, level in enumerate(lv[1:-1]):
-        if kinds is not None and set(kinds[vv != level]) != set(kinds):
+        if not keeps_every_kind(kinds, vv == level):
             continue  # the level holds every sweep of a kind: without it that channel's coefficients are unknown
         folds[vv == level] = i
     if not np.any(folds >= 0):

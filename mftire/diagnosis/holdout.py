@@ -58,12 +58,18 @@ def levels(df: pd.DataFrame, column: str) -> np.ndarray:
     return np.unique(df[col].to_numpy(float))
 
 
+def keeps_every_kind(kinds: np.ndarray | None, held: np.ndarray) -> bool:
+    """True when holding out the rows ``held`` (a mask) leaves every kind of sweep (``kinds``, one per row; None:
+    not known) in the training rows: the refitted coefficients of each channel need their own sweeps."""
+    return kinds is None or set(kinds[~held]) >= set(kinds)
+
+
 def _keeps_every_kind(df: pd.DataFrame, col: str, value: float) -> bool:
     """True when holding out ``col == value`` leaves every kind of sweep in the training data."""
     if "kind" not in df.columns:
         return True
-    train = df[np.abs(df[col].to_numpy(float) - value) > 1e-9 * max(abs(value), 1.0)]
-    return set(train["kind"]) >= set(df["kind"])
+    held = ~(np.abs(df[col].to_numpy(float) - value) > 1e-9 * max(abs(value), 1.0))  # NaN rows: not trained on
+    return keeps_every_kind(df["kind"].to_numpy(), held)
 
 
 def _mean_finite(a: np.ndarray) -> float:
